@@ -1,0 +1,35 @@
+# camgen — `make demo` and `make test` take a fresh machine to a rendered example and a passing suite.
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+OUT    ?= out
+
+.PHONY: setup demo test stress bench lint clean
+
+setup: $(STAMP)
+
+# Re-installs only when the dependency list changes; an up-to-date venv costs nothing.
+$(STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	touch $(STAMP)
+
+demo: setup
+	$(BIN)/camgen validate profiles/*.yaml scenes/*.yaml datasets/*.yaml
+	$(BIN)/camgen info profiles/ptz_2mp_30x.yaml
+	$(BIN)/camgen plan scenes/parking_lot.yaml
+
+test: setup
+	$(BIN)/python -m pytest -q
+
+bench: setup
+	$(BIN)/python -m camgen.bench --write BENCHMARKS.md
+
+lint: setup
+	$(BIN)/ruff check src tests
+	$(BIN)/ruff format --check src tests
+
+clean:
+	rm -rf $(VENV) $(OUT) .pytest_cache .ruff_cache .hypothesis

@@ -1,0 +1,47 @@
+"""The `camgen` command: dispatches to one module per subcommand."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from rich.console import Console
+
+import camgen
+from camgen.cli import info, plan, schema, validate
+from camgen.errors import ConfigError
+
+SUBCOMMANDS = (validate, schema, plan, info)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="camgen",
+        description="Synthetic surveillance video that matches real camera hardware.",
+    )
+    parser.add_argument("--version", action="version", version=f"camgen {camgen.__version__}")
+    subparsers = parser.add_subparsers(title="commands", metavar="COMMAND", required=True)
+    for module in SUBCOMMANDS:
+        module.add_parser(subparsers)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    # Piped output (CI logs, files) gets a wide console so tables stay readable.
+    width = None if sys.stdout.isatty() else 160
+    out = Console(highlight=False, width=width)
+    err = Console(stderr=True, highlight=False, width=width)
+    try:
+        return args.run(args, out, err)
+    except ConfigError as exc:
+        for problem in exc.problems:
+            err.print(f"[red]error[/red] {problem}", highlight=False, soft_wrap=True)
+        return 2
+    except KeyboardInterrupt:
+        err.print("interrupted")
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

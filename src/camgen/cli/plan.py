@@ -1,0 +1,76 @@
+"""camgen plan SCENE: the stages, passes and frames a render would run, and why each was chosen."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+from camgen.cli.common import add_profile_dirs_option, profile_dirs
+from camgen.config import load_scene
+from camgen.io.files import write_text_atomic
+from camgen.plan import PlanSettings, compile_scene
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser("plan", help="compile a scene into a render job and explain it")
+    parser.add_argument("scene", type=Path, metavar="SCENE")
+    parser.add_argument("--json", type=Path, metavar="FILE", help="also write the job as JSON")
+    parser.add_argument("--force-all", action="store_true", help="plan every stage, skipping nothing")
+    add_profile_dirs_option(parser)
+    parser.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace, out: Console, err: Console) -> int:
+    loaded = load_scene(args.scene, profile_dirs(args))
+    job = compile_scene(loaded, PlanSettings(force_all_stages=args.force_all))
+    out.print(
+        f"[bold]{job.scene_name}[/bold]  job {job.job_id[:16]}  {job.frame_count} frames at {job.fps:g} fps, "
+        f"seed {job.seed}, {len(job.cameras)} camera(s)", highlight=False,
+    )
+    for camera in job.cameras:
+        r = camera.render
+        state = camera.states[0]
+        out.print(
+            f"\n[bold]{camera.name}[/bold] ({camera.profile_name}): output {camera.width_px}×{camera.height_px}, "
+            f"render {r.width_px}×{r.height_px} (margin l/t/r/b {'/'.join(map(str, r.margin_px))} px, "
+            f"supersampling {r.supersampling}×), passes: {', '.join(r.passes) or 'none'}\n"
+            f"  f = {state.focal_length_mm:.3g} mm, N = {state.f_number:.3g}, focus {state.focus_distance_m:.3g} m, "
+            f"fx = {state.K_px[0][0]:.1f} px, exposure {camera.exposure_mode}", highlight=False,
+        )
+        stages = Table(title="stages", title_justify="left")
+        stages.add_column("#", justify="right")
+        stages.add_column("stage")
+        stages.add_column("passes")
+        stages.add_column("params")
+        for i, stage in enumerate(camera.stages, 1):
+            params = ", ".join(f"{k}={_short(v)}" for k, v in stage.params.items())
+            stages.add_row(str(i), stage.name, ", ".join(stage.passes), escape(params))
+        out.print(stages)
+        decisions = Table(title="decisions", title_justify="left")
+        decisions.add_column("")
+        decisions.add_column("stage or pass")
+        decisions.add_column("effect", justify="right")
+        decisions.add_column("threshold", justify="right")
+        decisions.add_column("reason")
+        for d in camera.decisions:
+            effect = f"{d.effect:.3g} {d.unit}" if d.effect is not None else ""
+            threshold = f"{d.threshold:g} {d.unit}" if d.threshold is not None else ""
+            mark = "[green]run[/green]" if d.included else "[dim]skip[/dim]"
+            decisions.add_row(mark, d.stage, effect, threshold, escape(d.reason))
+        out.print(decisions)
+    if args.json:
+        write_text_atomic(args.json, job.to_json())
+        out.print(f"wrote {args.json}", highlight=False)
+    return 0
+
+
+def _short(value) -> str:
+    if isinstance(value, float):
+        return f"{value:.3g}"
+    if isinstance(value, list):
+        return "[" + ", ".join(map(str, value)) + "]"
+    return str(value)

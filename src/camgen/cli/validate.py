@@ -1,0 +1,46 @@
+"""camgen validate FILE…: check profiles, scenes and datasets; print every problem with its place."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from rich.console import Console
+
+from camgen.cli.common import add_profile_dirs_option, detect_kind, profile_dirs
+from camgen.config import load_dataset, load_profile, load_scene
+from camgen.errors import ConfigError
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser("validate", help="check profile, scene and dataset YAML files")
+    parser.add_argument("files", nargs="+", type=Path, metavar="FILE")
+    parser.add_argument("--kind", choices=["profile", "scene", "dataset"], help="skip detection by keys")
+    add_profile_dirs_option(parser)
+    parser.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace, out: Console, err: Console) -> int:
+    failed = 0
+    for path in args.files:
+        try:
+            kind = args.kind or detect_kind(path)
+            if kind is None:
+                raise ConfigError(
+                    f"{path}: cannot tell what this is: a profile has 'sensor' and 'lens', a scene "
+                    "'cameras', a dataset 'scenes'; or pass --kind"
+                )
+            if kind == "profile":
+                load_profile(path, profile_dirs(args))
+            elif kind == "scene":
+                load_scene(path, profile_dirs(args))
+            else:
+                load_dataset(path)
+            out.print(f"[green]ok[/green]  {path} ({kind})", highlight=False)
+        except ConfigError as exc:
+            failed += 1
+            for problem in exc.problems:
+                err.print(f"[red]error[/red] {problem}", highlight=False, markup=True, soft_wrap=True)
+    if failed:
+        err.print(f"{failed} of {len(args.files)} file(s) invalid", highlight=False)
+    return 1 if failed else 0

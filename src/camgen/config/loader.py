@@ -1,0 +1,264 @@
+"""Load profiles, scenes and datasets from YAML, resolve references, and check them against each other.
+
+This is the only place that reads configuration files. Everything returned is a frozen model.
+"""
+
+from __future__ import annotations
+
+import difflib
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from camgen.config.dataset import Dataset
+from camgen.config.profile import Profile
+from camgen.config.scene import FileMesh, Scene
+from camgen.config.validation import show_value, validate
+from camgen.config.yaml_source import YamlDocument, load_yaml, merge_documents
+from camgen.errors import ConfigError, Location, Problem
+
+PROFILE_NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
+
+
+@dataclass(frozen=True)
+class LoadedProfile:
+    name: str
+    path: Path
+    profile: Profile
+
+
+@dataclass(frozen=True)
+class LoadedScene:
+    """A validated scene, where it came from, and the profile of each camera (by camera name)."""
+
+    name: str
+    path: Path
+    scene: Scene
+    profiles: dict[str, LoadedProfile]
+    file_bounds: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]]
+    """Local bounds (low, high corners, m) of every mesh file the scene uses, by its path as written."""
+
+    @property
+    def profile_models(self) -> dict[str, Profile]:
+        return {camera: loaded.profile for camera, loaded in self.profiles.items()}
+
+    @property
+    def profile_names(self) -> dict[str, str]:
+        return {camera: loaded.name for camera, loaded in self.profiles.items()}
+
+
+def default_profile_dirs(referencing_file: Path) -> list[Path]:
+    """Where a profile *name* is looked up: next to the file, its ``profiles/`` sibling, ``./profiles``."""
+    here = referencing_file.resolve().parent
+    return [here, here / "profiles", here.parent / "profiles", Path.cwd() / "profiles"]
+
+
+def find_profile(
+    reference: str,
+    referencing_file: Path,
+    profile_dirs: Sequence[Path] = (),
+    location: Location | None = None,
+    key_path: tuple = (),
+) -> Path:
+    """Resolve a profile reference: a path (relative to the referencing file) or a bare name."""
+    is_name = PROFILE_NAME.match(reference) and not reference.endswith((".yaml", ".yml"))
+    if not is_name:
+        candidate = (referencing_file.parent / reference).resolve()
+        if candidate.is_file():
+            return candidate
+        raise ConfigError([Problem(key_path, f"refers to {reference!r}, but {candidate} does not exist", location)])
+    dirs = [*profile_dirs, *default_profile_dirs(referencing_file)]
+    for directory in dirs:
+        for suffix in (".yaml", ".yml"):
+            candidate = directory / f"{reference}{suffix}"
+            if candidate.is_file():
+                return candidate.resolve()
+    known = sorted({p.stem for d in dirs if d.is_dir() for p in d.glob("*.y*ml")})
+    close = difflib.get_close_matches(reference, known, n=1, cutoff=0.6)
+    hint = f"; did you mean {close[0]!r}?" if close else ""
+    searched = ", ".join(str(d) for d in dict.fromkeys(dirs) if d.is_dir()) or "no existing directory"
+    raise ConfigError(
+        [Problem(key_path, f"names profile {reference!r}, which is not in {searched}{hint}", location)]
+    )
+
+
+def _profile_document(path: Path, profile_dirs: Sequence[Path], chain: tuple[Path, ...]) -> YamlDocument:
+    doc = load_yaml(path)
+    parent_ref = doc.data.get("extends")
+    if parent_ref is None:
+        return doc
+    where = doc.locate(("extends",))
+    if not isinstance(parent_ref, str) or not parent_ref:
+        raise ConfigError(
+            [Problem(("extends",), f"must name a profile or a profile file, got {show_value(parent_ref)}", where)]
+        )
+    parent_path = find_profile(parent_ref, path, profile_dirs, where, ("extends",))
+    if parent_path in chain or parent_path == path.resolve():
+        cycle = " → ".join(p.name for p in (*chain, path.resolve(), parent_path))
+        raise ConfigError([Problem(("extends",), f"makes a cycle: {cycle}", where)])
+    parent = _profile_document(parent_path, profile_dirs, (*chain, path.resolve()))
+    own = YamlDocument(
+        data={k: v for k, v in doc.data.items() if k != "extends"},
+        locations={k: v for k, v in doc.locations.items() if k[:1] != ("extends",)},
+    )
+    parent = YamlDocument(
+        data={k: v for k, v in parent.data.items() if k != "extends"},
+        locations={k: v for k, v in parent.locations.items() if k[:1] != ("extends",)},
+    )
+    return merge_documents(parent, own)
+
+
+def load_profile(path: str | Path, profile_dirs: Sequence[Path] = ()) -> LoadedProfile:
+    """Load and validate a profile file, applying `extends:` (deep merge, the child wins)."""
+    path = Path(path)
+    doc = _profile_document(path, profile_dirs, ())
+    return LoadedProfile(name=path.stem, path=path.resolve(), profile=validate(Profile, doc))
+
+
+def load_scene(path: str | Path, profile_dirs: Sequence[Path] = ()) -> LoadedScene:
+    """Load a scene, its cameras' profiles and mesh files, and check them against each other."""
+    path = Path(path)
+    doc = load_yaml(path)
+    scene: Scene = validate(Scene, doc)
+    problems: list[Problem] = []
+    profiles: dict[str, LoadedProfile] = {}
+    cache: dict[Path, LoadedProfile] = {}
+    for i, camera in enumerate(scene.cameras):
+        key = ("cameras", i, "profile")
+        try:
+            profile_path = find_profile(camera.profile, path, profile_dirs, doc.locate(key), key)
+            if profile_path not in cache:
+                cache[profile_path] = load_profile(profile_path, profile_dirs)
+            profiles[camera.name] = cache[profile_path]
+        except ConfigError as exc:
+            problems += exc.problems
+    file_meshes = [(("environment", "meshes", i, "path"), m) for i, m in enumerate(scene.environment.meshes)]
+    file_meshes += [(("actors", i, "shape", "path"), a.shape) for i, a in enumerate(scene.actors)]
+    file_bounds = {}
+    for key, mesh in file_meshes:
+        if isinstance(mesh, FileMesh) and mesh.path not in file_bounds:
+            try:
+                file_bounds[mesh.path] = _mesh_file_bounds(path.parent / mesh.path)
+            except ConfigError as exc:
+                problems.append(Problem(key, exc.problems[0].message, doc.locate(key)))
+    if problems:
+        raise ConfigError(problems)
+    located = [
+        Problem(p.path, p.message, doc.locate(p.path))
+        for p in check_cameras(scene, {k: v.profile for k, v in profiles.items()})
+    ]
+    if located:
+        raise ConfigError(located)
+    return LoadedScene(name=path.stem, path=path.resolve(), scene=scene, profiles=profiles, file_bounds=file_bounds)
+
+
+def _mesh_file_bounds(path: Path) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """Axis-aligned bounds of a mesh file in its own frame (trimesh reads glTF, OBJ, PLY, STL, …)."""
+    import trimesh  # heavy import, only for scenes that use mesh files
+
+    if not path.is_file():
+        raise ConfigError(f"refers to {path.name!r}, but {path.resolve()} does not exist")
+    try:
+        loaded = trimesh.load(path, force="scene")
+        low, high = loaded.bounds
+    except Exception as exc:  # trimesh raises many types for unreadable files
+        raise ConfigError(f"cannot be read as a mesh ({path}): {exc}") from None
+    if low is None or not len(loaded.geometry):
+        raise ConfigError(f"holds no geometry ({path})")
+    return tuple(map(float, low)), tuple(map(float, high))
+
+
+def load_dataset(path: str | Path) -> Dataset:
+    """Load a dataset spec and check that every scene and profile it names exists."""
+    path = Path(path)
+    doc = load_yaml(path)
+    dataset: Dataset = validate(Dataset, doc)
+    problems = []
+    for i, scene in enumerate(dataset.scenes):
+        if not (path.parent / scene).is_file():
+            key = ("scenes", i)
+            problems.append(
+                Problem(key, f"refers to {scene!r}, but {(path.parent / scene).resolve()} does not exist", doc.locate(key))
+            )
+    for i, reference in enumerate(dataset.profiles):
+        key = ("profiles", i)
+        try:
+            find_profile(reference, path, (), doc.locate(key), key)
+        except ConfigError as exc:
+            problems += exc.problems
+    if problems:
+        raise ConfigError(problems)
+    return dataset
+
+
+def check_cameras(scene: Scene, profiles: dict[str, Profile]) -> list[Problem]:
+    """Checks that need both a camera and its profile; key paths are relative to the scene."""
+    problems = []
+    for i, camera in enumerate(scene.cameras):
+        profile = profiles[camera.name]
+        lens, head = profile.lens, profile.ptz
+        base = ("cameras", i)
+        if scene.fps > profile.sensor.frame_rate_max_hz:
+            problems.append(Problem(
+                ("fps",),
+                f"must be ≤ {profile.sensor.frame_rate_max_hz:g} Hz, the frame rate limit of camera "
+                f"{camera.name!r}'s sensor, got {scene.fps:g}",
+            ))
+        if profile.exposure.mode == "manual" and profile.exposure.exposure_time_s > 1 / scene.fps:
+            problems.append(Problem(
+                (*base, "profile"),
+                f"sets a manual exposure of {profile.exposure.exposure_time_s:g} s, longer than the frame "
+                f"period 1/fps = {1 / scene.fps:g} s; shorten the exposure or lower fps",
+            ))
+        if camera.ptz is not None and head is None:
+            problems.append(Problem(
+                (*base, "ptz"),
+                f"is set, but profile {camera.profile!r} has no PTZ head; aim a fixed camera with "
+                "mount.yaw_deg and mount.pitch_deg",
+            ))
+        if camera.ptz is not None and head is not None:
+            ptz = camera.ptz
+            if ptz.zoom_x > lens.zoom_max_x + 1e-9:
+                problems.append(Problem(
+                    (*base, "ptz", "zoom_x"),
+                    f"must be ≤ {lens.zoom_max_x:.4g} (the lens zooms {lens.focal_length_min_mm:g}–"
+                    f"{lens.focal_length_max_mm:g} mm), got {ptz.zoom_x:g}",
+                ))
+            if not head.pan_continuous and not head.pan_range_deg[0] <= ptz.pan_deg <= head.pan_range_deg[1]:
+                low, high = head.pan_range_deg
+                problems.append(Problem(
+                    (*base, "ptz", "pan_deg"), f"must lie in the head's pan range [{low:g}, {high:g}]°, got {ptz.pan_deg:g}"
+                ))
+            low, high = head.tilt_range_deg
+            if not low <= ptz.tilt_deg <= high:
+                problems.append(Problem(
+                    (*base, "ptz", "tilt_deg"), f"must lie in the head's tilt range [{low:g}, {high:g}]°, got {ptz.tilt_deg:g}"
+                ))
+            for axis in ("pan", "tilt"):
+                limit = getattr(ptz, f"{axis}_max_deg_s")
+                head_max = getattr(head, f"{axis}_max_deg_s")
+                if limit is not None and limit > head_max:
+                    problems.append(Problem(
+                        (*base, "ptz", f"{axis}_max_deg_s"),
+                        f"must be ≤ the head's maximum {head_max:g} deg/s, got {limit:g}",
+                    ))
+        if camera.focal_length_mm is not None:
+            if head is not None:
+                problems.append(Problem(
+                    (*base, "focal_length_mm"),
+                    "is for varifocal fixed cameras; a PTZ camera zooms with ptz.zoom_x",
+                ))
+            elif not lens.focal_length_min_mm - 1e-9 <= camera.focal_length_mm <= lens.focal_length_max_mm + 1e-9:
+                problems.append(Problem(
+                    (*base, "focal_length_mm"),
+                    f"must lie in the lens range [{lens.focal_length_min_mm:g}, {lens.focal_length_max_mm:g}] mm, "
+                    f"got {camera.focal_length_mm:g}",
+                ))
+        focus = camera.focus_distance_m
+        if focus is not None and focus < lens.min_focus_distance_m:
+            problems.append(Problem(
+                (*base, "focus_distance_m"),
+                f"must be ≥ the lens' min_focus_distance_m ({lens.min_focus_distance_m:g} m), got {focus:g}",
+            ))
+    return problems

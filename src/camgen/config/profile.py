@@ -1,0 +1,498 @@
+"""Camera profile: the hardware — sensor, noise model, lens, exposure, ISP, codec and PTZ head.
+
+Every physical quantity carries its unit in its key. The noise terms follow DESIGN.md "Sensor model"
+(EMVA 1288 quantities; the seed paper's eq. 5 after Irie et al.).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from camgen.config.base import Model, invalid
+from camgen.optics.distortion import radial_reach
+from camgen.optics.intrinsics import camera_matrix_px
+
+PositiveFloat = Annotated[float, Field(gt=0)]
+NonNegativeFloat = Annotated[float, Field(ge=0)]
+Fraction = Annotated[float, Field(ge=0, le=1)]
+Rgb = tuple[float, float, float]
+
+
+class QuantumEfficiency(Model):
+    """Quantum efficiency η per CFA colour at its peak wavelength (electrons per photon, 0–1)."""
+
+    r: Fraction = 0.6
+    g: Fraction = 0.7
+    b: Fraction = 0.55
+
+
+class ChannelNoiseScale(Model):
+    """Per-channel multipliers on the temporal noise (seed paper Fig. 5); 1 is the physical model."""
+
+    r: NonNegativeFloat = 1.0
+    g: NonNegativeFloat = 1.0
+    b: NonNegativeFloat = 1.0
+
+
+class Noise(Model):
+    """Every term of N_cap = (I·PRNU + SN_ph + FPN + SN_dark + N_read)·N_D·N_filt + N_Q, in electrons.
+
+    A term set to 0 (or false) is off; the plan leaves it out.
+    """
+
+    shot_noise: bool = True
+    """Photon shot noise (Poisson on the collected photo-electrons)."""
+    read_noise_e: NonNegativeFloat = 2.0
+    """Temporal read noise σ_read, electrons rms (EMVA 1288 σ_d at zero exposure, minus quantisation)."""
+    read_noise_tail_dof: Annotated[float, Field(gt=2)] | None = None
+    """Degrees of freedom of a Student-t read-noise tail (RTS/popcorn noise); null for Gaussian."""
+    prnu_pct: Annotated[float, Field(ge=0, le=100)] = 0.5
+    """Photo-response non-uniformity, % rms of the signal (fixed pattern, keyed by the camera serial)."""
+    dsnu_e: NonNegativeFloat = 0.5
+    """Dark-signal non-uniformity, electrons rms (fixed pattern)."""
+    row_fpn_e: NonNegativeFloat = 0.0
+    """Row-wise offset fixed-pattern noise, electrons rms."""
+    column_fpn_e: NonNegativeFloat = 0.0
+    """Column-wise offset fixed-pattern noise, electrons rms."""
+    dark_current_e_per_s: NonNegativeFloat = 1.0
+    """Mean dark current at `dark_current_reference_c`, electrons per second per pixel."""
+    dark_current_reference_c: float = 25.0
+    """Temperature at which `dark_current_e_per_s` holds, °C."""
+    dark_current_doubling_c: PositiveFloat = 6.5
+    """Temperature rise that doubles the dark current, °C."""
+    hot_pixel_fraction: Fraction = 0.0
+    """Fraction of pixels with elevated dark current."""
+    hot_pixel_dark_current_e_per_s: NonNegativeFloat = 0.0
+    """Dark current of a hot pixel at the reference temperature, e⁻/s."""
+    dead_pixel_fraction: Fraction = 0.0
+    """Fraction of pixels that do not respond to light."""
+    blooming: bool = True
+    """Charge above full well spills into neighbouring pixels instead of being lost."""
+    channel_scale: ChannelNoiseScale = ChannelNoiseScale()
+
+
+class Sensor(Model):
+    """The image sensor: geometry, colour filter array and the electron → DN chain."""
+
+    model: str = ""
+    """Sensor part number, for people (not used in computation)."""
+    format: str = ""
+    """Optical format as sold, e.g. 1/2.8" (not used in computation: the pitch and resolution are)."""
+    width_px: Annotated[int, Field(gt=0, le=32768)]
+    """Effective (output) pixels horizontally."""
+    height_px: Annotated[int, Field(gt=0, le=32768)]
+    """Effective (output) pixels vertically."""
+    pixel_pitch_um: Annotated[float, Field(gt=0, le=100)]
+    """Horizontal pixel pitch, µm."""
+    pixel_pitch_y_um: Annotated[float, Field(gt=0, le=100)] | None = None
+    """Vertical pixel pitch, µm, for non-square pixels; null means square."""
+    principal_point_offset_px: tuple[float, float] = (0.0, 0.0)
+    """Optical axis offset from the sensor centre, pixels (x right, y down)."""
+    cfa: Literal["RGGB", "BGGR", "GRBG", "GBRG", "mono"] = "RGGB"
+    """Colour filter array, read from the top-left 2×2 block row by row."""
+    bit_depth: Annotated[int, Field(ge=8, le=16)] = 12
+    """ADC resolution, bits."""
+    full_well_e: PositiveFloat
+    """Saturation capacity, electrons (EMVA 1288 μ_e.sat)."""
+    conversion_gain_dn_per_e: PositiveFloat
+    """System gain K at 0 dB analog gain, DN per electron."""
+    black_level_dn: NonNegativeFloat = 0.0
+    """Offset added before the ADC clip, DN."""
+    analog_gain_max_db: Annotated[float, Field(ge=0, le=72)] = 0.0
+    """Largest analog/digital gain the camera applies, dB (20·log10)."""
+    temperature_c: Annotated[float, Field(ge=-60, le=150)] = 40.0
+    """Operating sensor temperature, °C (drives dark current)."""
+    frame_rate_max_hz: PositiveFloat = 30.0
+    """Highest frame rate at full resolution, Hz."""
+    quantum_efficiency: QuantumEfficiency = QuantumEfficiency()
+    noise: Noise = Noise()
+
+    @property
+    def pitch_y_um(self) -> float:
+        return self.pixel_pitch_y_um if self.pixel_pitch_y_um is not None else self.pixel_pitch_um
+
+    @property
+    def width_mm(self) -> float:
+        return self.width_px * self.pixel_pitch_um * 1e-3
+
+    @property
+    def height_mm(self) -> float:
+        return self.height_px * self.pitch_y_um * 1e-3
+
+    @property
+    def white_level_dn(self) -> int:
+        return 2**self.bit_depth - 1
+
+    @model_validator(mode="after")
+    def _check(self) -> Sensor:
+        if self.black_level_dn >= self.white_level_dn:
+            raise invalid(
+                "black_level_dn",
+                f"must be below the white level {self.white_level_dn} DN of a {self.bit_depth}-bit ADC, "
+                f"got {self.black_level_dn:g}",
+            )
+        if self.noise.hot_pixel_fraction > 0 and self.noise.hot_pixel_dark_current_e_per_s == 0:
+            raise invalid(
+                "noise.hot_pixel_dark_current_e_per_s",
+                "must be > 0 when noise.hot_pixel_fraction is set (a hot pixel needs a dark current)",
+            )
+        return self
+
+
+class Distortion(Model):
+    """Brown–Conrady coefficients in OpenCV order (undistorted → distorted, as cv2.projectPoints)."""
+
+    k1: float = 0.0
+    k2: float = 0.0
+    p1: float = 0.0
+    p2: float = 0.0
+    k3: float = 0.0
+    k4: float = 0.0
+    k5: float = 0.0
+    k6: float = 0.0
+
+    def as_array(self) -> np.ndarray:
+        return np.array([self.k1, self.k2, self.p1, self.p2, self.k3, self.k4, self.k5, self.k6])
+
+    @property
+    def is_zero(self) -> bool:
+        return not np.any(self.as_array())
+
+
+class ZoomPosition(Model):
+    """Lens properties at one focal length; values between entries are interpolated linearly."""
+
+    focal_length_mm: PositiveFloat
+    f_number: Annotated[float, Field(ge=0.5, le=64)] | None = None
+    """Aperture at this focal length (zoom lenses ramp, e.g. F1.6 wide → F4.4 tele)."""
+    distortion: Distortion | None = None
+
+
+class ChromaticAberration(Model):
+    """Lateral CA as per-channel radial magnification relative to green (1 = none)."""
+
+    lateral_scale_r: Annotated[float, Field(gt=0.9, lt=1.1)] = 1.0
+    lateral_scale_b: Annotated[float, Field(gt=0.9, lt=1.1)] = 1.0
+
+
+class Vignetting(Model):
+    """Relative illumination across the frame."""
+
+    natural_cos4: bool = False
+    """Apply the cos⁴ law of the chief-ray angle (most real lenses correct much of it)."""
+    relative_illumination_corner: Annotated[float, Field(gt=0, le=1)] = 1.0
+    """Optical relative illumination at the image corner (datasheet figure; 1 = none)."""
+
+
+class Lens(Model):
+    """The lens: focal length or zoom range, aperture, focus, distortion, CA and vignetting."""
+
+    model: str = ""
+    """Lens part number, for people."""
+    focal_length_mm: PositiveFloat | None = None
+    """Focal length of a fixed lens, mm. Give this or `focal_length_range_mm`, not both."""
+    focal_length_range_mm: tuple[PositiveFloat, PositiveFloat] | None = None
+    """[wide, tele] focal lengths of a zoom or varifocal lens, mm."""
+    f_number: Annotated[float, Field(ge=0.5, le=64)]
+    """Working f-number N = f/D at the wide end (seed paper eq. 3)."""
+    focus_distance_m: PositiveFloat | None = None
+    """Distance the lens is focused at, m; null focuses at the hyperfocal distance."""
+    min_focus_distance_m: PositiveFloat = 0.3
+    """Closest focus distance, m."""
+    coc_um: PositiveFloat | None = None
+    """Acceptable circle of confusion for depth-of-field figures, µm; null uses 2 pixel pitches."""
+    distortion: Distortion = Distortion()
+    zoom_table: list[ZoomPosition] = []
+    """Per-focal-length f-number and distortion, ordered by focal length."""
+    chromatic_aberration: ChromaticAberration = ChromaticAberration()
+    vignetting: Vignetting = Vignetting()
+
+    @property
+    def focal_length_min_mm(self) -> float:
+        return self.focal_length_range_mm[0] if self.focal_length_range_mm else self.focal_length_mm
+
+    @property
+    def focal_length_max_mm(self) -> float:
+        return self.focal_length_range_mm[1] if self.focal_length_range_mm else self.focal_length_mm
+
+    @property
+    def zoom_max_x(self) -> float:
+        return self.focal_length_max_mm / self.focal_length_min_mm
+
+    def at_focal_length(self, focal_length_mm: float) -> tuple[float, Distortion]:
+        """f-number and distortion at `focal_length_mm`, interpolated over the zoom table."""
+        f_numbers = [(z.focal_length_mm, z.f_number) for z in self.zoom_table if z.f_number is not None]
+        dists = [(z.focal_length_mm, z.distortion) for z in self.zoom_table if z.distortion is not None]
+        f_number = self.f_number
+        if f_numbers:
+            xs, ys = zip(*f_numbers, strict=True)
+            f_number = float(np.interp(focal_length_mm, xs, ys))
+        distortion = self.distortion
+        if dists:
+            xs = [x for x, _ in dists]
+            table = np.array([d.as_array() for _, d in dists])
+            values = [float(np.interp(focal_length_mm, xs, table[:, i])) for i in range(table.shape[1])]
+            distortion = Distortion(**dict(zip(Distortion.model_fields, values, strict=True)))
+        return f_number, distortion
+
+    @model_validator(mode="after")
+    def _check(self) -> Lens:
+        if (self.focal_length_mm is None) == (self.focal_length_range_mm is None):
+            raise invalid(
+                "focal_length_mm",
+                "must be given for a fixed lens, or `focal_length_range_mm: [wide, tele]` for a zoom "
+                "lens — exactly one of the two"
+                + (", got both" if self.focal_length_mm is not None else ", got neither"),
+            )
+        if self.focal_length_range_mm and self.focal_length_range_mm[0] > self.focal_length_range_mm[1]:
+            wide, tele = self.focal_length_range_mm
+            raise invalid(
+                "focal_length_range_mm",
+                f"must be ordered [wide, tele] with wide ≤ tele, got [{wide:g}, {tele:g}]",
+            )
+        if self.focus_distance_m is not None and self.focus_distance_m < self.min_focus_distance_m:
+            raise invalid(
+                "focus_distance_m",
+                f"must be ≥ min_focus_distance_m ({self.min_focus_distance_m:g} m), "
+                f"got {self.focus_distance_m:g}",
+            )
+        if not self.distortion.is_zero and any(z.distortion for z in self.zoom_table):
+            raise invalid(
+                "distortion",
+                "must be left out when zoom_table gives distortion per focal length (one source, "
+                "not two); move these coefficients into the zoom_table entry for the wide end",
+            )
+        previous = -math.inf
+        for i, position in enumerate(self.zoom_table):
+            f = position.focal_length_mm
+            if not self.focal_length_min_mm <= f <= self.focal_length_max_mm:
+                raise invalid(
+                    f"zoom_table[{i}].focal_length_mm",
+                    f"must lie in the lens range [{self.focal_length_min_mm:g}, "
+                    f"{self.focal_length_max_mm:g}] mm, got {f:g}",
+                )
+            if f <= previous:
+                raise invalid(
+                    f"zoom_table[{i}].focal_length_mm",
+                    f"must increase along the table (previous {previous:g} mm), got {f:g}",
+                )
+            previous = f
+        return self
+
+
+class AutoExposure(Model):
+    """Auto-exposure: meter a region, drive the mean towards a target, adapt at a limited speed."""
+
+    target_level_frac: Annotated[float, Field(gt=0, lt=1)] = 0.18
+    """Metered mean to aim for, as a fraction of the raw full scale above black."""
+    metering_region_frac: tuple[Fraction, Fraction, Fraction, Fraction] = (0.0, 0.0, 1.0, 1.0)
+    """[x0, y0, x1, y1] of the metering window as fractions of width and height."""
+    speed_up_ev_per_s: PositiveFloat = 4.0
+    """Fastest brightening, exposure values (stops) per second."""
+    speed_down_ev_per_s: PositiveFloat = 8.0
+    """Fastest darkening, stops per second (cameras react faster to over-exposure)."""
+
+    @model_validator(mode="after")
+    def _check(self) -> AutoExposure:
+        x0, y0, x1, y1 = self.metering_region_frac
+        if not (x0 < x1 and y0 < y1):
+            raise invalid(
+                "metering_region_frac",
+                f"must be [x0, y0, x1, y1] with x0 < x1 and y0 < y1, got [{x0:g}, {y0:g}, {x1:g}, {y1:g}]",
+            )
+        return self
+
+
+class Exposure(Model):
+    """Exposure time and gain: fixed (manual) or driven by auto-exposure within limits."""
+
+    mode: Literal["manual", "auto"] = "auto"
+    exposure_time_s: Annotated[float, Field(ge=1e-6, le=10)] = 0.01
+    """Manual exposure time, or the auto-exposure starting point, s."""
+    exposure_time_min_s: Annotated[float, Field(ge=1e-6, le=10)] = 1e-5
+    exposure_time_max_s: Annotated[float, Field(ge=1e-6, le=10)] = 1 / 30
+    gain_db: Annotated[float, Field(ge=0, le=72)] = 0.0
+    """Manual analog gain, or the auto-exposure starting point, dB."""
+    auto: AutoExposure = AutoExposure()
+
+    @model_validator(mode="after")
+    def _check(self) -> Exposure:
+        if self.exposure_time_min_s > self.exposure_time_max_s:
+            raise invalid(
+                "exposure_time_min_s",
+                f"must be ≤ exposure_time_max_s ({self.exposure_time_max_s:g} s), "
+                f"got {self.exposure_time_min_s:g}",
+            )
+        if not self.exposure_time_min_s <= self.exposure_time_s <= self.exposure_time_max_s:
+            raise invalid(
+                "exposure_time_s",
+                f"must lie in [exposure_time_min_s, exposure_time_max_s] = "
+                f"[{self.exposure_time_min_s:g}, {self.exposure_time_max_s:g}] s, got {self.exposure_time_s:g}",
+            )
+        return self
+
+
+class WhiteBalance(Model):
+    mode: Literal["auto_grey_world", "fixed"] = "auto_grey_world"
+    gains_rgb: tuple[PositiveFloat, PositiveFloat, PositiveFloat] = (1.0, 1.0, 1.0)
+    """Fixed white-balance gains (R, G, B), used when mode is fixed."""
+
+
+class ContrastStretch(Model):
+    """Contrast stretch (seed paper Fig. 7): map the [low, high] percentiles to the output range."""
+
+    low_percentile: Annotated[float, Field(ge=0, lt=100)] = 0.5
+    high_percentile: Annotated[float, Field(gt=0, le=100)] = 99.5
+    adaptation_time_s: NonNegativeFloat = 0.5
+    """Time constant of the limits' adaptation after a lighting change, s (0 = instant)."""
+
+    @model_validator(mode="after")
+    def _check(self) -> ContrastStretch:
+        if self.low_percentile >= self.high_percentile:
+            raise invalid(
+                "low_percentile",
+                f"must be below high_percentile ({self.high_percentile:g}), got {self.low_percentile:g}",
+            )
+        return self
+
+
+class Isp(Model):
+    """The camera's image signal processor, in the order it runs."""
+
+    demosaic: Literal["bilinear", "edge_aware", "vng"] = "edge_aware"
+    white_balance: WhiteBalance = WhiteBalance()
+    ccm: tuple[Rgb, Rgb, Rgb] = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+    """Colour-correction matrix, camera RGB → linear sRGB, rows summing to 1 to keep white."""
+    contrast_stretch: ContrastStretch | None = ContrastStretch()
+    """null turns the stretch off."""
+    tone_curve: Literal["srgb", "bt709", "gamma", "linear"] = "bt709"
+    gamma: Annotated[float, Field(gt=0.1, le=5)] = 2.2
+    """Display gamma, used when tone_curve is gamma."""
+    denoise_strength: Fraction = 0.0
+    """Spatial/temporal denoise strength, 0 = off."""
+    sharpen_amount: Annotated[float, Field(ge=0, le=5)] = 0.0
+    """Unsharp-mask amount, 0 = off."""
+    sharpen_radius_px: PositiveFloat = 1.0
+
+    @property
+    def ccm_is_identity(self) -> bool:
+        return bool(np.allclose(np.array(self.ccm), np.eye(3)))
+
+
+class Codec(Model):
+    """How the camera encodes its stream."""
+
+    name: Literal["h264", "h265", "mjpeg"] = "h264"
+    bitrate_kbps: Annotated[float, Field(gt=0)] | None = 4096.0
+    """Target bitrate, kbit/s; null uses constant quality (crf)."""
+    crf: Annotated[int, Field(ge=0, le=51)] = 23
+    gop_frames: Annotated[int, Field(ge=1)] = 50
+    """Frames between key frames (I-frame interval)."""
+    pixel_format: Literal["yuv420p", "yuv422p", "yuv444p"] = "yuv420p"
+
+
+class Ptz(Model):
+    """Pan–tilt–zoom head limits. Pan and tilt are relative to the mount; tilt > 0 looks up."""
+
+    pan_range_deg: tuple[float, float] = (-180.0, 180.0)
+    pan_continuous: bool = True
+    """Endless pan (slip ring): the range wraps around."""
+    tilt_range_deg: tuple[float, float] = (-90.0, 20.0)
+    pan_max_deg_s: PositiveFloat = 100.0
+    """Fastest pan, degrees per second."""
+    tilt_max_deg_s: PositiveFloat = 100.0
+    pan_accel_deg_s2: PositiveFloat = 200.0
+    tilt_accel_deg_s2: PositiveFloat = 200.0
+    pan_step_deg: NonNegativeFloat = 0.0
+    """Mechanical resolution of pan, degrees (0 = continuous)."""
+    tilt_step_deg: NonNegativeFloat = 0.0
+    zoom_wide_to_tele_s: PositiveFloat = 3.5
+    """Time for a full zoom sweep, s."""
+
+    @model_validator(mode="after")
+    def _check(self) -> Ptz:
+        for key in ("pan_range_deg", "tilt_range_deg"):
+            low, high = getattr(self, key)
+            if low >= high:
+                raise invalid(key, f"must be ordered [min, max] with min < max, got [{low:g}, {high:g}]")
+        if self.pan_continuous and self.pan_range_deg[1] - self.pan_range_deg[0] != 360:
+            low, high = self.pan_range_deg
+            raise invalid(
+                "pan_range_deg",
+                f"must span exactly 360° when pan_continuous is true, got [{low:g}, {high:g}]; "
+                "set pan_continuous: false for a limited pan",
+            )
+        return self
+
+
+class Profile(Model):
+    """A camera model as sold: everything that does not depend on where it is installed."""
+
+    description: str = ""
+    serial: Annotated[int, Field(ge=0)] = 0
+    """Default serial seed of the fixed-pattern maps; a scene camera may give its own."""
+    sensor: Sensor
+    lens: Lens
+    exposure: Exposure = Exposure()
+    isp: Isp = Isp()
+    codec: Codec = Codec()
+    ptz: Ptz | None = None
+    """The PTZ head, absent for a fixed camera."""
+
+    @property
+    def coc_mm(self) -> float:
+        coc_um = self.lens.coc_um if self.lens.coc_um is not None else 2.0 * self.sensor.pixel_pitch_um
+        return coc_um * 1e-3
+
+    def corner_radius_normalized(self, focal_length_mm: float) -> float:
+        """Normalised (distorted) radius of the farthest image corner at `focal_length_mm`."""
+        s = self.sensor
+        K = camera_matrix_px(
+            focal_length_mm, s.pixel_pitch_um, s.pitch_y_um, s.width_px, s.height_px,
+            s.principal_point_offset_px,
+        )
+        corners_u = np.array([-0.5, s.width_px - 0.5])
+        corners_v = np.array([-0.5, s.height_px - 0.5])
+        dx = (corners_u - K[0, 2]) / K[0, 0]
+        dy = (corners_v - K[1, 2]) / K[1, 1]
+        return float(np.sqrt(np.max(dx**2) + np.max(dy**2)))
+
+    @model_validator(mode="after")
+    def _check(self) -> Profile:
+        lens, sensor = self.lens, self.sensor
+        if self.exposure.gain_db > sensor.analog_gain_max_db:
+            raise invalid(
+                "exposure.gain_db",
+                f"must be ≤ sensor.analog_gain_max_db ({sensor.analog_gain_max_db:g} dB), "
+                f"got {self.exposure.gain_db:g}",
+            )
+        # The distortion model must stay monotone out to the image corners at every zoom position.
+        checks = [("lens.distortion", lens.focal_length_min_mm)]
+        checks += [
+            (f"lens.zoom_table[{i}].distortion", z.focal_length_mm)
+            for i, z in enumerate(lens.zoom_table)
+            if z.distortion is not None
+        ]
+        if lens.zoom_table:
+            checks += [
+                ("lens.zoom_table", f)
+                for f in np.geomspace(lens.focal_length_min_mm, lens.focal_length_max_mm, 17)
+            ]
+        for key, focal_length in checks:
+            _, distortion = lens.at_focal_length(focal_length)
+            if distortion.is_zero:
+                continue
+            corner = self.corner_radius_normalized(focal_length)
+            reach = radial_reach(distortion.as_array(), r_undistorted_max=20.0 * max(corner, 1.0))
+            if reach < corner:
+                raise invalid(
+                    key,
+                    f"folds over inside the image at {focal_length:.4g} mm: the radial mapping turns back "
+                    f"at distorted radius {reach:.3f} but the image corner lies at {corner:.3f} "
+                    "(normalised units); reduce |k1|/k2/k3 or check their signs",
+                )
+        return self

@@ -1,0 +1,282 @@
+"""Scene: the world (meshes, lights), what moves in it (actors) and the cameras that watch it.
+
+World frame: right-handed, Z up, metres, ground at z = 0 (DESIGN.md "Conventions").
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from camgen.config.base import Model, invalid
+
+PositiveFloat = Annotated[float, Field(gt=0)]
+NonNegativeFloat = Annotated[float, Field(ge=0)]
+Fraction = Annotated[float, Field(ge=0, le=1)]
+Vec3 = tuple[float, float, float]
+Name = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9_.-]+$")]
+
+
+class Material(Model):
+    """A PBR metallic-roughness material; colours are linear (not sRGB-encoded) reflectances."""
+
+    color_rgb: tuple[Fraction, Fraction, Fraction] = (0.5, 0.5, 0.5)
+    roughness: Fraction = 0.8
+    metallic: Fraction = 0.0
+    emission_cd_m2: NonNegativeFloat = 0.0
+    """Luminance the surface emits by itself (signs, screens, lamps), cd/m²."""
+
+
+class Placement(Model):
+    position_m: Vec3 = (0.0, 0.0, 0.0)
+    rotation_deg: Vec3 = (0.0, 0.0, 0.0)
+    """Rotation about the world X, Y, then Z axes (extrinsic), degrees."""
+    material: Material = Material()
+
+
+class BoxMesh(Placement):
+    type: Literal["box"]
+    name: Name
+    size_m: tuple[PositiveFloat, PositiveFloat, PositiveFloat]
+    """Extents along the local X, Y, Z axes, m; the box is centred on position_m."""
+
+
+class CylinderMesh(Placement):
+    type: Literal["cylinder"]
+    name: Name
+    radius_m: PositiveFloat
+    height_m: PositiveFloat
+    """Along the local Z axis, centred on position_m."""
+
+
+class SphereMesh(Placement):
+    type: Literal["sphere"]
+    name: Name
+    radius_m: PositiveFloat
+
+
+class PlaneMesh(Placement):
+    type: Literal["plane"]
+    name: Name
+    size_m: tuple[PositiveFloat, PositiveFloat]
+    """Extents along the local X and Y axes, m; the plane faces local +Z."""
+
+
+class CheckerboardMesh(Placement):
+    type: Literal["checkerboard"]
+    name: Name
+    squares: tuple[Annotated[int, Field(ge=2, le=100)], Annotated[int, Field(ge=2, le=100)]]
+    """Squares along local X and Y (a board with 10×7 squares has 9×6 inner corners)."""
+    square_size_m: PositiveFloat
+    """Edge of one square, m. The board lies in its local XY plane, facing +Z, centred on position_m."""
+
+
+class FileMesh(Placement):
+    type: Literal["file"]
+    name: Name
+    path: str
+    """Mesh file (glTF, OBJ, PLY, STL, …), relative to the scene file."""
+    scale: PositiveFloat = 1.0
+
+
+Mesh = Annotated[
+    BoxMesh | CylinderMesh | SphereMesh | PlaneMesh | CheckerboardMesh | FileMesh,
+    Field(discriminator="type"),
+]
+
+
+class SunLight(Model):
+    type: Literal["sun"]
+    illuminance_lux: Annotated[float, Field(gt=0, le=200_000)]
+    """Illuminance on a surface facing the sun, lux (clear noon ≈ 100 000)."""
+    azimuth_deg: float = 135.0
+    """Direction of the sun from the scene, counter-clockwise from +X, degrees."""
+    elevation_deg: Annotated[float, Field(gt=0, le=90)] = 45.0
+    color_rgb: tuple[Fraction, Fraction, Fraction] = (1.0, 1.0, 1.0)
+
+
+class PointLight(Model):
+    type: Literal["point"]
+    position_m: Vec3
+    intensity_cd: PositiveFloat
+    """Luminous intensity, candela (a 1000 lm isotropic lamp ≈ 80 cd)."""
+    color_rgb: tuple[Fraction, Fraction, Fraction] = (1.0, 1.0, 1.0)
+
+
+class SpotLight(Model):
+    type: Literal["spot"]
+    position_m: Vec3
+    target_m: Vec3
+    intensity_cd: PositiveFloat
+    cone_half_angle_deg: Annotated[float, Field(gt=0, lt=90)] = 30.0
+    color_rgb: tuple[Fraction, Fraction, Fraction] = (1.0, 1.0, 1.0)
+
+
+class AmbientLight(Model):
+    type: Literal["ambient"]
+    illuminance_lux: Annotated[float, Field(gt=0, le=200_000)]
+    """Uniform illuminance from the whole sky, lux (overcast day ≈ 10 000, dusk ≈ 10)."""
+
+
+Light = Annotated[SunLight | PointLight | SpotLight | AmbientLight, Field(discriminator="type")]
+
+
+class Environment(Model):
+    sky_luminance_cd_m2: NonNegativeFloat = 0.0
+    """Luminance of the background where no geometry is hit, cd/m² (clear day sky ≈ 5000)."""
+    meshes: list[Mesh] = []
+
+
+class ActorPath(Model):
+    """Constant-speed motion along straight segments between ground waypoints."""
+
+    waypoints_m: Annotated[list[tuple[float, float]], Field(min_length=1)]
+    """[[x, y], …] on the ground, m. One waypoint: the actor stands still."""
+    speed_m_s: Annotated[float, Field(gt=0, le=100)] = 1.4
+    start_s: NonNegativeFloat = 0.0
+    """When the actor leaves the first waypoint, s."""
+    loop: bool = False
+    """Return to the first waypoint and repeat; otherwise stop at the last one."""
+
+    @model_validator(mode="after")
+    def _check(self) -> ActorPath:
+        points = self.waypoints_m
+        for i in range(1, len(points)):
+            if points[i] == points[i - 1]:
+                raise invalid(
+                    f"waypoints_m[{i}]",
+                    f"repeats the previous waypoint {list(points[i])}; remove it (use start_s to wait)",
+                )
+        return self
+
+
+ActorClass = Literal["person", "car", "truck", "bus", "bicycle", "motorcycle", "other"]
+ActorShape = Annotated[BoxMesh | CylinderMesh | SphereMesh | FileMesh, Field(discriminator="type")]
+
+
+class Actor(Model):
+    """Something that moves and is annotated: it gets a track id, a class, boxes and masks."""
+
+    name: Name
+    cls: ActorClass = Field(alias="class")
+    """Object class written to MOTChallenge and COCO."""
+    shape: ActorShape | None = None
+    """Geometry in the actor's frame (x forward, z up, origin on the ground); null uses the class default."""
+    path: ActorPath
+
+
+class Mount(Model):
+    """Where a camera (or its PTZ head) is fixed and which way its zero position looks."""
+
+    position_m: Vec3
+    yaw_deg: float = 0.0
+    """Heading, counter-clockwise from +X seen from above, degrees."""
+    pitch_deg: Annotated[float, Field(ge=-90, le=90)] = 0.0
+    """Elevation of the optical axis, degrees; negative looks down."""
+    roll_deg: Annotated[float, Field(ge=-180, le=180)] = 0.0
+    """Rotation about the optical axis, degrees; positive turns the image clockwise."""
+
+
+class PtzPosition(Model):
+    """Position of a PTZ head relative to its mount, and speed limits set on this camera."""
+
+    pan_deg: float = 0.0
+    """Counter-clockwise about the mount's up axis, degrees."""
+    tilt_deg: float = 0.0
+    """Up about the mount's right axis, degrees; negative looks down."""
+    zoom_x: Annotated[float, Field(ge=1)] = 1.0
+    """Optical zoom factor: focal length = wide-end focal length × zoom_x."""
+    pan_max_deg_s: PositiveFloat | None = None
+    """Pan speed limit configured on this camera, deg/s; null uses the head's maximum."""
+    tilt_max_deg_s: PositiveFloat | None = None
+
+
+class Camera(Model):
+    name: Name
+    profile: str
+    """A profile name (looked up in the profile directories) or a path to a profile YAML."""
+    serial: Annotated[int, Field(ge=0)] | None = None
+    """Serial seed of this unit's fixed-pattern noise; null uses the profile's."""
+    mount: Mount
+    ptz: PtzPosition | None = None
+    """Head position for PTZ cameras; a fixed camera is aimed by its mount alone."""
+    focal_length_mm: PositiveFloat | None = None
+    """Installed focal length of a varifocal (non-PTZ) lens, mm; null uses the wide end."""
+    focus_distance_m: PositiveFloat | None = None
+    """Overrides the profile's focus distance, m."""
+
+
+class Outputs(Model):
+    """What a render of this scene writes; the plan renders only the passes these need."""
+
+    video: bool = True
+    frames: Literal["png", "tiff", "exr"] | None = None
+    raw_dng: bool = False
+    depth: Literal["png16", "exr"] | None = None
+    annotations: list[Literal["mot", "coco"]] = ["mot", "coco"]
+    camera_metadata: bool = True
+
+
+class Scene(Model):
+    description: str = ""
+    duration_s: Annotated[float, Field(gt=0, le=86_400)]
+    fps: Annotated[float, Field(gt=0, le=240)] = 25.0
+    seed: Annotated[int, Field(ge=0)] = 0
+    environment: Environment = Environment()
+    lights: list[Light] = []
+    actors: list[Actor] = []
+    cameras: Annotated[list[Camera], Field(min_length=1)]
+    outputs: Outputs = Outputs()
+
+    @property
+    def frame_count(self) -> int:
+        return max(1, math.floor(self.duration_s * self.fps + 1e-9))
+
+    @model_validator(mode="after")
+    def _check(self) -> Scene:
+        for key, items in (
+            ("environment.meshes", self.environment.meshes),
+            ("actors", self.actors),
+            ("cameras", self.cameras),
+        ):
+            seen: dict[str, int] = {}
+            for i, item in enumerate(items):
+                if item.name in seen:
+                    raise invalid(
+                        f"{key}[{i}].name",
+                        f"must be unique, got {item.name!r} again (first at {key}[{seen[item.name]}])",
+                    )
+                seen[item.name] = i
+        if not self.lights and self.environment.sky_luminance_cd_m2 == 0 and not any(
+            m.material.emission_cd_m2 > 0 for m in self.environment.meshes
+        ):
+            raise invalid(
+                "lights",
+                "must hold at least one light (the scene has no sky luminance and no emitting mesh, "
+                "so every frame would be black)",
+            )
+        return self
+
+
+# Class-typical sizes (m) used when an actor gives no shape: a standing adult, a mid-size car, …
+_DEFAULT_BOX_SIZE_M: dict[str, tuple[float, float, float]] = {
+    "car": (4.5, 1.8, 1.5),
+    "truck": (8.0, 2.5, 3.2),
+    "bus": (12.0, 2.55, 3.2),
+    "bicycle": (1.8, 0.6, 1.6),
+    "motorcycle": (2.1, 0.8, 1.4),
+    "other": (1.0, 1.0, 1.0),
+}
+
+
+def actor_shape(actor: Actor) -> BoxMesh | CylinderMesh | SphereMesh | FileMesh:
+    """The actor's geometry in its own frame (x forward, z up, origin on the ground)."""
+    if actor.shape is not None:
+        return actor.shape
+    if actor.cls == "person":
+        return CylinderMesh(type="cylinder", name=actor.name, radius_m=0.25, height_m=1.75,
+                            position_m=(0.0, 0.0, 0.875))
+    size = _DEFAULT_BOX_SIZE_M[actor.cls]
+    return BoxMesh(type="box", name=actor.name, size_m=size, position_m=(0.0, 0.0, size[2] / 2))

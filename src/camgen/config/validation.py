@@ -1,0 +1,191 @@
+"""Turn pydantic validation errors into located, readable `Problem`s.
+
+``scenes/lot.yaml:23:7: cameras[1].ptz.pan_max_deg_s must be > 0, got -30``
+"""
+
+from __future__ import annotations
+
+import difflib
+import types
+import typing
+from typing import Any
+
+from pydantic import BaseModel, ValidationError
+
+from camgen.config.base import parse_subpath
+from camgen.config.yaml_source import KeyPath, YamlDocument
+from camgen.errors import ConfigError, Problem
+
+
+def show_value(value: Any, limit: int = 60) -> str:
+    """A value as the user wrote it in YAML, shortened."""
+    if isinstance(value, str):
+        text = repr(value)
+    elif value is None:
+        text = "null"
+    elif isinstance(value, bool):
+        text = "true" if value else "false"
+    elif isinstance(value, float):
+        text = f"{value:g}"
+    elif isinstance(value, dict):
+        text = "{" + ", ".join(f"{k}: {show_value(v, 20)}" for k, v in value.items()) + "}"
+    elif isinstance(value, list | tuple):
+        text = "[" + ", ".join(show_value(v, 20) for v in value) + "]"
+    else:
+        text = str(value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def _data_path(loc: tuple, data: Any) -> KeyPath:
+    """Map a pydantic `loc` onto the user's data, dropping union tags pydantic inserts."""
+    path: list[str | int] = []
+    node = data
+    for i, part in enumerate(loc):
+        last = i == len(loc) - 1
+        if isinstance(node, dict) and part in node:
+            node = node[part]
+            path.append(part)
+        elif isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node):
+            node = node[part]
+            path.append(part)
+        elif last or not isinstance(node, dict):
+            path.append(part)
+        # else: a discriminator tag such as 'box' in ('meshes', 0, 'box', 'size_m'): not user data
+    return tuple(path)
+
+
+def _unwrap(annotation: Any) -> list[Any]:
+    """The candidate types behind Optional/Union/Annotated."""
+    origin = typing.get_origin(annotation)
+    if origin is typing.Annotated:
+        return _unwrap(typing.get_args(annotation)[0])
+    if origin in (typing.Union, types.UnionType):
+        out = []
+        for arg in typing.get_args(annotation):
+            out += _unwrap(arg)
+        return out
+    return [annotation]
+
+
+def _model_at(root: type[BaseModel], path: KeyPath, data: Any) -> type[BaseModel] | None:
+    """The model class whose keys live at `path` in `data` (resolving unions by their `type` key)."""
+    candidates: list[Any] = [root]
+    node = data
+    for part in path:
+        nxt: list[Any] = []
+        for candidate in candidates:
+            for t in _unwrap(candidate):
+                origin = typing.get_origin(t)
+                if isinstance(part, int) and origin in (list, tuple):
+                    nxt.append(typing.get_args(t)[0])
+                elif isinstance(part, str) and isinstance(t, type) and issubclass(t, BaseModel):
+                    for name, info in t.model_fields.items():
+                        if part in (name, info.alias):
+                            nxt.append(info.annotation)
+        node = node[part] if isinstance(node, dict | list) and _has(node, part) else None
+        candidates = nxt
+    models = [t for c in candidates for t in _unwrap(c) if isinstance(t, type) and issubclass(t, BaseModel)]
+    if len(models) > 1 and isinstance(node, dict):
+        tagged = [m for m in models if "type" in m.model_fields and _literal_matches(m, node.get("type"))]
+        models = tagged or models
+    return models[0] if models else None
+
+
+def _has(node: Any, part: str | int) -> bool:
+    if isinstance(node, dict):
+        return part in node
+    return isinstance(part, int) and 0 <= part < len(node)
+
+
+def _literal_matches(model: type[BaseModel], value: Any) -> bool:
+    return value in typing.get_args(model.model_fields["type"].annotation)
+
+
+def allowed_keys(model: type[BaseModel]) -> list[str]:
+    return [info.alias or name for name, info in model.model_fields.items()]
+
+
+def _phrase(error: dict, root: type[BaseModel], path: KeyPath, data: Any) -> str:
+    kind = error["type"]
+    ctx = error.get("ctx", {})
+    value = error.get("input")
+    got = f", got {show_value(value)}"
+    if kind == "camgen":
+        return ctx["message"]
+    if kind == "missing":
+        return "is required"
+    if kind == "extra_forbidden":
+        parent = _model_at(root, path[:-1], data)
+        keys = allowed_keys(parent) if parent else []
+        close = difflib.get_close_matches(str(path[-1]), keys, n=1, cutoff=0.6)
+        hint = f"; did you mean {close[0]!r}?" if close else ""
+        listing = f" Allowed keys here: {', '.join(keys)}." if keys else ""
+        return f"is not a known key{hint}{listing}"
+    if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
+        op = {"greater_than": ">", "greater_than_equal": "≥", "less_than": "<", "less_than_equal": "≤"}[kind]
+        bound = next(iter(ctx.values()))
+        return f"must be {op} {show_value(bound)}{got}"
+    if kind == "finite_number":
+        return f"must be a finite number{got}"
+    if kind in ("float_type", "float_parsing", "int_type", "int_parsing"):
+        return f"must be a number{got}"
+    if kind == "int_from_float":
+        return f"must be a whole number{got}"
+    if kind in ("bool_type", "bool_parsing"):
+        return f"must be true or false{got}"
+    if kind == "string_type":
+        return f"must be text{got}"
+    if kind in ("list_type", "tuple_type"):
+        return f"must be a list{got}"
+    if kind in ("model_type", "dict_type", "model_attributes_type"):
+        return f"must be a mapping of keys{got}"
+    if kind in ("too_short", "too_long"):
+        expected = ctx.get("min_length") if kind == "too_short" else ctx.get("max_length")
+        actual = ctx.get("actual_length")
+        word = "at least" if kind == "too_short" else "at most"
+        return f"must have {word} {expected} item{'s' if expected != 1 else ''}, got {actual}{got}"
+    if kind in ("string_too_short", "string_too_long"):
+        return f"must be {'non-empty' if kind == 'string_too_short' else 'shorter'} text{got}"
+    if kind == "string_pattern_mismatch":
+        return f"must use only letters, digits, '_', '-' and '.'{got}"
+    if kind == "literal_error":
+        close = ""
+        if isinstance(value, str):
+            options = [o.strip(" '") for o in ctx.get("expected", "").replace(" or ", ", ").split(",")]
+            match = difflib.get_close_matches(value, options, n=1, cutoff=0.5)
+            close = f"; did you mean {match[0]!r}?" if match else ""
+        return f"must be one of {ctx.get('expected')}{got}{close}"
+    if kind == "union_tag_invalid":
+        options = [o.strip(" '") for o in str(ctx.get("expected_tags", "")).split(",")]
+        match = difflib.get_close_matches(str(ctx.get("tag")), options, n=1, cutoff=0.5)
+        close = f"; did you mean {match[0]!r}?" if match else ""
+        return f"must be one of {ctx.get('expected_tags')}, got {show_value(ctx.get('tag'))}{close}"
+    if kind == "union_tag_not_found":
+        return "is required (it selects the kind of item)"
+    if kind in ("value_error", "assertion_error"):
+        return str(ctx.get("error", error["msg"]))
+    return f"{error['msg'][0].lower()}{error['msg'][1:]}{got}"
+
+
+def problems_from(exc: ValidationError, doc: YamlDocument | None, root: type[BaseModel]) -> list[Problem]:
+    """One located `Problem` per pydantic error, in file order."""
+    data = doc.data if doc is not None else None
+    problems = []
+    for error in exc.errors(include_url=False):
+        path = _data_path(tuple(error["loc"]), data) if data is not None else tuple(error["loc"])
+        if error["type"] == "camgen":
+            path = path + parse_subpath(error["ctx"]["subpath"])
+        elif error["type"] in ("union_tag_invalid", "union_tag_not_found"):
+            path = path + (error["ctx"].get("discriminator", "'type'").strip("'"),)
+        message = _phrase(error, root, path, data)
+        problems.append(Problem(path=path, message=message, location=doc.locate(path) if doc else None))
+    problems.sort(key=lambda p: (p.location.line, p.location.column) if p.location else (0, 0))
+    return problems
+
+
+def validate(model: type[BaseModel], doc: YamlDocument) -> Any:
+    """Validate `doc` against `model`, raising a located `ConfigError` listing every problem."""
+    try:
+        return model.model_validate(doc.data)
+    except ValidationError as exc:
+        raise ConfigError(problems_from(exc, doc, model)) from None

@@ -1,0 +1,138 @@
+"""YAML → plain Python data, remembering where every key came from.
+
+PyYAML's composer keeps a mark (line, column) on every node; we walk the node tree ourselves so each
+key path maps to the place a user would look at. Duplicate keys are errors (PyYAML would silently keep
+the last one).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from camgen.errors import ConfigError, Location, Problem
+
+KeyPath = tuple[str | int, ...]
+
+
+@dataclass(frozen=True)
+class YamlDocument:
+    """Parsed YAML data with the source location of every key path (`()` is the document)."""
+
+    data: Any
+    locations: dict[KeyPath, Location] = field(default_factory=dict)
+
+    def locate(self, path: KeyPath) -> Location | None:
+        """The location of `path`, or of its deepest ancestor present in the file."""
+        for end in range(len(path), -1, -1):
+            location = self.locations.get(tuple(path[:end]))
+            if location is not None:
+                return location
+        return None
+
+
+def _location(file: str, mark: yaml.Mark) -> Location:
+    return Location(file=file, line=mark.line + 1, column=mark.column + 1)
+
+
+def _walk(
+    node: yaml.Node,
+    path: KeyPath,
+    file: str,
+    constructor: yaml.constructor.SafeConstructor,
+    locations: dict[KeyPath, Location],
+) -> Any:
+    if isinstance(node, yaml.MappingNode):
+        constructor.flatten_mapping(node)  # resolves YAML merge keys (<<)
+        result: dict[str, Any] = {}
+        for key_node, value_node in node.value:
+            key = constructor.construct_object(key_node, deep=True)
+            if not isinstance(key, str):
+                key = str(key)
+            if key in result:
+                where = _location(file, key_node.start_mark)
+                raise ConfigError([Problem(path + (key,), "appears twice in this mapping", where)])
+            locations[path + (key,)] = _location(file, key_node.start_mark)
+            result[key] = _walk(value_node, path + (key,), file, constructor, locations)
+        return result
+    if isinstance(node, yaml.SequenceNode):
+        items = []
+        for index, item in enumerate(node.value):
+            locations[path + (index,)] = _location(file, item.start_mark)
+            items.append(_walk(item, path + (index,), file, constructor, locations))
+        return items
+    return constructor.construct_object(node, deep=True)
+
+
+def parse_yaml(text: str, file: str) -> YamlDocument:
+    """Parse one YAML document from `text`; `file` names it in error messages."""
+    try:
+        node = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        where = _location(file, mark) if mark else Location(file, 1, 1)
+        reason = exc.problem or "is not valid YAML"
+        raise ConfigError([Problem((), f"YAML syntax error: {reason}", where)]) from None
+    except yaml.YAMLError as exc:
+        raise ConfigError([Problem((), f"YAML error: {exc}", Location(file, 1, 1))]) from None
+    if node is None:
+        raise ConfigError([Problem((), "the file is empty; expected a mapping of keys", Location(file, 1, 1))])
+    locations: dict[KeyPath, Location] = {(): _location(file, node.start_mark)}
+    constructor = yaml.SafeLoader("")
+    data = _walk(node, (), file, constructor, locations)
+    if not isinstance(data, dict):
+        raise ConfigError(
+            [Problem((), f"the top level must be a mapping of keys, got {type(data).__name__}", locations[()])]
+        )
+    return YamlDocument(data=data, locations=locations)
+
+
+def load_yaml(path: Path) -> YamlDocument:
+    """Read and parse a YAML file; a missing or unreadable file is a `ConfigError`."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"{path}: cannot read: {exc}") from None
+    return parse_yaml(text, str(path))
+
+
+def merge_documents(base: YamlDocument, override: YamlDocument) -> YamlDocument:
+    """Deep-merge `override` onto `base`: mappings merge key by key, anything else is replaced.
+
+    Locations follow the value that wins, so an error in an inherited key points at the base file.
+    """
+    locations: dict[KeyPath, Location] = {}
+
+    def merge(a: Any, b: Any, path: KeyPath) -> Any:
+        if isinstance(a, dict) and isinstance(b, dict):
+            merged = {}
+            for key in [*a, *(k for k in b if k not in a)]:
+                sub = path + (key,)
+                if key in b and key in a:
+                    locations[sub] = override.locations.get(sub) or base.locations[sub]
+                    merged[key] = merge(a[key], b[key], sub)
+                elif key in b:
+                    _copy_locations(override, sub, locations)
+                    merged[key] = b[key]
+                else:
+                    _copy_locations(base, sub, locations)
+                    merged[key] = a[key]
+            return merged
+        _copy_locations(override, path, locations)
+        return b
+
+    data = merge(base.data, override.data, ())
+    locations[()] = override.locations[()]
+    return YamlDocument(data=data, locations=locations)
+
+
+def _copy_locations(source: YamlDocument, prefix: KeyPath, into: dict[KeyPath, Location]) -> None:
+    n = len(prefix)
+    for path, location in source.locations.items():
+        if path[:n] == prefix:
+            into[path] = location

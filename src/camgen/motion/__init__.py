@@ -1,0 +1,1 @@
+"""Camera heads and actor trajectories: pure functions of time."""

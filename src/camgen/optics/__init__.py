@@ -1,0 +1,1 @@
+"""Lens optics: pure functions on arrays (no I/O, no OpenGL)."""

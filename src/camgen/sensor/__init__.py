@@ -1,0 +1,1 @@
+"""Sensor model: radiance → electrons → noise → DN (pure functions, explicit rng)."""
