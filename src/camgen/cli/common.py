@@ -13,7 +13,11 @@ PROFILE_PATH_ENV = "CAMGEN_PROFILE_PATH"
 
 def add_profile_dirs_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "--profiles", metavar="DIR", action="append", type=Path, default=[],
+        "--profiles",
+        metavar="DIR",
+        action="append",
+        type=Path,
+        default=[],
         help=f"directory to look up profile names in (repeatable; also ${PROFILE_PATH_ENV}, then the "
         "scene's own and sibling profiles/ directories, then ./profiles)",
     )

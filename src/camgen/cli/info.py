@@ -28,8 +28,10 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     sensor = Table(title="Sensor", show_header=False, title_justify="left")
     rows = [
         ("resolution", f"{s.width_px} × {s.height_px} px, {s.cfa}, {s.bit_depth}-bit"),
-        ("sensor size", f"{info.sensor_width_mm:.3f} × {info.sensor_height_mm:.3f} mm "
-                        f"(diagonal {info.sensor_diagonal_mm:.3f} mm)"),
+        (
+            "sensor size",
+            f"{info.sensor_width_mm:.3f} × {info.sensor_height_mm:.3f} mm (diagonal {info.sensor_diagonal_mm:.3f} mm)",
+        ),
         ("pixel", f"{s.pixel_pitch_um:g} × {s.pitch_y_um:g} µm, area {info.pixel_area_um2:.3g} µm²"),
         ("saturation", f"{info.saturation_e:.0f} e⁻ (limited by the {info.saturation_limit})"),
         ("dark current", f"{info.dark_current_e_per_s:.3g} e⁻/s at {s.temperature_c:g} °C"),
@@ -45,8 +47,15 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         optics.add_column(column, justify="right")
     for z in info.zoom_steps:
         optics.add_row(
-            f"{z.zoom_x:g}", f"{z.focal_length_mm:.2f}", f"{z.fx_px:.1f}", f"{z.fy_px:.1f}", f"{z.hfov_deg:.2f}",
-            f"{z.vfov_deg:.2f}", f"{z.dfov_deg:.2f}", f"{z.f_number:.2f}", f"{z.hyperfocal_m:.2f}",
+            f"{z.zoom_x:g}",
+            f"{z.focal_length_mm:.2f}",
+            f"{z.fx_px:.1f}",
+            f"{z.fy_px:.1f}",
+            f"{z.hfov_deg:.2f}",
+            f"{z.vfov_deg:.2f}",
+            f"{z.dfov_deg:.2f}",
+            f"{z.f_number:.2f}",
+            f"{z.hyperfocal_m:.2f}",
         )
     out.print(optics)
     return 0

@@ -29,7 +29,8 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     job = compile_scene(loaded, PlanSettings(force_all_stages=args.force_all))
     out.print(
         f"[bold]{job.scene_name}[/bold]  job {job.job_id[:16]}  {job.frame_count} frames at {job.fps:g} fps, "
-        f"seed {job.seed}, {len(job.cameras)} camera(s)", highlight=False,
+        f"seed {job.seed}, {len(job.cameras)} camera(s)",
+        highlight=False,
     )
     for camera in job.cameras:
         r = camera.render
@@ -39,7 +40,8 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             f"render {r.width_px}×{r.height_px} (margin l/t/r/b {'/'.join(map(str, r.margin_px))} px, "
             f"supersampling {r.supersampling}×), passes: {', '.join(r.passes) or 'none'}\n"
             f"  f = {state.focal_length_mm:.3g} mm, N = {state.f_number:.3g}, focus {state.focus_distance_m:.3g} m, "
-            f"fx = {state.K_px[0][0]:.1f} px, exposure {camera.exposure_mode}", highlight=False,
+            f"fx = {state.K_px[0][0]:.1f} px, exposure {camera.exposure_mode}",
+            highlight=False,
         )
         stages = Table(title="stages", title_justify="left")
         stages.add_column("#", justify="right")

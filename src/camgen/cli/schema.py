@@ -18,7 +18,10 @@ def add_parser(subparsers) -> None:
     parser = subparsers.add_parser("schema", help="print or write the JSON Schema of the YAML files")
     parser.add_argument("kind", nargs="?", choices=[*MODELS, "all"], default="all")
     parser.add_argument(
-        "-o", "--output", type=Path, metavar="DIR",
+        "-o",
+        "--output",
+        type=Path,
+        metavar="DIR",
         help="write <kind>.schema.json files into DIR instead of printing",
     )
     parser.set_defaults(run=run)

@@ -78,9 +78,7 @@ def find_profile(
     close = difflib.get_close_matches(reference, known, n=1, cutoff=0.6)
     hint = f"; did you mean {close[0]!r}?" if close else ""
     searched = ", ".join(str(d) for d in dict.fromkeys(dirs) if d.is_dir()) or "no existing directory"
-    raise ConfigError(
-        [Problem(key_path, f"names profile {reference!r}, which is not in {searched}{hint}", location)]
-    )
+    raise ConfigError([Problem(key_path, f"names profile {reference!r}, which is not in {searched}{hint}", location)])
 
 
 def _profile_document(path: Path, profile_dirs: Sequence[Path], chain: tuple[Path, ...]) -> YamlDocument:
@@ -139,7 +137,7 @@ def load_scene(path: str | Path, profile_dirs: Sequence[Path] = ()) -> LoadedSce
     for key, mesh in file_meshes:
         if isinstance(mesh, FileMesh) and mesh.path not in file_bounds:
             try:
-                file_bounds[mesh.path] = _mesh_file_bounds(path.parent / mesh.path)
+                file_bounds[mesh.path] = _mesh_file_bounds(path.parent, mesh.path)
             except ConfigError as exc:
                 problems.append(Problem(key, exc.problems[0].message, doc.locate(key)))
     if problems:
@@ -153,12 +151,13 @@ def load_scene(path: str | Path, profile_dirs: Sequence[Path] = ()) -> LoadedSce
     return LoadedScene(name=path.stem, path=path.resolve(), scene=scene, profiles=profiles, file_bounds=file_bounds)
 
 
-def _mesh_file_bounds(path: Path) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+def _mesh_file_bounds(directory: Path, reference: str) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     """Axis-aligned bounds of a mesh file in its own frame (trimesh reads glTF, OBJ, PLY, STL, …)."""
     import trimesh  # heavy import, only for scenes that use mesh files
 
+    path = directory / reference
     if not path.is_file():
-        raise ConfigError(f"refers to {path.name!r}, but {path.resolve()} does not exist")
+        raise ConfigError(f"refers to {reference!r}, but {path.resolve()} does not exist")
     try:
         loaded = trimesh.load(path, force="scene")
         low, high = loaded.bounds
@@ -179,7 +178,9 @@ def load_dataset(path: str | Path) -> Dataset:
         if not (path.parent / scene).is_file():
             key = ("scenes", i)
             problems.append(
-                Problem(key, f"refers to {scene!r}, but {(path.parent / scene).resolve()} does not exist", doc.locate(key))
+                Problem(
+                    key, f"refers to {scene!r}, but {(path.parent / scene).resolve()} does not exist", doc.locate(key)
+                )
             )
     for i, reference in enumerate(dataset.profiles):
         key = ("profiles", i)
@@ -200,65 +201,87 @@ def check_cameras(scene: Scene, profiles: dict[str, Profile]) -> list[Problem]:
         lens, head = profile.lens, profile.ptz
         base = ("cameras", i)
         if scene.fps > profile.sensor.frame_rate_max_hz:
-            problems.append(Problem(
-                ("fps",),
-                f"must be ≤ {profile.sensor.frame_rate_max_hz:g} Hz, the frame rate limit of camera "
-                f"{camera.name!r}'s sensor, got {scene.fps:g}",
-            ))
+            problems.append(
+                Problem(
+                    ("fps",),
+                    f"must be ≤ {profile.sensor.frame_rate_max_hz:g} Hz, the frame rate limit of camera "
+                    f"{camera.name!r}'s sensor, got {scene.fps:g}",
+                )
+            )
         if profile.exposure.mode == "manual" and profile.exposure.exposure_time_s > 1 / scene.fps:
-            problems.append(Problem(
-                (*base, "profile"),
-                f"sets a manual exposure of {profile.exposure.exposure_time_s:g} s, longer than the frame "
-                f"period 1/fps = {1 / scene.fps:g} s; shorten the exposure or lower fps",
-            ))
+            problems.append(
+                Problem(
+                    (*base, "profile"),
+                    f"sets a manual exposure of {profile.exposure.exposure_time_s:g} s, longer than the frame "
+                    f"period 1/fps = {1 / scene.fps:g} s; shorten the exposure or lower fps",
+                )
+            )
         if camera.ptz is not None and head is None:
-            problems.append(Problem(
-                (*base, "ptz"),
-                f"is set, but profile {camera.profile!r} has no PTZ head; aim a fixed camera with "
-                "mount.yaw_deg and mount.pitch_deg",
-            ))
+            problems.append(
+                Problem(
+                    (*base, "ptz"),
+                    f"is set, but profile {camera.profile!r} has no PTZ head; aim a fixed camera with "
+                    "mount.yaw_deg and mount.pitch_deg",
+                )
+            )
         if camera.ptz is not None and head is not None:
             ptz = camera.ptz
             if ptz.zoom_x > lens.zoom_max_x + 1e-9:
-                problems.append(Problem(
-                    (*base, "ptz", "zoom_x"),
-                    f"must be ≤ {lens.zoom_max_x:.4g} (the lens zooms {lens.focal_length_min_mm:g}–"
-                    f"{lens.focal_length_max_mm:g} mm), got {ptz.zoom_x:g}",
-                ))
+                problems.append(
+                    Problem(
+                        (*base, "ptz", "zoom_x"),
+                        f"must be ≤ {lens.zoom_max_x:.4g} (the lens zooms {lens.focal_length_min_mm:g}–"
+                        f"{lens.focal_length_max_mm:g} mm), got {ptz.zoom_x:g}",
+                    )
+                )
             if not head.pan_continuous and not head.pan_range_deg[0] <= ptz.pan_deg <= head.pan_range_deg[1]:
                 low, high = head.pan_range_deg
-                problems.append(Problem(
-                    (*base, "ptz", "pan_deg"), f"must lie in the head's pan range [{low:g}, {high:g}]°, got {ptz.pan_deg:g}"
-                ))
+                problems.append(
+                    Problem(
+                        (*base, "ptz", "pan_deg"),
+                        f"must lie in the head's pan range [{low:g}, {high:g}]°, got {ptz.pan_deg:g}",
+                    )
+                )
             low, high = head.tilt_range_deg
             if not low <= ptz.tilt_deg <= high:
-                problems.append(Problem(
-                    (*base, "ptz", "tilt_deg"), f"must lie in the head's tilt range [{low:g}, {high:g}]°, got {ptz.tilt_deg:g}"
-                ))
+                problems.append(
+                    Problem(
+                        (*base, "ptz", "tilt_deg"),
+                        f"must lie in the head's tilt range [{low:g}, {high:g}]°, got {ptz.tilt_deg:g}",
+                    )
+                )
             for axis in ("pan", "tilt"):
                 limit = getattr(ptz, f"{axis}_max_deg_s")
                 head_max = getattr(head, f"{axis}_max_deg_s")
                 if limit is not None and limit > head_max:
-                    problems.append(Problem(
-                        (*base, "ptz", f"{axis}_max_deg_s"),
-                        f"must be ≤ the head's maximum {head_max:g} deg/s, got {limit:g}",
-                    ))
+                    problems.append(
+                        Problem(
+                            (*base, "ptz", f"{axis}_max_deg_s"),
+                            f"must be ≤ the head's maximum {head_max:g} deg/s, got {limit:g}",
+                        )
+                    )
         if camera.focal_length_mm is not None:
             if head is not None:
-                problems.append(Problem(
-                    (*base, "focal_length_mm"),
-                    "is for varifocal fixed cameras; a PTZ camera zooms with ptz.zoom_x",
-                ))
+                problems.append(
+                    Problem(
+                        (*base, "focal_length_mm"),
+                        "is for varifocal fixed cameras; a PTZ camera zooms with ptz.zoom_x",
+                    )
+                )
             elif not lens.focal_length_min_mm - 1e-9 <= camera.focal_length_mm <= lens.focal_length_max_mm + 1e-9:
-                problems.append(Problem(
-                    (*base, "focal_length_mm"),
-                    f"must lie in the lens range [{lens.focal_length_min_mm:g}, {lens.focal_length_max_mm:g}] mm, "
-                    f"got {camera.focal_length_mm:g}",
-                ))
+                problems.append(
+                    Problem(
+                        (*base, "focal_length_mm"),
+                        f"must lie in the lens range [{lens.focal_length_min_mm:g}, {lens.focal_length_max_mm:g}] mm, "
+                        f"got {camera.focal_length_mm:g}",
+                    )
+                )
         focus = camera.focus_distance_m
         if focus is not None and focus < lens.min_focus_distance_m:
-            problems.append(Problem(
-                (*base, "focus_distance_m"),
-                f"must be ≥ the lens' min_focus_distance_m ({lens.min_focus_distance_m:g} m), got {focus:g}",
-            ))
+            problems.append(
+                Problem(
+                    (*base, "focus_distance_m"),
+                    f"must be ≥ the lens' min_focus_distance_m ({lens.min_focus_distance_m:g} m), got {focus:g}",
+                )
+            )
     return problems

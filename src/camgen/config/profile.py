@@ -257,8 +257,7 @@ class Lens(Model):
         if self.focus_distance_m is not None and self.focus_distance_m < self.min_focus_distance_m:
             raise invalid(
                 "focus_distance_m",
-                f"must be ≥ min_focus_distance_m ({self.min_focus_distance_m:g} m), "
-                f"got {self.focus_distance_m:g}",
+                f"must be ≥ min_focus_distance_m ({self.min_focus_distance_m:g} m), got {self.focus_distance_m:g}",
             )
         if not self.distortion.is_zero and any(z.distortion for z in self.zoom_table):
             raise invalid(
@@ -324,8 +323,7 @@ class Exposure(Model):
         if self.exposure_time_min_s > self.exposure_time_max_s:
             raise invalid(
                 "exposure_time_min_s",
-                f"must be ≤ exposure_time_max_s ({self.exposure_time_max_s:g} s), "
-                f"got {self.exposure_time_min_s:g}",
+                f"must be ≤ exposure_time_max_s ({self.exposure_time_max_s:g} s), got {self.exposure_time_min_s:g}",
             )
         if not self.exposure_time_min_s <= self.exposure_time_s <= self.exposure_time_max_s:
             raise invalid(
@@ -452,7 +450,11 @@ class Profile(Model):
         """Normalised (distorted) radius of the farthest image corner at `focal_length_mm`."""
         s = self.sensor
         K = camera_matrix_px(
-            focal_length_mm, s.pixel_pitch_um, s.pitch_y_um, s.width_px, s.height_px,
+            focal_length_mm,
+            s.pixel_pitch_um,
+            s.pitch_y_um,
+            s.width_px,
+            s.height_px,
             s.principal_point_offset_px,
         )
         corners_u = np.array([-0.5, s.width_px - 0.5])
@@ -479,8 +481,7 @@ class Profile(Model):
         ]
         if lens.zoom_table:
             checks += [
-                ("lens.zoom_table", f)
-                for f in np.geomspace(lens.focal_length_min_mm, lens.focal_length_max_mm, 17)
+                ("lens.zoom_table", f) for f in np.geomspace(lens.focal_length_min_mm, lens.focal_length_max_mm, 17)
             ]
         for key, focal_length in checks:
             _, distortion = lens.at_focal_length(focal_length)

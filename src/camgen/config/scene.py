@@ -249,8 +249,10 @@ class Scene(Model):
                         f"must be unique, got {item.name!r} again (first at {key}[{seen[item.name]}])",
                     )
                 seen[item.name] = i
-        if not self.lights and self.environment.sky_luminance_cd_m2 == 0 and not any(
-            m.material.emission_cd_m2 > 0 for m in self.environment.meshes
+        if (
+            not self.lights
+            and self.environment.sky_luminance_cd_m2 == 0
+            and not any(m.material.emission_cd_m2 > 0 for m in self.environment.meshes)
         ):
             raise invalid(
                 "lights",
@@ -276,7 +278,8 @@ def actor_shape(actor: Actor) -> BoxMesh | CylinderMesh | SphereMesh | FileMesh:
     if actor.shape is not None:
         return actor.shape
     if actor.cls == "person":
-        return CylinderMesh(type="cylinder", name=actor.name, radius_m=0.25, height_m=1.75,
-                            position_m=(0.0, 0.0, 0.875))
+        return CylinderMesh(
+            type="cylinder", name=actor.name, radius_m=0.25, height_m=1.75, position_m=(0.0, 0.0, 0.875)
+        )
     size = _DEFAULT_BOX_SIZE_M[actor.cls]
     return BoxMesh(type="box", name=actor.name, size_m=size, position_m=(0.0, 0.0, size[2] / 2))

@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import difflib
+import re
 import types
 import typing
 from typing import Any
@@ -101,6 +102,31 @@ def _literal_matches(model: type[BaseModel], value: Any) -> bool:
     return value in typing.get_args(model.model_fields["type"].annotation)
 
 
+def _value_at(data: Any, path: KeyPath) -> Any:
+    node = data
+    for part in path:
+        if not isinstance(node, dict | list) or not _has(node, part):
+            return None
+        node = node[part]
+    return node
+
+
+def _tuple_length(root: type[BaseModel], path: KeyPath, data: Any) -> int | None:
+    """Length of the fixed-length tuple field at `path`, if it is one."""
+    if not path or not isinstance(path[-1], str):
+        return None
+    parent = _model_at(root, path[:-1], data)
+    if parent is None:
+        return None
+    for name, info in parent.model_fields.items():
+        if path[-1] in (name, info.alias):
+            for t in _unwrap(info.annotation):
+                args = typing.get_args(t)
+                if typing.get_origin(t) is tuple and args and args[-1] is not Ellipsis:
+                    return len(args)
+    return None
+
+
 def allowed_keys(model: type[BaseModel]) -> list[str]:
     return [info.alias or name for name, info in model.model_fields.items()]
 
@@ -173,12 +199,34 @@ def problems_from(exc: ValidationError, doc: YamlDocument | None, root: type[Bas
     problems = []
     for error in exc.errors(include_url=False):
         path = _data_path(tuple(error["loc"]), data) if data is not None else tuple(error["loc"])
+        if error["type"] == "missing" and path and isinstance(path[-1], int):
+            # A fixed-length list such as position_m: [x, y] — say so instead of "[2] is required".
+            path = path[:-1]
+            given = _value_at(data, path)
+            expected = _tuple_length(root, path, data)
+            count = f"{expected} items" if expected else "more items"
+            error = {
+                **error,
+                "type": "camgen",
+                "ctx": {
+                    "message": f"must have {count}, got {len(given) if isinstance(given, list) else 0}: "
+                    f"{show_value(given)}",
+                    "subpath": "",
+                },
+            }
         if error["type"] == "camgen":
             path = path + parse_subpath(error["ctx"]["subpath"])
         elif error["type"] in ("union_tag_invalid", "union_tag_not_found"):
-            path = path + (error["ctx"].get("discriminator", "'type'").strip("'"),)
+            path = (*path, error["ctx"].get("discriminator", "'type'").strip("'"))
         message = _phrase(error, root, path, data)
         problems.append(Problem(path=path, message=message, location=doc.locate(path) if doc else None))
+    # A misspelt required key gives two errors (unknown key, missing key); the suggestion covers both.
+    suggested = set()
+    for problem in problems:
+        match = re.search(r"did you mean '([^']+)'\?", problem.message)
+        if match and problem.message.startswith("is not a known key"):
+            suggested.add((*problem.path[:-1], match.group(1)))
+    problems = [p for p in problems if not (p.message == "is required" and p.path in suggested)]
     problems.sort(key=lambda p: (p.location.line, p.location.column) if p.location else (0, 0))
     return problems
 

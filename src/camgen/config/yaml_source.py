@@ -54,15 +54,15 @@ def _walk(
                 key = str(key)
             if key in result:
                 where = _location(file, key_node.start_mark)
-                raise ConfigError([Problem(path + (key,), "appears twice in this mapping", where)])
-            locations[path + (key,)] = _location(file, key_node.start_mark)
-            result[key] = _walk(value_node, path + (key,), file, constructor, locations)
+                raise ConfigError([Problem((*path, key), "appears twice in this mapping", where)])
+            locations[(*path, key)] = _location(file, key_node.start_mark)
+            result[key] = _walk(value_node, (*path, key), file, constructor, locations)
         return result
     if isinstance(node, yaml.SequenceNode):
         items = []
         for index, item in enumerate(node.value):
-            locations[path + (index,)] = _location(file, item.start_mark)
-            items.append(_walk(item, path + (index,), file, constructor, locations))
+            locations[(*path, index)] = _location(file, item.start_mark)
+            items.append(_walk(item, (*path, index), file, constructor, locations))
         return items
     return constructor.construct_object(node, deep=True)
 
@@ -72,9 +72,12 @@ def parse_yaml(text: str, file: str) -> YamlDocument:
     try:
         node = yaml.compose(text, Loader=yaml.SafeLoader)
     except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
+        # Point at where the broken construct opened (an unclosed [ or {), else where parsing stopped.
+        mark = exc.context_mark or exc.problem_mark
         where = _location(file, mark) if mark else Location(file, 1, 1)
         reason = exc.problem or "is not valid YAML"
+        if exc.context_mark is not None and exc.context:
+            reason += f" ({exc.context} that starts here)"
         raise ConfigError([Problem((), f"YAML syntax error: {reason}", where)]) from None
     except yaml.YAMLError as exc:
         raise ConfigError([Problem((), f"YAML error: {exc}", Location(file, 1, 1))]) from None
@@ -112,7 +115,7 @@ def merge_documents(base: YamlDocument, override: YamlDocument) -> YamlDocument:
         if isinstance(a, dict) and isinstance(b, dict):
             merged = {}
             for key in [*a, *(k for k in b if k not in a)]:
-                sub = path + (key,)
+                sub = (*path, key)
                 if key in b and key in a:
                     locations[sub] = override.locations.get(sub) or base.locations[sub]
                     merged[key] = merge(a[key], b[key], sub)

@@ -117,9 +117,7 @@ def radial_reach(coeffs, r_undistorted_max: float, samples: int = 20001) -> floa
     return float(g[first - 1]) if first > 0 else 0.0
 
 
-def max_displacement_px(
-    coeffs, K_px: np.ndarray, width_px: int, height_px: int, samples_per_edge: int = 64
-) -> float:
+def max_displacement_px(coeffs, K_px: np.ndarray, width_px: int, height_px: int, samples_per_edge: int = 64) -> float:
     """Largest image displacement the distortion causes over the frame, in pixels.
 
     Sampled on a grid including the border, where radial distortion is largest.

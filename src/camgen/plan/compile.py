@@ -30,7 +30,7 @@ from camgen.config.scene import (
 from camgen.errors import ConfigError
 from camgen.motion.pose import R_world_from_cam, T_world_from_cam, rotation_xyz_deg
 from camgen.motion.trajectory import position_on_path
-from camgen.optics.distortion import distort_normalized, max_displacement_px, undistort_normalized
+from camgen.optics.distortion import max_displacement_px, undistort_normalized
 from camgen.optics.intrinsics import (
     airy_sigma_um,
     blur_circle_diameter_mm,
@@ -145,8 +145,14 @@ def _source_bounds_px(
 
 
 def _actor_motion_px(
-    actors: list[Actor], times_s: np.ndarray, exposure_s: float, T_world_from_cam_: np.ndarray, K: np.ndarray,
-    width_px: int, height_px: int,
+    actors: list[Actor],
+    times_s: np.ndarray,
+    exposure_s: float,
+    T_world_from_cam_: np.ndarray,
+    K: np.ndarray,
+    width_px: int,
+    height_px: int,
+    file_bounds: Mapping[str, Bounds] | None,
 ) -> float:
     """Largest image displacement of an actor point (ground and top) within one exposure, px."""
     T_cam_from_world = np.linalg.inv(T_world_from_cam_)
@@ -155,8 +161,7 @@ def _actor_motion_px(
         if len(actor.path.waypoints_m) < 2:
             continue
         shape = actor_shape(actor)
-        low, high = local_bounds(shape, None) if not isinstance(shape, FileMesh) else (np.zeros(3), np.ones(3))
-        top = float((_placement(shape)[:3, :3] @ high + np.array(shape.position_m))[2])
+        top = float(box_corners(*local_bounds(shape, file_bounds), _placement(shape))[:, 2].max())
         ends = []
         for t in (times_s, times_s + exposure_s):
             xy, _ = position_on_path(
@@ -172,7 +177,10 @@ def _actor_motion_px(
                 continue
             uv = [(c[visible, :2] / c[visible, 2:3]) @ K[:2, :2].T + K[:2, 2] for c in cams]
             inside = (
-                (uv[0][:, 0] > -0.5) & (uv[0][:, 0] < width_px - 0.5) & (uv[0][:, 1] > -0.5) & (uv[0][:, 1] < height_px - 0.5)
+                (uv[0][:, 0] > -0.5)
+                & (uv[0][:, 0] < width_px - 0.5)
+                & (uv[0][:, 1] > -0.5)
+                & (uv[0][:, 1] < height_px - 0.5)
             )
             if inside.any():
                 worst = max(worst, float(np.max(np.hypot(*(uv[1] - uv[0])[inside].T))))
@@ -224,7 +232,9 @@ def _compile_camera(
     focal_length_mm, zoom_x = _camera_focal_length_mm(camera, profile)
     f_number, distortion = lens.at_focal_length(focal_length_mm)
     dist = distortion.as_array()
-    K = camera_matrix_px(focal_length_mm, sensor.pixel_pitch_um, sensor.pitch_y_um, W, H, sensor.principal_point_offset_px)
+    K = camera_matrix_px(
+        focal_length_mm, sensor.pixel_pitch_um, sensor.pitch_y_um, W, H, sensor.principal_point_offset_px
+    )
     pan = camera.ptz.pan_deg if camera.ptz else 0.0
     tilt = camera.ptz.tilt_deg if camera.ptz else 0.0
     m = camera.mount
@@ -249,20 +259,32 @@ def _compile_camera(
     # --- geometric lens effects: one remap ------------------------------------------------------
     distortion_px = max_displacement_px(dist, K, W, H)
     use_distortion = needs_image or annotations
-    decisions.append(_decision(
-        "optics.distortion", distortion_px > tol and use_distortion, force,
-        "all coefficients are zero" if distortion.is_zero else f"largest displacement {distortion_px:.3g} px",
-        effect=distortion_px, threshold=tol, unit="px",
-    ))
+    decisions.append(
+        _decision(
+            "optics.distortion",
+            distortion_px > tol and use_distortion,
+            force,
+            "all coefficients are zero" if distortion.is_zero else f"largest displacement {distortion_px:.3g} px",
+            effect=distortion_px,
+            threshold=tol,
+            unit="px",
+        )
+    )
     ca = lens.chromatic_aberration
     ca_scales = (1.0,) if mono else (ca.lateral_scale_r, 1.0, ca.lateral_scale_b)
     corner_px = _corner_radius_px(K, W, H)
     ca_px = max(abs(s - 1.0) for s in ca_scales) * corner_px
-    decisions.append(_decision(
-        "optics.lateral_ca", ca_px > tol and needs_image and not mono, force and not mono,
-        "monochrome sensor" if mono else f"largest colour fringe {ca_px:.3g} px at the corner",
-        effect=ca_px, threshold=tol, unit="px",
-    ))
+    decisions.append(
+        _decision(
+            "optics.lateral_ca",
+            ca_px > tol and needs_image and not mono,
+            force and not mono,
+            "monochrome sensor" if mono else f"largest colour fringe {ca_px:.3g} px at the corner",
+            effect=ca_px,
+            threshold=tol,
+            unit="px",
+        )
+    )
     remap = decisions[-2].included or decisions[-1].included
 
     # --- photometric lens effects ------------------------------------------------------------------
@@ -271,11 +293,17 @@ def _compile_camera(
     if lens.vignetting.natural_cos4:
         relative *= math.cos(math.atan(corner_norm)) ** 4
     falloff = 1.0 - relative
-    decisions.append(_decision(
-        "optics.vignetting", falloff > settings.illumination_tolerance_rel and needs_image, force and needs_image,
-        f"corner illumination {relative:.3f} of the centre", effect=falloff,
-        threshold=settings.illumination_tolerance_rel, unit="relative",
-    ))
+    decisions.append(
+        _decision(
+            "optics.vignetting",
+            falloff > settings.illumination_tolerance_rel and needs_image,
+            force and needs_image,
+            f"corner illumination {relative:.3f} of the centre",
+            effect=falloff,
+            threshold=settings.illumination_tolerance_rel,
+            unit="relative",
+        )
+    )
 
     if depth_range is None:
         coc_px, dof_reason = 0.0, "no geometry in view"
@@ -287,32 +315,56 @@ def _compile_camera(
             f"blur circle up to {coc_px:.3g} px over depths {near:.3g}–{far:.3g} m "
             f"(f = {focal_length_mm:.4g} mm, N = {f_number:.3g}, focus {focus_m:.3g} m, {focus_reason})"
         )
-    decisions.append(_decision(
-        "optics.depth_of_field", coc_px > blur_max and needs_image, force and needs_image, dof_reason,
-        effect=coc_px, threshold=blur_max, unit="px",
-    ))
+    decisions.append(
+        _decision(
+            "optics.depth_of_field",
+            coc_px > blur_max and needs_image,
+            force and needs_image,
+            dof_reason,
+            effect=coc_px,
+            threshold=blur_max,
+            unit="px",
+        )
+    )
     airy_px = 2.44 * WAVELENGTH_UM * f_number / sensor.pixel_pitch_um
-    decisions.append(_decision(
-        "optics.diffraction", airy_px > blur_max and needs_image, force and needs_image,
-        f"Airy disc diameter 2.44·λ·N = {airy_px:.3g} px at N = {f_number:.3g}, λ = {WAVELENGTH_UM} µm",
-        effect=airy_px, threshold=blur_max, unit="px",
-    ))
+    decisions.append(
+        _decision(
+            "optics.diffraction",
+            airy_px > blur_max and needs_image,
+            force and needs_image,
+            f"Airy disc diameter 2.44·λ·N = {airy_px:.3g} px at N = {f_number:.3g}, λ = {WAVELENGTH_UM} µm",
+            effect=airy_px,
+            threshold=blur_max,
+            unit="px",
+        )
+    )
     times = np.arange(scene.frame_count) / scene.fps
-    motion_px = _actor_motion_px(scene.actors, times, exposure_longest_s, T, K, W, H)
-    decisions.append(_decision(
-        "optics.motion_blur", motion_px > blur_max and needs_image, force and needs_image,
-        f"largest actor motion {motion_px:.3g} px during a {exposure_longest_s:.3g} s exposure "
-        f"({'manual' if exposure.mode == 'manual' else 'longest auto-exposure'}); the camera is static",
-        effect=motion_px, threshold=blur_max, unit="px",
-    ))
+    motion_px = _actor_motion_px(scene.actors, times, exposure_longest_s, T, K, W, H, file_bounds)
+    decisions.append(
+        _decision(
+            "optics.motion_blur",
+            motion_px > blur_max and needs_image,
+            force and needs_image,
+            f"largest actor motion {motion_px:.3g} px during a {exposure_longest_s:.3g} s exposure "
+            f"({'manual' if exposure.mode == 'manual' else 'longest auto-exposure'}); the camera is static",
+            effect=motion_px,
+            threshold=blur_max,
+            unit="px",
+        )
+    )
     include = {d.stage: d.included for d in decisions}
 
     # --- margins the render needs ---------------------------------------------------------------------
     left = top = right = bottom = 0.0
     if remap:
-        u0, v0, u1, v1 = _source_bounds_px(K, dist if include["optics.distortion"] else np.zeros(8),
-                                           ca_scales if include["optics.lateral_ca"] else (1.0,), W, H,
-                                           f"cameras[{camera.name}]")
+        u0, v0, u1, v1 = _source_bounds_px(
+            K,
+            dist if include["optics.distortion"] else np.zeros(8),
+            ca_scales if include["optics.lateral_ca"] else (1.0,),
+            W,
+            H,
+            f"cameras[{camera.name}]",
+        )
         left, top = max(0.0, -0.5 - u0), max(0.0, -0.5 - v0)
         right, bottom = max(0.0, u1 - (W - 0.5)), max(0.0, v1 - (H - 0.5))
         left, top, right, bottom = (x + RESAMPLE_SUPPORT_PX for x in (left, top, right, bottom))
@@ -323,7 +375,7 @@ def _compile_camera(
         blur_radius = max(blur_radius, 3 * airy_sigma_um(f_number, WAVELENGTH_UM) / sensor.pixel_pitch_um)
     if include["optics.motion_blur"]:
         blur_radius = max(blur_radius, motion_px)
-    margin = tuple(int(math.ceil(x + blur_radius)) for x in (left, top, right, bottom))
+    margin = tuple(math.ceil(x + blur_radius) for x in (left, top, right, bottom))
 
     # --- passes -------------------------------------------------------------------------------------
     passes: list[str] = []
@@ -333,36 +385,70 @@ def _compile_camera(
     else:
         decisions.append(Decision(stage="pass.radiance", included=False, reason="no image output requested"))
     depth_needed = include["optics.depth_of_field"] or outputs.depth is not None
-    decisions.append(Decision(
-        stage="pass.depth_m", included=depth_needed,
-        reason="consumed by " + " and ".join(
-            [s for s, use in (("depth of field", include["optics.depth_of_field"]),
-                              ("depth output", outputs.depth is not None)) if use]
-        ) if depth_needed else "no depth of field and no depth output",
-    ))
+    decisions.append(
+        Decision(
+            stage="pass.depth_m",
+            included=depth_needed,
+            reason="consumed by "
+            + " and ".join(
+                [
+                    s
+                    for s, use in (
+                        ("depth of field", include["optics.depth_of_field"]),
+                        ("depth output", outputs.depth is not None),
+                    )
+                    if use
+                ]
+            )
+            if depth_needed
+            else "no depth of field and no depth output",
+        )
+    )
     if depth_needed:
         passes.append("depth_m")
-    decisions.append(Decision(
-        stage="pass.instance_id", included=annotations,
-        reason=f"annotations requested: {', '.join(outputs.annotations)}" if annotations else "no annotations requested",
-    ))
+    decisions.append(
+        Decision(
+            stage="pass.instance_id",
+            included=annotations,
+            reason=f"annotations requested: {', '.join(outputs.annotations)}"
+            if annotations
+            else "no annotations requested",
+        )
+    )
     if annotations:
         passes.append("instance_id")
     static = True  # camera poses are constant until PTZ programs exist (motion issue)
     static_background = static and bool(scene.actors) and needs_image
-    decisions.append(Decision(
-        stage="render.static_background", included=static_background,
-        reason="camera and environment are static; actors are composited per frame" if static_background
-        else ("no actors: every frame is the same render" if not scene.actors else "no image output"),
-    ))
+    decisions.append(
+        Decision(
+            stage="render.static_background",
+            included=static_background,
+            reason="camera and environment are static; actors are composited per frame"
+            if static_background
+            else ("no actors: every frame is the same render" if not scene.actors else "no image output"),
+        )
+    )
 
-    stages.append(Stage(name="render", passes=tuple(passes),
-                        params={"supersampling": settings.supersampling, "static_background": static_background}))
+    stages.append(
+        Stage(
+            name="render",
+            passes=tuple(passes),
+            params={"supersampling": settings.supersampling, "static_background": static_background},
+        )
+    )
     if remap:
         consumed = tuple(p for p in passes if p in ("radiance", "instance_id", "depth_m"))
-        stages.append(Stage(name="optics.remap", passes=consumed, params={
-            "distortion": include["optics.distortion"], "lateral_ca": include["optics.lateral_ca"],
-            "instance_id_interpolation": "nearest"}))
+        stages.append(
+            Stage(
+                name="optics.remap",
+                passes=consumed,
+                params={
+                    "distortion": include["optics.distortion"],
+                    "lateral_ca": include["optics.lateral_ca"],
+                    "instance_id_interpolation": "nearest",
+                },
+            )
+        )
     for name, params in (
         ("optics.vignetting", {"corner_relative_illumination": relative}),
         ("optics.depth_of_field", {"focus_distance_m": focus_m, "coc_max_px": coc_px}),
@@ -388,20 +474,39 @@ def _compile_camera(
 
     applied_dist = tuple(float(x) for x in (dist if include["optics.distortion"] else np.zeros(8)))
     state = dict(
-        pan_deg=pan, tilt_deg=tilt, zoom_x=zoom_x, focal_length_mm=focal_length_mm, f_number=f_number,
-        focus_distance_m=focus_m, exposure_time_s=exposure.exposure_time_s, gain_db=exposure.gain_db,
-        K_px=tuple(map(tuple, K.tolist())), distortion=applied_dist, T_world_from_cam=tuple(map(tuple, T.tolist())),
+        pan_deg=pan,
+        tilt_deg=tilt,
+        zoom_x=zoom_x,
+        focal_length_mm=focal_length_mm,
+        f_number=f_number,
+        focus_distance_m=focus_m,
+        exposure_time_s=exposure.exposure_time_s,
+        gain_db=exposure.gain_db,
+        K_px=tuple(map(tuple, K.tolist())),
+        distortion=applied_dist,
+        T_world_from_cam=tuple(map(tuple, T.tolist())),
     )
     states = tuple(CameraState(frame=i, time_s=float(t), **state) for i, t in enumerate(times))
     render = RenderSpec(
-        width_px=W + margin[0] + margin[2], height_px=H + margin[1] + margin[3], margin_px=margin,
-        passes=tuple(passes), supersampling=settings.supersampling, static_background=static_background,
+        width_px=W + margin[0] + margin[2],
+        height_px=H + margin[1] + margin[3],
+        margin_px=margin,
+        passes=tuple(passes),
+        supersampling=settings.supersampling,
+        static_background=static_background,
     )
     return CameraJob(
-        name=camera.name, profile_name=profile_name, profile=profile,
+        name=camera.name,
+        profile_name=profile_name,
+        profile=profile,
         serial=camera.serial if camera.serial is not None else profile.serial,
-        width_px=W, height_px=H, exposure_mode=exposure.mode, render=render,
-        stages=tuple(stages), decisions=tuple(decisions), states=states,
+        width_px=W,
+        height_px=H,
+        exposure_mode=exposure.mode,
+        render=render,
+        stages=tuple(stages),
+        decisions=tuple(decisions),
+        states=states,
     )
 
 
@@ -426,7 +531,9 @@ def _sensor_and_isp(profile, outputs, needs_isp, mono, force, stages, decisions)
         if on or force:
             active.append(term)
     stages.append(Stage(name="sensor.noise", params={"terms": active}))
-    stages.append(Stage(name="sensor.adc", params={"bit_depth": sensor.bit_depth, "black_level_dn": sensor.black_level_dn}))
+    stages.append(
+        Stage(name="sensor.adc", params={"bit_depth": sensor.bit_depth, "black_level_dn": sensor.black_level_dn})
+    )
     if outputs.raw_dng:
         stages.append(Stage(name="io.raw_dng"))
     if not needs_isp:
@@ -434,15 +541,31 @@ def _sensor_and_isp(profile, outputs, needs_isp, mono, force, stages, decisions)
         return
     wb = isp.white_balance
     isp_steps = [
-        ("isp.demosaic", not mono, "monochrome sensor" if mono else f"{sensor.cfa} mosaic, {isp.demosaic}",
-         {"method": isp.demosaic, "cfa": sensor.cfa}),
-        ("isp.white_balance", not mono and (wb.mode == "auto_grey_world" or wb.gains_rgb != (1.0, 1.0, 1.0)),
-         "monochrome sensor" if mono else f"{wb.mode}, gains {list(wb.gains_rgb)}", {"mode": wb.mode}),
-        ("isp.ccm", not mono and not isp.ccm_is_identity,
-         "identity matrix" if isp.ccm_is_identity else "colour-correction matrix set", {}),
+        (
+            "isp.demosaic",
+            not mono,
+            "monochrome sensor" if mono else f"{sensor.cfa} mosaic, {isp.demosaic}",
+            {"method": isp.demosaic, "cfa": sensor.cfa},
+        ),
+        (
+            "isp.white_balance",
+            not mono and (wb.mode == "auto_grey_world" or wb.gains_rgb != (1.0, 1.0, 1.0)),
+            "monochrome sensor" if mono else f"{wb.mode}, gains {list(wb.gains_rgb)}",
+            {"mode": wb.mode},
+        ),
+        (
+            "isp.ccm",
+            not mono and not isp.ccm_is_identity,
+            "identity matrix" if isp.ccm_is_identity else "colour-correction matrix set",
+            {},
+        ),
         ("isp.denoise", isp.denoise_strength > 0, f"strength {isp.denoise_strength:g}", {}),
-        ("isp.contrast_stretch", isp.contrast_stretch is not None,
-         "set" if isp.contrast_stretch else "contrast_stretch is null", {}),
+        (
+            "isp.contrast_stretch",
+            isp.contrast_stretch is not None,
+            "set" if isp.contrast_stretch else "contrast_stretch is null",
+            {},
+        ),
         ("isp.tone", isp.tone_curve != "linear", f"tone curve {isp.tone_curve}", {"curve": isp.tone_curve}),
         ("isp.sharpen", isp.sharpen_amount > 0, f"amount {isp.sharpen_amount:g}", {}),
     ]
@@ -454,7 +577,7 @@ def _sensor_and_isp(profile, outputs, needs_isp, mono, force, stages, decisions)
             stages.append(Stage(name=name, params=params))
 
 
-def compile(  # noqa: A001 — the name the design gives this entry point
+def compile(
     scene: Scene,
     profiles: Mapping[str, Profile],
     *,
@@ -478,14 +601,26 @@ def compile(  # noqa: A001 — the name the design gives this entry point
     actor_boxes = [box for actor in scene.actors for box in _actor_swept_boxes(actor, file_bounds, times)]
     cameras = tuple(
         _compile_camera(
-            scene, camera, profiles[camera.name], (profile_names or {}).get(camera.name, camera.profile),
-            settings, static_boxes, actor_boxes, file_bounds,
+            scene,
+            camera,
+            profiles[camera.name],
+            (profile_names or {}).get(camera.name, camera.profile),
+            settings,
+            static_boxes,
+            actor_boxes,
+            file_bounds,
         )
         for camera in scene.cameras
     )
     job = Job(
-        camgen_version=camgen.__version__, scene_name=scene_name, scene=scene, settings=settings,
-        frame_count=scene.frame_count, fps=scene.fps, seed=scene.seed, cameras=cameras,
+        camgen_version=camgen.__version__,
+        scene_name=scene_name,
+        scene=scene,
+        settings=settings,
+        frame_count=scene.frame_count,
+        fps=scene.fps,
+        seed=scene.seed,
+        cameras=cameras,
     )
     return job.model_copy(update={"job_id": job.content_hash()})
 
@@ -493,6 +628,10 @@ def compile(  # noqa: A001 — the name the design gives this entry point
 def compile_scene(loaded: LoadedScene, settings: PlanSettings | None = None) -> Job:
     """Compile a scene as returned by `camgen.config.load_scene`."""
     return compile(
-        loaded.scene, loaded.profile_models, scene_name=loaded.name, profile_names=loaded.profile_names,
-        settings=settings, file_bounds=loaded.file_bounds,
+        loaded.scene,
+        loaded.profile_models,
+        scene_name=loaded.name,
+        profile_names=loaded.profile_names,
+        settings=settings,
+        file_bounds=loaded.file_bounds,
     )

@@ -63,16 +63,30 @@ def profile_info(profile: Profile) -> ProfileInfo:
     for zoom in zooms:
         f_mm = lens.focal_length_min_mm * zoom
         f_number, _ = lens.at_focal_length(f_mm)
-        steps.append(ZoomStep(
-            zoom_x=zoom, focal_length_mm=f_mm,
-            fx_px=focal_length_px(f_mm, sensor.pixel_pitch_um), fy_px=focal_length_px(f_mm, sensor.pitch_y_um),
-            hfov_deg=angular_fov_deg(width_mm, f_mm), vfov_deg=angular_fov_deg(height_mm, f_mm),
-            dfov_deg=angular_fov_deg(diagonal_mm, f_mm), f_number=f_number,
-            hyperfocal_m=hyperfocal_distance_m(f_mm, f_number, profile.coc_mm),
-        ))
+        steps.append(
+            ZoomStep(
+                zoom_x=zoom,
+                focal_length_mm=f_mm,
+                fx_px=focal_length_px(f_mm, sensor.pixel_pitch_um),
+                fy_px=focal_length_px(f_mm, sensor.pitch_y_um),
+                hfov_deg=angular_fov_deg(width_mm, f_mm),
+                vfov_deg=angular_fov_deg(height_mm, f_mm),
+                dfov_deg=angular_fov_deg(diagonal_mm, f_mm),
+                f_number=f_number,
+                hyperfocal_m=hyperfocal_distance_m(f_mm, f_number, profile.coc_mm),
+            )
+        )
     return ProfileInfo(
-        sensor_width_mm=width_mm, sensor_height_mm=height_mm, sensor_diagonal_mm=diagonal_mm,
-        pixel_area_um2=sensor.pixel_pitch_um * sensor.pitch_y_um, saturation_e=sat_e, saturation_limit=limit,
-        dark_current_e_per_s=dark, dark_noise_e=sigma_d, dynamic_range_db=dynamic_range_db(sat_e, sigma_d),
-        dynamic_range_exposure_s=exposure_s, coc_um=profile.coc_mm * 1e3, zoom_steps=tuple(steps),
+        sensor_width_mm=width_mm,
+        sensor_height_mm=height_mm,
+        sensor_diagonal_mm=diagonal_mm,
+        pixel_area_um2=sensor.pixel_pitch_um * sensor.pitch_y_um,
+        saturation_e=sat_e,
+        saturation_limit=limit,
+        dark_current_e_per_s=dark,
+        dark_noise_e=sigma_d,
+        dynamic_range_db=dynamic_range_db(sat_e, sigma_d),
+        dynamic_range_exposure_s=exposure_s,
+        coc_um=profile.coc_mm * 1e3,
+        zoom_steps=tuple(steps),
     )

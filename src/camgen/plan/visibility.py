@@ -12,7 +12,11 @@ def box_corners(low: np.ndarray, high: np.ndarray, T_world_from_local: np.ndarra
     """The 8 world-frame corners (8, 3) of an axis-aligned local box."""
     i = np.arange(8)
     local = np.stack(
-        [np.where(i & 1, high[0], low[0]), np.where(i >> 1 & 1, high[1], low[1]), np.where(i >> 2 & 1, high[2], low[2])],
+        [
+            np.where(i & 1, high[0], low[0]),
+            np.where(i >> 1 & 1, high[1], low[1]),
+            np.where(i >> 2 & 1, high[2], low[2]),
+        ],
         axis=-1,
     )
     return local @ T_world_from_local[:3, :3].T + T_world_from_local[:3, 3]

@@ -12,8 +12,9 @@ def dark_current_e_per_s(
     return reference_e_per_s * 2.0 ** ((temperature_c - reference_c) / doubling_c)
 
 
-def saturation_e(full_well_e: float, conversion_gain_dn_per_e: float, black_level_dn: float, bit_depth: int,
-                 gain_db: float = 0.0) -> tuple[float, str]:
+def saturation_e(
+    full_well_e: float, conversion_gain_dn_per_e: float, black_level_dn: float, bit_depth: int, gain_db: float = 0.0
+) -> tuple[float, str]:
     """Electrons at which the raw output saturates, and what limits it ('full well' or 'ADC').
 
     The ADC clips at 2^bits − 1 DN; with gain G = 10^(dB/20) one electron gives K·G DN.

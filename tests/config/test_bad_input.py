@@ -1,0 +1,421 @@
+"""Every kind of bad input gets its own clear error: file:line:column, key path, value, what is allowed.
+
+Each case edits a valid file; the line expected in the error is the one marked ``#<``.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from camgen.cli.main import main
+from camgen.config import load_dataset, load_profile, load_scene
+from camgen.errors import ConfigError
+from tests.conftest import FIXED_PROFILE, PTZ_PROFILE, SCENE, write
+
+
+def edit(base: str, old: str, new: str) -> str:
+    assert old in base, f"test setup: {old!r} not in the base file"
+    return base.replace(old, new, 1)
+
+
+# (id, kind, file text, expected key path, expected message fragment)
+CASES = [
+    (
+        "negative_focal_length",
+        "profile",
+        edit(FIXED_PROFILE, "focal_length_mm: 4.0", "focal_length_mm: -4.0 #<"),
+        "lens.focal_length_mm",
+        "must be > 0, got -4",
+    ),
+    (
+        "wrong_type_width",
+        "profile",
+        edit(FIXED_PROFILE, "width_px: 640", "width_px: wide #<"),
+        "sensor.width_px",
+        "must be a number, got 'wide'",
+    ),
+    (
+        "fractional_width",
+        "profile",
+        edit(FIXED_PROFILE, "width_px: 640", "width_px: 640.5 #<"),
+        "sensor.width_px",
+        "must be a whole number, got 640.5",
+    ),
+    (
+        "unknown_key_typo",
+        "profile",
+        edit(FIXED_PROFILE, "pixel_pitch_um: 3.0", "pixel_pich_um: 3.0 #<"),
+        "sensor.pixel_pich_um",
+        "is not a known key; did you mean 'pixel_pitch_um'?",
+    ),
+    (
+        "missing_required",
+        "profile",
+        edit(FIXED_PROFILE, "  full_well_e: 10000\n", ""),
+        "sensor.full_well_e",
+        "is required",
+    ),
+    (
+        "unordered_zoom_range",
+        "profile",
+        edit(PTZ_PROFILE, "focal_length_range_mm: [4.0, 40.0]", "focal_length_range_mm: [40.0, 4.0] #<"),
+        "lens.focal_length_range_mm",
+        "must be ordered [wide, tele] with wide ≤ tele, got [40, 4]",
+    ),
+    (
+        "f_number_too_small",
+        "profile",
+        edit(FIXED_PROFILE, "f_number: 2.0", "f_number: 0.3 #<"),
+        "lens.f_number",
+        "must be ≥ 0.5, got 0.3",
+    ),
+    (
+        "focus_closer_than_lens",
+        "profile",
+        edit(FIXED_PROFILE, "f_number: 2.0", "f_number: 2.0\n  focus_distance_m: 0.1 #<"),
+        "lens.focus_distance_m",
+        "must be ≥ min_focus_distance_m (0.3 m), got 0.1",
+    ),
+    (
+        "folding_distortion",
+        "profile",
+        edit(FIXED_PROFILE, "f_number: 2.0", "f_number: 2.0\n  distortion: {k1: -4.0} #<"),
+        "lens.distortion",
+        "folds over inside the image",
+    ),
+    (
+        "focal_length_twice",
+        "profile",
+        edit(FIXED_PROFILE, "focal_length_mm: 4.0", "focal_length_mm: 4.0 #<\n  focal_length_range_mm: [4, 8]"),
+        "lens.focal_length_mm",
+        "exactly one of the two, got both",
+    ),
+    (
+        "cfa_typo",
+        "profile",
+        edit(FIXED_PROFILE, "cfa: RGGB", "cfa: RGBG #<"),
+        "sensor.cfa",
+        "must be one of 'RGGB', 'BGGR', 'GRBG', 'GBRG' or 'mono', got 'RGBG'",
+    ),
+    (
+        "bit_depth_too_large",
+        "profile",
+        edit(FIXED_PROFILE, "bit_depth: 12", "bit_depth: 20 #<"),
+        "sensor.bit_depth",
+        "must be ≤ 16, got 20",
+    ),
+    (
+        "black_above_white",
+        "profile",
+        edit(FIXED_PROFILE, "black_level_dn: 64", "black_level_dn: 5000 #<"),
+        "sensor.black_level_dn",
+        "must be below the white level 4095 DN",
+    ),
+    (
+        "nan_full_well",
+        "profile",
+        edit(FIXED_PROFILE, "full_well_e: 10000", "full_well_e: .nan #<"),
+        "sensor.full_well_e",
+        "must be a finite number, got nan",
+    ),
+    (
+        "zoom_table_outside_range",
+        "profile",
+        edit(PTZ_PROFILE, "f_number: 1.6", "f_number: 1.6\n  zoom_table:\n    - {focal_length_mm: 50, f_number: 4} #<"),
+        "lens.zoom_table[0].focal_length_mm",
+        "must lie in the lens range [4, 40] mm, got 50",
+    ),
+    (
+        "zoom_table_not_increasing",
+        "profile",
+        edit(
+            PTZ_PROFILE,
+            "f_number: 1.6",
+            "f_number: 1.6\n  zoom_table:\n    - {focal_length_mm: 20, f_number: 2}\n"
+            "    - {focal_length_mm: 10, f_number: 3} #<",
+        ),
+        "lens.zoom_table[1].focal_length_mm",
+        "must increase along the table (previous 20 mm), got 10",
+    ),
+    (
+        "exposure_limits_reversed",
+        "profile",
+        FIXED_PROFILE + "exposure:\n  exposure_time_min_s: 0.1 #<\n  exposure_time_max_s: 0.01\n",
+        "exposure.exposure_time_min_s",
+        "must be ≤ exposure_time_max_s (0.01 s), got 0.1",
+    ),
+    (
+        "gain_above_sensor_max",
+        "profile",
+        FIXED_PROFILE + "exposure:\n  gain_db: 12 #<\n",
+        "exposure.gain_db",
+        "must be ≤ sensor.analog_gain_max_db (0 dB), got 12",
+    ),
+    (
+        "pan_range_not_360",
+        "profile",
+        edit(PTZ_PROFILE, "pan_max_deg_s: 100", "pan_max_deg_s: 100\n  pan_range_deg: [-170, 170] #<"),
+        "ptz.pan_range_deg",
+        "must span exactly 360° when pan_continuous is true",
+    ),
+    (
+        "negative_head_speed",
+        "profile",
+        edit(PTZ_PROFILE, "pan_max_deg_s: 100", "pan_max_deg_s: -45 #<"),
+        "ptz.pan_max_deg_s",
+        "must be > 0, got -45",
+    ),
+    (
+        "duplicate_key",
+        "profile",
+        edit(FIXED_PROFILE, "  bit_depth: 12", "  bit_depth: 12\n  bit_depth: 10 #<"),
+        "sensor.bit_depth",
+        "appears twice in this mapping",
+    ),
+    (
+        "yaml_syntax_error",
+        "profile",
+        edit(FIXED_PROFILE, "  cfa: RGGB", "  cfa: [RGGB #<\n  bits: 3"),
+        "",
+        "YAML syntax error",
+    ),
+    (
+        "extends_missing_parent",
+        "profile",
+        "extends: nonexistent_camera #<\n" + FIXED_PROFILE,
+        "extends",
+        "names profile 'nonexistent_camera', which is not in",
+    ),
+    ("extends_itself", "profile_self", "extends: self_ref #<\n" + FIXED_PROFILE, "extends", "makes a cycle"),
+    (
+        "missing_profile_reference",
+        "scene",
+        edit(SCENE, "profile: fixed", "profile: fixd #<"),
+        "cameras[0].profile",
+        "names profile 'fixd', which is not in",
+    ),
+    (
+        "empty_actor_path",
+        "scene",
+        edit(SCENE, "waypoints_m: [[-3, 5], [3, 5]]", "waypoints_m: [] #<"),
+        "actors[0].path.waypoints_m",
+        "must have at least 1 item, got 0",
+    ),
+    (
+        "repeated_waypoint",
+        "scene",
+        edit(SCENE, "waypoints_m: [[-3, 5], [3, 5]]", "waypoints_m: [[-3, 5], [-3, 5]] #<"),
+        "actors[0].path.waypoints_m[1]",
+        "repeats the previous waypoint",
+    ),
+    (
+        "negative_camera_pan_speed",
+        "scene",
+        edit(
+            edit(SCENE, "profile: fixed", "profile: ptz"),
+            "pitch_deg: -20\n",
+            "pitch_deg: 0\n    ptz:\n      pan_max_deg_s: -30 #<",
+        ),
+        "cameras[0].ptz.pan_max_deg_s",
+        "must be > 0, got -30",
+    ),
+    (
+        "camera_speed_above_head",
+        "scene",
+        edit(
+            edit(SCENE, "profile: fixed", "profile: ptz"),
+            "pitch_deg: -20\n",
+            "pitch_deg: 0\n    ptz:\n      pan_max_deg_s: 300 #<",
+        ),
+        "cameras[0].ptz.pan_max_deg_s",
+        "must be ≤ the head's maximum 100 deg/s, got 300",
+    ),
+    (
+        "zoom_beyond_lens",
+        "scene",
+        edit(
+            edit(SCENE, "profile: fixed", "profile: ptz"), "pitch_deg: -20\n", "pitch_deg: 0\n    ptz: {zoom_x: 12} #<"
+        ),
+        "cameras[0].ptz.zoom_x",
+        "must be ≤ 10 (the lens zooms 4–40 mm), got 12",
+    ),
+    (
+        "tilt_outside_head",
+        "scene",
+        edit(
+            edit(SCENE, "profile: fixed", "profile: ptz"),
+            "pitch_deg: -20\n",
+            "pitch_deg: 0\n    ptz: {tilt_deg: 45} #<",
+        ),
+        "cameras[0].ptz.tilt_deg",
+        "must lie in the head's tilt range [-90, 10]°, got 45",
+    ),
+    (
+        "ptz_on_fixed_camera",
+        "scene",
+        edit(SCENE, "pitch_deg: -20\n", "pitch_deg: -20\n    ptz: {pan_deg: 10} #<"),
+        "cameras[0].ptz",
+        "profile 'fixed' has no PTZ head",
+    ),
+    (
+        "varifocal_outside_range",
+        "scene",
+        edit(SCENE, "pitch_deg: -20\n", "pitch_deg: -20\n    focal_length_mm: 8 #<"),
+        "cameras[0].focal_length_mm",
+        "must lie in the lens range [4, 4] mm, got 8",
+    ),
+    (
+        "duplicate_camera_name",
+        "scene",
+        SCENE + "  - name: cam #<\n    profile: fixed\n    mount: {position_m: [0, 0, 3]}\n",
+        "cameras[1].name",
+        "must be unique, got 'cam' again (first at cameras[0])",
+    ),
+    (
+        "unknown_mesh_type",
+        "scene",
+        edit(SCENE, "type: plane", "type: cube #<"),
+        "environment.meshes[0].type",
+        "got 'cube'",
+    ),
+    (
+        "short_position",
+        "scene",
+        edit(SCENE, "position_m: [0, -5, 3]", "position_m: [0, -5] #<"),
+        "cameras[0].mount.position_m",
+        "must have 3 items, got 2: [0, -5]",
+    ),
+    (
+        "fps_above_sensor",
+        "scene",
+        edit(SCENE, "fps: 10", "fps: 120 #<"),
+        "fps",
+        "must be ≤ 30 Hz, the frame rate limit of camera 'cam'",
+    ),
+    (
+        "no_lights",
+        "scene",
+        edit(SCENE, "  - {type: ambient, illuminance_lux: 1000}\n", "  [] #<\n").replace("lights:\n  []", "lights: []"),
+        "lights",
+        "must hold at least one light",
+    ),
+    (
+        "missing_mesh_file",
+        "scene",
+        edit(
+            SCENE,
+            "    - type: plane\n      name: ground\n      size_m: [20, 20]",
+            "    - type: file\n      name: statue\n      path: meshes/statue.glb #<",
+        ),
+        "environment.meshes[0].path",
+        "refers to 'meshes/statue.glb', but",
+    ),
+    (
+        "top_level_typo",
+        "scene",
+        edit(SCENE, "actors:", "acters: #<"),
+        "acters",
+        "is not a known key; did you mean 'actors'?",
+    ),
+    (
+        "actor_class_typo",
+        "scene",
+        edit(SCENE, "class: person", "class: persn #<"),
+        "actors[0].class",
+        "got 'persn'; did you mean 'person'?",
+    ),
+    (
+        "negative_duration",
+        "scene",
+        edit(SCENE, "duration_s: 1", "duration_s: -1 #<"),
+        "duration_s",
+        "must be > 0, got -1",
+    ),
+    (
+        "dataset_zip_lengths",
+        "dataset",
+        "scenes: [scenes/ok.yaml]\nseeds: [1, 2]\ncombine: zip #<\n",
+        "combine",
+        "zip needs lists of one length, got scenes: 1, seeds: 2",
+    ),
+    (
+        "dataset_missing_scene",
+        "dataset",
+        "scenes:\n  - scenes/nope.yaml #<\n",
+        "scenes[0]",
+        "refers to 'scenes/nope.yaml', but",
+    ),
+]
+
+
+@pytest.mark.parametrize(("kind", "text", "key", "fragment"), [c[1:] for c in CASES], ids=[c[0] for c in CASES])
+def test_bad_input_is_located_and_explained(workspace: Path, kind: str, text: str, key: str, fragment: str):
+    if kind == "profile_self":
+        path = write(workspace, "profiles/self_ref.yaml", text)
+        loader = load_profile
+    elif kind == "profile":
+        path = write(workspace, "profiles/bad.yaml", text)
+        loader = load_profile
+    elif kind == "scene":
+        path = write(workspace, "scenes/bad.yaml", text)
+        loader = load_scene
+    else:
+        write(workspace, "scenes/ok.yaml", SCENE)
+        path = write(workspace, "bad_dataset.yaml", text)
+        loader = load_dataset
+
+    with pytest.raises(ConfigError) as caught:
+        loader(path)
+
+    problems = caught.value.problems
+    assert len(problems) == 1, [str(p) for p in problems]
+    problem = problems[0]
+    message = str(problem)
+    assert fragment in message
+    if key:
+        assert f" {key} " in f" {message} ", message
+    marked = [i + 1 for i, line in enumerate(text.splitlines()) if "#<" in line]
+    if marked:
+        assert problem.location is not None
+        assert problem.location.file == str(path)
+        assert problem.location.line == marked[0], message
+        assert re.match(rf"^{re.escape(str(path))}:{marked[0]}:\d+: ", message), message
+
+
+def test_cases_are_distinct_and_many():
+    assert len(CASES) >= 25
+    assert len({c[0] for c in CASES}) == len(CASES)
+    assert len({c[4] for c in CASES}) == len(CASES), "each case must check its own message"
+
+
+def test_all_problems_are_reported_at_once(workspace: Path):
+    text = edit(edit(FIXED_PROFILE, "width_px: 640", "width_px: -1"), "f_number: 2.0", "f_number: 0.1")
+    path = write(workspace, "profiles/two.yaml", text)
+    with pytest.raises(ConfigError) as caught:
+        load_profile(path)
+    keys = [p.path for p in caught.value.problems]
+    assert keys == [("sensor", "width_px"), ("lens", "f_number")]
+
+
+def test_inherited_error_points_at_the_parent_file(workspace: Path):
+    write(workspace, "profiles/base.yaml", edit(FIXED_PROFILE, "bit_depth: 12", "bit_depth: 20"))
+    child = write(workspace, "profiles/child.yaml", "extends: base\nserial: 5\n")
+    with pytest.raises(ConfigError) as caught:
+        load_profile(child)
+    (problem,) = caught.value.problems
+    assert problem.location.file.endswith("base.yaml")
+    assert problem.path == ("sensor", "bit_depth")
+
+
+@pytest.mark.parametrize("command", ["validate", "plan"])
+def test_cli_reports_without_traceback(workspace: Path, command: str, capsys):
+    path = write(workspace, "scenes/bad.yaml", edit(SCENE, "fps: 10", "fps: -5"))
+    code = main([command, str(path)])
+    captured = capsys.readouterr()
+    assert code in (1, 2)
+    assert "Traceback" not in captured.err + captured.out
+    assert f"{path}:2:" in captured.err
+    assert "fps must be > 0, got -5" in captured.err

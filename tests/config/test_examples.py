@@ -1,0 +1,69 @@
+"""The shipped profiles, scenes and datasets validate, plan and say why."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from camgen.cli.main import main
+from camgen.config import load_dataset, load_profile, load_scene
+from tests.conftest import REPO
+
+PROFILES = sorted((REPO / "profiles").glob("*.yaml"))
+SCENES = sorted((REPO / "scenes").glob("*.yaml"))
+DATASETS = sorted((REPO / "datasets").glob("*.yaml"))
+
+
+def test_the_examples_exist():
+    names = {p.stem for p in SCENES}
+    assert {"parking_lot", "corridor", "checkerboard", "intersection_two_cameras"} <= names
+    assert len(PROFILES) >= 4
+
+
+@pytest.mark.parametrize("path", PROFILES, ids=lambda p: p.stem)
+def test_profile_validates(path: Path):
+    load_profile(path)
+
+
+@pytest.mark.parametrize("path", PROFILES, ids=lambda p: p.stem)
+def test_every_profile_number_has_a_source_comment(path: Path):
+    """Datasheet figures carry a [S…] source or say 'estimate' on their line or in a block comment."""
+    text = path.read_text(encoding="utf-8")
+    assert "# " in text and ("[S1]" in text or "estimate" in text)
+
+
+@pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)
+def test_scene_validates_and_plans(path: Path, capsys):
+    load_scene(path)
+    assert main(["plan", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "stages" in out and "decisions" in out
+    assert "render" in out and ("run" in out or "skip" in out)
+
+
+@pytest.mark.parametrize("path", DATASETS, ids=lambda p: p.stem)
+def test_dataset_validates(path: Path):
+    load_dataset(path)
+
+
+def test_checkerboard_scene_has_at_least_twelve_poses():
+    scene = load_scene(REPO / "scenes/checkerboard.yaml").scene
+    assert len(scene.cameras) >= 12
+    assert any(m.type == "checkerboard" for m in scene.environment.meshes)
+
+
+def test_extends_merges_child_over_parent():
+    base = load_profile(REPO / "profiles/ptz_2mp_30x.yaml").profile
+    child = load_profile(REPO / "profiles/ptz_2mp_20x.yaml").profile
+    assert child.sensor == base.sensor
+    assert child.lens.focal_length_range_mm == (4.7, 94.0)
+    assert child.ptz.zoom_wide_to_tele_s == 3.0
+    assert child.ptz.pan_max_deg_s == base.ptz.pan_max_deg_s
+    assert child.serial != base.serial
+
+
+def test_validate_cli_accepts_all_examples(capsys):
+    files = [str(p) for p in PROFILES + SCENES + DATASETS]
+    assert main(["validate", *files]) == 0
+    assert capsys.readouterr().out.count("ok ") == len(files)

@@ -1,0 +1,87 @@
+"""Shared fixtures: small valid profiles and scenes written to a temporary directory."""
+
+from __future__ import annotations
+
+import textwrap
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+
+FIXED_PROFILE = """\
+description: test fixed camera
+sensor:
+  width_px: 640
+  height_px: 480
+  pixel_pitch_um: 3.0
+  cfa: RGGB
+  bit_depth: 12
+  full_well_e: 10000
+  conversion_gain_dn_per_e: 0.4
+  black_level_dn: 64
+  noise:
+    read_noise_e: 2.0
+lens:
+  focal_length_mm: 4.0
+  f_number: 2.0
+  min_focus_distance_m: 0.3
+"""
+
+PTZ_PROFILE = """\
+description: test ptz camera
+sensor:
+  width_px: 640
+  height_px: 480
+  pixel_pitch_um: 3.0
+  full_well_e: 10000
+  conversion_gain_dn_per_e: 0.4
+lens:
+  focal_length_range_mm: [4.0, 40.0]
+  f_number: 1.6
+ptz:
+  pan_max_deg_s: 100
+  tilt_range_deg: [-90, 10]
+"""
+
+SCENE = """\
+duration_s: 1
+fps: 10
+seed: 1
+environment:
+  meshes:
+    - type: plane
+      name: ground
+      size_m: [20, 20]
+lights:
+  - {type: ambient, illuminance_lux: 1000}
+actors:
+  - name: walker
+    class: person
+    path:
+      waypoints_m: [[-3, 5], [3, 5]]
+      speed_m_s: 1.4
+cameras:
+  - name: cam
+    profile: fixed
+    mount:
+      position_m: [0, -5, 3]
+      yaw_deg: 90
+      pitch_deg: -20
+"""
+
+
+def write(directory: Path, name: str, text: str) -> Path:
+    path = directory / name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(textwrap.dedent(text), encoding="utf-8")
+    return path
+
+
+@pytest.fixture
+def workspace(tmp_path: Path) -> Path:
+    """A directory with profiles/fixed.yaml, profiles/ptz.yaml and scenes/ for test scenes."""
+    write(tmp_path, "profiles/fixed.yaml", FIXED_PROFILE)
+    write(tmp_path, "profiles/ptz.yaml", PTZ_PROFILE)
+    (tmp_path / "scenes").mkdir()
+    return tmp_path

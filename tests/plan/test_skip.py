@@ -1,0 +1,188 @@
+"""The plan skips what a scene does not need, and says why."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from camgen.config import load_scene
+from camgen.errors import ConfigError
+from camgen.optics.intrinsics import blur_circle_diameter_mm
+from camgen.plan import Job, PlanSettings, compile, compile_scene
+from camgen.plan.visibility import box_corners, visible_depth_range_m
+from tests.conftest import FIXED_PROFILE, SCENE, write
+
+
+def plan(workspace, scene_text, profile_edit=None, settings=None, name="s.yaml"):
+    if profile_edit:
+        fixed = (workspace / "profiles/fixed.yaml").read_text()
+        write(workspace, "profiles/fixed.yaml", fixed + profile_edit)
+    job = compile_scene(load_scene(write(workspace, f"scenes/{name}", scene_text)), settings)
+    return job.cameras[0]
+
+
+def decision(camera, stage):
+    (d,) = [d for d in camera.decisions if d.stage == stage]
+    return d
+
+
+def stage_names(camera):
+    return [s.name for s in camera.stages]
+
+
+def test_no_annotations_plans_no_instance_pass(workspace):
+    camera = plan(workspace, SCENE + "outputs: {annotations: []}\n")
+    assert "instance_id" not in camera.render.passes
+    assert not decision(camera, "pass.instance_id").included
+    assert "annotate" not in stage_names(camera)
+    with_annotations = plan(workspace, SCENE, name="t.yaml")
+    assert "instance_id" in with_annotations.render.passes
+    assert "annotate" in stage_names(with_annotations)
+
+
+def test_zero_distortion_plans_no_remap_and_no_margin(workspace):
+    # No blur stage either: a fast lens (Airy disc < 0.5 px) and a short manual exposure (no motion blur).
+    fixed = FIXED_PROFILE.replace("f_number: 2.0", "f_number: 1.0")
+    write(workspace, "profiles/fixed.yaml", fixed + "exposure: {mode: manual, exposure_time_s: 0.0005}\n")
+    camera = plan(workspace, SCENE)
+    assert "optics.remap" not in stage_names(camera)
+    assert decision(camera, "optics.distortion").reason == "all coefficients are zero"
+    assert not {"optics.diffraction", "optics.motion_blur", "optics.depth_of_field"} & set(stage_names(camera))
+    assert camera.render.margin_px == (0, 0, 0, 0)
+    assert (camera.render.width_px, camera.render.height_px) == (640, 480)
+    assert camera.states[0].distortion == (0.0,) * 8
+
+
+def test_distortion_plans_remap_and_a_margin_that_covers_the_source(workspace):
+    camera = plan(workspace, SCENE, profile_edit="  distortion: {k1: -0.3}\n")
+    blur = {s.name for s in camera.stages} & {"optics.diffraction", "optics.motion_blur", "optics.depth_of_field"}
+    assert blur == {"optics.diffraction", "optics.motion_blur"}
+    camera = plan(
+        workspace,
+        SCENE.replace("speed_m_s: 1.4", "speed_m_s: 0.01"),
+        name="slow.yaml",
+        profile_edit="exposure: {mode: manual, exposure_time_s: 0.0005, exposure_time_max_s: 0.01}\n",
+    )
+    assert "optics.remap" in stage_names(camera)
+    left, _, right, _ = camera.render.margin_px
+    # Barrel: the output corner samples the pinhole image beyond the frame. Closed form for k1 only:
+    # the corner at distorted radius rd comes from r with r + k1 r³ = rd.
+    K = np.array(camera.states[0].K_px)
+    rd = math.hypot(320 / K[0, 0], 240 / K[1, 1])
+    r = rd
+    for _ in range(100):
+        r = rd / (1 - 0.3 * r * r)
+    overshoot_x = (r / rd - 1) * 320
+    assert left >= overshoot_x and left <= overshoot_x + 4
+    assert camera.render.width_px == 640 + left + right
+    assert camera.states[0].distortion[0] == -0.3
+
+
+def test_shallow_depth_of_field_plans_a_depth_pass_and_deep_one_does_not(workspace):
+    deep = plan(workspace, SCENE)
+    d = decision(deep, "optics.depth_of_field")
+    assert not d.included and d.effect < 0.5
+    assert "depth_m" not in deep.render.passes
+    assert not decision(deep, "pass.depth_m").included
+
+    # A long, fast lens focused close: the far ground is badly out of focus.
+    shallow = plan(
+        workspace,
+        SCENE.replace("pitch_deg: -20", "pitch_deg: -20\n    focus_distance_m: 0.5"),
+        profile_edit="",
+        name="near.yaml",
+    )
+    d = decision(shallow, "optics.depth_of_field")
+    assert d.included and d.effect > 0.5
+    assert "depth_m" in shallow.render.passes
+    assert "optics.depth_of_field" in stage_names(shallow)
+
+
+def test_blur_circle_closed_form():
+    # f = 50 mm, N = 2, focus 2 m, object 4 m: c = (f/N)·|d − s|/d · f/(s − f).
+    expected = 25.0 * (2.0 / 4.0) * 50.0 / 1950.0
+    assert blur_circle_diameter_mm(4.0, 50.0, 2.0, 2.0) == pytest.approx(expected)
+    assert blur_circle_diameter_mm(2.0, 50.0, 2.0, 2.0) == 0.0
+
+
+def test_visible_depth_range_of_a_wall_and_of_the_ground():
+    K = np.array([[500.0, 0, 319.5], [0, 500.0, 239.5], [0, 0, 1]])
+    T = np.eye(4)  # camera at the origin looking along +z (camera frame = world frame here)
+    wall = box_corners(np.array([-50, -50, 0.0]), np.array([50, 50, 0.0]), np.eye(4) @ _translate(0, 0, 7.0))
+    near, far = visible_depth_range_m([wall], T, K, 640, 480)
+    assert near == pytest.approx(7.0) and far == pytest.approx(7.0)
+    # A floor 2 m below (y down): seen from the image's bottom edge (v = 479.5) to the horizon.
+    floor = box_corners(np.array([-100, 2.0, 0.0]), np.array([100, 2.0, 100.0]), np.eye(4))
+    near, far = visible_depth_range_m([floor], T, K, 640, 480)
+    assert near == pytest.approx(2.0 * 500.0 / (479.5 - 239.5))
+    assert far == pytest.approx(100.0)
+    # Behind the camera: nothing.
+    assert visible_depth_range_m([box_corners(np.full(3, -5.0), np.full(3, -4.0), np.eye(4))], T, K, 640, 480) is None
+
+
+def _translate(x, y, z):
+    T = np.eye(4)
+    T[:3, 3] = (x, y, z)
+    return T
+
+
+def test_forcing_all_stages_plans_every_stage_and_says_so(workspace):
+    skipped = plan(workspace, SCENE)
+    forced = plan(workspace, SCENE, settings=PlanSettings(force_all_stages=True), name="f.yaml")
+    assert len(forced.stages) > len(skipped.stages)
+    for name in ("optics.remap", "optics.vignetting", "optics.depth_of_field", "optics.diffraction"):
+        assert name in stage_names(forced)
+    assert decision(forced, "optics.vignetting").reason.startswith("forced on")
+    assert "depth_m" in forced.render.passes
+
+
+def test_motion_blur_follows_actor_speed_and_exposure(workspace):
+    slow = plan(
+        workspace, SCENE, profile_edit="exposure: {mode: manual, exposure_time_s: 0.001, exposure_time_max_s: 0.01}\n"
+    )
+    assert not decision(slow, "optics.motion_blur").included
+    fast = plan(workspace, SCENE.replace("speed_m_s: 1.4", "speed_m_s: 30"), name="fast.yaml", profile_edit="")
+    d = decision(fast, "optics.motion_blur")
+    # 30 m/s for 1 ms at ≈ 10 m depth with f = 1333 px moves ≈ 4 px.
+    assert d.included and 2.0 < d.effect < 8.0
+
+
+def test_raw_only_output_plans_no_isp(workspace):
+    camera = plan(workspace, SCENE + "outputs: {video: false, raw_dng: true, annotations: []}\n")
+    names = stage_names(camera)
+    assert "io.raw_dng" in names and "sensor.adc" in names
+    assert not any(n.startswith("isp.") for n in names)
+
+
+def test_annotations_only_plans_no_radiance(workspace):
+    camera = plan(workspace, SCENE + "outputs: {video: false, annotations: [mot]}\n")
+    assert camera.render.passes == ("instance_id",)
+    assert not any(n.startswith(("sensor.", "isp.")) for n in stage_names(camera))
+
+
+def test_job_round_trips_through_json_and_its_id_is_its_content(workspace):
+    loaded = load_scene(write(workspace, "scenes/s.yaml", SCENE))
+    job = compile_scene(loaded)
+    again = Job.from_json(job.to_json())
+    assert again == job
+    assert again.content_hash() == job.job_id
+    assert compile_scene(loaded).job_id == job.job_id
+    other = compile(
+        loaded.scene.model_copy(update={"seed": 2}),
+        loaded.profile_models,
+        scene_name=loaded.name,
+        profile_names=loaded.profile_names,
+    )
+    assert other.job_id != job.job_id
+    assert len(job.cameras[0].states) == loaded.scene.frame_count == 10
+
+
+def test_compile_checks_cameras_against_profiles(workspace):
+    loaded = load_scene(write(workspace, "scenes/s.yaml", SCENE))
+    fast = loaded.scene.model_copy(update={"fps": 100.0})
+    with pytest.raises(ConfigError, match="fps must be ≤ 30 Hz"):
+        compile(fast, loaded.profile_models)
+    with pytest.raises(ConfigError, match="no profile given for camera"):
+        compile(loaded.scene, {})
