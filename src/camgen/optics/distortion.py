@@ -85,7 +85,7 @@ def undistort_normalized(points: np.ndarray, coeffs, *, max_iterations: int = 50
             step_y = (a * fy - b * fx) / det
         x = x - step_x
         y = y - step_y
-        if np.all(np.abs(step_x) + np.abs(step_y) < 1e-15):
+        if np.all(np.abs(step_x) + np.abs(step_y) < 1e-13):  # ~1e-10 px at f = 1000 px
             break
     residual = np.hypot(*np.moveaxis(distort_normalized(np.stack([x, y], -1), c) - target, -1, 0))
     return Undistorted(points=np.stack([x, y], axis=-1), residual=residual)

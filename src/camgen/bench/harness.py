@@ -1,0 +1,71 @@
+"""Time a named case over repeats; report the median and spread, and its error where it has one."""
+
+from __future__ import annotations
+
+import statistics
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Case:
+    """A benchmark case. `run` does the work once and returns its error against a reference, or None."""
+
+    name: str
+    run: Callable[[], float | None]
+    setup: Callable[[], None] | None = None
+    error_unit: str = ""
+
+
+@dataclass(frozen=True)
+class Result:
+    name: str
+    repeats: int
+    median_ms: float
+    q1_ms: float
+    q3_ms: float
+    min_ms: float
+    error: float | None
+    error_unit: str
+
+
+def run_case(case: Case, repeats: int = 7, warmup: int = 1, clock=time.perf_counter) -> Result:
+    """Run `warmup` untimed and `repeats` timed calls; the error is the largest one seen."""
+    if repeats < 1:
+        raise ValueError(f"repeats must be ≥ 1, got {repeats}")
+    if case.setup:
+        case.setup()
+    for _ in range(warmup):
+        case.run()
+    times_ms, errors = [], []
+    for _ in range(repeats):
+        start = clock()
+        error = case.run()
+        times_ms.append((clock() - start) * 1e3)
+        if error is not None:
+            errors.append(error)
+    quartiles = statistics.quantiles(times_ms, n=4, method="inclusive") if repeats > 1 else times_ms * 3
+    return Result(
+        name=case.name,
+        repeats=repeats,
+        median_ms=statistics.median(times_ms),
+        q1_ms=quartiles[0],
+        q3_ms=quartiles[2],
+        min_ms=min(times_ms),
+        error=max(errors) if errors else None,
+        error_unit=case.error_unit,
+    )
+
+
+def markdown_table(results: list[Result]) -> str:
+    lines = [
+        "| case | median ms | IQR ms | min ms | repeats | max error |",
+        "|---|---:|---:|---:|---:|---:|",
+    ]
+    for r in results:
+        error = f"{r.error:.3g} {r.error_unit}" if r.error is not None else "—"
+        lines.append(
+            f"| {r.name} | {r.median_ms:.2f} | {r.q1_ms:.2f}–{r.q3_ms:.2f} | {r.min_ms:.2f} | {r.repeats} | {error} |"
+        )
+    return "\n".join(lines)

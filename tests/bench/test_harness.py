@@ -1,0 +1,38 @@
+"""The benchmark harness reports medians, quartiles and the worst error correctly."""
+
+from __future__ import annotations
+
+import itertools
+
+import pytest
+
+from camgen.bench.harness import Case, markdown_table, run_case
+
+
+def fake_clock(durations_s):
+    """A clock whose successive start/stop pairs are `durations_s` apart."""
+    ticks = itertools.chain.from_iterable((0.0, d) for d in durations_s)
+    return lambda: next(ticks)
+
+
+def test_median_quartiles_and_worst_error():
+    errors = iter([0.1, 0.5, 0.2, 0.3, 0.4])
+    case = Case(name="c", run=lambda: next(errors), error_unit="px")
+    result = run_case(case, repeats=5, warmup=0, clock=fake_clock([0.005, 0.001, 0.003, 0.002, 0.004]))
+    assert result.median_ms == pytest.approx(3.0)
+    assert (result.q1_ms, result.q3_ms) == (pytest.approx(2.0), pytest.approx(4.0))
+    assert result.min_ms == pytest.approx(1.0)
+    assert result.error == 0.5
+    assert "0.5 px" in markdown_table([result])
+
+
+def test_warmup_runs_are_not_timed():
+    calls = []
+    case = Case(name="c", run=lambda: calls.append(1))
+    result = run_case(case, repeats=2, warmup=3, clock=fake_clock([0.001, 0.001]))
+    assert len(calls) == 5 and result.repeats == 2 and result.error is None
+
+
+def test_repeats_must_be_positive():
+    with pytest.raises(ValueError, match="repeats must be ≥ 1"):
+        run_case(Case(name="c", run=lambda: None), repeats=0)
