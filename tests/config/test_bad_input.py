@@ -293,7 +293,7 @@ CASES = [
         "scene",
         edit(SCENE, "fps: 10", "fps: 120 #<"),
         "fps",
-        "must be ≤ 30 Hz, the frame rate limit of camera 'cam'",
+        "must be ≤ 30 Hz, the frame rate limit of the sensor of camera 'cam', got 120",
     ),
     (
         "no_lights",
@@ -419,3 +419,52 @@ def test_cli_reports_without_traceback(workspace: Path, command: str, capsys):
     assert "Traceback" not in captured.err + captured.out
     assert f"{path}:2:" in captured.err
     assert "fps must be > 0, got -5" in captured.err
+
+
+# Hostile YAML: each must end in a located error, never a traceback or a hang.
+ALIAS_BOMB = "\n".join(
+    ["a0: &a0 [x, x, x, x, x, x, x, x, x, x]"]
+    + [f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * 10) + "]" for i in range(1, 10)]
+    + ["cameras: *a9"]
+)
+HOSTILE = [
+    ("bad_int_tag", "duration_s: !!int foo\n", "duration_s cannot be read"),
+    ("python_object_tag", "duration_s: !!python/object:os.system x\n", "could not determine a constructor"),
+    ("bad_merge_key", "duration_s: 2\n<<: 5\n", "has a bad merge key"),
+    ("self_alias", "a: &x [*x]\n", "is an alias that contains itself"),
+    ("deep_nesting", "a: " + "[" * 3000 + "]" * 3000 + "\n", "is nested too deeply to read"),
+    ("alias_bomb", ALIAS_BOMB + "\n", "makes the document expand past"),
+    ("markup_in_value", "duration_s: 1\noutputs: {frames: '[/bold]'}\ncameras: []\n", "'[/bold]'"),
+    ("top_level_list", "- a\n- b\n", "the top level must be a mapping of keys, got list"),
+    ("empty_profile_name", SCENE.replace("profile: fixed", "profile: ''"), "must be non-empty text"),
+]
+
+
+@pytest.mark.parametrize(("text", "fragment"), [c[1:] for c in HOSTILE], ids=[c[0] for c in HOSTILE])
+def test_hostile_yaml_gets_a_located_error(workspace: Path, text: str, fragment: str, capsys):
+    path = write(workspace, "scenes/hostile.yaml", text)
+    assert main(["validate", "--kind", "scene", str(path)]) == 1
+    err = capsys.readouterr().err
+    assert fragment in err
+    assert re.search(rf"{re.escape(str(path))}:\d+:\d+: ", err), err
+
+
+def test_rational_lens_with_a_pole_far_outside_the_image_is_accepted(workspace: Path):
+    text = edit(FIXED_PROFILE, "f_number: 2.0", "f_number: 2.0\n  distortion: {k1: 0.05, k4: -0.004}")
+    load_profile(write(workspace, "profiles/rational.yaml", text))
+
+
+def test_rational_lens_that_turns_back_inside_the_image_is_rejected(workspace: Path):
+    # g(r) = r / (1 + 25 r²) peaks at g = 0.1 (r = 0.2), short of the corner radius 0.3.
+    text = edit(FIXED_PROFILE, "f_number: 2.0", "f_number: 2.0\n  distortion: {k4: 25.0}")
+    with pytest.raises(ConfigError, match="folds over inside the image"):
+        load_profile(write(workspace, "profiles/pole.yaml", text))
+
+
+def test_a_fold_in_the_zoom_table_is_blamed_on_its_entry(workspace: Path):
+    text = edit(
+        PTZ_PROFILE, "f_number: 1.6", "f_number: 1.6\n  zoom_table:\n    - {focal_length_mm: 4, distortion: {k1: -4}}"
+    )
+    with pytest.raises(ConfigError) as caught:
+        load_profile(write(workspace, "profiles/zt.yaml", text))
+    assert caught.value.problems[0].path == ("lens", "zoom_table", 0, "distortion")

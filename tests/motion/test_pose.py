@@ -39,18 +39,18 @@ def test_roll_turns_the_image_clockwise():
     np.testing.assert_allclose(R[:, 0], [0, 0, -1], atol=1e-12)
 
 
-def test_projection_matches_cv2():
-    rng = np.random.default_rng(0)
-    R = R_world_from_cam(37, -21, 4, pan_deg=12, tilt_deg=-5)
-    t_world = np.array([3.0, -2.0, 6.0])
-    K = np.array([[1500.0, 0, 959.5], [0, 1498.0, 539.5], [0, 0, 1]])
-    in_camera = np.column_stack([rng.uniform(-3, 3, (200, 2)), rng.uniform(5, 40, 200)])
-    points = in_camera @ R.T + t_world
-    cam = (points - t_world) @ R  # R_cam_from_world = Rᵀ
-    ours = (cam[:, :2] / cam[:, 2:]) @ K[:2, :2].T + K[:2, 2]
-    rvec, _ = cv2.Rodrigues(R.T)
-    theirs, _ = cv2.projectPoints(points, rvec, -R.T @ t_world, K, None)
-    np.testing.assert_allclose(ours, theirs.reshape(-1, 2), atol=1e-6)
+def test_projection_follows_the_hand_derived_convention():
+    # A camera looking north (+Y), level: image right is east (+X), image down is world down (−Z).
+    R_cam_from_world = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])
+    np.testing.assert_allclose(R_world_from_cam(90, 0, 0).T, R_cam_from_world, atol=1e-15)
+    K = np.array([[1000.0, 0, 959.5], [0, 1000.0, 539.5], [0, 0, 1]])
+    t = np.array([2.0, -3.0, 5.0])
+    points = t + np.array([[0, 10, 0], [1, 10, 0], [0, 10, 1]])  # ahead, east of it, above it
+    rvec, _ = cv2.Rodrigues(R_cam_from_world)
+    uv, _ = cv2.projectPoints(points, rvec, -R_cam_from_world @ t, K, None)
+    uv = uv.reshape(-1, 2)
+    np.testing.assert_allclose(uv[0], [959.5, 539.5], atol=1e-9)
+    assert uv[1, 0] > 959.5 and uv[2, 1] < 539.5
 
 
 def test_path_moves_at_constant_speed_and_stops():

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -15,10 +16,9 @@ from camgen.plan.visibility import box_corners, visible_depth_range_m
 from tests.conftest import FIXED_PROFILE, SCENE, write
 
 
-def plan(workspace, scene_text, profile_edit=None, settings=None, name="s.yaml"):
-    if profile_edit:
-        fixed = (workspace / "profiles/fixed.yaml").read_text()
-        write(workspace, "profiles/fixed.yaml", fixed + profile_edit)
+def plan(workspace, scene_text, profile_edit=None, settings=None, name="s.yaml", base=FIXED_PROFILE):
+    """Plan `scene_text` with the profile `base` plus `profile_edit` appended (never cumulative)."""
+    write(workspace, "profiles/fixed.yaml", base + (profile_edit or ""))
     job = compile_scene(load_scene(write(workspace, f"scenes/{name}", scene_text)), settings)
     return job.cameras[0]
 
@@ -44,9 +44,12 @@ def test_no_annotations_plans_no_instance_pass(workspace):
 
 def test_zero_distortion_plans_no_remap_and_no_margin(workspace):
     # No blur stage either: a fast lens (Airy disc < 0.5 px) and a short manual exposure (no motion blur).
-    fixed = FIXED_PROFILE.replace("f_number: 2.0", "f_number: 1.0")
-    write(workspace, "profiles/fixed.yaml", fixed + "exposure: {mode: manual, exposure_time_s: 0.0005}\n")
-    camera = plan(workspace, SCENE)
+    camera = plan(
+        workspace,
+        SCENE,
+        profile_edit="exposure: {mode: manual, exposure_time_s: 0.0005}\n",
+        base=FIXED_PROFILE.replace("f_number: 2.0", "f_number: 1.0"),
+    )
     assert "optics.remap" not in stage_names(camera)
     assert decision(camera, "optics.distortion").reason == "all coefficients are zero"
     assert not {"optics.diffraction", "optics.motion_blur", "optics.depth_of_field"} & set(stage_names(camera))
@@ -56,15 +59,13 @@ def test_zero_distortion_plans_no_remap_and_no_margin(workspace):
 
 
 def test_distortion_plans_remap_and_a_margin_that_covers_the_source(workspace):
-    camera = plan(workspace, SCENE, profile_edit="  distortion: {k1: -0.3}\n")
-    blur = {s.name for s in camera.stages} & {"optics.diffraction", "optics.motion_blur", "optics.depth_of_field"}
-    assert blur == {"optics.diffraction", "optics.motion_blur"}
+    # A short exposure keeps motion blur out, so the margin is the lens's (plus < 1 px of diffraction).
     camera = plan(
         workspace,
-        SCENE.replace("speed_m_s: 1.4", "speed_m_s: 0.01"),
-        name="slow.yaml",
-        profile_edit="exposure: {mode: manual, exposure_time_s: 0.0005, exposure_time_max_s: 0.01}\n",
+        SCENE,
+        profile_edit="  distortion: {k1: -0.3}\nexposure: {mode: manual, exposure_time_s: 0.0005}\n",
     )
+    assert "optics.motion_blur" not in stage_names(camera)
     assert "optics.remap" in stage_names(camera)
     left, _, right, _ = camera.render.margin_px
     # Barrel: the output corner samples the pinhole image beyond the frame. Closed form for k1 only:
@@ -143,7 +144,12 @@ def test_motion_blur_follows_actor_speed_and_exposure(workspace):
         workspace, SCENE, profile_edit="exposure: {mode: manual, exposure_time_s: 0.001, exposure_time_max_s: 0.01}\n"
     )
     assert not decision(slow, "optics.motion_blur").included
-    fast = plan(workspace, SCENE.replace("speed_m_s: 1.4", "speed_m_s: 30"), name="fast.yaml", profile_edit="")
+    fast = plan(
+        workspace,
+        SCENE.replace("speed_m_s: 1.4", "speed_m_s: 30"),
+        name="fast.yaml",
+        profile_edit="exposure: {mode: manual, exposure_time_s: 0.001, exposure_time_max_s: 0.01}\n",
+    )
     d = decision(fast, "optics.motion_blur")
     # 30 m/s for 1 ms at ≈ 10 m depth with f = 1333 px moves ≈ 4 px.
     assert d.included and 2.0 < d.effect < 8.0
@@ -186,3 +192,15 @@ def test_compile_checks_cameras_against_profiles(workspace):
         compile(fast, loaded.profile_models)
     with pytest.raises(ConfigError, match="no profile given for camera"):
         compile(loaded.scene, {})
+
+
+def _near_depth_m(camera) -> float:
+    reason = decision(camera, "optics.depth_of_field").reason
+    return float(re.search(r"over depths ([0-9.]+)–", reason).group(1))
+
+
+def test_depth_range_covers_what_a_barrel_lens_sees_beyond_the_pinhole_frame(workspace):
+    pinhole = plan(workspace, SCENE)
+    barrel = plan(workspace, SCENE, profile_edit="  distortion: {k1: -0.3}\n", name="b.yaml")
+    # The camera looks down at the ground: the wider view of the barrel lens reaches nearer ground.
+    assert _near_depth_m(barrel) < _near_depth_m(pinhole)

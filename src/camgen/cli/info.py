@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from camgen.cli.common import add_profile_dirs_option, profile_dirs
@@ -24,7 +25,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     loaded = load_profile(args.profile, profile_dirs(args))
     profile, info = loaded.profile, profile_info(loaded.profile)
     s = profile.sensor
-    out.print(f"[bold]{loaded.name}[/bold] — {profile.description}", highlight=False)
+    out.print(f"[bold]{escape(loaded.name)}[/bold] — {escape(profile.description)}")
     sensor = Table(title="Sensor", show_header=False, title_justify="left")
     rows = [
         ("resolution", f"{s.width_px} × {s.height_px} px, {s.cfa}, {s.bit_depth}-bit"),

@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from rich.console import Console
+from rich.markup import escape
 
 import camgen
 from camgen.cli import info, plan, schema, validate
@@ -36,7 +37,7 @@ def main(argv: list[str] | None = None) -> int:
         return args.run(args, out, err)
     except ConfigError as exc:
         for problem in exc.problems:
-            err.print(f"[red]error[/red] {problem}", highlight=False, soft_wrap=True)
+            err.print(f"[red]error[/red] {escape(str(problem))}", soft_wrap=True)
         return 2
     except KeyboardInterrupt:
         err.print("interrupted")

@@ -28,7 +28,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     loaded = load_scene(args.scene, profile_dirs(args))
     job = compile_scene(loaded, PlanSettings(force_all_stages=args.force_all))
     out.print(
-        f"[bold]{job.scene_name}[/bold]  job {job.job_id[:16]}  {job.frame_count} frames at {job.fps:g} fps, "
+        f"[bold]{escape(job.scene_name)}[/bold]  job {job.job_id[:16]}  {job.frame_count} frames at {job.fps:g} fps, "
         f"seed {job.seed}, {len(job.cameras)} camera(s)",
         highlight=False,
     )
@@ -36,7 +36,8 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         r = camera.render
         state = camera.states[0]
         out.print(
-            f"\n[bold]{camera.name}[/bold] ({camera.profile_name}): output {camera.width_px}×{camera.height_px}, "
+            f"\n[bold]{camera.name}[/bold] ({escape(camera.profile_name)}): "
+            f"output {camera.width_px}×{camera.height_px}, "
             f"render {r.width_px}×{r.height_px} (margin l/t/r/b {'/'.join(map(str, r.margin_px))} px, "
             f"supersampling {r.supersampling}×), passes: {', '.join(r.passes) or 'none'}\n"
             f"  f = {state.focal_length_mm:.3g} mm, N = {state.f_number:.3g}, focus {state.focus_distance_m:.3g} m, "
@@ -66,7 +67,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         out.print(decisions)
     if args.json:
         write_text_atomic(args.json, job.to_json())
-        out.print(f"wrote {args.json}", highlight=False)
+        out.print(f"wrote {args.json}", markup=False)
     return 0
 
 

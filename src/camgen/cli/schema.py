@@ -39,7 +39,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         for kind in kinds:
             target = args.output / f"{kind}.schema.json"
             write_text_atomic(target, json.dumps(schema_of(kind), indent=2, ensure_ascii=False) + "\n")
-            out.print(f"wrote {target}", highlight=False)
+            out.print(f"wrote {target}", markup=False)
         return 0
     document = schema_of(kinds[0]) if len(kinds) == 1 else {k: schema_of(k) for k in kinds}
     print(json.dumps(document, indent=2, ensure_ascii=False))

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from rich.console import Console
+from rich.markup import escape
 
 from camgen.cli.common import add_profile_dirs_option, detect_kind, profile_dirs
 from camgen.config import load_dataset, load_profile, load_scene
@@ -36,11 +37,11 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
                 load_scene(path, profile_dirs(args))
             else:
                 load_dataset(path)
-            out.print(f"[green]ok[/green]  {path} ({kind})", highlight=False)
+            out.print(f"[green]ok[/green]  {escape(str(path))} ({kind})")
         except ConfigError as exc:
             failed += 1
             for problem in exc.problems:
-                err.print(f"[red]error[/red] {problem}", highlight=False, markup=True, soft_wrap=True)
+                err.print(f"[red]error[/red] {escape(str(problem))}", soft_wrap=True)
     if failed:
-        err.print(f"{failed} of {len(args.files)} file(s) invalid", highlight=False)
+        err.print(f"{failed} of {len(args.files)} file(s) invalid", markup=False)
     return 1 if failed else 0

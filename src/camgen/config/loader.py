@@ -67,7 +67,8 @@ def find_profile(
         candidate = (referencing_file.parent / reference).resolve()
         if candidate.is_file():
             return candidate
-        raise ConfigError([Problem(key_path, f"refers to {reference!r}, but {candidate} does not exist", location)])
+        state = "is not a file" if candidate.exists() else "does not exist"
+        raise ConfigError([Problem(key_path, f"refers to {reference!r}, but {candidate} {state}", location)])
     dirs = [*profile_dirs, *default_profile_dirs(referencing_file)]
     for directory in dirs:
         for suffix in (".yaml", ".yml"):
@@ -85,7 +86,7 @@ def _profile_document(path: Path, profile_dirs: Sequence[Path], chain: tuple[Pat
     doc = load_yaml(path)
     parent_ref = doc.data.get("extends")
     if parent_ref is None:
-        return doc
+        return _without_extends(doc)
     where = doc.locate(("extends",))
     if not isinstance(parent_ref, str) or not parent_ref:
         raise ConfigError(
@@ -96,15 +97,18 @@ def _profile_document(path: Path, profile_dirs: Sequence[Path], chain: tuple[Pat
         cycle = " → ".join(p.name for p in (*chain, path.resolve(), parent_path))
         raise ConfigError([Problem(("extends",), f"makes a cycle: {cycle}", where)])
     parent = _profile_document(parent_path, profile_dirs, (*chain, path.resolve()))
-    own = YamlDocument(
+    if {"cameras", "scenes"} & set(parent.data):
+        raise ConfigError(
+            [Problem(("extends",), f"names {parent_path}, which is a scene or dataset, not a profile", where)]
+        )
+    return merge_documents(parent, _without_extends(doc))
+
+
+def _without_extends(doc: YamlDocument) -> YamlDocument:
+    return YamlDocument(
         data={k: v for k, v in doc.data.items() if k != "extends"},
         locations={k: v for k, v in doc.locations.items() if k[:1] != ("extends",)},
     )
-    parent = YamlDocument(
-        data={k: v for k, v in parent.data.items() if k != "extends"},
-        locations={k: v for k, v in parent.locations.items() if k[:1] != ("extends",)},
-    )
-    return merge_documents(parent, own)
 
 
 def load_profile(path: str | Path, profile_dirs: Sequence[Path] = ()) -> LoadedProfile:
@@ -160,11 +164,11 @@ def _mesh_file_bounds(directory: Path, reference: str) -> tuple[tuple[float, flo
         raise ConfigError(f"refers to {reference!r}, but {path.resolve()} does not exist")
     try:
         loaded = trimesh.load(path, force="scene")
-        low, high = loaded.bounds
     except Exception as exc:  # trimesh raises many types for unreadable files
         raise ConfigError(f"cannot be read as a mesh ({path}): {exc}") from None
-    if low is None or not len(loaded.geometry):
-        raise ConfigError(f"holds no geometry ({path})")
+    if loaded.bounds is None or not len(loaded.geometry):
+        raise ConfigError(f"holds no geometry ({path}); give a mesh file with triangles")
+    low, high = loaded.bounds
     return tuple(map(float, low)), tuple(map(float, high))
 
 
@@ -196,18 +200,20 @@ def load_dataset(path: str | Path) -> Dataset:
 def check_cameras(scene: Scene, profiles: dict[str, Profile]) -> list[Problem]:
     """Checks that need both a camera and its profile; key paths are relative to the scene."""
     problems = []
+    slowest = min(scene.cameras, key=lambda c: profiles[c.name].sensor.frame_rate_max_hz)
+    limit_hz = profiles[slowest.name].sensor.frame_rate_max_hz
+    if scene.fps > limit_hz:
+        problems.append(
+            Problem(
+                ("fps",),
+                f"must be ≤ {limit_hz:g} Hz, the frame rate limit of the sensor of camera "
+                f"{slowest.name!r}, got {scene.fps:g}",
+            )
+        )
     for i, camera in enumerate(scene.cameras):
         profile = profiles[camera.name]
         lens, head = profile.lens, profile.ptz
         base = ("cameras", i)
-        if scene.fps > profile.sensor.frame_rate_max_hz:
-            problems.append(
-                Problem(
-                    ("fps",),
-                    f"must be ≤ {profile.sensor.frame_rate_max_hz:g} Hz, the frame rate limit of camera "
-                    f"{camera.name!r}'s sensor, got {scene.fps:g}",
-                )
-            )
         if profile.exposure.mode == "manual" and profile.exposure.exposure_time_s > 1 / scene.fps:
             problems.append(
                 Problem(

@@ -14,7 +14,7 @@ from pydantic import Field, model_validator
 
 from camgen.config.base import Model, invalid
 from camgen.optics.distortion import radial_reach
-from camgen.optics.intrinsics import camera_matrix_px
+from camgen.optics.intrinsics import camera_matrix_px, corner_radius_normalized
 
 PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegativeFloat = Annotated[float, Field(ge=0)]
@@ -450,18 +450,9 @@ class Profile(Model):
         """Normalised (distorted) radius of the farthest image corner at `focal_length_mm`."""
         s = self.sensor
         K = camera_matrix_px(
-            focal_length_mm,
-            s.pixel_pitch_um,
-            s.pitch_y_um,
-            s.width_px,
-            s.height_px,
-            s.principal_point_offset_px,
+            focal_length_mm, s.pixel_pitch_um, s.pitch_y_um, s.width_px, s.height_px, s.principal_point_offset_px
         )
-        corners_u = np.array([-0.5, s.width_px - 0.5])
-        corners_v = np.array([-0.5, s.height_px - 0.5])
-        dx = (corners_u - K[0, 2]) / K[0, 0]
-        dy = (corners_v - K[1, 2]) / K[1, 1]
-        return float(np.sqrt(np.max(dx**2) + np.max(dy**2)))
+        return corner_radius_normalized(K, s.width_px, s.height_px)
 
     @model_validator(mode="after")
     def _check(self) -> Profile:
@@ -473,13 +464,14 @@ class Profile(Model):
                 f"got {self.exposure.gain_db:g}",
             )
         # The distortion model must stay monotone out to the image corners at every zoom position.
-        checks = [("lens.distortion", lens.focal_length_min_mm)]
+        table_has_distortion = any(z.distortion is not None for z in lens.zoom_table)
+        checks = [] if table_has_distortion else [("lens.distortion", lens.focal_length_min_mm)]
         checks += [
             (f"lens.zoom_table[{i}].distortion", z.focal_length_mm)
             for i, z in enumerate(lens.zoom_table)
             if z.distortion is not None
         ]
-        if lens.zoom_table:
+        if table_has_distortion:
             checks += [
                 ("lens.zoom_table", f) for f in np.geomspace(lens.focal_length_min_mm, lens.focal_length_max_mm, 17)
             ]

@@ -163,7 +163,8 @@ class Actor(Model):
     cls: ActorClass = Field(alias="class")
     """Object class written to MOTChallenge and COCO."""
     shape: ActorShape | None = None
-    """Geometry in the actor's frame (x forward, z up, origin on the ground); null uses the class default."""
+    """Geometry in the actor's frame (x forward, z up, origin on the ground): shapes are centred on their
+    position_m, so give z = height/2 to stand on the ground. null uses a class-typical size."""
     path: ActorPath
 
 
@@ -176,7 +177,8 @@ class Mount(Model):
     pitch_deg: Annotated[float, Field(ge=-90, le=90)] = 0.0
     """Elevation of the optical axis, degrees; negative looks down."""
     roll_deg: Annotated[float, Field(ge=-180, le=180)] = 0.0
-    """Rotation about the optical axis, degrees; positive turns the image clockwise."""
+    """Rotation of the camera about its optical axis, degrees; positive turns the camera clockwise as
+    seen from behind it, so the picture's content turns counter-clockwise."""
 
 
 class PtzPosition(Model):
@@ -195,7 +197,7 @@ class PtzPosition(Model):
 
 class Camera(Model):
     name: Name
-    profile: str
+    profile: Annotated[str, Field(min_length=1)]
     """A profile name (looked up in the profile directories) or a path to a profile YAML."""
     serial: Annotated[int, Field(ge=0)] | None = None
     """Serial seed of this unit's fixed-pattern noise; null uses the profile's."""

@@ -145,7 +145,7 @@ def _phrase(error: dict, root: type[BaseModel], path: KeyPath, data: Any) -> str
         keys = allowed_keys(parent) if parent else []
         close = difflib.get_close_matches(str(path[-1]), keys, n=1, cutoff=0.6)
         hint = f"; did you mean {close[0]!r}?" if close else ""
-        listing = f" Allowed keys here: {', '.join(keys)}." if keys else ""
+        listing = f"; allowed keys here: {', '.join(keys)}" if keys else ""
         return f"is not a known key{hint}{listing}"
     if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
         op = {"greater_than": ">", "greater_than_equal": "≥", "less_than": "<", "less_than_equal": "≤"}[kind]
@@ -169,7 +169,7 @@ def _phrase(error: dict, root: type[BaseModel], path: KeyPath, data: Any) -> str
         expected = ctx.get("min_length") if kind == "too_short" else ctx.get("max_length")
         actual = ctx.get("actual_length")
         word = "at least" if kind == "too_short" else "at most"
-        return f"must have {word} {expected} item{'s' if expected != 1 else ''}, got {actual}{got}"
+        return f"must have {word} {expected} item{'s' if expected != 1 else ''}, got {actual}: {show_value(value)}"
     if kind in ("string_too_short", "string_too_long"):
         return f"must be {'non-empty' if kind == 'string_too_short' else 'shorter'} text{got}"
     if kind == "string_pattern_mismatch":
@@ -227,7 +227,7 @@ def problems_from(exc: ValidationError, doc: YamlDocument | None, root: type[Bas
         if match and problem.message.startswith("is not a known key"):
             suggested.add((*problem.path[:-1], match.group(1)))
     problems = [p for p in problems if not (p.message == "is required" and p.path in suggested)]
-    problems.sort(key=lambda p: (p.location.line, p.location.column) if p.location else (0, 0))
+    problems.sort(key=lambda p: (p.location.file, p.location.line, p.location.column) if p.location else ("", 0, 0))
     return problems
 
 

@@ -38,33 +38,65 @@ def _location(file: str, mark: yaml.Mark) -> Location:
     return Location(file=file, line=mark.line + 1, column=mark.column + 1)
 
 
-def _walk(
-    node: yaml.Node,
-    path: KeyPath,
-    file: str,
-    constructor: yaml.constructor.SafeConstructor,
-    locations: dict[KeyPath, Location],
-) -> Any:
-    if isinstance(node, yaml.MappingNode):
-        constructor.flatten_mapping(node)  # resolves YAML merge keys (<<)
-        result: dict[str, Any] = {}
-        for key_node, value_node in node.value:
-            key = constructor.construct_object(key_node, deep=True)
-            if not isinstance(key, str):
-                key = str(key)
-            if key in result:
-                where = _location(file, key_node.start_mark)
-                raise ConfigError([Problem((*path, key), "appears twice in this mapping", where)])
-            locations[(*path, key)] = _location(file, key_node.start_mark)
-            result[key] = _walk(value_node, (*path, key), file, constructor, locations)
-        return result
-    if isinstance(node, yaml.SequenceNode):
-        items = []
-        for index, item in enumerate(node.value):
-            locations[(*path, index)] = _location(file, item.start_mark)
-            items.append(_walk(item, (*path, index), file, constructor, locations))
-        return items
-    return constructor.construct_object(node, deep=True)
+MAX_VALUES = 200_000
+"""Values one document may expand to: far above any real scene, far below an alias bomb."""
+
+
+class _Walker:
+    """Builds plain data from composed nodes, recording each key path's location.
+
+    Guards what PyYAML does not: aliases that contain themselves, alias bombs (a few lines expanding
+    to billions of values), and tags whose constructor fails — all become located `ConfigError`s.
+    """
+
+    def __init__(self, file: str):
+        self.file = file
+        self.constructor = yaml.SafeLoader("")
+        self.locations: dict[KeyPath, Location] = {}
+        self.count = 0
+        self.open: set[int] = set()
+
+    def fail(self, node: yaml.Node, path: KeyPath, message: str) -> ConfigError:
+        return ConfigError([Problem(path, message, _location(self.file, node.start_mark))])
+
+    def scalar(self, node: yaml.Node, path: KeyPath) -> Any:
+        try:
+            return self.constructor.construct_object(node, deep=True)
+        except (yaml.YAMLError, ValueError, TypeError) as exc:
+            reason = getattr(exc, "problem", None) or str(exc)
+            raise self.fail(node, path, f"cannot be read ({node.tag}): {reason}") from None
+
+    def walk(self, node: yaml.Node, path: KeyPath) -> Any:
+        self.count += 1
+        if self.count > MAX_VALUES:
+            raise self.fail(node, path, f"makes the document expand past {MAX_VALUES} values (nested aliases?)")
+        if id(node) in self.open:
+            raise self.fail(node, path, "is an alias that contains itself")
+        if isinstance(node, yaml.MappingNode):
+            self.open.add(id(node))
+            try:
+                self.constructor.flatten_mapping(node)  # resolves YAML merge keys (<<)
+            except yaml.YAMLError as exc:
+                raise self.fail(node, path, f"has a bad merge key (<<): {getattr(exc, 'problem', exc)}") from None
+            result: dict[str, Any] = {}
+            for key_node, value_node in node.value:
+                key = self.scalar(key_node, path)
+                key = key if isinstance(key, str) else str(key)
+                if key in result:
+                    raise self.fail(key_node, (*path, key), "appears twice in this mapping")
+                self.locations[(*path, key)] = _location(self.file, key_node.start_mark)
+                result[key] = self.walk(value_node, (*path, key))
+            self.open.discard(id(node))
+            return result
+        if isinstance(node, yaml.SequenceNode):
+            self.open.add(id(node))
+            items = []
+            for index, item in enumerate(node.value):
+                self.locations[(*path, index)] = _location(self.file, item.start_mark)
+                items.append(self.walk(item, (*path, index)))
+            self.open.discard(id(node))
+            return items
+        return self.scalar(node, path)
 
 
 def parse_yaml(text: str, file: str) -> YamlDocument:
@@ -81,16 +113,21 @@ def parse_yaml(text: str, file: str) -> YamlDocument:
         raise ConfigError([Problem((), f"YAML syntax error: {reason}", where)]) from None
     except yaml.YAMLError as exc:
         raise ConfigError([Problem((), f"YAML error: {exc}", Location(file, 1, 1))]) from None
+    except RecursionError:
+        raise ConfigError([Problem((), "is nested too deeply to read", Location(file, 1, 1))]) from None
     if node is None:
         raise ConfigError([Problem((), "the file is empty; expected a mapping of keys", Location(file, 1, 1))])
-    locations: dict[KeyPath, Location] = {(): _location(file, node.start_mark)}
-    constructor = yaml.SafeLoader("")
-    data = _walk(node, (), file, constructor, locations)
+    walker = _Walker(file)
+    walker.locations[()] = _location(file, node.start_mark)
+    try:
+        data = walker.walk(node, ())
+    except RecursionError:
+        raise ConfigError([Problem((), "is nested too deeply to read", Location(file, 1, 1))]) from None
     if not isinstance(data, dict):
         raise ConfigError(
-            [Problem((), f"the top level must be a mapping of keys, got {type(data).__name__}", locations[()])]
+            [Problem((), f"the top level must be a mapping of keys, got {type(data).__name__}", walker.locations[()])]
         )
-    return YamlDocument(data=data, locations=locations)
+    return YamlDocument(data=data, locations=walker.locations)
 
 
 def load_yaml(path: Path) -> YamlDocument:

@@ -107,14 +107,21 @@ def radial_reach(coeffs, r_undistorted_max: float, samples: int = 20001) -> floa
     one image radius) or `r_undistorted_max`. An image whose corners lie beyond the returned radius
     sees a folded or undefined part of the model.
     """
+    c = _coefficients(coeffs)
     r = np.linspace(0.0, r_undistorted_max, samples)
-    g, dg = radial_mapping(r, coeffs)
-    bad = ~np.isfinite(g) | ~np.isfinite(dg) | (dg <= 0.0)
+    r2 = r * r
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        g, dg = radial_mapping(r, c)
+        denominator = 1.0 + r2 * (c[5] + r2 * (c[6] + r2 * c[7]))
+    # Stop at a fold (g' ≤ 0), at a pole of the rational model (denominator ≤ 0), or where g stops
+    # rising between samples (a fold or pole narrower than the sampling step).
+    bad = ~np.isfinite(g) | ~np.isfinite(dg) | (dg <= 0.0) | (denominator <= 0.0)
+    bad[1:] |= np.diff(g) <= 0.0
     bad[0] = False
     if not bad.any():
         return float(g[-1])
     first = int(np.argmax(bad))
-    return float(g[first - 1]) if first > 0 else 0.0
+    return float(g[first - 1])
 
 
 def max_displacement_px(coeffs, K_px: np.ndarray, width_px: int, height_px: int, samples_per_edge: int = 64) -> float:

@@ -35,6 +35,25 @@ def camera_matrix_px(
     return np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
 
 
+def _corner_offsets_px(K_px: np.ndarray, width_px: int, height_px: int) -> tuple[float, float]:
+    """Largest |u − cx| and |v − cy| over the frame's outer pixel edges."""
+    du = np.array([-0.5, width_px - 0.5]) - K_px[0, 2]
+    dv = np.array([-0.5, height_px - 0.5]) - K_px[1, 2]
+    return float(np.max(np.abs(du))), float(np.max(np.abs(dv)))
+
+
+def corner_radius_px(K_px: np.ndarray, width_px: int, height_px: int) -> float:
+    """Distance from the principal point to the farthest image corner, pixels."""
+    du, dv = _corner_offsets_px(K_px, width_px, height_px)
+    return float(np.hypot(du, dv))
+
+
+def corner_radius_normalized(K_px: np.ndarray, width_px: int, height_px: int) -> float:
+    """The same corner in normalised image coordinates (x/z, y/z), honouring fx ≠ fy."""
+    du, dv = _corner_offsets_px(K_px, width_px, height_px)
+    return float(np.hypot(du / K_px[0, 0], dv / K_px[1, 1]))
+
+
 def angular_fov_deg(sensor_extent_mm: float, focal_length_mm: float) -> float:
     """AFOV = 2·atan(h / 2f) in degrees (seed paper eq. 2), for a lens focused at infinity."""
     return math.degrees(2.0 * math.atan(sensor_extent_mm / (2.0 * focal_length_mm)))

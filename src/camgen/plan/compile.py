@@ -28,13 +28,15 @@ from camgen.config.scene import (
     actor_shape,
 )
 from camgen.errors import ConfigError
-from camgen.motion.pose import R_world_from_cam, T_world_from_cam, rotation_xyz_deg
+from camgen.motion.pose import R_world_from_cam, T_world_from_cam, rot_z, rotation_xyz_deg
 from camgen.motion.trajectory import position_on_path
 from camgen.optics.distortion import max_displacement_px, undistort_normalized
 from camgen.optics.intrinsics import (
     airy_sigma_um,
     blur_circle_diameter_mm,
     camera_matrix_px,
+    corner_radius_normalized,
+    corner_radius_px,
     hyperfocal_distance_m,
 )
 from camgen.plan.job import CameraJob, CameraState, Decision, Job, PlanSettings, RenderSpec, Stage
@@ -58,12 +60,11 @@ def local_bounds(shape, file_bounds: Mapping[str, Bounds] | None = None) -> Boun
         return -half, half
     if isinstance(shape, SphereMesh):
         return -np.full(3, shape.radius_m), np.full(3, shape.radius_m)
-    if isinstance(shape, PlaneMesh | CheckerboardMesh):
-        if isinstance(shape, PlaneMesh):
-            size = np.array(shape.size_m)
-        else:
-            size = np.array(shape.squares) * shape.square_size_m
-        half = np.array([size[0] / 2, size[1] / 2, 0.0])
+    if isinstance(shape, PlaneMesh):
+        half = np.array([shape.size_m[0] / 2, shape.size_m[1] / 2, 0.0])
+        return -half, half
+    if isinstance(shape, CheckerboardMesh):
+        half = np.array([shape.squares[0] * shape.square_size_m / 2, shape.squares[1] * shape.square_size_m / 2, 0.0])
         return -half, half
     if isinstance(shape, FileMesh):
         if not file_bounds or shape.path not in file_bounds:
@@ -74,26 +75,52 @@ def local_bounds(shape, file_bounds: Mapping[str, Bounds] | None = None) -> Boun
 
 
 def _placement(shape) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, :3] = rotation_xyz_deg(shape.rotation_deg)
-    T[:3, 3] = shape.position_m
-    return T
+    return T_world_from_cam(shape.position_m, rotation_xyz_deg(shape.rotation_deg))
 
 
-def _actor_swept_boxes(actor: Actor, file_bounds, times_s: np.ndarray) -> list[np.ndarray]:
-    """World corners of the actor's box at every sampled time (the volume it sweeps)."""
+def _path_positions(actor: Actor, times_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    path = actor.path
+    return position_on_path(np.array(path.waypoints_m), path.speed_m_s, path.start_s, path.loop, times_s)
+
+
+def _actor_swept_boxes(actor: Actor, file_bounds, duration_s: float) -> list[np.ndarray]:
+    """World corners of boxes that contain everything the actor occupies during the sequence.
+
+    Along one straight segment the actor's box slides along its heading, so the volume it sweeps is
+    its box stretched by the distance covered: one oriented box per segment travelled.
+    """
     shape = actor_shape(actor)
     low, high = local_bounds(shape, file_bounds)
     corners_local = box_corners(low, high, _placement(shape))
-    positions, headings = position_on_path(
-        np.array(actor.path.waypoints_m), actor.path.speed_m_s, actor.path.start_s, actor.path.loop, times_s
-    )
-    boxes = []
-    for (x, y), heading in zip(positions, headings, strict=True):
-        c, s = math.cos(heading), math.sin(heading)
-        R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-        boxes.append(corners_local @ R.T + np.array([x, y, 0.0]))
+    low, high = corners_local.min(axis=0), corners_local.max(axis=0)
+    path = actor.path
+    points = np.array(path.waypoints_m, dtype=np.float64)
+    if len(points) == 1:
+        return [box_corners(low, high, _translate(points[0]))]
+    if path.loop:
+        points = np.vstack([points, points[:1]])
+    lengths = np.hypot(*np.diff(points, axis=0).T)
+    travelled = max(0.0, duration_s - path.start_s) * path.speed_m_s
+    if path.loop:
+        travelled = min(travelled, lengths.sum())
+    boxes, start = [], 0.0
+    for i, length in enumerate(lengths):
+        covered = min(length, travelled - start)
+        if covered < 0:
+            break
+        direction = (points[i + 1] - points[i]) / length
+        T = _translate(points[i])
+        T[:3, :3] = rot_z(math.atan2(direction[1], direction[0]))
+        stretched_high = high + np.array([covered, 0.0, 0.0])
+        boxes.append(box_corners(low, stretched_high, T))
+        start += length
     return boxes
+
+
+def _translate(xy) -> np.ndarray:
+    T = np.eye(4)
+    T[:2, 3] = xy
+    return T
 
 
 def _camera_focal_length_mm(camera: Camera, profile: Profile) -> tuple[float, float]:
@@ -103,12 +130,6 @@ def _camera_focal_length_mm(camera: Camera, profile: Profile) -> tuple[float, fl
     if camera.focal_length_mm is not None:
         return camera.focal_length_mm, camera.focal_length_mm / lens.focal_length_min_mm
     return lens.focal_length_min_mm, 1.0
-
-
-def _corner_radius_px(K: np.ndarray, width_px: int, height_px: int) -> float:
-    du = np.array([-0.5, width_px - 0.5]) - K[0, 2]
-    dv = np.array([-0.5, height_px - 0.5]) - K[1, 2]
-    return float(np.sqrt(np.max(du**2) + np.max(dv**2)))
 
 
 def _border_points_px(width_px: int, height_px: int, step_px: float = 8.0) -> np.ndarray:
@@ -162,12 +183,7 @@ def _actor_motion_px(
             continue
         shape = actor_shape(actor)
         top = float(box_corners(*local_bounds(shape, file_bounds), _placement(shape))[:, 2].max())
-        ends = []
-        for t in (times_s, times_s + exposure_s):
-            xy, _ = position_on_path(
-                np.array(actor.path.waypoints_m), actor.path.speed_m_s, actor.path.start_s, actor.path.loop, t
-            )
-            ends.append(xy)
+        ends = [_path_positions(actor, t)[0] for t in (times_s, times_s + exposure_s)]
         for height in (0.0, top):
             pts = [np.column_stack([xy, np.full(len(xy), height)]) for xy in ends]
             cams = [p @ T_cam_from_world[:3, :3].T + T_cam_from_world[:3, 3] for p in pts]
@@ -217,6 +233,7 @@ def _decision(stage: str, include: bool, force: bool, reason: str, **measure) ->
 
 def _compile_camera(
     scene: Scene,
+    camera_index: int,
     camera: Camera,
     profile: Profile,
     profile_name: str,
@@ -239,8 +256,6 @@ def _compile_camera(
     tilt = camera.ptz.tilt_deg if camera.ptz else 0.0
     m = camera.mount
     T = T_world_from_cam(m.position_m, R_world_from_cam(m.yaw_deg, m.pitch_deg, m.roll_deg, pan, tilt))
-    depth_range = visible_depth_range_m(static_boxes + actor_boxes, T, K, W, H)
-    focus_m, focus_reason = _focus_distance_m(camera, profile, focal_length_mm, f_number, depth_range)
     exposure = profile.exposure
     frame_period_s = 1.0 / scene.fps
     exposure_longest_s = (
@@ -272,7 +287,7 @@ def _compile_camera(
     )
     ca = lens.chromatic_aberration
     ca_scales = (1.0,) if mono else (ca.lateral_scale_r, 1.0, ca.lateral_scale_b)
-    corner_px = _corner_radius_px(K, W, H)
+    corner_px = corner_radius_px(K, W, H)
     ca_px = max(abs(s - 1.0) for s in ca_scales) * corner_px
     decisions.append(
         _decision(
@@ -286,9 +301,32 @@ def _compile_camera(
         )
     )
     remap = decisions[-2].included or decisions[-1].included
+    geometric_margin = (0.0, 0.0, 0.0, 0.0)
+    if remap:
+        u0, v0, u1, v1 = _source_bounds_px(
+            K,
+            dist if decisions[-2].included else np.zeros(8),
+            ca_scales if decisions[-1].included else (1.0,),
+            W,
+            H,
+            f"cameras[{camera_index}]",
+        )
+        geometric_margin = tuple(
+            x + RESAMPLE_SUPPORT_PX
+            for x in (max(0.0, -0.5 - u0), max(0.0, -0.5 - v0), max(0.0, u1 - (W - 0.5)), max(0.0, v1 - (H - 0.5)))
+        )
+    # What the lens actually sees: the pinhole extent the output frame samples (wider under barrel).
+    seen_left, seen_top, seen_right, seen_bottom = (math.ceil(x) for x in geometric_margin)
+    K_seen = K.copy()
+    K_seen[0, 2] += seen_left
+    K_seen[1, 2] += seen_top
+    depth_range = visible_depth_range_m(
+        static_boxes + actor_boxes, T, K_seen, W + seen_left + seen_right, H + seen_top + seen_bottom
+    )
+    focus_m, focus_reason = _focus_distance_m(camera, profile, focal_length_mm, f_number, depth_range)
 
     # --- photometric lens effects ------------------------------------------------------------------
-    corner_norm = corner_px / math.sqrt(K[0, 0] * K[1, 1])
+    corner_norm = corner_radius_normalized(K, W, H)
     relative = lens.vignetting.relative_illumination_corner
     if lens.vignetting.natural_cos4:
         relative *= math.cos(math.atan(corner_norm)) ** 4
@@ -355,19 +393,7 @@ def _compile_camera(
     include = {d.stage: d.included for d in decisions}
 
     # --- margins the render needs ---------------------------------------------------------------------
-    left = top = right = bottom = 0.0
-    if remap:
-        u0, v0, u1, v1 = _source_bounds_px(
-            K,
-            dist if include["optics.distortion"] else np.zeros(8),
-            ca_scales if include["optics.lateral_ca"] else (1.0,),
-            W,
-            H,
-            f"cameras[{camera.name}]",
-        )
-        left, top = max(0.0, -0.5 - u0), max(0.0, -0.5 - v0)
-        right, bottom = max(0.0, u1 - (W - 0.5)), max(0.0, v1 - (H - 0.5))
-        left, top, right, bottom = (x + RESAMPLE_SUPPORT_PX for x in (left, top, right, bottom))
+    left, top, right, bottom = geometric_margin
     blur_radius = 0.0
     if include["optics.depth_of_field"]:
         blur_radius = max(blur_radius, coc_px / 2)
@@ -597,11 +623,11 @@ def compile(
     static_boxes = [
         box_corners(*local_bounds(mesh, file_bounds), _placement(mesh)) for mesh in scene.environment.meshes
     ]
-    times = np.arange(scene.frame_count) / scene.fps
-    actor_boxes = [box for actor in scene.actors for box in _actor_swept_boxes(actor, file_bounds, times)]
+    actor_boxes = [box for actor in scene.actors for box in _actor_swept_boxes(actor, file_bounds, scene.duration_s)]
     cameras = tuple(
         _compile_camera(
             scene,
+            i,
             camera,
             profiles[camera.name],
             (profile_names or {}).get(camera.name, camera.profile),
@@ -610,7 +636,7 @@ def compile(
             actor_boxes,
             file_bounds,
         )
-        for camera in scene.cameras
+        for i, camera in enumerate(scene.cameras)
     )
     job = Job(
         camgen_version=camgen.__version__,
