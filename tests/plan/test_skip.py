@@ -88,12 +88,9 @@ def test_shallow_depth_of_field_plans_a_depth_pass_and_deep_one_does_not(workspa
     assert "depth_m" not in deep.render.passes
     assert not decision(deep, "pass.depth_m").included
 
-    # A long, fast lens focused close: the far ground is badly out of focus.
+    # The same camera focused at 0.5 m: the ground 8–30 m away is out of focus.
     shallow = plan(
-        workspace,
-        SCENE.replace("pitch_deg: -20", "pitch_deg: -20\n    focus_distance_m: 0.5"),
-        profile_edit="",
-        name="near.yaml",
+        workspace, SCENE.replace("pitch_deg: -20", "pitch_deg: -20\n    focus_distance_m: 0.5"), name="near.yaml"
     )
     d = decision(shallow, "optics.depth_of_field")
     assert d.included and d.effect > 0.5
@@ -140,16 +137,10 @@ def test_forcing_all_stages_plans_every_stage_and_says_so(workspace):
 
 
 def test_motion_blur_follows_actor_speed_and_exposure(workspace):
-    slow = plan(
-        workspace, SCENE, profile_edit="exposure: {mode: manual, exposure_time_s: 0.001, exposure_time_max_s: 0.01}\n"
-    )
+    manual_1ms = "exposure: {mode: manual, exposure_time_s: 0.001, exposure_time_max_s: 0.01}\n"
+    slow = plan(workspace, SCENE, profile_edit=manual_1ms)
     assert not decision(slow, "optics.motion_blur").included
-    fast = plan(
-        workspace,
-        SCENE.replace("speed_m_s: 1.4", "speed_m_s: 30"),
-        name="fast.yaml",
-        profile_edit="exposure: {mode: manual, exposure_time_s: 0.001, exposure_time_max_s: 0.01}\n",
-    )
+    fast = plan(workspace, SCENE.replace("speed_m_s: 1.4", "speed_m_s: 30"), name="fast.yaml", profile_edit=manual_1ms)
     d = decision(fast, "optics.motion_blur")
     # 30 m/s for 1 ms at ≈ 10 m depth with f = 1333 px moves ≈ 4 px.
     assert d.included and 2.0 < d.effect < 8.0

@@ -71,7 +71,6 @@ def _unwrap(annotation: Any) -> list[Any]:
 def _model_at(root: type[BaseModel], path: KeyPath, data: Any) -> type[BaseModel] | None:
     """The model class whose keys live at `path` in `data` (resolving unions by their `type` key)."""
     candidates: list[Any] = [root]
-    node = data
     for part in path:
         nxt: list[Any] = []
         for candidate in candidates:
@@ -83,9 +82,9 @@ def _model_at(root: type[BaseModel], path: KeyPath, data: Any) -> type[BaseModel
                     for name, info in t.model_fields.items():
                         if part in (name, info.alias):
                             nxt.append(info.annotation)
-        node = node[part] if isinstance(node, dict | list) and _has(node, part) else None
         candidates = nxt
     models = [t for c in candidates for t in _unwrap(c) if isinstance(t, type) and issubclass(t, BaseModel)]
+    node = _value_at(data, path)
     if len(models) > 1 and isinstance(node, dict):
         tagged = [m for m in models if "type" in m.model_fields and _literal_matches(m, node.get("type"))]
         models = tagged or models

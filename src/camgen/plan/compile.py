@@ -96,7 +96,7 @@ def _actor_swept_boxes(actor: Actor, file_bounds, duration_s: float) -> list[np.
     path = actor.path
     points = np.array(path.waypoints_m, dtype=np.float64)
     if len(points) == 1:
-        return [box_corners(low, high, _translate(points[0]))]
+        return [box_corners(low, high, T_world_from_cam((*points[0], 0.0), np.eye(3)))]
     if path.loop:
         points = np.vstack([points, points[:1]])
     lengths = np.hypot(*np.diff(points, axis=0).T)
@@ -108,19 +108,11 @@ def _actor_swept_boxes(actor: Actor, file_bounds, duration_s: float) -> list[np.
         covered = min(length, travelled - start)
         if covered < 0:
             break
-        direction = (points[i + 1] - points[i]) / length
-        T = _translate(points[i])
-        T[:3, :3] = rot_z(math.atan2(direction[1], direction[0]))
-        stretched_high = high + np.array([covered, 0.0, 0.0])
-        boxes.append(box_corners(low, stretched_high, T))
+        dx, dy = points[i + 1] - points[i]
+        T = T_world_from_cam((*points[i], 0.0), rot_z(math.atan2(dy, dx)))
+        boxes.append(box_corners(low, high + np.array([covered, 0.0, 0.0]), T))
         start += length
     return boxes
-
-
-def _translate(xy) -> np.ndarray:
-    T = np.eye(4)
-    T[:2, 3] = xy
-    return T
 
 
 def _camera_focal_length_mm(camera: Camera, profile: Profile) -> tuple[float, float]:
@@ -410,22 +402,20 @@ def _compile_camera(
         decisions.append(Decision(stage="pass.radiance", included=True, reason="video, frames or raw output"))
     else:
         decisions.append(Decision(stage="pass.radiance", included=False, reason="no image output requested"))
-    depth_needed = include["optics.depth_of_field"] or outputs.depth is not None
+    depth_consumers = [
+        name
+        for name, use in (
+            ("depth of field", include["optics.depth_of_field"]),
+            ("depth output", outputs.depth is not None),
+        )
+        if use
+    ]
+    depth_needed = bool(depth_consumers)
     decisions.append(
         Decision(
             stage="pass.depth_m",
             included=depth_needed,
-            reason="consumed by "
-            + " and ".join(
-                [
-                    s
-                    for s, use in (
-                        ("depth of field", include["optics.depth_of_field"]),
-                        ("depth output", outputs.depth is not None),
-                    )
-                    if use
-                ]
-            )
+            reason="consumed by " + " and ".join(depth_consumers)
             if depth_needed
             else "no depth of field and no depth output",
         )
@@ -463,11 +453,10 @@ def _compile_camera(
         )
     )
     if remap:
-        consumed = tuple(p for p in passes if p in ("radiance", "instance_id", "depth_m"))
         stages.append(
             Stage(
                 name="optics.remap",
-                passes=consumed,
+                passes=tuple(passes),  # every rendered pass goes through the same lens map
                 params={
                     "distortion": include["optics.distortion"],
                     "lateral_ca": include["optics.lateral_ca"],
