@@ -71,6 +71,14 @@ class CheckerboardMesh(Placement):
     """Squares along local X and Y (a board with 10×7 squares has 9×6 inner corners)."""
     square_size_m: PositiveFloat
     """Edge of one square, m. The board lies in its local XY plane, facing +Z, centred on position_m."""
+    border_m: NonNegativeFloat | None = None
+    """Width of the light margin around the squares (detectors need it), m; null is one square."""
+    dark_color_rgb: tuple[Fraction, Fraction, Fraction] = (0.03, 0.03, 0.03)
+    """Linear reflectance of the dark squares; the light squares and the margin use material.color_rgb."""
+
+    @property
+    def border_width_m(self) -> float:
+        return self.square_size_m if self.border_m is None else self.border_m
 
 
 class FileMesh(Placement):
@@ -101,7 +109,7 @@ class PointLight(Model):
     type: Literal["point"]
     position_m: Vec3
     intensity_cd: PositiveFloat
-    """Luminous intensity, candela (a 1000 lm isotropic lamp ≈ 80 cd)."""
+    """Luminous intensity, candela (a 1000 lm isotropic lamp ≈ 80 cd). Casts no shadows."""
     color_rgb: tuple[Fraction, Fraction, Fraction] = (1.0, 1.0, 1.0)
 
 
@@ -111,6 +119,7 @@ class SpotLight(Model):
     target_m: Vec3
     intensity_cd: PositiveFloat
     cone_half_angle_deg: Annotated[float, Field(gt=0, lt=90)] = 30.0
+    """Where the beam ends; it is at full intensity within 80 % of this angle and fades to the edge."""
     color_rgb: tuple[Fraction, Fraction, Fraction] = (1.0, 1.0, 1.0)
 
 
@@ -127,6 +136,9 @@ class Environment(Model):
     sky_luminance_cd_m2: NonNegativeFloat = 0.0
     """Luminance of the background where no geometry is hit, cd/m² (clear day sky ≈ 5000)."""
     meshes: list[Mesh] = []
+    shadows: bool = True
+    """Sun and spot lights cast shadows (shadow maps); point lights never do. Shadows of moving actors
+    fall on the environment, so a static camera then renders every frame in full."""
 
 
 class ActorPath(Model):

@@ -64,7 +64,8 @@ def local_bounds(shape, file_bounds: Mapping[str, Bounds] | None = None) -> Boun
         half = np.array([shape.size_m[0] / 2, shape.size_m[1] / 2, 0.0])
         return -half, half
     if isinstance(shape, CheckerboardMesh):
-        half = np.array([shape.squares[0] * shape.square_size_m / 2, shape.squares[1] * shape.square_size_m / 2, 0.0])
+        border = shape.border_width_m
+        half = np.array([s * shape.square_size_m / 2 + border for s in shape.squares] + [0.0])
         return -half, half
     if isinstance(shape, FileMesh):
         if not file_bounds or shape.path not in file_bounds:
@@ -434,16 +435,17 @@ def _compile_camera(
     if annotations:
         passes.append("instance_id")
     static = True  # camera poses are constant until PTZ programs exist (motion issue)
-    static_background = static and bool(scene.actors) and needs_image
-    decisions.append(
-        Decision(
-            stage="render.static_background",
-            included=static_background,
-            reason="camera and environment are static; actors are composited per frame"
-            if static_background
-            else ("no actors: every frame is the same render" if not scene.actors else "no image output"),
-        )
-    )
+    shadow_lights = scene.environment.shadows and any(light.type in ("sun", "spot") for light in scene.lights)
+    static_background = static and bool(scene.actors) and needs_image and not shadow_lights
+    if static_background:
+        static_reason = "camera and environment are static; actors are composited per frame"
+    elif not scene.actors:
+        static_reason = "no actors: the environment alone is drawn each frame"
+    elif not needs_image:
+        static_reason = "no image output (the geometric passes alone are cheap)"
+    else:
+        static_reason = "actors cast shadows on the environment (environment.shadows), so every frame is drawn in full"
+    decisions.append(Decision(stage="render.static_background", included=static_background, reason=static_reason))
 
     stages.append(
         Stage(

@@ -1,0 +1,379 @@
+"""Linear HDR radiance, metric depth and instance ids from pyrender, in one draw.
+
+pyrender 0.1.45 reads back 8-bit, clamped, gamma-encoded colour and a depth buffer resolved from
+multisamples. This module keeps pyrender's scene graph, meshes, PBR materials, lights, shadow maps and
+draw calls, and replaces what it renders into and with:
+
+- a framebuffer of our own with up to three colour attachments, one per pass: RGBA32F radiance,
+  RG32F depth_m and R32UI instance_id, plus a 32-bit float depth buffer, single-sampled, so every
+  value is the one at the pixel centre;
+- shaders of our own, handed to pyrender through its program cache: its lit shader without gamma
+  and clamp, writing all three targets (multiple render targets: one draw), and a geometry-only
+  shader for depth and ids without lighting;
+- a projection built from OpenCV intrinsics with pixel centres at integers and rows top-down, so
+  arrays come back in image order without a flip.
+
+Radiance unit: linear RGB (BT.709 primaries) scaled so that 0.2126 R + 0.7152 G + 0.0722 B is the
+luminance in cd/m² (see `camgen.render.scene_graph`); unclamped. depth_m: distance along the optical
+axis (camera z), m, +inf where no geometry is hit. instance_id: uint32, 0 for background.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from camgen.render.gl import pyrender
+
+from OpenGL import GL  # isort: skip — after camgen.render.gl, which selects the EGL platform
+from pyrender.constants import ProgramFlags, RenderFlags  # isort: skip
+from pyrender.light import DirectionalLight, SpotLight  # isort: skip
+from pyrender.shader_program import ShaderProgramCache  # isort: skip
+
+SHADER_DIR = Path(__file__).parent / "shaders"
+PASSES = ("radiance", "depth_m", "instance_id")
+# Geometry closer than this to the camera is clipped, m.
+NEAR_CLIP_M = 0.05
+
+# Cleared depth_m: finite, because pyrender draws with blending on (GL_ONE, GL_ZERO) and 0·inf is NaN;
+# read back as +inf.
+_NO_DEPTH = np.finfo(np.float32).max
+
+# The OpenGL camera looks down −z with y up; OpenCV's looks down +z with y down.
+_GL_FROM_CV = np.diag([1.0, -1.0, -1.0, 1.0])
+
+
+@dataclass(frozen=True)
+class View:
+    """An ideal pinhole camera for one draw (OpenCV conventions, DESIGN.md)."""
+
+    K_px: np.ndarray
+    """3×3 camera matrix; pixel centres at integer coordinates, (0, 0) the top-left pixel."""
+    T_world_from_cam: np.ndarray
+    """4×4 pose of the OpenCV camera frame (x right, y down, z forward) in the world."""
+    width_px: int
+    height_px: int
+
+    def scaled(self, factor: int) -> View:
+        """The same view sampled `factor` times more finely per axis (for supersampling).
+
+        Output pixel u covers [u − ½, u + ½]; sub-pixel centres sit at (u + ½)·s − ½, so the
+        principal point moves to (c + ½)·s − ½.
+        """
+        K = self.K_px.copy()
+        K[0, 0] *= factor
+        K[1, 1] *= factor
+        K[0, 2] = (K[0, 2] + 0.5) * factor - 0.5
+        K[1, 2] = (K[1, 2] + 0.5) * factor - 0.5
+        return View(K, self.T_world_from_cam, self.width_px * factor, self.height_px * factor)
+
+
+@dataclass
+class Passes:
+    """What one draw returns; a pass that was not asked for is None."""
+
+    radiance: np.ndarray | None = None
+    """(H, W, 3) float32, cd/m² (see the module docstring)."""
+    depth_m: np.ndarray | None = None
+    """(H, W) float32, camera z in metres, +inf for background."""
+    instance_id: np.ndarray | None = None
+    """(H, W) uint32, 0 for background."""
+
+
+def gl_projection(K_px: np.ndarray, width_px: int, height_px: int, near_m: float, far_m: float) -> np.ndarray:
+    """OpenGL projection whose window rows run top-down and whose pixel centres are OpenCV's.
+
+    An OpenCV pixel (u, v) has its centre at window coordinates (u + ½, v + ½) with row 0 at the
+    top: x_ndc = 2(u + ½)/W − 1 and y_ndc = 2(v + ½)/H − 1 for u = fx·X/Z + cx, v = fy·Y/Z + cy,
+    written in the OpenGL camera frame (X, −Y, −Z). Rows top-down reverse the winding of triangles,
+    so draws use glFrontFace(GL_CW).
+    """
+    fx, fy, cx, cy = K_px[0, 0], K_px[1, 1], K_px[0, 2], K_px[1, 2]
+    s = K_px[0, 1]
+    P = np.zeros((4, 4))
+    P[0, 0] = 2.0 * fx / width_px
+    P[0, 1] = -2.0 * s / width_px
+    P[0, 2] = 1.0 - 2.0 * (cx + 0.5) / width_px
+    P[1, 1] = 2.0 * fy / height_px
+    P[1, 2] = 2.0 * (cy + 0.5) / height_px - 1.0
+    P[2, 2] = (far_m + near_m) / (near_m - far_m)
+    P[2, 3] = 2.0 * far_m * near_m / (near_m - far_m)
+    P[3, 2] = -1.0
+    # Flip y: row v of the framebuffer then holds image row v.
+    return np.diag([1.0, -1.0, 1.0, 1.0]) @ P
+
+
+def gl_camera_pose(T_world_from_cam: np.ndarray) -> np.ndarray:
+    """Pose of the OpenGL camera (x right, y up, looking down −z) for an OpenCV camera pose."""
+    return np.asarray(T_world_from_cam, dtype=np.float64) @ _GL_FROM_CV
+
+
+class _LinearProgramCache(ShaderProgramCache):
+    """pyrender's program cache, answering with camgen's shaders for its lit and depth-only programs."""
+
+    OURS = {
+        "mesh.vert": "linear_mesh.vert",
+        "mesh.frag": "linear_mesh.frag",
+        "mesh_depth.vert": "geometry.vert",
+        "mesh_depth.frag": "geometry.frag",
+    }
+
+    def get_program(self, vertex_shader, fragment_shader, geometry_shader=None, defines=None):
+        def ours(name):
+            return str(SHADER_DIR / self.OURS[name]) if name in self.OURS else name
+
+        return super().get_program(ours(vertex_shader), ours(fragment_shader), geometry_shader, defines)
+
+
+class _Framebuffer:
+    """An offscreen target with one colour attachment per pass and a float depth buffer."""
+
+    # depth_m uses two channels of which it reads one: pyrender draws with blending on (GL_ONE,
+    # GL_ZERO), and Mesa's llvmpipe blends into a one-channel R32F target as zeros (measured).
+    FORMATS = {"radiance": GL.GL_RGBA32F, "depth_m": GL.GL_RG32F, "instance_id": GL.GL_R32UI}
+
+    def __init__(self, width_px: int, height_px: int, passes: tuple[str, ...]):
+        self.width_px, self.height_px, self.passes = width_px, height_px, passes
+        self.fbo = GL.glGenFramebuffers(1)
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.fbo)
+        self.renderbuffers = []
+        for name in passes:
+            self.renderbuffers.append(self._attach(self.FORMATS[name], GL.GL_COLOR_ATTACHMENT0 + PASSES.index(name)))
+        self.renderbuffers.append(self._attach(GL.GL_DEPTH_COMPONENT32F, GL.GL_DEPTH_ATTACHMENT))
+        status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
+        if status != GL.GL_FRAMEBUFFER_COMPLETE:
+            raise RuntimeError(f"OpenGL framebuffer for {passes} at {width_px}×{height_px} incomplete: {status:#x}")
+        self.draw_buffers = [
+            GL.GL_COLOR_ATTACHMENT0 + i if name in passes else GL.GL_NONE for i, name in enumerate(PASSES)
+        ]
+
+    def _attach(self, internal_format, attachment):
+        rb = GL.glGenRenderbuffers(1)
+        GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, rb)
+        GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, internal_format, self.width_px, self.height_px)
+        GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, attachment, GL.GL_RENDERBUFFER, rb)
+        return rb
+
+    def bind(self) -> None:
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.fbo)
+        GL.glDrawBuffers(len(self.draw_buffers), self.draw_buffers)
+        GL.glViewport(0, 0, self.width_px, self.height_px)
+
+    def clear(self, sky_luminance_cd_m2: float) -> None:
+        if "radiance" in self.passes:
+            GL.glClearBufferfv(GL.GL_COLOR, 0, np.array([sky_luminance_cd_m2] * 3 + [1.0], np.float32))
+        if "depth_m" in self.passes:
+            GL.glClearBufferfv(GL.GL_COLOR, 1, np.full(4, _NO_DEPTH, np.float32))
+        if "instance_id" in self.passes:
+            GL.glClearBufferuiv(GL.GL_COLOR, 2, np.zeros(4, np.uint32))
+        GL.glClearBufferfv(GL.GL_DEPTH, 0, np.ones(1, np.float32))
+
+    def copy_from(self, other: _Framebuffer) -> None:
+        """Blit every pass and the depth buffer of `other` (same size and passes) into this one."""
+        GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, other.fbo)
+        GL.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, self.fbo)
+        w, h = self.width_px, self.height_px
+        for name in self.passes:
+            attachment = GL.GL_COLOR_ATTACHMENT0 + PASSES.index(name)
+            GL.glReadBuffer(attachment)
+            GL.glDrawBuffer(attachment)
+            GL.glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL.GL_COLOR_BUFFER_BIT, GL.GL_NEAREST)
+        GL.glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL.GL_DEPTH_BUFFER_BIT, GL.GL_NEAREST)
+
+    def read(self) -> Passes:
+        GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, self.fbo)
+        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
+        w, h = self.width_px, self.height_px
+        out = Passes()
+        for name in self.passes:
+            GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT0 + PASSES.index(name))
+            if name == "radiance":
+                data = GL.glReadPixels(0, 0, w, h, GL.GL_RGB, GL.GL_FLOAT)
+                out.radiance = np.frombuffer(data, np.float32).reshape(h, w, 3)
+            elif name == "depth_m":
+                data = GL.glReadPixels(0, 0, w, h, GL.GL_RED, GL.GL_FLOAT)
+                depth = np.frombuffer(data, np.float32).reshape(h, w).copy()
+                depth[depth == _NO_DEPTH] = np.inf
+                out.depth_m = depth
+            else:
+                data = GL.glReadPixels(0, 0, w, h, GL.GL_RED_INTEGER, GL.GL_UNSIGNED_INT)
+                out.instance_id = np.frombuffer(data, np.uint32).reshape(h, w)
+        return out
+
+    def delete(self) -> None:
+        GL.glDeleteFramebuffers(1, [self.fbo])
+        GL.glDeleteRenderbuffers(len(self.renderbuffers), self.renderbuffers)
+
+
+class _PassRenderer(pyrender.Renderer):
+    """pyrender's renderer with camgen's shaders and a forward pass that sets each node's id."""
+
+    def __init__(self):
+        super().__init__(1, 1)
+        self._program_cache = _LinearProgramCache()
+
+    def shadow_flags(self, scene, shadows: bool) -> int:
+        if not shadows:
+            return RenderFlags.NONE
+        flags = RenderFlags.NONE
+        if scene.directional_light_nodes:
+            flags |= RenderFlags.SHADOWS_DIRECTIONAL
+        if scene.spot_light_nodes:
+            flags |= RenderFlags.SHADOWS_SPOT
+        return flags
+
+    def render_shadow_maps(self, scene, flags: int) -> None:
+        GL.glFrontFace(GL.GL_CCW)  # the shadow cameras are pyrender's own, with rows bottom-up
+        for node in scene.light_nodes:
+            if (isinstance(node.light, DirectionalLight) and flags & RenderFlags.SHADOWS_DIRECTIONAL) or (
+                isinstance(node.light, SpotLight) and flags & RenderFlags.SHADOWS_SPOT
+            ):
+                self._shadow_mapping_pass(scene, node, flags)
+
+    def forward(self, scene, nodes, instance_ids, V, P, cam_position, flags: int, lit: bool) -> None:
+        GL.glEnable(GL.GL_DEPTH_TEST)
+        GL.glDepthMask(GL.GL_TRUE)
+        GL.glDepthFunc(GL.GL_LESS)
+        GL.glDepthRange(0.0, 1.0)
+        GL.glDisable(GL.GL_MULTISAMPLE)
+        GL.glFrontFace(GL.GL_CW)  # gl_projection flips rows
+        draw_flags = flags if lit else RenderFlags.DEPTH_ONLY
+        program_flags = ProgramFlags.USE_MATERIAL if lit else ProgramFlags.NONE
+        program = None
+        for node in nodes:
+            if not node.mesh.is_visible:
+                continue
+            for primitive in node.mesh.primitives:
+                program = self._get_primitive_program(primitive, draw_flags, program_flags)
+                program._bind()
+                program.set_uniform("V", V)
+                program.set_uniform("P", P)
+                program.set_uniform("instance_id", instance_ids[node], unsigned=True)
+                if lit:
+                    program.set_uniform("cam_pos", cam_position)
+                    self._bind_lighting(scene, program, node, flags)
+                self._bind_and_draw_primitive(primitive, scene.get_pose(node), program, draw_flags)
+                self._reset_active_textures()
+        if program is not None:
+            program._unbind()
+
+
+class Renderer:
+    """A headless OpenGL context (EGL) that draws camgen scene graphs into float passes.
+
+    One per process (or thread); reuse it across frames, cameras and scenes. Use as a context
+    manager, or call `close`.
+    """
+
+    def __init__(self, device_index: int = 0):
+        from pyrender.platforms import egl
+
+        self._platform = egl.EGLPlatform(1, 1, device=egl.get_device_by_index(device_index))
+        self._platform.init_context()
+        self._platform.make_current()
+        self._renderer = _PassRenderer()
+        self._framebuffers: dict[tuple, _Framebuffer] = {}
+        self.gl_renderer = GL.glGetString(GL.GL_RENDERER).decode()
+        """The OpenGL implementation drawing (llvmpipe, or a GPU's name)."""
+
+    def __enter__(self) -> Renderer:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        if self._platform is None:
+            return
+        self._platform.make_current()
+        for framebuffer in self._framebuffers.values():
+            framebuffer.delete()
+        self._renderer.delete()
+        self._platform.delete_context()
+        self._platform = None
+
+    def forget(self, kept: str) -> None:
+        """Free a draw kept with `keep_as`."""
+        framebuffer = self._framebuffers.pop(("main", kept), None)
+        if framebuffer is not None:
+            self._platform.make_current()
+            framebuffer.delete()
+
+    def _framebuffer(self, key: tuple, width_px: int, height_px: int, passes: tuple[str, ...]) -> _Framebuffer:
+        framebuffer = self._framebuffers.get(key)
+        if framebuffer is None or (framebuffer.width_px, framebuffer.height_px, framebuffer.passes) != (
+            width_px,
+            height_px,
+            passes,
+        ):
+            if framebuffer is not None:
+                framebuffer.delete()
+            framebuffer = self._framebuffers[key] = _Framebuffer(width_px, height_px, passes)
+        return framebuffer
+
+    def draw(
+        self,
+        graph,
+        view: View,
+        passes: tuple[str, ...],
+        *,
+        nodes=None,
+        background: str | None = None,
+        keep_as: str | None = None,
+        read: bool = True,
+    ) -> Passes:
+        """Draw `nodes` (default: every mesh) of a `SceneGraph` as seen by `view`.
+
+        passes: any of "radiance", "depth_m", "instance_id"; they share one draw. Without radiance
+        the geometry-only shader runs (no lighting). `background` names a draw kept earlier with
+        `keep_as` (same view and passes) to start from instead of an empty frame: the new nodes are
+        depth-tested against it, exactly as if everything were drawn together.
+        """
+        unknown = set(passes) - set(PASSES)
+        if unknown or not passes:
+            raise ValueError(f"passes must be a non-empty subset of {PASSES}, got {passes}")
+        passes = tuple(name for name in PASSES if name in passes)
+        self._platform.make_current()
+        scene = graph.scene
+        nodes = list(graph.instance_ids) if nodes is None else list(nodes)
+        lit = "radiance" in passes
+        renderer = self._renderer
+        flags = renderer.shadow_flags(scene, graph.shadows) if lit else RenderFlags.NONE
+        pose_gl = gl_camera_pose(view.T_world_from_cam)
+        scene.set_pose(scene.main_camera_node, pose_gl)
+        renderer._update_context(scene, flags)
+        if flags != RenderFlags.NONE:
+            renderer.render_shadow_maps(scene, flags)
+
+        size = (view.width_px, view.height_px)
+        target = self._framebuffer(("main", keep_as), *size, passes)
+        if background is not None:
+            kept = self._framebuffers.get(("main", background))
+            if kept is None or (kept.width_px, kept.height_px, kept.passes) != (*size, passes):
+                raise ValueError(f"no kept draw {background!r} of size {size} with passes {passes}")
+            target = self._framebuffer(("composite",), *size, passes)
+            target.copy_from(kept)
+            target.bind()
+        else:
+            target.bind()
+            target.clear(graph.sky_luminance_cd_m2)
+
+        near_m, far_m = _clip_range_m(scene, view.T_world_from_cam)
+        P = gl_projection(view.K_px, view.width_px, view.height_px, near_m, far_m)
+        V = np.linalg.inv(pose_gl)
+        renderer.forward(scene, nodes, graph.instance_ids, V, P, pose_gl[:3, 3], flags, lit)
+        GL.glFlush()
+        return target.read() if read else Passes()
+
+
+def _clip_range_m(scene, T_world_from_cam: np.ndarray) -> tuple[float, float]:
+    """Near and far clipping distances: far just beyond the farthest corner of the scene's bounds."""
+    bounds = scene.bounds
+    corners = np.array([[bounds[i >> k & 1, k] for k in range(3)] for i in range(8)])
+    farthest = float(np.max(np.linalg.norm(corners - T_world_from_cam[:3, 3], axis=1)))
+    return NEAR_CLIP_M, max(2.0 * NEAR_CLIP_M, farthest * 1.01 + 1.0)
+
+
+__all__ = ["PASSES", "Passes", "Renderer", "View", "gl_camera_pose", "gl_projection"]

@@ -1,0 +1,238 @@
+"""A camgen scene as a pyrender scene graph, in physical units, with an instance id on every node.
+
+Units (DESIGN.md "camgen.render"): pyrender's lit shader is a Cook–Torrance BRDF whose Lambertian
+term is ρ/π; with light intensities in lux (directional) and candela (point, spot) its output is
+luminance in cd/m² once gamma and clamping are removed (`camgen.render.renderer`). So:
+
+- sun: a directional light of ``illuminance_lux`` (lux on a surface facing it);
+- point and spot: ``intensity_cd`` candela, falling off as 1/d²;
+- ambient: a uniform sky of illuminance E lux lights a Lambertian surface of reflectance ρ to
+  L = ρ·E/π cd/m²; pyrender adds base_colour × ambient_light, so ambient_light = E/π;
+- emission: ``emission_cd_m2`` is added as it is (white);
+- sky: pixels that hit no geometry get ``sky_luminance_cd_m2`` (the renderer's clear value).
+
+Instance ids: actors take 1…A in scene order (so an actor's id is its track id), environment meshes
+A+1…A+M; 0 is the background. Ids are 32-bit, so any realistic number of instances fits.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import trimesh
+
+from camgen.config.scene import (
+    Actor,
+    AmbientLight,
+    BoxMesh,
+    CheckerboardMesh,
+    CylinderMesh,
+    FileMesh,
+    Material,
+    PlaneMesh,
+    PointLight,
+    Scene,
+    SphereMesh,
+    SpotLight,
+    SunLight,
+    actor_shape,
+)
+from camgen.errors import ConfigError
+from camgen.motion.pose import T_world_from_cam, rot_z, rotation_xyz_deg
+from camgen.motion.trajectory import position_on_path
+from camgen.render.gl import pyrender
+
+CYLINDER_SECTIONS = 48
+SPHERE_SUBDIVISIONS = 3
+SPOT_FULL_INTENSITY_FRACTION = 0.8
+
+
+@dataclass(frozen=True)
+class Instance:
+    instance_id: int
+    name: str
+    kind: Literal["actor", "environment"]
+
+
+@dataclass
+class SceneGraph:
+    """A pyrender scene built from a camgen scene; actor nodes are moved with `place_actors`."""
+
+    scene: pyrender.Scene
+    actors: list[Actor]
+    actor_nodes: list[pyrender.Node]
+    environment_nodes: list[pyrender.Node]
+    instance_ids: dict[pyrender.Node, int]
+    instances: tuple[Instance, ...]
+    sky_luminance_cd_m2: float
+    shadows: bool
+    actor_local_poses: list[np.ndarray] = field(default_factory=list)
+
+    def place_actors(self, time_s: float) -> None:
+        """Move every actor to where its path puts it at `time_s`."""
+        for actor, node, local in zip(self.actors, self.actor_nodes, self.actor_local_poses, strict=True):
+            self.scene.set_pose(node, actor_pose(actor, time_s) @ local)
+
+
+def actor_pose(actor: Actor, time_s: float) -> np.ndarray:
+    """T_world_from_actor at `time_s`: on the ground at its path position, x along its heading."""
+    path = actor.path
+    xy, heading = position_on_path(np.array(path.waypoints_m), path.speed_m_s, path.start_s, path.loop, time_s)
+    return T_world_from_cam((float(xy[0]), float(xy[1]), 0.0), rot_z(float(heading)))
+
+
+def placement(shape) -> np.ndarray:
+    """T_parent_from_mesh of a placed shape: rotation about X, Y, Z (extrinsic), then the offset."""
+    return T_world_from_cam(shape.position_m, rotation_xyz_deg(shape.rotation_deg))
+
+
+def _material(material: Material, color_rgb=None) -> pyrender.MetallicRoughnessMaterial:
+    rgb = material.color_rgb if color_rgb is None else color_rgb
+    return pyrender.MetallicRoughnessMaterial(
+        baseColorFactor=(*rgb, 1.0),
+        metallicFactor=material.metallic,
+        roughnessFactor=material.roughness,
+        emissiveFactor=(material.emission_cd_m2,) * 3,
+        doubleSided=False,
+    )
+
+
+def _checkerboard(shape: CheckerboardMesh) -> list[tuple[trimesh.Trimesh, tuple[float, float, float]]]:
+    """Light and dark quads tiling the board and its margin in one plane (no overlap, no z-fighting)."""
+    nx, ny = shape.squares
+    size, border = shape.square_size_m, shape.border_width_m
+    xs = (np.arange(nx + 1) - nx / 2) * size
+    ys = (np.arange(ny + 1) - ny / 2) * size
+    quads: dict[bool, list[tuple[float, float, float, float]]] = {True: [], False: []}
+    for i in range(nx):
+        for j in range(ny):
+            quads[(i + j) % 2 == 0].append((xs[i], ys[j], xs[i + 1], ys[j + 1]))
+    if border > 0:
+        x0, x1, y0, y1 = xs[0] - border, xs[-1] + border, ys[0] - border, ys[-1] + border
+        quads[False] += [
+            (x0, y0, x1, ys[0]),
+            (x0, ys[-1], x1, y1),
+            (x0, ys[0], xs[0], ys[-1]),
+            (xs[-1], ys[0], x1, ys[-1]),
+        ]
+    parts = []
+    for dark, colour in ((True, shape.dark_color_rgb), (False, shape.material.color_rgb)):
+        vertices, faces = [], []
+        for k, (a0, b0, a1, b1) in enumerate(quads[dark]):
+            vertices += [(a0, b0, 0.0), (a1, b0, 0.0), (a1, b1, 0.0), (a0, b1, 0.0)]
+            faces += [(4 * k, 4 * k + 1, 4 * k + 2), (4 * k, 4 * k + 2, 4 * k + 3)]
+        parts.append((trimesh.Trimesh(np.array(vertices), np.array(faces), process=False), colour))
+    return parts
+
+
+def _plane(size_m: tuple[float, float]) -> trimesh.Trimesh:
+    hx, hy = size_m[0] / 2, size_m[1] / 2
+    vertices = np.array([(-hx, -hy, 0.0), (hx, -hy, 0.0), (hx, hy, 0.0), (-hx, hy, 0.0)])
+    return trimesh.Trimesh(vertices, np.array([(0, 1, 2), (0, 2, 3)]), process=False)
+
+
+def build_mesh(shape, resolve_path: Callable[[str], Path] | None = None) -> pyrender.Mesh:
+    """A pyrender mesh in the shape's own frame (its placement goes on the node)."""
+    material = _material(shape.material)
+    if isinstance(shape, BoxMesh):
+        return pyrender.Mesh.from_trimesh(trimesh.creation.box(extents=shape.size_m), material=material, smooth=False)
+    if isinstance(shape, CylinderMesh):
+        cylinder = trimesh.creation.cylinder(radius=shape.radius_m, height=shape.height_m, sections=CYLINDER_SECTIONS)
+        return pyrender.Mesh.from_trimesh(cylinder, material=material, smooth=False)
+    if isinstance(shape, SphereMesh):
+        sphere = trimesh.creation.icosphere(subdivisions=SPHERE_SUBDIVISIONS, radius=shape.radius_m)
+        return pyrender.Mesh.from_trimesh(sphere, material=material, smooth=True)
+    if isinstance(shape, PlaneMesh):
+        return pyrender.Mesh.from_trimesh(_plane(shape.size_m), material=material, smooth=False)
+    if isinstance(shape, CheckerboardMesh):
+        primitives = []
+        for part, colour in _checkerboard(shape):
+            mesh = pyrender.Mesh.from_trimesh(part, material=_material(shape.material, colour), smooth=False)
+            primitives += mesh.primitives
+        return pyrender.Mesh(primitives=primitives)
+    if isinstance(shape, FileMesh):
+        if resolve_path is None:
+            raise ConfigError(f"mesh file {shape.path!r} needs the scene's directory to be found")
+        loaded = trimesh.load(resolve_path(shape.path), force="mesh")
+        loaded.apply_scale(shape.scale)
+        # The file's own materials stand unless the scene sets one.
+        override = material if "material" in shape.model_fields_set else None
+        return pyrender.Mesh.from_trimesh(loaded, material=override, smooth=False)
+    raise TypeError(f"unknown shape {type(shape).__name__}")
+
+
+def _look_along(direction: np.ndarray, position=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """A node pose whose −z axis points along `direction` (how pyrender aims lights)."""
+    z = -np.asarray(direction, dtype=np.float64)
+    z /= np.linalg.norm(z)
+    helper = np.array([0.0, 0.0, 1.0]) if abs(z[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    return T_world_from_cam(position, np.column_stack([x, np.cross(z, x), z]))
+
+
+def _add_lights(scene: pyrender.Scene, lights) -> None:
+    for light in lights:
+        if isinstance(light, SunLight):
+            az, el = math.radians(light.azimuth_deg), math.radians(light.elevation_deg)
+            towards_sun = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+            node_light = pyrender.DirectionalLight(color=light.color_rgb, intensity=light.illuminance_lux)
+            scene.add(node_light, pose=_look_along(-towards_sun))
+        elif isinstance(light, PointLight):
+            node_light = pyrender.PointLight(color=light.color_rgb, intensity=light.intensity_cd)
+            scene.add(node_light, pose=T_world_from_cam(light.position_m, np.eye(3)))
+        elif isinstance(light, SpotLight):
+            outer = math.radians(light.cone_half_angle_deg)
+            node_light = pyrender.SpotLight(
+                color=light.color_rgb,
+                intensity=light.intensity_cd,
+                innerConeAngle=SPOT_FULL_INTENSITY_FRACTION * outer,
+                outerConeAngle=outer,
+            )
+            direction = np.subtract(light.target_m, light.position_m)
+            scene.add(node_light, pose=_look_along(direction, light.position_m))
+        elif not isinstance(light, AmbientLight):
+            raise TypeError(f"unknown light {type(light).__name__}")
+
+
+def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None = None) -> SceneGraph:
+    """Meshes, actors (at t = 0) and lights of `scene` as a pyrender scene; no camera yet."""
+    ambient_lux = sum(light.illuminance_lux for light in scene.lights if isinstance(light, AmbientLight))
+    graph = pyrender.Scene(bg_color=(0.0, 0.0, 0.0, 0.0), ambient_light=np.full(3, ambient_lux / math.pi))
+    _add_lights(graph, scene.lights)
+    # pyrender's shadow passes sort meshes by distance to the main camera; draws set its pose.
+    graph.add(pyrender.IntrinsicsCamera(1.0, 1.0, 0.0, 0.0), name="camera")
+    instance_ids: dict[pyrender.Node, int] = {}
+    instances: list[Instance] = []
+    actor_nodes, local_poses = [], []
+    for actor in scene.actors:
+        shape = actor_shape(actor)
+        node = graph.add(build_mesh(shape, resolve_path), name=f"actor:{actor.name}")
+        instances.append(Instance(len(instances) + 1, actor.name, "actor"))
+        instance_ids[node] = instances[-1].instance_id
+        actor_nodes.append(node)
+        local_poses.append(placement(shape))
+    environment_nodes = []
+    for mesh in scene.environment.meshes:
+        node = graph.add(build_mesh(mesh, resolve_path), pose=placement(mesh), name=f"environment:{mesh.name}")
+        instances.append(Instance(len(instances) + 1, mesh.name, "environment"))
+        instance_ids[node] = instances[-1].instance_id
+        environment_nodes.append(node)
+    result = SceneGraph(
+        scene=graph,
+        actors=list(scene.actors),
+        actor_nodes=actor_nodes,
+        environment_nodes=environment_nodes,
+        instance_ids=instance_ids,
+        instances=tuple(instances),
+        sky_luminance_cd_m2=scene.environment.sky_luminance_cd_m2,
+        shadows=scene.environment.shadows,
+        actor_local_poses=local_poses,
+    )
+    result.place_actors(0.0)
+    return result

@@ -1,0 +1,126 @@
+"""Render the passes of one camera of a compiled Job, frame by frame, as its RenderSpec says.
+
+- The pinhole render is larger than the output by the plan's margin (for distortion, CA and blur):
+  the principal point moves by the left/top margin, so output pixel (u, v) is render pixel
+  (u + left, v + top) and the output's own camera matrix still holds after cropping.
+- Supersampling s > 1: radiance is drawn s× finer per axis and box-averaged, which integrates each
+  pixel's area as a sensor pixel does. depth_m and instance_id stay point samples at pixel centres
+  (exact values, no mixed ids), drawn together at 1× in one cheap geometry-only draw.
+- Static background: the environment is drawn once per camera and kept on the GPU; each frame starts
+  from a copy of it and draws only the actors, depth-tested against it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from camgen.plan.job import CameraJob, CameraState, Job, RenderSpec
+from camgen.render.renderer import Passes, Renderer, View
+from camgen.render.scene_graph import SceneGraph, build_scene_graph
+
+
+def render_view(state: CameraState, spec: RenderSpec) -> View:
+    """The pinhole view of the margin-enlarged render for one camera state."""
+    K = np.array(state.K_px, dtype=np.float64)
+    left, top, _, _ = spec.margin_px
+    K[0, 2] += left
+    K[1, 2] += top
+    return View(K, np.array(state.T_world_from_cam, dtype=np.float64), spec.width_px, spec.height_px)
+
+
+def box_downsample(image: np.ndarray, factor: int) -> np.ndarray:
+    """Mean over factor×factor blocks, (H·f, W·f, …) → (H, W, …); float32 in, float32 out."""
+    if factor == 1:
+        return image
+    h, w = image.shape[0] // factor, image.shape[1] // factor
+    return cv2.resize(image, (w, h), interpolation=cv2.INTER_AREA)
+
+
+@dataclass
+class Frame:
+    index: int
+    time_s: float
+    passes: Passes
+    """At the render size (output plus margin)."""
+
+
+class CameraRenderer:
+    """Draws the planned passes of one camera; keeps its static background between frames."""
+
+    def __init__(self, renderer: Renderer, graph: SceneGraph, camera: CameraJob):
+        self.renderer, self.graph, self.camera = renderer, graph, camera
+        self.spec = camera.render
+        self._kept_views: dict[str, View] = {}
+
+    def close(self) -> None:
+        """Free the kept background draws."""
+        for kept in self._kept_views:
+            self.renderer.forget(kept)
+        self._kept_views.clear()
+
+    def _draw(self, view: View, passes: tuple[str, ...], key: str) -> Passes:
+        graph, renderer = self.graph, self.renderer
+        if not self.spec.static_background:
+            return renderer.draw(graph, view, passes)
+        kept = f"{self.camera.name}:{key}"
+        if kept not in self._kept_views or not _same_view(self._kept_views[kept], view):
+            renderer.draw(graph, view, passes, nodes=graph.environment_nodes, keep_as=kept, read=False)
+            self._kept_views[kept] = view
+        return renderer.draw(graph, view, passes, nodes=graph.actor_nodes, background=kept)
+
+    def frame(self, index: int) -> Frame:
+        state = self.camera.states[index]
+        spec = self.spec
+        self.graph.place_actors(state.time_s)
+        view = render_view(state, spec)
+        passes = spec.passes
+        s = spec.supersampling
+        if s == 1:
+            result = self._draw(view, passes, "1x")
+        else:
+            result = Passes()
+            if "radiance" in passes:
+                fine = self._draw(view.scaled(s), ("radiance",), f"{s}x")
+                result.radiance = box_downsample(fine.radiance, s)
+            geometric = tuple(p for p in passes if p != "radiance")
+            if geometric:
+                coarse = self._draw(view, geometric, "1x")
+                result.depth_m, result.instance_id = coarse.depth_m, coarse.instance_id
+        return Frame(index, state.time_s, result)
+
+
+def _same_view(a: View, b: View) -> bool:
+    return (
+        (a.width_px, a.height_px) == (b.width_px, b.height_px)
+        and np.array_equal(a.K_px, b.K_px)
+        and np.array_equal(a.T_world_from_cam, b.T_world_from_cam)
+    )
+
+
+def render_camera(
+    renderer: Renderer,
+    job: Job,
+    camera: CameraJob,
+    *,
+    frames: Iterable[int] | None = None,
+    resolve_path: Callable[[str], Path] | None = None,
+) -> Iterator[Frame]:
+    """Yield the planned passes of `camera` for each frame index (default: every frame)."""
+    graph = build_scene_graph(job.scene, resolve_path)
+    camera_renderer = CameraRenderer(renderer, graph, camera)
+    try:
+        for index in range(job.frame_count) if frames is None else frames:
+            yield camera_renderer.frame(index)
+    finally:
+        camera_renderer.close()
+
+
+def crop_to_output(image: np.ndarray, spec: RenderSpec) -> np.ndarray:
+    """The output frame of a margin-enlarged render (ideal pinhole: no lens stage has run)."""
+    left, top, right, bottom = spec.margin_px
+    return image[top : image.shape[0] - bottom, left : image.shape[1] - right]
