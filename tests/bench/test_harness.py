@@ -36,3 +36,15 @@ def test_warmup_runs_are_not_timed():
 def test_repeats_must_be_positive():
     with pytest.raises(ValueError, match="repeats must be ≥ 1"):
         run_case(Case(name="c", run=lambda: None), repeats=0)
+
+
+def test_case_repeats_override_and_baseline_ratio():
+    calls = []
+    slow = Case(name="slow", run=lambda: calls.append(1), repeats=2)
+    result = run_case(slow, repeats=7, warmup=0, clock=fake_clock([0.004, 0.004]))
+    assert result.repeats == 2 and len(calls) == 2
+    fast = run_case(
+        Case(name="fast", run=lambda: None, baseline="slow"), repeats=1, warmup=0, clock=fake_clock([0.001])
+    )
+    table = markdown_table([result, fast])
+    assert "| 0.25 |" in table.splitlines()[-1]

@@ -240,3 +240,12 @@ def test_unknown_pass_is_refused(renderer):
     graph = _lit_plane(lights=[{"type": "ambient", "illuminance_lux": 10}])
     with pytest.raises(ValueError, match="passes must be"):
         renderer.draw(graph, _overhead_view(), ("normals",))
+
+
+def test_closing_one_renderer_leaves_another_working(renderer):
+    from camgen.render.renderer import Renderer
+
+    graph = _lit_plane(lights=[{"type": "ambient", "illuminance_lux": 10}])
+    with Renderer() as other:
+        other.draw(graph, _overhead_view(), ("instance_id",))
+    assert (renderer.draw(graph, _overhead_view(), ("instance_id",)).instance_id == 1).any()

@@ -1,4 +1,4 @@
-"""The benchmark cases that exist so far: configuration, planning, and the lens inverse."""
+"""The benchmark cases that exist so far: configuration, planning, the lens inverse and rendering."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from camgen.bench.harness import Case
+from camgen.bench.render_cases import render_cases
 from camgen.config import load_scene
 from camgen.optics.distortion import distort_normalized, undistort_normalized
 from camgen.plan import compile_scene
@@ -20,6 +21,7 @@ def default_cases(repo: Path) -> list[Case]:
         loaded = load_scene(path)
         cases.append(Case(name=f"compile plan {path.stem}", run=lambda s=loaded: _compile(s)))
     cases.append(_undistort_case())
+    cases += render_cases(repo)
     return cases
 
 

@@ -16,6 +16,12 @@ class Case:
     run: Callable[[], float | None]
     setup: Callable[[], None] | None = None
     error_unit: str = ""
+    repeats: int | None = None
+    """Timed runs for this case (slow cases use fewer); None uses the harness's number."""
+    baseline: str | None = None
+    """Name of the case this one is compared with: the table gives the ratio of medians (same run)."""
+    warmup: int | None = None
+    """Untimed runs first; None uses the harness's number."""
 
 
 @dataclass(frozen=True)
@@ -28,10 +34,13 @@ class Result:
     min_ms: float
     error: float | None
     error_unit: str
+    baseline: str | None = None
 
 
 def run_case(case: Case, repeats: int = 7, warmup: int = 1, clock=time.perf_counter) -> Result:
     """Run `warmup` untimed and `repeats` timed calls; the error is the largest one seen."""
+    repeats = case.repeats or repeats
+    warmup = warmup if case.warmup is None else case.warmup
     if repeats < 1:
         raise ValueError(f"repeats must be ≥ 1, got {repeats}")
     if case.setup:
@@ -55,17 +64,22 @@ def run_case(case: Case, repeats: int = 7, warmup: int = 1, clock=time.perf_coun
         min_ms=min(times_ms),
         error=max(errors) if errors else None,
         error_unit=case.error_unit,
+        baseline=case.baseline,
     )
 
 
 def markdown_table(results: list[Result]) -> str:
+    """One row per result; `× baseline` is its median over its baseline's median from the same run."""
+    medians = {r.name: r.median_ms for r in results}
     lines = [
-        "| case | median ms | IQR ms | min ms | repeats | max error |",
-        "|---|---:|---:|---:|---:|---:|",
+        "| case | median ms | IQR ms | min ms | repeats | max error | × baseline |",
+        "|---|---:|---:|---:|---:|---:|---:|",
     ]
     for r in results:
         error = f"{r.error:.3g} {r.error_unit}" if r.error is not None else "—"
+        ratio = f"{r.median_ms / medians[r.baseline]:.3g}" if r.baseline in medians else "—"
         lines.append(
-            f"| {r.name} | {r.median_ms:.2f} | {r.q1_ms:.2f}–{r.q3_ms:.2f} | {r.min_ms:.2f} | {r.repeats} | {error} |"
+            f"| {r.name} | {r.median_ms:.2f} | {r.q1_ms:.2f}–{r.q3_ms:.2f} | {r.min_ms:.2f} | {r.repeats} | {error} "
+            f"| {ratio} |"
         )
     return "\n".join(lines)

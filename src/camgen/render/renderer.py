@@ -291,7 +291,13 @@ class Renderer:
         for framebuffer in self._framebuffers.values():
             framebuffer.delete()
         self._renderer.delete()
-        self._platform.delete_context()
+        # Destroy only this context: pyrender's delete_context also terminates the EGL display, which
+        # the process shares, and would break every other live Renderer.
+        from OpenGL import EGL
+
+        platform = self._platform
+        EGL.eglMakeCurrent(platform._egl_display, EGL.EGL_NO_SURFACE, EGL.EGL_NO_SURFACE, EGL.EGL_NO_CONTEXT)
+        EGL.eglDestroyContext(platform._egl_display, platform._egl_context)
         self._platform = None
 
     def forget(self, kept: str) -> None:

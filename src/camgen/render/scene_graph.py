@@ -79,6 +79,14 @@ class SceneGraph:
             self.scene.set_pose(node, actor_pose(actor, time_s) @ local)
 
 
+def instance_table(scene: Scene) -> tuple[Instance, ...]:
+    """Every instance id the render assigns: actors 1…A in scene order, then environment meshes."""
+    named = [(actor.name, "actor") for actor in scene.actors] + [
+        (m.name, "environment") for m in scene.environment.meshes
+    ]
+    return tuple(Instance(i, name, kind) for i, (name, kind) in enumerate(named, start=1))
+
+
 def actor_pose(actor: Actor, time_s: float) -> np.ndarray:
     """T_world_from_actor at `time_s`: on the ground at its path position, x along its heading."""
     path = actor.path
@@ -207,29 +215,24 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
     _add_lights(graph, scene.lights)
     # pyrender's shadow passes sort meshes by distance to the main camera; draws set its pose.
     graph.add(pyrender.IntrinsicsCamera(1.0, 1.0, 0.0, 0.0), name="camera")
-    instance_ids: dict[pyrender.Node, int] = {}
-    instances: list[Instance] = []
-    actor_nodes, local_poses = [], []
+    instances = instance_table(scene)
+    actor_nodes, local_poses, environment_nodes = [], [], []
     for actor in scene.actors:
         shape = actor_shape(actor)
-        node = graph.add(build_mesh(shape, resolve_path), name=f"actor:{actor.name}")
-        instances.append(Instance(len(instances) + 1, actor.name, "actor"))
-        instance_ids[node] = instances[-1].instance_id
-        actor_nodes.append(node)
+        actor_nodes.append(graph.add(build_mesh(shape, resolve_path), name=f"actor:{actor.name}"))
         local_poses.append(placement(shape))
-    environment_nodes = []
     for mesh in scene.environment.meshes:
         node = graph.add(build_mesh(mesh, resolve_path), pose=placement(mesh), name=f"environment:{mesh.name}")
-        instances.append(Instance(len(instances) + 1, mesh.name, "environment"))
-        instance_ids[node] = instances[-1].instance_id
         environment_nodes.append(node)
+    nodes = actor_nodes + environment_nodes
+    instance_ids = {node: instance.instance_id for node, instance in zip(nodes, instances, strict=True)}
     result = SceneGraph(
         scene=graph,
         actors=list(scene.actors),
         actor_nodes=actor_nodes,
         environment_nodes=environment_nodes,
         instance_ids=instance_ids,
-        instances=tuple(instances),
+        instances=instances,
         sky_luminance_cd_m2=scene.environment.sky_luminance_cd_m2,
         shadows=scene.environment.shadows,
         actor_local_poses=local_poses,

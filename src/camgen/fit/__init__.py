@@ -1,0 +1,1 @@
+"""Profiles from real hardware: noise from raw frames, lens intrinsics from boards, reference matching."""

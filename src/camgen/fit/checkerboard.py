@@ -1,0 +1,61 @@
+"""Camera intrinsics from views of a checkerboard, with OpenCV (Zhang's method).
+
+Used to verify rendered geometry (the render tests and `bench`) and, later, to fit lens profiles
+from real board images.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from camgen.config.scene import CheckerboardMesh
+from camgen.isp.preview import LUMINANCE_WEIGHTS_BT709
+
+
+@dataclass(frozen=True)
+class Calibration:
+    rms_px: float
+    """Reprojection error over every corner of every view, px."""
+    K_px: np.ndarray
+    distortion: np.ndarray
+    """OpenCV order (k1, k2, p1, p2, k3)."""
+    views_used: int
+
+
+def inner_corners(board: CheckerboardMesh) -> tuple[int, int]:
+    """Inner corner grid of a board: one fewer than its squares along each axis."""
+    return board.squares[0] - 1, board.squares[1] - 1
+
+
+def board_points_m(board: CheckerboardMesh) -> np.ndarray:
+    """Inner corners in the board's own plane (z = 0), m, in OpenCV's detection order: (N, 3) float32."""
+    nx, ny = inner_corners(board)
+    points = np.zeros((nx * ny, 3), np.float32)
+    points[:, :2] = np.mgrid[0:nx, 0:ny].T.reshape(-1, 2) * board.square_size_m
+    return points
+
+
+def gray8_from_radiance(radiance_cd_m2: np.ndarray) -> np.ndarray:
+    """An 8-bit grey view of linear radiance for corner detection: luminance, white at the 99.5th
+    percentile (so the board's light squares do not clip), gamma 1/2.2."""
+    luminance = radiance_cd_m2 @ LUMINANCE_WEIGHTS_BT709
+    white = max(float(np.percentile(luminance, 99.5)), np.finfo(np.float32).tiny)
+    return np.round(255 * np.clip(luminance / white, 0, 1) ** (1 / 2.2)).astype(np.uint8)
+
+
+def find_corners(gray8: np.ndarray, inner: tuple[int, int]) -> np.ndarray | None:
+    """Sub-pixel inner corners (N, 1, 2) of a board in an 8-bit grey image, or None if not found."""
+    found, corners = cv2.findChessboardCornersSB(gray8, inner, flags=cv2.CALIB_CB_ACCURACY)
+    return corners if found else None
+
+
+def calibrate(board: CheckerboardMesh, corners: list[np.ndarray], size_px: tuple[int, int]) -> Calibration:
+    """`cv2.calibrateCamera` over the views whose corners were found (k1, k2, p1, p2, k3 free)."""
+    if len(corners) < 3:
+        raise ValueError(f"calibration needs the board in at least 3 views, found it in {len(corners)}")
+    points = board_points_m(board)
+    rms, K, dist, _, _ = cv2.calibrateCamera([points] * len(corners), corners, size_px, None, None)
+    return Calibration(float(rms), K, dist.ravel(), len(corners))

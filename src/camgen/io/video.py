@@ -1,0 +1,357 @@
+"""Encode 8-bit RGB frames into an H.264, H.265 or MJPEG file the way a surveillance camera streams them.
+
+The encoder follows the camera's `Codec` profile: rate control (target bitrate or constant quality), a
+fixed key-frame interval, and the chroma subsampling of the stream. Encoding goes through PyAV (FFmpeg's
+libx264, libx265 and mjpeg encoders). The file appears under its final name only once it is complete.
+
+Conventions
+-----------
+* Colour: H.264 and H.265 streams are BT.709, limited range (Y' 16–235), and say so in the stream's VUI;
+  MJPEG is BT.601 full range as JFIF requires. The RGB input is taken to be already gamma-encoded
+  (the ISP's output); no transfer function is applied here.
+* Time: frame ``i`` has presentation time ``i / fps`` seconds exactly (pts ``i`` in a time base of
+  ``1 / fps``), with ``fps`` held as a fraction so that NTSC rates such as 30000/1001 stay exact.
+* Frames: I and P frames only, no B-frames, as IP cameras stream for low latency; key frames fall
+  exactly every `Codec.gop_frames` frames (closed GOPs, no scene-cut key frames).
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import os
+import tempfile
+from fractions import Fraction
+from pathlib import Path
+from types import MappingProxyType, TracebackType
+from typing import Self
+
+import av
+import numpy as np
+from av.codec.codec import UnknownCodecError
+from av.video.reformatter import ColorRange, Colorspace
+
+from camgen.config.profile import Codec
+from camgen.errors import ConfigError
+
+ENCODERS = MappingProxyType({"h264": "libx264", "h265": "libx265", "mjpeg": "mjpeg"})
+"""FFmpeg encoder behind each `Codec.name`."""
+
+X26X_PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower", "veryslow")
+"""Speed/quality presets shared by libx264 and libx265 (fastest first)."""
+
+H273_BT709 = 1
+"""ITU-T H.273 code point of BT.709 colour primaries and transfer characteristics (AVCOL_PRI/TRC_BT709)."""
+
+VBV_BUFFER_S = 1.0
+"""Decoder buffer of the bitrate mode, seconds of the target bitrate (see `VideoWriter`)."""
+
+CHROMA_SUBSAMPLING = MappingProxyType({"yuv420p": (2, 2), "yuv422p": (2, 1), "yuv444p": (1, 1)})
+"""Chroma subsampling (horizontal, vertical) of each pixel format; the frame size must be a multiple."""
+
+
+class VideoWriter:
+    """Encodes 8-bit RGB frames as a camera's stream would (codec, rate control, GOP, chroma subsampling).
+
+    Frames go into a temporary file beside `path` (``.<name>.<random>.partial<suffix>``); `close` renames
+    it to `path` in one step, `abort` deletes it. Used as a context manager, the writer closes on success
+    and aborts when the block raises, so `path` never holds a partial video.
+
+    Parameters
+    ----------
+    path : str or Path
+        Output file. The suffix chooses the container (``.mp4``, ``.mkv``, ``.mov``, ``.avi``).
+        Missing parent directories are created.
+    width_px, height_px : int
+        Frame size, pixels. 4:2:0 needs both even, 4:2:2 an even width.
+    fps : float
+        Frame rate, frames per second (> 0). Rates within 0.01 % of an integer or of an NTSC rate
+        ``n · 1000/1001`` (29.97, 59.94, 23.976) are stored as that exact fraction; others as the
+        nearest fraction with denominator ≤ 1001.
+    codec : Codec
+        The camera's codec profile:
+
+        * ``name``: ``h264`` (libx264), ``h265`` (libx265) or ``mjpeg``.
+        * ``bitrate_kbps``: target bitrate, kbit/s. For H.264/H.265 this is a VBV-constrained average
+          like a camera's CBR mode: peak rate (``maxrate``) = target, decoder buffer (``bufsize``) =
+          `VBV_BUFFER_S` seconds of the target; no filler data is inserted, so a static scene may use
+          less. For MJPEG it is the mpegvideo rate controller's target.
+        * ``crf`` (when ``bitrate_kbps`` is None): constant quality, 0 (best) to 51 (worst).
+          MJPEG has no CRF; it maps linearly onto a fixed quantiser scale,
+          ``q = 2 + round(29 · crf / 51)`` (2 best, 31 worst).
+        * ``gop_frames``: key-frame interval, frames. Frame ``k · gop_frames`` is a key (IDR) frame and
+          no other is (scene-cut detection off). MJPEG frames are all key frames.
+        * ``pixel_format``: chroma subsampling of the stream (``yuv420p``, ``yuv422p``, ``yuv444p``).
+    preset : str
+        libx264/libx265 speed preset, ``ultrafast`` … ``veryslow``; ignored by MJPEG.
+
+    Raises
+    ------
+    ConfigError
+        (a ValueError) for a frame size the pixel format cannot hold, a non-positive frame rate, an
+        unknown preset, a container the suffix does not name, or a codec this FFmpeg build lacks.
+
+    Examples
+    --------
+    >>> with VideoWriter("out/cam.mp4", width_px=320, height_px=240, fps=25) as writer:  # doctest: +SKIP
+    ...     for frame in frames_rgb8:
+    ...         writer.write(frame)
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        width_px: int,
+        height_px: int,
+        fps: float,
+        codec: Codec = Codec(),  # noqa: B008 - frozen pydantic model, safe to share
+        preset: str = "medium",
+    ) -> None:
+        self._path = Path(path)
+        self._width_px = width_px
+        self._height_px = height_px
+        self._frames_written = 0
+        self._closed = False
+        _check_size(width_px, height_px, codec.pixel_format)
+        rate = _frame_rate(fps)
+        encoder = _encoder(codec.name)
+        if codec.name != "mjpeg" and preset not in X26X_PRESETS:
+            raise ConfigError(f"preset must be one of {', '.join(X26X_PRESETS)}, got {preset!r}")
+        self._colour = _colour(codec.name)
+
+        self._path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(
+            prefix=f".{self._path.name}.", suffix=f".partial{self._path.suffix}", dir=self._path.parent
+        )
+        os.close(fd)
+        self._tmp_path = Path(tmp)
+        try:
+            try:
+                self._container = av.open(str(self._tmp_path), mode="w")
+            except ValueError as error:
+                raise ConfigError(
+                    f"{self._path}: cannot tell the container format from the suffix {self._path.suffix!r}; "
+                    "use .mp4, .mkv, .mov or .avi"
+                ) from error
+            self._stream = self._container.add_stream(encoder, rate=rate)
+            _configure(self._stream.codec_context, codec, rate, width_px, height_px, preset, self._colour)
+            self._stream.codec_context.open()
+        except BaseException:
+            self._discard()
+            raise
+
+    @property
+    def frames_written(self) -> int:
+        """Frames passed to `write` so far."""
+        return self._frames_written
+
+    def write(self, frame_rgb8: np.ndarray) -> None:
+        """Encode one frame; it is shown for ``1 / fps`` seconds after the previous one.
+
+        Parameters
+        ----------
+        frame_rgb8 : ndarray, shape (height_px, width_px, 3), uint8
+            Gamma-encoded RGB, channels in R, G, B order, 0–255 DN.
+
+        Raises
+        ------
+        ValueError
+            If the writer is closed, or the frame is not a uint8 array of shape (height_px, width_px, 3).
+        """
+        if self._closed:
+            raise ValueError(f"{self._path}: the writer is closed; open a new VideoWriter to write more frames")
+        _check_frame(frame_rgb8, self._width_px, self._height_px)
+        frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame_rgb8), format="rgb24")
+        colorspace, color_range = self._colour
+        frame = frame.reformat(
+            format=self._stream.codec_context.pix_fmt,
+            dst_colorspace=colorspace,
+            dst_color_range=color_range,
+        )
+        frame.pts = self._frames_written
+        self._container.mux(self._stream.encode(frame))
+        self._frames_written += 1
+
+    def close(self) -> None:
+        """Flush the encoder, finish the container and rename the file to `path`.
+
+        Closing twice does nothing. If finishing fails, the temporary file is deleted and the error
+        propagates; `path` is left as it was.
+
+        Raises
+        ------
+        ValueError
+            If no frame was written: containers drop an empty video track, so there is no video to save.
+            The temporary file is deleted; use `abort` to stop without output on purpose.
+        """
+        if self._closed:
+            return
+        if self._frames_written == 0:
+            self._discard()
+            raise ValueError(f"{self._path}: no frames were written, so there is no video to save; write a frame first")
+        try:
+            self._container.mux(self._stream.encode(None))
+            self._container.close()
+            os.replace(self._tmp_path, self._path)
+        except BaseException:
+            self._discard()
+            raise
+        self._closed = True
+
+    def abort(self) -> None:
+        """Stop without producing `path`: close the container and delete the temporary file.
+
+        Safe to call more than once, and after `close` (then it does nothing).
+        """
+        if not self._closed:
+            self._discard()
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
+
+    def _discard(self) -> None:
+        self._closed = True
+        container = getattr(self, "_container", None)
+        try:
+            if container is not None:
+                container.close()
+        except (av.FFmpegError, OSError, ValueError):
+            pass  # the file is deleted next; a failed trailer on it does not matter
+        finally:
+            self._tmp_path.unlink(missing_ok=True)
+
+
+def _frame_rate(fps: float) -> Fraction:
+    """`fps` as an exact fraction: integer, NTSC ``n · 1000/1001``, or nearest with denominator ≤ 1001."""
+    if isinstance(fps, bool) or not isinstance(fps, numbers.Real) or not (math.isfinite(fps) and fps > 0):
+        raise ConfigError(f"fps must be a finite number > 0, got {fps!r}")
+    fps = float(fps)
+    for candidate in (Fraction(round(fps)), Fraction(round(fps * 1.001) * 1000, 1001)):
+        if candidate > 0 and abs(fps - candidate) <= 1e-4 * fps:
+            return candidate
+    rate = Fraction(fps).limit_denominator(1001)
+    if rate <= 0:
+        raise ConfigError(f"fps must be ≥ 1/1001 frames per second, got {fps!r}")
+    return rate
+
+
+def _check_size(width_px: int, height_px: int, pixel_format: str) -> None:
+    """Raise ConfigError unless the frame size is positive and fits the chroma subsampling."""
+    for name, value in (("width_px", width_px), ("height_px", height_px)):
+        if not isinstance(value, int | np.integer) or isinstance(value, bool) or value <= 0:
+            raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+    step_x, step_y = CHROMA_SUBSAMPLING[pixel_format]
+    if width_px % step_x or height_px % step_y:
+        needs = "even width and height" if step_y == 2 else "an even width"
+        name = {"yuv420p": "4:2:0", "yuv422p": "4:2:2"}[pixel_format]
+        raise ConfigError(
+            f"codec.pixel_format {pixel_format} ({name} chroma subsampling) needs {needs}, "
+            f"got {width_px}×{height_px} px; crop or pad the frames to an even size, or use yuv444p"
+        )
+
+
+def _check_frame(frame_rgb8: np.ndarray, width_px: int, height_px: int) -> None:
+    """Raise ValueError unless `frame_rgb8` is a uint8 array of shape (height_px, width_px, 3)."""
+    if not isinstance(frame_rgb8, np.ndarray):
+        raise ValueError(f"frame_rgb8 must be a numpy array, got {type(frame_rgb8).__name__}")
+    if frame_rgb8.dtype != np.uint8:
+        raise ValueError(
+            f"frame_rgb8 must have dtype uint8 (8-bit RGB, 0–255 DN), got {frame_rgb8.dtype}; "
+            "quantise it first, e.g. np.clip(np.rint(frame * 255), 0, 255).astype(np.uint8) for 0–1 floats"
+        )
+    expected = (height_px, width_px, 3)
+    if frame_rgb8.shape != expected:
+        raise ValueError(
+            f"frame_rgb8 must have shape (height_px, width_px, 3) = {expected} (RGB, channels last), "
+            f"got {frame_rgb8.shape}"
+        )
+
+
+def _encoder(name: str) -> str:
+    """The FFmpeg encoder for `name`, or ConfigError listing the camgen codecs this build can encode."""
+    encoder = ENCODERS[name]
+    if _has_encoder(encoder):
+        return encoder
+    available = [f"{codec} ({enc})" for codec, enc in ENCODERS.items() if _has_encoder(enc)]
+    raise ConfigError(
+        f"codec.name {name} needs FFmpeg's {encoder} encoder, which this PyAV build (FFmpeg "
+        f"libavcodec {'.'.join(map(str, av.library_versions['libavcodec']))}) lacks; encoders available "
+        f"here: {', '.join(available) or 'none'}. Choose one of those, or install a PyAV/FFmpeg build "
+        f"with {encoder}"
+    )
+
+
+def _has_encoder(encoder: str) -> bool:
+    try:
+        av.codec.Codec(encoder, "w")
+    except UnknownCodecError:
+        return False
+    return True
+
+
+def _colour(codec_name: str) -> tuple[Colorspace, ColorRange]:
+    """YUV matrix and range of the stream: BT.709 limited for H.264/H.265, BT.601 full (JFIF) for MJPEG."""
+    if codec_name == "mjpeg":
+        return Colorspace.ITU601, ColorRange.JPEG
+    return Colorspace.ITU709, ColorRange.MPEG
+
+
+def _configure(
+    context: av.video.codeccontext.VideoCodecContext,
+    codec: Codec,
+    rate: Fraction,
+    width_px: int,
+    height_px: int,
+    preset: str,
+    colour: tuple[Colorspace, ColorRange],
+) -> None:
+    """Set size, timing, pixel format, colour tags, GOP and rate control on an unopened encoder."""
+    context.width = width_px
+    context.height = height_px
+    context.pix_fmt = codec.pixel_format
+    context.framerate = rate
+    context.time_base = 1 / rate
+    context.gop_size = codec.gop_frames
+    context.max_b_frames = 0
+    colorspace, color_range = colour
+    context.colorspace = colorspace  # swscale's ITU709/ITU601 equal the H.273 matrix codes BT709/BT470BG
+    context.color_range = color_range
+    if codec.name != "mjpeg":
+        context.color_primaries = H273_BT709
+        context.color_trc = H273_BT709
+
+    options: dict[str, str] = {}
+    if codec.bitrate_kbps is not None:
+        bit_rate = round(codec.bitrate_kbps * 1000)
+        context.bit_rate = bit_rate
+        if codec.name != "mjpeg":
+            options["maxrate"] = str(bit_rate)
+            options["bufsize"] = str(round(bit_rate * VBV_BUFFER_S))
+    elif codec.name == "mjpeg":
+        # qmin = qmax pins the quantiser; the qscale flag would need a per-frame quality, which PyAV lacks
+        options["qmin"] = options["qmax"] = str(2 + round(29 * codec.crf / 51))
+    else:
+        context.bit_rate = 0
+        options["crf"] = str(codec.crf)
+
+    if codec.name != "mjpeg":
+        # min-keyint only bounds scene-cut key frames, which are off; keyint alone fixes the interval.
+        gop = f"keyint={codec.gop_frames}:scenecut=0:bframes=0"
+        if codec.name == "h264":
+            options["x264-params"] = gop
+        else:
+            options["x265-params"] = f"{gop}:open-gop=0:log-level=error"
+        options["preset"] = preset
+    context.options = options

@@ -1,0 +1,41 @@
+"""camgen render: writes a playable video and the passes, atomically, and reports bad options."""
+
+from __future__ import annotations
+
+import json
+
+import av
+import numpy as np
+import pytest
+
+from camgen.cli.main import main
+from tests.conftest import SCENE, write
+
+pytestmark = pytest.mark.opengl
+
+
+def test_render_writes_video_passes_and_job(workspace, capsys):
+    scene = write(workspace, "scenes/walk.yaml", SCENE)
+    out = workspace / "out"
+    assert main(["render", str(scene), "-o", str(out), "--frames", "4", "--save-passes"]) == 0
+    (job_dir,) = out.iterdir()
+    assert job_dir.name.startswith("walk-")
+    job = json.loads((job_dir / "job.json").read_text())
+    assert job["job_id"].startswith(job_dir.name.split("-")[1])
+    camera_dir = job_dir / "cam"
+    with av.open(str(camera_dir / "video.mp4")) as container:
+        frames = [frame.to_ndarray(format="rgb24") for frame in container.decode(video=0)]
+    assert len(frames) == 4 and frames[0].shape == (480, 640, 3)
+    passes = np.load(camera_dir / "passes" / "000002.npz")
+    assert passes["radiance_cd_m2"].shape == (480, 640, 3)
+    assert set(np.unique(passes["instance_id"])) <= {0, 1, 2}
+    instances = json.loads((camera_dir / "passes" / "instances.json").read_text())
+    assert instances[0] == {"instance_id": 1, "name": "walker", "kind": "actor"}
+    assert not list(workspace.rglob("*.partial*"))
+    assert "ideal pinhole" in capsys.readouterr().err
+
+
+def test_render_rejects_an_unknown_camera(workspace, capsys):
+    scene = write(workspace, "scenes/walk.yaml", SCENE)
+    assert main(["render", str(scene), "-o", str(workspace / "out"), "--camera", "nope"]) == 2
+    assert "no such camera" in capsys.readouterr().err

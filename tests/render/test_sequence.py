@@ -1,0 +1,123 @@
+"""Rendering a compiled camera: planned passes only, margins, supersampling, static background."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from camgen.config import load_scene
+from camgen.plan import PlanSettings, compile_scene
+from camgen.render.sequence import CameraRenderer, box_downsample, crop_to_output, render_camera
+from tests.conftest import SCENE, write
+
+pytestmark = pytest.mark.opengl
+
+# The test scene with a sun (no shadows, so the static background applies), a parked box and a
+# second, faster actor crossing in front of the first.
+SUNNY = (
+    SCENE.replace(
+        "  - {type: ambient, illuminance_lux: 1000}",
+        "  - {type: ambient, illuminance_lux: 1000}\n  - {type: sun, illuminance_lux: 20000, azimuth_deg: 250}",
+    )
+    .replace(
+        "      size_m: [20, 20]",
+        "      size_m: [20, 20]\n    - {type: box, name: crate, size_m: [1, 1, 1], position_m: [1, 6, 0.5]}\n"
+        "  shadows: false",
+    )
+    .replace(
+        "      speed_m_s: 1.4",
+        "      speed_m_s: 1.4\n  - {name: car, class: car, path: {waypoints_m: [[6, 3], [-6, 3]], speed_m_s: 8}}",
+    )
+)
+
+
+def _job(workspace, text=SUNNY, **settings):
+    path = write(workspace, "scenes/s.yaml", text)
+    return compile_scene(load_scene(path), PlanSettings(**settings))
+
+
+def _with_render(camera, **changes):
+    return camera.model_copy(update={"render": camera.render.model_copy(update=changes)})
+
+
+def test_static_background_composite_equals_full_render(workspace, renderer):
+    job = _job(workspace)
+    camera = job.cameras[0]
+    assert camera.render.static_background
+    for supersampling in (1, 2):
+        composite = CameraRenderer(renderer, *_graph_and(job, camera, supersampling=supersampling))
+        full = CameraRenderer(renderer, *_graph_and(job, camera, supersampling=supersampling, static_background=False))
+        try:
+            for index in (0, 7, 9):
+                a, b = composite.frame(index).passes, full.frame(index).passes
+                if index == 7:
+                    assert (a.instance_id == 2).sum() > 100  # the car is in view
+                np.testing.assert_array_equal(a.instance_id, b.instance_id)
+                np.testing.assert_allclose(a.radiance, b.radiance, rtol=1e-6, atol=1e-6)
+        finally:
+            composite.close()
+
+
+def _graph_and(job, camera, **render_changes):
+    from camgen.render.scene_graph import build_scene_graph
+
+    return build_scene_graph(job.scene), _with_render(camera, **render_changes)
+
+
+def test_shadows_rule_out_the_static_background(workspace):
+    job = _job(workspace, SUNNY.replace("  shadows: false", "  shadows: true"))
+    decision = next(d for d in job.cameras[0].decisions if d.stage == "render.static_background")
+    assert not decision.included and "shadows" in decision.reason
+
+
+def test_only_planned_passes_are_rendered(workspace, renderer):
+    annotations_only = SUNNY + "outputs: {video: false, annotations: [mot]}\n"
+    job = _job(workspace, annotations_only)
+    frame = next(render_camera(renderer, job, job.cameras[0]))
+    assert job.cameras[0].render.passes == ("instance_id",)
+    assert frame.passes.radiance is None and frame.passes.depth_m is None
+    assert crop_to_output(frame.passes.instance_id, job.cameras[0].render).shape == (480, 640)
+
+    video_only = SUNNY + "outputs: {video: true, annotations: []}\n"
+    job = _job(workspace, video_only)
+    frame = next(render_camera(renderer, job, job.cameras[0]))
+    assert frame.passes.instance_id is None and frame.passes.depth_m is None
+    assert crop_to_output(frame.passes.radiance, job.cameras[0].render).shape == (480, 640, 3)
+    assert frame.passes.radiance.dtype == np.float32
+
+
+def test_margin_render_crops_back_to_the_output(workspace, renderer):
+    job = _job(workspace, supersampling=1)
+    camera = _with_render(job.cameras[0], margin_px=(0, 0, 0, 0), width_px=640, height_px=480)
+    plain = next(render_camera(renderer, job, camera, frames=[3])).passes
+    wide = _with_render(camera, margin_px=(7, 5, 3, 9), width_px=650, height_px=494)
+    framed = next(render_camera(renderer, job, wide, frames=[3])).passes
+    assert framed.radiance.shape == (494, 650, 3)
+    cropped_ids = crop_to_output(framed.instance_id, wide.render)
+    # The same rays hit the same surfaces; only rounding at silhouette edges may differ.
+    assert (cropped_ids == plain.instance_id).mean() > 0.9995
+    same = cropped_ids == plain.instance_id
+    np.testing.assert_allclose(crop_to_output(framed.radiance, wide.render)[same], plain.radiance[same], rtol=1e-4)
+
+
+def test_box_downsample_is_the_block_mean():
+    image = np.random.default_rng(0).random((12, 18, 3), dtype=np.float32) * 1000
+    expected = image.reshape(4, 3, 6, 3, 3).mean(axis=(1, 3))
+    np.testing.assert_allclose(box_downsample(image, 3), expected, rtol=1e-6)
+
+
+def test_supersampling_antialiases_radiance_but_not_ids(workspace, renderer):
+    job = _job(
+        workspace, SUNNY.replace("  - {type: sun, illuminance_lux: 20000, azimuth_deg: 250}\n", ""), supersampling=1
+    )
+    camera = job.cameras[0]
+    sharp = next(render_camera(renderer, job, camera, frames=[0])).passes
+    smooth = next(render_camera(renderer, job, _with_render(camera, supersampling=4), frames=[0])).passes
+    np.testing.assert_array_equal(smooth.instance_id, sharp.instance_id)
+    # Ambient light on one grey material: every surface has the same radiance L, so 1× shows 0 (sky)
+    # and L only, and 4× shows the 17 coverage fractions k/16 of L at edges.
+    radiance = sharp.radiance[..., 1].max()
+    np.testing.assert_array_equal(np.unique(sharp.radiance), [0.0, radiance])
+    fractions = smooth.radiance[..., 1] / radiance * 16
+    np.testing.assert_allclose(fractions, np.round(fractions), atol=1e-4)
+    assert len(np.unique(np.round(fractions))) == 17
