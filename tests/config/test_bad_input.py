@@ -303,6 +303,22 @@ CASES = [
         "must hold at least one light",
     ),
     (
+        "too_many_spot_lights",
+        "scene",
+        edit(
+            SCENE,
+            "  - {type: ambient, illuminance_lux: 1000}\n",
+            "  - {type: ambient, illuminance_lux: 1000}\n"
+            + "".join(
+                f"  - {{type: spot, position_m: [{i}, 0, 3], target_m: [0, 5, 0], intensity_cd: 50}}\n"
+                for i in range(4)
+            )
+            + "  - {type: spot, position_m: [9, 0, 3], target_m: [0, 5, 0], intensity_cd: 50} #<\n",
+        ),
+        "lights[5]",
+        "is spot light number 5; the renderer shades at most 4 spot lights",
+    ),
+    (
         "missing_mesh_file",
         "scene",
         edit(

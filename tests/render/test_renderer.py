@@ -249,3 +249,12 @@ def test_closing_one_renderer_leaves_another_working(renderer):
     with Renderer() as other:
         other.draw(graph, _overhead_view(), ("instance_id",))
     assert (renderer.draw(graph, _overhead_view(), ("instance_id",)).instance_id == 1).any()
+
+
+def test_more_than_four_point_lights_all_shine(renderer):
+    """Superposition: six lamps together give the sum of each lamp alone (pyrender alone keeps 4)."""
+    lamps = [{"type": "point", "position_m": [x, y, 3.0], "intensity_cd": 500} for x in (-3, 0, 3) for y in (-2, 2)]
+    view = _overhead_view()
+    together = renderer.draw(_lit_plane(lights=lamps), view, ("radiance",)).radiance
+    alone = sum(renderer.draw(_lit_plane(lights=[lamp]), view, ("radiance",)).radiance for lamp in lamps)
+    np.testing.assert_allclose(together, alone, rtol=1e-4, atol=1e-3)

@@ -12,6 +12,10 @@ from pydantic import Field, model_validator
 
 from camgen.config.base import Model, invalid
 
+# Lights the renderer shades per type. Sun and spot lights each need a shadow-map texture unit;
+# OpenGL 3.3 guarantees 16 units, of which pyrender reserves 6, so 4 of each fit anywhere.
+MAX_LIGHTS = {"sun": 4, "spot": 4, "point": 16}
+
 PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegativeFloat = Annotated[float, Field(ge=0)]
 Fraction = Annotated[float, Field(ge=0, le=1)]
@@ -263,6 +267,14 @@ class Scene(Model):
                         f"must be unique, got {item.name!r} again (first at {key}[{seen[item.name]}])",
                     )
                 seen[item.name] = i
+        for kind, limit in MAX_LIGHTS.items():
+            indices = [i for i, light in enumerate(self.lights) if light.type == kind]
+            if len(indices) > limit:
+                raise invalid(
+                    f"lights[{indices[limit]}]",
+                    f"is {kind} light number {limit + 1}; the renderer shades at most {limit} {kind} lights: "
+                    "merge or remove some",
+                )
         if (
             not self.lights
             and self.environment.sky_luminance_cd_m2 == 0

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from camgen.config.scene import MAX_LIGHTS
 from camgen.render.gl import pyrender
 
 from OpenGL import GL  # isort: skip — after camgen.render.gl, which selects the EGL platform
@@ -214,6 +215,26 @@ class _PassRenderer(pyrender.Renderer):
         super().__init__(1, 1)
         self._program_cache = _LinearProgramCache()
 
+    def _compute_max_n_lights(self, flags):
+        """Room in the shader for the lights `camgen.config.scene.MAX_LIGHTS` allows (pyrender: 4 each).
+
+        Sun and spot limits stay pyrender's when shadows are on: each shadow map takes a texture unit.
+        """
+        directional, spot, _ = super()._compute_max_n_lights(flags)
+        return [
+            directional if flags & RenderFlags.SHADOWS_DIRECTIONAL else MAX_LIGHTS["sun"],
+            spot if flags & RenderFlags.SHADOWS_SPOT else MAX_LIGHTS["spot"],
+            MAX_LIGHTS["point"],
+        ]
+
+    def check_light_counts(self, scene, flags) -> None:
+        """pyrender drops lights beyond the shader's room without a word; refuse instead."""
+        room = self._compute_max_n_lights(flags)
+        counts = (len(scene.directional_light_nodes), len(scene.spot_light_nodes), len(scene.point_light_nodes))
+        for kind, count, limit in zip(("sun", "spot", "point"), counts, room, strict=True):
+            if count > limit:
+                raise RuntimeError(f"{count} {kind} lights, but this OpenGL implementation can shade only {limit}")
+
     def shadow_flags(self, scene, shadows: bool) -> int:
         if not shadows:
             return RenderFlags.NONE
@@ -349,6 +370,7 @@ class Renderer:
         flags = renderer.shadow_flags(scene, graph.shadows) if lit else RenderFlags.NONE
         pose_gl = gl_camera_pose(view.T_world_from_cam)
         scene.set_pose(scene.main_camera_node, pose_gl)
+        renderer.check_light_counts(scene, flags)
         renderer._update_context(scene, flags)
         if flags != RenderFlags.NONE:
             renderer.render_shadow_maps(scene, flags)
