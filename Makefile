@@ -20,7 +20,7 @@ demo: setup
 	$(BIN)/camgen validate profiles/*.yaml scenes/*.yaml datasets/*.yaml
 	$(BIN)/camgen info profiles/ptz_2mp_30x.yaml
 	$(BIN)/camgen plan scenes/parking_lot.yaml
-	$(BIN)/camgen render scenes/parking_lot.yaml -o $(OUT)
+	$(BIN)/camgen render scenes/parking_lot.yaml -o $(OUT) --frames 50
 
 test: setup
 	$(BIN)/python -m pytest -q

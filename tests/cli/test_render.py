@@ -39,3 +39,11 @@ def test_render_rejects_an_unknown_camera(workspace, capsys):
     scene = write(workspace, "scenes/walk.yaml", SCENE)
     assert main(["render", str(scene), "-o", str(workspace / "out"), "--camera", "nope"]) == 2
     assert "no such camera" in capsys.readouterr().err
+
+
+def test_render_refuses_a_file_as_output(workspace, capsys):
+    scene = write(workspace, "scenes/walk.yaml", SCENE)
+    target = workspace / "taken"
+    target.write_text("")
+    assert main(["render", str(scene), "-o", str(target)]) == 2
+    assert "is a file" in capsys.readouterr().err

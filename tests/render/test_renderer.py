@@ -258,3 +258,69 @@ def test_more_than_four_point_lights_all_shine(renderer):
     together = renderer.draw(_lit_plane(lights=lamps), view, ("radiance",)).radiance
     alone = sum(renderer.draw(_lit_plane(lights=[lamp]), view, ("radiance",)).radiance for lamp in lamps)
     np.testing.assert_allclose(together, alone, rtol=1e-4, atol=1e-3)
+
+
+def test_sun_on_a_matte_plane_is_lambertian_and_casts_the_right_shadow(renderer):
+    """L = ρ·E·sin(elevation)/π on open ground (plus a small specular part at roughness 1); a 2 m pole
+    lit from azimuth 0° (+X) at 45° casts a 2 m shadow towards −X."""
+    graph = _graph(
+        environment={
+            "meshes": [
+                {
+                    "type": "plane",
+                    "name": "ground",
+                    "size_m": [20, 20],
+                    "material": {"color_rgb": [0.5, 0.5, 0.5], "roughness": 1.0},
+                },
+                {"type": "box", "name": "pole", "size_m": [0.2, 0.2, 2.0], "position_m": [0, 0, 1.0]},
+            ]
+        },
+        lights=[{"type": "sun", "illuminance_lux": 10000, "azimuth_deg": 0, "elevation_deg": 45}],
+    )
+    T = np.eye(4)
+    T[:3, :3] = np.diag([1.0, -1.0, -1.0])  # straight down: image x = world x, image y = world −y
+    T[:3, 3] = (0.0, 0.0, 10.0)
+    K = camera_matrix(100.0, 100.0, 319.5, 239.5)
+    out = renderer.draw(graph, View(K, T, 640, 480), ("radiance", "instance_id"))
+    luminance = out.radiance[..., 1]
+
+    def at(x_m, y_m):
+        return luminance[round(239.5 - 10 * y_m), round(319.5 + 10 * x_m)]
+
+    lambertian = 0.5 * 10000 * math.sin(math.radians(45)) / math.pi
+    assert lambertian <= at(3.0, 3.0) <= 1.05 * lambertian  # open ground: diffuse + a little specular
+    assert at(1.0, 0.0) == pytest.approx(at(3.0, 3.0), rel=0.02)  # sun side of the pole: lit
+    for x_m in (-0.5, -1.0, -1.5):  # the shadow, from the pole's foot to 2 m towards −X
+        assert at(x_m, 0.0) < 0.05 * lambertian
+    assert at(-2.6, 0.0) == pytest.approx(at(3.0, 3.0), rel=0.02)  # beyond the shadow's tip
+
+
+def test_double_sided_surfaces_keep_depth_and_ids_from_behind(renderer):
+    graph = _graph(
+        environment={"meshes": [{"type": "plane", "name": "ground", "size_m": [20, 20]}]},
+        lights=[{"type": "ambient", "illuminance_lux": 100}],
+    )
+    ground = graph.environment_nodes[0]
+    for primitive in ground.mesh.primitives:
+        primitive.material.doubleSided = True
+    view = View(camera_matrix(300.0, 300.0, 159.5, 119.5), look_at((0.0, -6.0, -5.0), (0.0, 0.0, 0.0)), 320, 240)
+    lit = renderer.draw(graph, view, ("radiance", "instance_id")).instance_id
+    geometric = renderer.draw(graph, view, ("depth_m", "instance_id")).instance_id
+    assert (lit == 1).sum() > 1000
+    np.testing.assert_array_equal(geometric, lit)
+
+
+def test_a_renderer_dropped_without_close_leaves_others_working(renderer):
+    import gc
+
+    from camgen.render.renderer import Renderer
+
+    graph = _lit_plane(lights=[{"type": "ambient", "illuminance_lux": 10}])
+    Renderer().draw(graph, _overhead_view(), ("instance_id",))
+    gc.collect()
+    assert (
+        renderer.draw(
+            _lit_plane(lights=[{"type": "ambient", "illuminance_lux": 10}]), _overhead_view(), ("instance_id",)
+        ).instance_id
+        == 1
+    ).any()

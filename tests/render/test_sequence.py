@@ -26,7 +26,11 @@ SUNNY = (
     )
     .replace(
         "      speed_m_s: 1.4",
-        "      speed_m_s: 1.4\n  - {name: car, class: car, path: {waypoints_m: [[6, 3], [-6, 3]], speed_m_s: 8}}",
+        "      speed_m_s: 1.4\n  - {name: car, class: car, path: {waypoints_m: [[6, 3], [-6, 3]], speed_m_s: 8}}\n"
+        # A person standing half inside the crate (ties in depth order) and a car racing off to 500 m
+        # (the scene's bounds change every frame): both must not change what the composite shows.
+        "  - {name: inside, class: person, path: {waypoints_m: [[1.1, 5.6]]}}\n"
+        "  - {name: racer, class: car, path: {waypoints_m: [[3, 9], [3, 500]], speed_m_s: 60}}",
     )
 )
 
@@ -48,7 +52,7 @@ def test_static_background_composite_equals_full_render(workspace, renderer):
         composite = CameraRenderer(renderer, *_graph_and(job, camera, supersampling=supersampling))
         full = CameraRenderer(renderer, *_graph_and(job, camera, supersampling=supersampling, static_background=False))
         try:
-            for index in (0, 7, 9):
+            for index in (0, 3, 7, 9):
                 a, b = composite.frame(index).passes, full.frame(index).passes
                 if index == 7:
                     assert (a.instance_id == 2).sum() > 100  # the car is in view
@@ -97,7 +101,8 @@ def test_margin_render_crops_back_to_the_output(workspace, renderer):
     # The same rays hit the same surfaces; only rounding at silhouette edges may differ.
     assert (cropped_ids == plain.instance_id).mean() > 0.9995
     same = cropped_ids == plain.instance_id
-    np.testing.assert_allclose(crop_to_output(framed.radiance, wide.render)[same], plain.radiance[same], rtol=1e-4)
+    close = np.isclose(crop_to_output(framed.radiance, wide.render)[same], plain.radiance[same], rtol=1e-4)
+    assert close.mean() > 0.9999  # a few pixels where two surfaces intersect may round differently
 
 
 def test_box_downsample_is_the_block_mean():
@@ -121,3 +126,15 @@ def test_supersampling_antialiases_radiance_but_not_ids(workspace, renderer):
     fractions = smooth.radiance[..., 1] / radiance * 16
     np.testing.assert_allclose(fractions, np.round(fractions), atol=1e-4)
     assert len(np.unique(np.round(fractions))) == 17
+
+
+def test_a_render_larger_than_the_gpu_allows_is_refused_with_the_fix(workspace):
+    from types import SimpleNamespace
+
+    from camgen.errors import ConfigError
+    from camgen.render.scene_graph import build_scene_graph
+
+    job = _job(workspace, supersampling=4)
+    small_gpu = SimpleNamespace(max_size_px=2000)
+    with pytest.raises(ConfigError, match=r"at supersampling 4 needs \d+ pixels per side.*use supersampling 2 or less"):
+        CameraRenderer(small_gpu, build_scene_graph(job.scene), job.cameras[0])

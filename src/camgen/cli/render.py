@@ -45,6 +45,8 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         if not 1 <= args.supersampling <= 8:
             raise ConfigError(f"--supersampling must be 1…8, got {args.supersampling}")
         settings = PlanSettings(supersampling=args.supersampling)
+    if args.out.exists() and not args.out.is_dir():
+        raise ConfigError(f"-o {args.out}: is a file; give a directory to write the job into")
     loaded = load_scene(args.scene, profile_dirs(args))
     job = compile_scene(loaded, settings)
     names = {camera.name for camera in job.cameras}

@@ -64,7 +64,6 @@ def execute(
     on_frame(camera, index) is called after each frame (for progress).
     """
     job_dir = Path(out_dir) / job_directory_name(job)
-    write_text_atomic(job_dir / "job.json", job.to_json())
     indices = list(range(job.frame_count) if frames is None else frames)
     wanted = None if cameras is None else set(cameras)
     results = []
@@ -74,6 +73,8 @@ def execute(
         results.append(
             _execute_camera(job, camera, job_dir / camera.name, renderer, indices, resolve_path, save_passes, on_frame)
         )
+    # Written last: a job directory with job.json in it holds a complete render.
+    write_text_atomic(job_dir / "job.json", job.to_json())
     return results
 
 

@@ -20,6 +20,7 @@ axis (camera z), m, +inf where no geometry is hit. instance_id: uint32, 0 for ba
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -275,10 +276,35 @@ class _PassRenderer(pyrender.Renderer):
                 if lit:
                     program.set_uniform("cam_pos", cam_position)
                     self._bind_lighting(scene, program, node, flags)
-                self._bind_and_draw_primitive(primitive, scene.get_pose(node), program, draw_flags)
+                    self._bind_and_draw_primitive(primitive, scene.get_pose(node), program, draw_flags)
+                else:
+                    _draw_geometry(primitive, scene.get_pose(node), program)
                 self._reset_active_textures()
         if program is not None:
             program._unbind()
+
+
+def _draw_geometry(primitive, pose: np.ndarray, program) -> None:
+    """Draw a primitive for depth and ids only, culling as its material says.
+
+    pyrender's depth-only path always culls back faces, so double-sided surfaces seen from behind
+    would have radiance but no depth or id.
+    """
+    program.set_uniform("M", pose)
+    primitive._bind()
+    GL.glDisable(GL.GL_BLEND)
+    GL.glPolygonMode(GL.GL_FRONT_AND_BACK, GL.GL_FILL)
+    if primitive.material.doubleSided:
+        GL.glDisable(GL.GL_CULL_FACE)
+    else:
+        GL.glEnable(GL.GL_CULL_FACE)
+        GL.glCullFace(GL.GL_BACK)
+    instances = 1 if primitive.poses is None else len(primitive.poses)
+    if primitive.indices is not None:
+        GL.glDrawElementsInstanced(primitive.mode, primitive.indices.size, GL.GL_UNSIGNED_INT, None, instances)
+    else:
+        GL.glDrawArraysInstanced(primitive.mode, 0, len(primitive.positions), instances)
+    primitive._unbind()
 
 
 class Renderer:
@@ -291,13 +317,29 @@ class Renderer:
     def __init__(self, device_index: int = 0):
         from pyrender.platforms import egl
 
-        self._platform = egl.EGLPlatform(1, 1, device=egl.get_device_by_index(device_index))
-        self._platform.init_context()
-        self._platform.make_current()
+        platform = egl.EGLPlatform(1, 1, device=egl.get_device_by_index(device_index))
+        platform.init_context()
+        platform.make_current()
+        # This Renderer owns the context: destroyed on close or garbage collection, never with
+        # eglTerminate (pyrender's delete_context), because the process shares the EGL display.
+        self._display, self._context = platform._egl_display, platform._egl_context
+        platform._egl_display = platform._egl_context = None  # pyrender's clean-up then does nothing
+        self._release_context = weakref.finalize(self, _destroy_context, self._display, self._context)
+        self._platform = platform
         self._renderer = _PassRenderer()
         self._framebuffers: dict[tuple, _Framebuffer] = {}
         self.gl_renderer = GL.glGetString(GL.GL_RENDERER).decode()
         """The OpenGL implementation drawing (llvmpipe, or a GPU's name)."""
+        self.max_size_px = int(GL.glGetIntegerv(GL.GL_MAX_RENDERBUFFER_SIZE))
+        """The largest width or height of a render target here."""
+
+    def _make_current(self) -> None:
+        from OpenGL import EGL
+
+        if self._platform is None:
+            raise RuntimeError("this Renderer is closed")
+        if not EGL.eglMakeCurrent(self._display, EGL.EGL_NO_SURFACE, EGL.EGL_NO_SURFACE, self._context):
+            raise RuntimeError("cannot make the OpenGL context current (was the EGL display terminated?)")
 
     def __enter__(self) -> Renderer:
         return self
@@ -308,24 +350,18 @@ class Renderer:
     def close(self) -> None:
         if self._platform is None:
             return
-        self._platform.make_current()
+        self._make_current()
         for framebuffer in self._framebuffers.values():
             framebuffer.delete()
         self._renderer.delete()
-        # Destroy only this context: pyrender's delete_context also terminates the EGL display, which
-        # the process shares, and would break every other live Renderer.
-        from OpenGL import EGL
-
-        platform = self._platform
-        EGL.eglMakeCurrent(platform._egl_display, EGL.EGL_NO_SURFACE, EGL.EGL_NO_SURFACE, EGL.EGL_NO_CONTEXT)
-        EGL.eglDestroyContext(platform._egl_display, platform._egl_context)
+        self._release_context()
         self._platform = None
 
     def forget(self, kept: str) -> None:
         """Free a draw kept with `keep_as`."""
         framebuffer = self._framebuffers.pop(("main", kept), None)
         if framebuffer is not None:
-            self._platform.make_current()
+            self._make_current()
             framebuffer.delete()
 
     def _framebuffer(self, key: tuple, width_px: int, height_px: int, passes: tuple[str, ...]) -> _Framebuffer:
@@ -350,21 +386,24 @@ class Renderer:
         background: str | None = None,
         keep_as: str | None = None,
         read: bool = True,
+        clip_range_m: tuple[float, float] | None = None,
     ) -> Passes:
         """Draw `nodes` (default: every mesh) of a `SceneGraph` as seen by `view`.
 
         passes: any of "radiance", "depth_m", "instance_id"; they share one draw. Without radiance
         the geometry-only shader runs (no lighting). `background` names a draw kept earlier with
         `keep_as` (same view and passes) to start from instead of an empty frame: the new nodes are
-        depth-tested against it, exactly as if everything were drawn together.
+        depth-tested against it, exactly as if everything were drawn together, provided both draws
+        use the same `clip_range_m` (near, far in m; default: from the scene's current bounds, which
+        move with the actors). Nodes are drawn in the order given (default: environment, then actors).
         """
         unknown = set(passes) - set(PASSES)
         if unknown or not passes:
             raise ValueError(f"passes must be a non-empty subset of {PASSES}, got {passes}")
         passes = tuple(name for name in PASSES if name in passes)
-        self._platform.make_current()
+        self._make_current()
         scene = graph.scene
-        nodes = list(graph.instance_ids) if nodes is None else list(nodes)
+        nodes = graph.environment_nodes + graph.actor_nodes if nodes is None else list(nodes)
         lit = "radiance" in passes
         renderer = self._renderer
         flags = renderer.shadow_flags(scene, graph.shadows) if lit else RenderFlags.NONE
@@ -388,12 +427,19 @@ class Renderer:
             target.bind()
             target.clear(graph.sky_luminance_cd_m2)
 
-        near_m, far_m = _clip_range_m(scene, view.T_world_from_cam)
+        near_m, far_m = clip_range_m or _clip_range_m(scene, view.T_world_from_cam)
         P = gl_projection(view.K_px, view.width_px, view.height_px, near_m, far_m)
         V = np.linalg.inv(pose_gl)
         renderer.forward(scene, nodes, graph.instance_ids, V, P, pose_gl[:3, 3], flags, lit)
         GL.glFlush()
         return target.read() if read else Passes()
+
+
+def _destroy_context(display, context) -> None:
+    from OpenGL import EGL
+
+    EGL.eglMakeCurrent(display, EGL.EGL_NO_SURFACE, EGL.EGL_NO_SURFACE, EGL.EGL_NO_CONTEXT)
+    EGL.eglDestroyContext(display, context)
 
 
 def _clip_range_m(scene, T_world_from_cam: np.ndarray) -> tuple[float, float]:

@@ -170,7 +170,12 @@ def build_mesh(shape, resolve_path: Callable[[str], Path] | None = None) -> pyre
         loaded.apply_scale(shape.scale)
         # The file's own materials stand unless the scene sets one.
         override = material if "material" in shape.model_fields_set else None
-        return pyrender.Mesh.from_trimesh(loaded, material=override, smooth=False)
+        mesh = pyrender.Mesh.from_trimesh(loaded, material=override, smooth=False)
+        for primitive in mesh.primitives:
+            # Surfaces are opaque: depth and ids name the first surface hit, and the static background
+            # stays exact. (pyrender marks every material it converts from trimesh as blended.)
+            primitive.material.alphaMode = "OPAQUE"
+        return mesh
     raise TypeError(f"unknown shape {type(shape).__name__}")
 
 

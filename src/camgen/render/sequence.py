@@ -19,8 +19,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from camgen.errors import ConfigError
 from camgen.plan.job import CameraJob, CameraState, Job, RenderSpec
-from camgen.render.renderer import Passes, Renderer, View
+from camgen.render.renderer import NEAR_CLIP_M, Passes, Renderer, View
 from camgen.render.scene_graph import SceneGraph, build_scene_graph
 
 
@@ -56,6 +57,22 @@ class CameraRenderer:
         self.renderer, self.graph, self.camera = renderer, graph, camera
         self.spec = camera.render
         self._kept_views: dict[str, View] = {}
+        self._reach_points_m, self._reach_radius_m = _reach(graph)
+        spec = self.spec
+        s = spec.supersampling if "radiance" in spec.passes else 1
+        largest = max(spec.width_px, spec.height_px)
+        if largest * s > renderer.max_size_px:
+            raise ConfigError(
+                f"camera {camera.name!r}: its {spec.width_px}×{spec.height_px} render at supersampling {s} needs "
+                f"{largest * s} pixels per side, more than this OpenGL implementation's {renderer.max_size_px}; "
+                f"use supersampling {max(1, renderer.max_size_px // largest)} or less"
+            )
+
+    def clip_range_m(self, view: View) -> tuple[float, float]:
+        """Near and far planes that hold for the whole sequence (everything any actor reaches), so
+        that the kept background and each frame's actors share one depth mapping."""
+        distance = np.linalg.norm(self._reach_points_m - view.T_world_from_cam[:3, 3], axis=1) + self._reach_radius_m
+        return NEAR_CLIP_M, max(2 * NEAR_CLIP_M, float(distance.max()) * 1.01 + 1.0)
 
     def close(self) -> None:
         """Free the kept background draws."""
@@ -65,13 +82,16 @@ class CameraRenderer:
 
     def _draw(self, view: View, passes: tuple[str, ...], key: str) -> Passes:
         graph, renderer = self.graph, self.renderer
+        clip = self.clip_range_m(view)
         if not self.spec.static_background:
-            return renderer.draw(graph, view, passes)
+            return renderer.draw(graph, view, passes, clip_range_m=clip)
         kept = f"{self.camera.name}:{key}"
         if kept not in self._kept_views or not _same_view(self._kept_views[kept], view):
-            renderer.draw(graph, view, passes, nodes=graph.environment_nodes, keep_as=kept, read=False)
+            renderer.draw(
+                graph, view, passes, nodes=graph.environment_nodes, keep_as=kept, read=False, clip_range_m=clip
+            )
             self._kept_views[kept] = view
-        return renderer.draw(graph, view, passes, nodes=graph.actor_nodes, background=kept)
+        return renderer.draw(graph, view, passes, nodes=graph.actor_nodes, background=kept, clip_range_m=clip)
 
     def frame(self, index: int) -> Frame:
         state = self.camera.states[index]
@@ -92,6 +112,30 @@ class CameraRenderer:
                 coarse = self._draw(view, geometric, "1x")
                 result.depth_m, result.instance_id = coarse.depth_m, coarse.instance_id
         return Frame(index, state.time_s, result)
+
+
+def _corners(bounds: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    i = np.arange(8)
+    local = np.stack([bounds[i & 1, 0], bounds[i >> 1 & 1, 1], bounds[i >> 2 & 1, 2]], axis=-1)
+    return local @ pose[:3, :3].T + pose[:3, 3]
+
+
+def _reach(graph: SceneGraph) -> tuple[np.ndarray, np.ndarray]:
+    """Points (N, 3) and radii (N,) such that all geometry, at any time, lies within a radius of a
+    point: environment mesh corners (radius 0), and each actor's waypoints with its own extent
+    (an actor moves along straight segments, whose farthest point from a camera is an end)."""
+    points, radii = [], []
+    for node in graph.environment_nodes:
+        points.append(_corners(node.mesh.bounds, graph.scene.get_pose(node)))
+        radii.append(np.zeros(8))
+    for actor, node, local in zip(graph.actors, graph.actor_nodes, graph.actor_local_poses, strict=True):
+        radius = float(np.max(np.linalg.norm(_corners(node.mesh.bounds, local), axis=1)))
+        waypoints = np.array(actor.path.waypoints_m, dtype=np.float64)
+        points.append(np.column_stack([waypoints, np.zeros(len(waypoints))]))
+        radii.append(np.full(len(waypoints), radius))
+    if not points:
+        return np.zeros((1, 3)), np.zeros(1)
+    return np.concatenate(points), np.concatenate(radii)
 
 
 def _same_view(a: View, b: View) -> bool:

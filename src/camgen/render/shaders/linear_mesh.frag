@@ -2,7 +2,9 @@
 // camgen: pyrender 0.1.45's mesh.frag (MIT licence, (c) Matthew Matl) changed to write linear,
 // unclamped radiance (no gamma, no clamp), metric depth and the instance id into three render targets,
 // to add the emissive factor once (pyrender multiplies it by itself), and to filter shadow maps
-// bilinearly (4 taps) instead of pyrender's 36-tap PCF, which doubled the cost of a frame on llvmpipe.
+// bilinearly (4 taps) instead of pyrender's 36-tap PCF, which doubled the cost of a frame on llvmpipe,
+// and to make the diffuse term Lambertian (rho/pi; pyrender scales it by 0.96 (1 - F)) with no light
+// leaking onto faces turned away (pyrender floors n.l at 0.001).
 ///////////////////////////////////////////////////////////////////////////////
 // Structs
 ///////////////////////////////////////////////////////////////////////////////
@@ -249,7 +251,7 @@ vec3 compute_brdf(vec3 n, vec3 v, vec3 l,
                   vec3 radiance)
 {
         vec3 h = normalize(l+v);
-        float nl = clamp(dot(n, l), 0.001, 1.0);
+        float nl = clamp(dot(n, l), 0.0, 1.0);
         float nv = clamp(abs(dot(n, v)), 0.001, 1.0);
         float nh = clamp(dot(n, h), 0.0, 1.0);
         float lh = clamp(dot(l, h), 0.0, 1.0);
@@ -263,7 +265,7 @@ vec3 compute_brdf(vec3 n, vec3 v, vec3 l,
         float D = microfacet_distribution(info);
 
         // Compute BRDF
-        vec3 diffuse_contrib = (1.0 - F) * c_diff / PI;
+        vec3 diffuse_contrib = c_diff / PI;  // Lambertian: L = rho E cos(theta) / pi
         vec3 spec_contrib = F * G * D / (4.0 * nl * nv + 0.001);
 
         vec3 color = nl * radiance * (diffuse_contrib + spec_contrib);
@@ -338,7 +340,7 @@ void main()
 
     // Compute specular and diffuse colors
     vec3 dialectric_spec = vec3(min_roughness);
-    vec3 c_diff = mix(vec3(0.0), base_color.rgb * (1 - min_roughness), 1.0 - metallic);
+    vec3 c_diff = base_color.rgb * (1.0 - metallic);
     vec3 f0 = mix(dialectric_spec, base_color.rgb, metallic);
 
     // Compute normal
