@@ -167,6 +167,8 @@ def build_mesh(shape, resolve_path: Callable[[str], Path] | None = None) -> pyre
         if resolve_path is None:
             raise ConfigError(f"mesh file {shape.path!r} needs the scene's directory to be found")
         loaded = trimesh.load(resolve_path(shape.path), force="mesh")
+        if len(getattr(loaded, "faces", ())) == 0:
+            raise ConfigError(f"mesh file {shape.path!r} holds no triangles (a point cloud?); give a mesh with faces")
         loaded.apply_scale(shape.scale)
         # The file's own materials stand unless the scene sets one.
         override = material if "material" in shape.model_fields_set else None
