@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from camgen.config.scene import MAX_LIGHTS
+from camgen.plan.visibility import box_corners
 from camgen.render.gl import pyrender
 
 from OpenGL import GL  # isort: skip — after camgen.render.gl, which selects the EGL platform
@@ -427,7 +428,7 @@ class Renderer:
             target.bind()
             target.clear(graph.sky_luminance_cd_m2)
 
-        near_m, far_m = clip_range_m or _clip_range_m(scene, view.T_world_from_cam)
+        near_m, far_m = clip_range_m or _scene_clip_range_m(scene, view.T_world_from_cam)
         P = gl_projection(view.K_px, view.width_px, view.height_px, near_m, far_m)
         V = np.linalg.inv(pose_gl)
         renderer.forward(scene, nodes, graph.instance_ids, V, P, pose_gl[:3, 3], flags, lit)
@@ -442,12 +443,15 @@ def _destroy_context(display, context) -> None:
     EGL.eglDestroyContext(display, context)
 
 
-def _clip_range_m(scene, T_world_from_cam: np.ndarray) -> tuple[float, float]:
+def _scene_clip_range_m(scene, T_world_from_cam: np.ndarray) -> tuple[float, float]:
     """Near and far clipping distances: far just beyond the farthest corner of the scene's bounds."""
-    bounds = scene.bounds
-    corners = np.array([[bounds[i >> k & 1, k] for k in range(3)] for i in range(8)])
-    farthest = float(np.max(np.linalg.norm(corners - T_world_from_cam[:3, 3], axis=1)))
-    return NEAR_CLIP_M, max(2.0 * NEAR_CLIP_M, farthest * 1.01 + 1.0)
+    corners = box_corners(*scene.bounds, np.eye(4))
+    return clip_planes_m(float(np.max(np.linalg.norm(corners - T_world_from_cam[:3, 3], axis=1))))
+
+
+def clip_planes_m(farthest_m: float) -> tuple[float, float]:
+    """Near and far planes for geometry no farther than `farthest_m`: far a little beyond it."""
+    return NEAR_CLIP_M, max(2.0 * NEAR_CLIP_M, farthest_m * 1.01 + 1.0)
 
 
 __all__ = ["PASSES", "Passes", "Renderer", "View", "gl_camera_pose", "gl_projection"]

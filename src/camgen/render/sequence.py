@@ -21,7 +21,8 @@ import numpy as np
 
 from camgen.errors import ConfigError
 from camgen.plan.job import CameraJob, CameraState, Job, RenderSpec
-from camgen.render.renderer import NEAR_CLIP_M, Passes, Renderer, View
+from camgen.plan.visibility import box_corners
+from camgen.render.renderer import Passes, Renderer, View, clip_planes_m
 from camgen.render.scene_graph import SceneGraph, build_scene_graph
 
 
@@ -72,7 +73,7 @@ class CameraRenderer:
         """Near and far planes that hold for the whole sequence (everything any actor reaches), so
         that the kept background and each frame's actors share one depth mapping."""
         distance = np.linalg.norm(self._reach_points_m - view.T_world_from_cam[:3, 3], axis=1) + self._reach_radius_m
-        return NEAR_CLIP_M, max(2 * NEAR_CLIP_M, float(distance.max()) * 1.01 + 1.0)
+        return clip_planes_m(float(distance.max()))
 
     def close(self) -> None:
         """Free the kept background draws."""
@@ -114,22 +115,16 @@ class CameraRenderer:
         return Frame(index, state.time_s, result)
 
 
-def _corners(bounds: np.ndarray, pose: np.ndarray) -> np.ndarray:
-    i = np.arange(8)
-    local = np.stack([bounds[i & 1, 0], bounds[i >> 1 & 1, 1], bounds[i >> 2 & 1, 2]], axis=-1)
-    return local @ pose[:3, :3].T + pose[:3, 3]
-
-
 def _reach(graph: SceneGraph) -> tuple[np.ndarray, np.ndarray]:
     """Points (N, 3) and radii (N,) such that all geometry, at any time, lies within a radius of a
     point: environment mesh corners (radius 0), and each actor's waypoints with its own extent
     (an actor moves along straight segments, whose farthest point from a camera is an end)."""
     points, radii = [], []
     for node in graph.environment_nodes:
-        points.append(_corners(node.mesh.bounds, graph.scene.get_pose(node)))
+        points.append(box_corners(*node.mesh.bounds, graph.scene.get_pose(node)))
         radii.append(np.zeros(8))
     for actor, node, local in zip(graph.actors, graph.actor_nodes, graph.actor_local_poses, strict=True):
-        radius = float(np.max(np.linalg.norm(_corners(node.mesh.bounds, local), axis=1)))
+        radius = float(np.max(np.linalg.norm(box_corners(*node.mesh.bounds, local), axis=1)))
         waypoints = np.array(actor.path.waypoints_m, dtype=np.float64)
         points.append(np.column_stack([waypoints, np.zeros(len(waypoints))]))
         radii.append(np.full(len(waypoints), radius))
