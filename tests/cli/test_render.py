@@ -47,3 +47,16 @@ def test_render_refuses_a_file_as_output(workspace, capsys):
     target.write_text("")
     assert main(["render", str(scene), "-o", str(target)]) == 2
     assert "is a file" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("option", "message"),
+    [
+        (["--frames", "0"], "--frames must be ≥ 1, got 0"),
+        (["--supersampling", "9"], "--supersampling must be 1…8, got 9"),
+    ],
+)
+def test_render_rejects_bad_numbers(workspace, capsys, option, message):
+    scene = write(workspace, "scenes/walk.yaml", SCENE)
+    assert main(["render", str(scene), "-o", str(workspace / "out"), *option]) == 2
+    assert message in capsys.readouterr().err

@@ -303,6 +303,37 @@ CASES = [
         "must hold at least one light",
     ),
     (
+        "shadows_not_bool",
+        "scene",
+        edit(SCENE, "environment:\n", "environment:\n  shadows: sometimes #<\n"),
+        "environment.shadows",
+        "must be true or false, got 'sometimes'",
+    ),
+    (
+        "checkerboard_negative_border",
+        "scene",
+        edit(
+            SCENE,
+            "      size_m: [20, 20]",
+            "      size_m: [20, 20]\n    - {type: checkerboard, name: b, squares: [4, 3], square_size_m: 0.1, "
+            "border_m: -0.05} #<",
+        ),
+        "environment.meshes[1].border_m",
+        "must be ≥ 0",
+    ),
+    (
+        "checkerboard_dark_colour_above_one",
+        "scene",
+        edit(
+            SCENE,
+            "      size_m: [20, 20]",
+            "      size_m: [20, 20]\n    - {type: checkerboard, name: b, squares: [4, 3], square_size_m: 0.1, "
+            "dark_color_rgb: [0.1, 1.5, 0.1]} #<",
+        ),
+        "environment.meshes[1].dark_color_rgb[1]",
+        "must be ≤ 1",
+    ),
+    (
         "too_many_spot_lights",
         "scene",
         edit(
