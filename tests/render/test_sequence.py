@@ -44,6 +44,11 @@ def _with_render(camera, **changes):
     return camera.model_copy(update={"render": camera.render.model_copy(update=changes)})
 
 
+def _without_motion_blur(camera):
+    """The camera as planned, but with sharp frames (for tests of the render geometry itself)."""
+    return camera.model_copy(update={"stages": tuple(s for s in camera.stages if s.name != "optics.motion_blur")})
+
+
 def test_static_background_composite_equals_full_render(workspace, renderer):
     job = _job(workspace)
     camera = job.cameras[0]
@@ -92,7 +97,7 @@ def test_only_planned_passes_are_rendered(workspace, renderer):
 
 def test_margin_render_crops_back_to_the_output(workspace, renderer):
     job = _job(workspace, supersampling=1)
-    camera = _with_render(job.cameras[0], margin_px=(0, 0, 0, 0), width_px=640, height_px=480)
+    camera = _with_render(_without_motion_blur(job.cameras[0]), margin_px=(0, 0, 0, 0), width_px=640, height_px=480)
     plain = next(render_camera(renderer, job, camera, frames=[3])).passes
     wide = _with_render(camera, margin_px=(7, 5, 3, 9), width_px=650, height_px=494)
     framed = next(render_camera(renderer, job, wide, frames=[3])).passes
@@ -115,7 +120,7 @@ def test_supersampling_antialiases_radiance_but_not_ids(workspace, renderer):
     job = _job(
         workspace, SUNNY.replace("  - {type: sun, illuminance_lux: 20000, azimuth_deg: 250}\n", ""), supersampling=1
     )
-    camera = job.cameras[0]
+    camera = _without_motion_blur(job.cameras[0])
     sharp = next(render_camera(renderer, job, camera, frames=[0])).passes
     smooth = next(render_camera(renderer, job, _with_render(camera, supersampling=4), frames=[0])).passes
     np.testing.assert_array_equal(smooth.instance_id, sharp.instance_id)

@@ -15,6 +15,7 @@ from pydantic import Field, model_validator
 from camgen.config.base import Model, invalid
 from camgen.optics.distortion import radial_reach
 from camgen.optics.intrinsics import camera_matrix_px, corner_radius_normalized
+from camgen.optics.projection import LensInversionError, undistort_points
 
 PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegativeFloat = Annotated[float, Field(ge=0)]
@@ -173,19 +174,65 @@ class ZoomPosition(Model):
 
 
 class ChromaticAberration(Model):
-    """Lateral CA as per-channel radial magnification relative to green (1 = none)."""
+    """Chromatic aberration relative to green.
+
+    Lateral: the red (blue) image is the green one magnified by `lateral_scale_r` (`_b`) about the
+    principal point, so a feature at radius r from it is displaced by (s − 1)·r. Axial: the red (blue)
+    focus lies `axial_focus_shift_r_um` (`_b`) behind the green one on the sensor side, which blurs
+    that channel by a disc of diameter |shift|/N.
+    """
 
     lateral_scale_r: Annotated[float, Field(gt=0.9, lt=1.1)] = 1.0
     lateral_scale_b: Annotated[float, Field(gt=0.9, lt=1.1)] = 1.0
+    axial_focus_shift_r_um: Annotated[float, Field(ge=-500, le=500)] = 0.0
+    axial_focus_shift_b_um: Annotated[float, Field(ge=-500, le=500)] = 0.0
 
 
 class Vignetting(Model):
-    """Relative illumination across the frame."""
+    """Relative illumination across the frame (`camgen.optics.vignetting`).
+
+    The optical part is RI(ρ) = 1 + a1·ρ² + a2·ρ⁴ + a3·ρ⁶ wide open, ρ the image radius over the
+    corner radius: give either the datasheet's corner figure (then a1 = RI_corner − 1) or the
+    polynomial, not both.
+    """
 
     natural_cos4: bool = False
     """Apply the cos⁴ law of the chief-ray angle (most real lenses correct much of it)."""
     relative_illumination_corner: Annotated[float, Field(gt=0, le=1)] = 1.0
-    """Optical relative illumination at the image corner (datasheet figure; 1 = none)."""
+    """Optical relative illumination at the image corner, wide open (datasheet figure; 1 = none)."""
+    polynomial: tuple[float, float, float] | None = None
+    """[a1, a2, a3] of the relative-illumination polynomial, wide open; null uses the corner figure."""
+    full_illumination_f_number: Annotated[float, Field(ge=0.5, le=64)] | None = None
+    """f-number from which the optical vignetting has gone (it fades linearly in stops from wide
+    open); null keeps it at every aperture."""
+
+    @property
+    def optical_polynomial(self) -> tuple[float, float, float]:
+        if self.polynomial is not None:
+            return self.polynomial
+        return (self.relative_illumination_corner - 1.0, 0.0, 0.0)
+
+    @model_validator(mode="after")
+    def _check(self) -> Vignetting:
+        if self.polynomial is not None and self.relative_illumination_corner != 1.0:
+            raise invalid(
+                "polynomial",
+                "must not be given together with relative_illumination_corner (one source, not two); drop one of them",
+            )
+        if self.polynomial is not None:
+            rho = np.linspace(0.0, 1.0, 1001)
+            a1, a2, a3 = self.polynomial
+            r2 = rho * rho
+            ri = 1.0 + r2 * (a1 + r2 * (a2 + r2 * a3))
+            if not (np.all(ri > 0.0) and np.all(ri <= 1.0 + 1e-9)):
+                worst = rho[int(np.argmin(ri))] if ri.min() <= 0 else rho[int(np.argmax(ri))]
+                value = 1.0 + worst**2 * (a1 + worst**2 * (a2 + worst**2 * a3))
+                raise invalid(
+                    "polynomial",
+                    f"must give a relative illumination in (0, 1] from centre to corner, got {value:.4g} at "
+                    f"ρ = {worst:.3g} for {list(self.polynomial)}",
+                )
+        return self
 
 
 class Lens(Model):
@@ -258,6 +305,13 @@ class Lens(Model):
             raise invalid(
                 "focus_distance_m",
                 f"must be ≥ min_focus_distance_m ({self.min_focus_distance_m:g} m), got {self.focus_distance_m:g}",
+            )
+        full = self.vignetting.full_illumination_f_number
+        if full is not None and full <= self.f_number:
+            raise invalid(
+                "vignetting.full_illumination_f_number",
+                f"must be above the wide-open f_number ({self.f_number:g}): the optical vignetting fades as "
+                f"the aperture closes from there, got {full:g}",
             )
         if not self.distortion.is_zero and any(z.distortion for z in self.zoom_table):
             raise invalid(
@@ -427,6 +481,12 @@ class Ptz(Model):
         return self
 
 
+def _validation_points_px(width_px: int, height_px: int, per_edge: int = 33) -> np.ndarray:
+    """Where a lens must be invertible: a grid over the image including its outer pixel edges."""
+    u, v = np.meshgrid(np.linspace(-0.5, width_px - 0.5, per_edge), np.linspace(-0.5, height_px - 0.5, per_edge))
+    return np.stack([u.ravel(), v.ravel()], axis=-1)
+
+
 class Profile(Model):
     """A camera model as sold: everything that does not depend on where it is installed."""
 
@@ -446,13 +506,16 @@ class Profile(Model):
         coc_um = self.lens.coc_um if self.lens.coc_um is not None else 2.0 * self.sensor.pixel_pitch_um
         return coc_um * 1e-3
 
+    def camera_matrix_px(self, focal_length_mm: float) -> np.ndarray:
+        s = self.sensor
+        return camera_matrix_px(
+            focal_length_mm, s.pixel_pitch_um, s.pitch_y_um, s.width_px, s.height_px, s.principal_point_offset_px
+        )
+
     def corner_radius_normalized(self, focal_length_mm: float) -> float:
         """Normalised (distorted) radius of the farthest image corner at `focal_length_mm`."""
         s = self.sensor
-        K = camera_matrix_px(
-            focal_length_mm, s.pixel_pitch_um, s.pitch_y_um, s.width_px, s.height_px, s.principal_point_offset_px
-        )
-        return corner_radius_normalized(K, s.width_px, s.height_px)
+        return corner_radius_normalized(self.camera_matrix_px(focal_length_mm), s.width_px, s.height_px)
 
     @model_validator(mode="after")
     def _check(self) -> Profile:
@@ -480,6 +543,7 @@ class Profile(Model):
             if distortion.is_zero:
                 continue
             corner = self.corner_radius_normalized(focal_length)
+            K = self.camera_matrix_px(focal_length)
             reach = radial_reach(distortion.as_array(), r_undistorted_max=20.0 * max(corner, 1.0))
             if reach < corner:
                 raise invalid(
@@ -488,4 +552,12 @@ class Profile(Model):
                     f"at distorted radius {reach:.3f} but the image corner lies at {corner:.3f} "
                     "(normalised units); reduce |k1|/k2/k3 or check their signs",
                 )
+            try:
+                undistort_points(_validation_points_px(sensor.width_px, sensor.height_px), K, distortion.as_array())
+            except LensInversionError as error:
+                raise invalid(
+                    key,
+                    f"cannot be inverted everywhere inside the image at {focal_length:.4g} mm ({error}); "
+                    "the tangential terms p1/p2 or the rational terms k4–k6 are too large for this field of view",
+                ) from None
         return self

@@ -55,40 +55,89 @@ def distort_normalized(points: np.ndarray, coeffs) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Undistorted:
-    """Result of inverting the distortion: points (..., 2) and the residual |distort(points) − target|."""
+    """Result of inverting the distortion: points (..., 2), the residual |distort(points) − target| and
+    the Jacobian determinant of the distortion there (≤ 0 where the mapping folds over)."""
 
     points: np.ndarray
     residual: np.ndarray
+    jacobian_det: np.ndarray
 
 
-def undistort_normalized(points: np.ndarray, coeffs, *, max_iterations: int = 50) -> Undistorted:
+def undistort_normalized(
+    points: np.ndarray, coeffs, *, max_iterations: int = 50, initial: np.ndarray | None = None
+) -> Undistorted:
     """Distorted → undistorted normalised coordinates by Newton's method with the analytic Jacobian.
 
-    The caller decides what residual is acceptable (in pixels, residual·f_px); nothing is clamped.
+    Starts from `initial` (same shape as `points`) or, by default, from the radial part inverted on
+    the lens's monotone branch (`_radial_start`). The caller decides what residual is acceptable (in
+    pixels, residual·f_px); nothing is clamped.
     """
     c = _coefficients(coeffs)
     target = np.asarray(points, dtype=np.float64)
     p1, p2 = c[2], c[3]
-    x = target[..., 0].copy()
-    y = target[..., 1].copy()
-    for _ in range(max_iterations):
+    start = _radial_start(target, c) if initial is None else np.asarray(initial, dtype=np.float64)
+    x = start[..., 0].copy()
+    y = start[..., 1].copy()
+    with np.errstate(all="ignore"):  # non-convergence is caught by the residual, not by warnings
+        for _ in range(max_iterations):
+            r2 = x * x + y * y
+            radial, dradial = _radial(r2, c)
+            fx = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x) - target[..., 0]
+            fy = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y - target[..., 1]
+            a = radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x
+            b = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y
+            d = radial + 2.0 * y * y * dradial + 6.0 * p1 * y + 2.0 * p2 * x
+            det = a * d - b * b
+            step_x = (d * fx - b * fy) / det
+            step_y = (a * fy - b * fx) / det
+            x = x - step_x
+            y = y - step_y
+            if np.all(np.abs(step_x) + np.abs(step_y) < 1e-13):  # ~1e-10 px at f = 1000 px
+                break
+    with np.errstate(all="ignore"):
+        residual = np.hypot(*np.moveaxis(distort_normalized(np.stack([x, y], -1), c) - target, -1, 0))
         r2 = x * x + y * y
         radial, dradial = _radial(r2, c)
-        fx = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x) - target[..., 0]
-        fy = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y - target[..., 1]
         a = radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x
         b = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y
         d = radial + 2.0 * y * y * dradial + 6.0 * p1 * y + 2.0 * p2 * x
-        det = a * d - b * b
-        with np.errstate(divide="ignore", invalid="ignore"):
-            step_x = (d * fx - b * fy) / det
-            step_y = (a * fy - b * fx) / det
-        x = x - step_x
-        y = y - step_y
-        if np.all(np.abs(step_x) + np.abs(step_y) < 1e-13):  # ~1e-10 px at f = 1000 px
-            break
-    residual = np.hypot(*np.moveaxis(distort_normalized(np.stack([x, y], -1), c) - target, -1, 0))
-    return Undistorted(points=np.stack([x, y], axis=-1), residual=residual)
+    return Undistorted(points=np.stack([x, y], axis=-1), residual=residual, jacobian_det=a * d - b * b)
+
+
+def _radial_start(target: np.ndarray, c: np.ndarray, samples: int = 4097) -> np.ndarray:
+    """A starting point on the lens's monotone branch: the radial part inverted by table lookup.
+
+    Starting Newton at the distorted point itself can land beyond a fold or a pole of the rational
+    model (and converge to a root no ray reaches, or diverge); the table confines the start to the
+    branch r ∈ [0, r_fold) where g(r) = r·R(r²) rises.
+    """
+    radius_d = np.hypot(target[..., 0], target[..., 1])
+    largest = float(np.nanmax(radius_d, initial=0.0)) if radius_d.size else 0.0
+    if not np.isfinite(largest) or largest == 0.0:
+        return target
+    r, g = _monotone_branch(c, 4.0 * max(1.0, largest), samples)
+    radius_u = np.interp(radius_d, g, r)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = np.where(radius_d > 0, radius_u / radius_d, 1.0)
+    return target * scale[..., None]
+
+
+def _monotone_branch(c: np.ndarray, r_max: float, samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """Samples (r, g(r)) of the radial mapping from r = 0 up to the first fold, pole or non-finite value."""
+    r = np.linspace(0.0, r_max, samples)
+    r2 = r * r
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        g, dg = radial_mapping(r, c)
+        denominator = 1.0 + r2 * (c[5] + r2 * (c[6] + r2 * c[7]))
+    # Stop at a fold (g' ≤ 0), at a pole of the rational model (denominator ≤ 0), or where g stops
+    # rising between samples (a fold or pole narrower than the sampling step).
+    bad = ~np.isfinite(g) | ~np.isfinite(dg) | (dg <= 0.0) | (denominator <= 0.0)
+    bad[1:] |= np.diff(g) <= 0.0
+    bad[0] = False
+    if not bad.any():
+        return r, g
+    first = int(np.argmax(bad))
+    return r[:first], g[:first]
 
 
 def radial_mapping(r: np.ndarray, coeffs) -> tuple[np.ndarray, np.ndarray]:
@@ -104,24 +153,17 @@ def radial_reach(coeffs, r_undistorted_max: float, samples: int = 20001) -> floa
     """The largest distorted radius the radial mapping reaches monotonically from the centre.
 
     Walks g(r) outward from r = 0 until g'(r) ≤ 0 (the lens folds over: two scene directions land on
-    one image radius) or `r_undistorted_max`. An image whose corners lie beyond the returned radius
-    sees a folded or undefined part of the model.
+    one image radius), a pole of the rational model, or `r_undistorted_max`. An image whose corners
+    lie beyond the returned radius sees a folded or undefined part of the model.
     """
-    c = _coefficients(coeffs)
-    r = np.linspace(0.0, r_undistorted_max, samples)
-    r2 = r * r
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        g, dg = radial_mapping(r, c)
-        denominator = 1.0 + r2 * (c[5] + r2 * (c[6] + r2 * c[7]))
-    # Stop at a fold (g' ≤ 0), at a pole of the rational model (denominator ≤ 0), or where g stops
-    # rising between samples (a fold or pole narrower than the sampling step).
-    bad = ~np.isfinite(g) | ~np.isfinite(dg) | (dg <= 0.0) | (denominator <= 0.0)
-    bad[1:] |= np.diff(g) <= 0.0
-    bad[0] = False
-    if not bad.any():
-        return float(g[-1])
-    first = int(np.argmax(bad))
-    return float(g[first - 1])
+    _, g = _monotone_branch(_coefficients(coeffs), r_undistorted_max, samples)
+    return float(g[-1])
+
+
+def monotone_radius(coeffs, r_undistorted_max: float = 20.0, samples: int = 20001) -> float:
+    """Undistorted radius where the monotone branch ends (fold or pole); ∞ if it reaches the limit."""
+    r, _ = _monotone_branch(_coefficients(coeffs), r_undistorted_max, samples)
+    return float(r[-1]) if len(r) < samples else np.inf
 
 
 def max_displacement_px(coeffs, K_px: np.ndarray, width_px: int, height_px: int, samples_per_edge: int = 64) -> float:

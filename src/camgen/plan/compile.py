@@ -30,6 +30,7 @@ from camgen.config.scene import (
 from camgen.errors import ConfigError
 from camgen.motion.pose import R_world_from_cam, T_world_from_cam, rot_z, rotation_xyz_deg
 from camgen.motion.trajectory import position_on_path
+from camgen.optics.diffraction import CHANNEL_WAVELENGTHS_UM
 from camgen.optics.distortion import max_displacement_px, undistort_normalized
 from camgen.optics.intrinsics import (
     airy_sigma_um,
@@ -39,13 +40,16 @@ from camgen.optics.intrinsics import (
     corner_radius_px,
     hyperfocal_distance_m,
 )
+from camgen.optics.projection import LensInversionError
+from camgen.optics.remap import SUPPORT_PX, LensGeometry, source_points_px
+from camgen.optics.vignetting import aperture_weight, relative_illumination
 from camgen.plan.job import CameraJob, CameraState, Decision, Job, PlanSettings, RenderSpec, Stage
 from camgen.plan.visibility import box_corners, visible_depth_range_m
 
 WAVELENGTH_UM = 0.55  # mid-visible, for the diffraction estimate
-INVERSE_RESIDUAL_MAX_PX = 1e-3
-# Extra render border for interpolation support when resampling (bicubic needs 2 pixels).
-RESAMPLE_SUPPORT_PX = 2
+MOTION_SAMPLE_STEP_PX = 1.0
+"""Largest image motion between the sub-frames that integrate one exposure, px."""
+MOTION_SAMPLES_MAX = 32
 
 Bounds = tuple[np.ndarray, np.ndarray]
 
@@ -139,23 +143,40 @@ def _source_bounds_px(
     K: np.ndarray, distortion: np.ndarray, ca_scales: tuple[float, ...], width_px: int, height_px: int, where: str
 ) -> tuple[float, float, float, float]:
     """Pinhole-image extent (u_min, v_min, u_max, v_max) the output frame samples through the lens."""
-    border = _border_points_px(width_px, height_px)
-    fx, fy, cx, cy = K[0, 0], K[1, 1], K[0, 2], K[1, 2]
-    sources = []
-    for scale in ca_scales:
-        # Lateral CA: channel image magnified by `scale` about the principal point in the distorted image.
-        u = cx + (border[:, 0] - cx) / scale
-        v = cy + (border[:, 1] - cy) / scale
-        result = undistort_normalized(np.stack([(u - cx) / fx, (v - cy) / fy], -1), distortion)
-        worst_px = float(np.max(result.residual)) * max(fx, fy)
-        if not worst_px <= INVERSE_RESIDUAL_MAX_PX:
-            raise ConfigError(
-                f"{where}: the distortion cannot be inverted at the image border (residual {worst_px:.3g} px "
-                f"> {INVERSE_RESIDUAL_MAX_PX:g} px); the coefficients do not describe a valid lens there"
-            )
-        sources.append(np.stack([result.points[:, 0] * fx + cx, result.points[:, 1] * fy + cy], -1))
+    geometry = LensGeometry(
+        K_px=tuple(map(tuple, K.tolist())),
+        distortion=tuple(float(c) for c in distortion),
+        ca_scales=tuple(ca_scales),
+        width_px=width_px,
+        height_px=height_px,
+        margin_px=(0, 0, 0, 0),
+    )
+    try:
+        sources = source_points_px(geometry, _border_points_px(width_px, height_px))
+    except LensInversionError as error:
+        raise ConfigError(
+            f"{where}: the distortion cannot be inverted at the image border ({error}); the coefficients do "
+            "not describe a valid lens there"
+        ) from None
     points = np.concatenate(sources)
     return float(points[:, 0].min()), float(points[:, 1].min()), float(points[:, 0].max()), float(points[:, 1].max())
+
+
+def _corner_illumination(K, distortion, width_px, height_px, vignetting, weight) -> float:
+    """Darkest relative illumination along the frame border (the corners, for a centred lens)."""
+    border = _border_points_px(width_px, height_px)
+    fx, fy, cx, cy = K[0, 0], K[1, 1], K[0, 2], K[1, 2]
+    distorted = np.stack([(border[:, 0] - cx) / fx, (border[:, 1] - cy) / fy], -1)
+    undistorted = undistort_normalized(distorted, distortion).points
+    gain = relative_illumination(
+        undistorted,
+        distorted,
+        corner_radius_normalized=corner_radius_normalized(K, width_px, height_px),
+        natural_cos4=vignetting.natural_cos4,
+        polynomial=vignetting.optical_polynomial,
+        weight=weight,
+    )
+    return float(np.min(gain))
 
 
 def _actor_motion_px(
@@ -305,7 +326,7 @@ def _compile_camera(
             f"cameras[{camera_index}]",
         )
         geometric_margin = tuple(
-            x + RESAMPLE_SUPPORT_PX
+            x + SUPPORT_PX[settings.remap_interpolation]
             for x in (max(0.0, -0.5 - u0), max(0.0, -0.5 - v0), max(0.0, u1 - (W - 0.5)), max(0.0, v1 - (H - 0.5)))
         )
     # What the lens actually sees: the pinhole extent the output frame samples (wider under barrel).
@@ -319,17 +340,18 @@ def _compile_camera(
     focus_m, focus_reason = _focus_distance_m(camera, profile, focal_length_mm, f_number, depth_range)
 
     # --- photometric lens effects ------------------------------------------------------------------
-    corner_norm = corner_radius_normalized(K, W, H)
-    relative = lens.vignetting.relative_illumination_corner
-    if lens.vignetting.natural_cos4:
-        relative *= math.cos(math.atan(corner_norm)) ** 4
+    vignetting = lens.vignetting
+    vignetting_weight = aperture_weight(
+        f_number, lens.at_focal_length(focal_length_mm)[0], vignetting.full_illumination_f_number
+    )
+    relative = _corner_illumination(K, dist, W, H, vignetting, vignetting_weight)
     falloff = 1.0 - relative
     decisions.append(
         _decision(
             "optics.vignetting",
             falloff > settings.illumination_tolerance_rel and needs_image,
             force and needs_image,
-            f"corner illumination {relative:.3f} of the centre",
+            f"darkest border illumination {relative:.3f} of the centre",
             effect=falloff,
             threshold=settings.illumination_tolerance_rel,
             unit="relative",
@@ -357,14 +379,30 @@ def _compile_camera(
             unit="px",
         )
     )
-    airy_px = 2.44 * WAVELENGTH_UM * f_number / sensor.pixel_pitch_um
+    airy_px = 2.44 * (WAVELENGTH_UM if mono else max(CHANNEL_WAVELENGTHS_UM)) * f_number / sensor.pixel_pitch_um
     decisions.append(
         _decision(
             "optics.diffraction",
             airy_px > blur_max and needs_image,
             force and needs_image,
-            f"Airy disc diameter 2.44·λ·N = {airy_px:.3g} px at N = {f_number:.3g}, λ = {WAVELENGTH_UM} µm",
+            f"Airy disc diameter 2.44·λ·N = {airy_px:.3g} px at N = {f_number:.3g}, "
+            f"λ = {WAVELENGTH_UM if mono else max(CHANNEL_WAVELENGTHS_UM)} µm",
             effect=airy_px,
+            threshold=blur_max,
+            unit="px",
+        )
+    )
+    axial_shifts_um = (0.0,) if mono else (ca.axial_focus_shift_r_um, 0.0, ca.axial_focus_shift_b_um)
+    axial_px = tuple(abs(shift) / f_number / sensor.pixel_pitch_um for shift in axial_shifts_um)
+    decisions.append(
+        _decision(
+            "optics.axial_ca",
+            max(axial_px) > blur_max and needs_image,
+            force and needs_image and not mono,
+            "monochrome sensor"
+            if mono
+            else f"per-channel blur discs {axial_px[0]:.3g}, {axial_px[2]:.3g} px (red, blue) at N = {f_number:.3g}",
+            effect=max(axial_px),
             threshold=blur_max,
             unit="px",
         )
@@ -391,7 +429,9 @@ def _compile_camera(
     if include["optics.depth_of_field"]:
         blur_radius = max(blur_radius, coc_px / 2)
     if include["optics.diffraction"]:
-        blur_radius = max(blur_radius, 3 * airy_sigma_um(f_number, WAVELENGTH_UM) / sensor.pixel_pitch_um)
+        blur_radius = max(blur_radius, 4 * airy_sigma_um(f_number, max(CHANNEL_WAVELENGTHS_UM)) / sensor.pixel_pitch_um)
+    if include["optics.axial_ca"]:
+        blur_radius = max(blur_radius, max(axial_px) / 2)
     if include["optics.motion_blur"]:
         blur_radius = max(blur_radius, motion_px)
     margin = tuple(math.ceil(x + blur_radius) for x in (left, top, right, bottom))
@@ -454,6 +494,26 @@ def _compile_camera(
             params={"supersampling": settings.supersampling, "static_background": static_background},
         )
     )
+    # Blur stages run on the margin-rendered pinhole image, before the remap (see `camgen.plan.optics`).
+    motion_samples = min(MOTION_SAMPLES_MAX, max(2, math.ceil(motion_px / MOTION_SAMPLE_STEP_PX)))
+    blur_stages = (
+        ("optics.motion_blur", {"displacement_max_px": motion_px, "samples": motion_samples}),
+        (
+            "optics.depth_of_field",
+            {
+                "focus_distance_m": focus_m,
+                "coc_max_px": coc_px,
+                "step_px": settings.dof_step_px,
+                "step_rel": settings.dof_step_rel,
+            },
+        ),
+        ("optics.axial_ca", {"focus_shift_um": list(axial_shifts_um)}),
+        ("optics.diffraction", {"airy_diameter_px": airy_px}),
+    )
+    for name, params in blur_stages:
+        if include[name]:
+            consumed = ("radiance", "depth_m") if name == "optics.depth_of_field" else ("radiance",)
+            stages.append(Stage(name=name, passes=consumed, params=params))
     if remap:
         stages.append(
             Stage(
@@ -462,19 +522,19 @@ def _compile_camera(
                 params={
                     "distortion": include["optics.distortion"],
                     "lateral_ca": include["optics.lateral_ca"],
-                    "instance_id_interpolation": "nearest",
+                    "interpolation": settings.remap_interpolation,
+                    "geometric_passes": "nearest",
                 },
             )
         )
-    for name, params in (
-        ("optics.vignetting", {"corner_relative_illumination": relative}),
-        ("optics.depth_of_field", {"focus_distance_m": focus_m, "coc_max_px": coc_px}),
-        ("optics.diffraction", {"airy_diameter_px": airy_px}),
-        ("optics.motion_blur", {"displacement_max_px": motion_px}),
-    ):
-        if include[name]:
-            consumed = ("radiance", "depth_m") if name == "optics.depth_of_field" else ("radiance",)
-            stages.append(Stage(name=name, passes=consumed, params=params))
+    if include["optics.vignetting"]:
+        stages.append(
+            Stage(
+                name="optics.vignetting",
+                passes=("radiance",),
+                params={"border_relative_illumination": relative, "aperture_weight": vignetting_weight},
+            )
+        )
 
     if needs_image:
         _sensor_and_isp(profile, outputs, needs_isp, mono, force, stages, decisions)

@@ -1,8 +1,9 @@
 """Run a compiled Job: render each camera's planned passes and write what this version can write.
 
-Implemented so far: the render stage (ideal pinhole radiance, depth, ids) and a preview video of the
-radiance (global exposure, sRGB; `camgen.isp.preview`) encoded with the profile's codec. The lens,
-sensor, ISP and annotation stages come with their issues; `unimplemented_stages` names those a job
+Implemented so far: the render stage (ideal pinhole radiance, depth, ids), the lens stages
+(`camgen.plan.lens_stages`) and a preview video of the radiance (global exposure, sRGB;
+`camgen.isp.preview`) encoded with the profile's codec. The sensor, ISP and annotation stages come
+with their issues; `unimplemented_stages` names those a job
 plans but this version skips, so callers can say so.
 """
 
@@ -19,11 +20,23 @@ import numpy as np
 from camgen.io.files import atomic_path, write_text_atomic
 from camgen.isp.preview import preview_exposure_scale, preview_srgb8
 from camgen.plan.job import CameraJob, Job
+from camgen.plan.lens_stages import LensStages
 from camgen.render.renderer import Renderer
 from camgen.render.scene_graph import instance_table
-from camgen.render.sequence import crop_to_output, render_camera
+from camgen.render.sequence import render_camera
 
-IMPLEMENTED_STAGES = frozenset({"render", "io.video"})
+IMPLEMENTED_STAGES = frozenset(
+    {
+        "render",
+        "optics.motion_blur",
+        "optics.depth_of_field",
+        "optics.axial_ca",
+        "optics.diffraction",
+        "optics.remap",
+        "optics.vignetting",
+        "io.video",
+    }
+)
 
 
 @dataclass
@@ -60,7 +73,7 @@ def execute(
     """Render `job` into ``out_dir/<scene>-<hash>/<camera>/`` and return what was written.
 
     frames: frame indices to render (default: all). save_passes: also write each frame's passes,
-    cropped to the output frame, as ``passes/<frame>.npz`` (radiance_cd_m2, depth_m, instance_id).
+    through the lens into the output frame, as ``passes/<frame>.npz`` (radiance_cd_m2, depth_m, instance_id).
     on_frame(camera, index) is called after each frame (for progress).
     """
     job_dir = Path(out_dir) / job_directory_name(job)
@@ -88,6 +101,7 @@ def _execute_camera(job, camera, directory, renderer, indices, resolve_path, sav
     video = None
     exposure_scale = None
     frames = render_camera(renderer, job, camera, frames=indices, resolve_path=resolve_path)
+    lens = LensStages(camera)
     try:
         while True:
             tick = time.perf_counter()
@@ -95,9 +109,9 @@ def _execute_camera(job, camera, directory, renderer, indices, resolve_path, sav
             result.render_s += time.perf_counter() - tick
             if frame is None:
                 break
-            passes = frame.passes
+            passes = lens.apply(camera.states[frame.index], frame.passes)
             if wants_video:
-                radiance = crop_to_output(passes.radiance, spec)
+                radiance = passes.radiance
                 if video is None:
                     exposure_scale = preview_exposure_scale(radiance)
                     video = VideoWriter(
@@ -112,7 +126,7 @@ def _execute_camera(job, camera, directory, renderer, indices, resolve_path, sav
                 if result.frames == 0:
                     table = [vars(instance) for instance in instance_table(job.scene)]
                     write_text_atomic(directory / "passes" / "instances.json", json.dumps(table, indent=1))
-                _save_passes(directory / "passes" / f"{frame.index:06d}.npz", passes, spec, result)
+                _save_passes(directory / "passes" / f"{frame.index:06d}.npz", passes, result)
             result.frames += 1
             if on_frame is not None:
                 on_frame(camera.name, frame.index)
@@ -129,9 +143,9 @@ def _execute_camera(job, camera, directory, renderer, indices, resolve_path, sav
     return result
 
 
-def _save_passes(path: Path, passes, spec, result: CameraResult) -> None:
+def _save_passes(path: Path, passes, result: CameraResult) -> None:
     arrays = {
-        key: crop_to_output(value, spec)
+        key: value
         for key, value in (
             ("radiance_cd_m2", passes.radiance),
             ("depth_m", passes.depth_m),

@@ -44,6 +44,13 @@ class PlanSettings(Frozen):
     """Radiance anti-aliasing: render at this factor per axis and average down. 2 by measurement
     (BENCHMARKS.md): against 8×8, 1× errs 4.4 % RMS and biases a checkerboard calibration's fx by
     0.24 %; 2× errs 1.6 % and 0.016 % at 2.65× the time."""
+    remap_interpolation: Literal["nearest", "linear", "cubic", "lanczos"] = "linear"
+    """Interpolation of the distortion/CA resampling of radiance (BENCHMARKS.md: run time against
+    error for each). Depth and instance ids always take the nearest pixel's exact value."""
+    dof_step_px: Annotated[float, Field(gt=0)] = 0.5
+    """Depth-of-field layers: the widest blur-diameter bin, px, for small blur circles."""
+    dof_step_rel: Annotated[float, Field(gt=0, le=1)] = 0.1
+    """Depth-of-field layers: bin width relative to the blur diameter, for large blur circles."""
     force_all_stages: bool = False
     """Plan every stage regardless of its effect (for checking that skipping changes nothing)."""
 

@@ -8,6 +8,8 @@
   (exact values, no mixed ids), drawn together at 1× in one cheap geometry-only draw.
 - Static background: the environment is drawn once per camera and kept on the GPU; each frame starts
   from a copy of it and draws only the actors, depth-tested against it.
+- Motion blur (when planned): radiance integrates the exposure as the mean of sub-frames at evenly
+  spread times, so each sub-frame only redraws the actors over the kept background.
 """
 
 from __future__ import annotations
@@ -59,6 +61,8 @@ class CameraRenderer:
         self.spec = camera.render
         self._kept_views: dict[str, View] = {}
         self._reach_points_m, self._reach_radius_m = _reach(graph)
+        motion = [stage for stage in camera.stages if stage.name == "optics.motion_blur"]
+        self.motion_samples = int(motion[0].params["samples"]) if motion else 1
         spec = self.spec
         s = spec.supersampling if "radiance" in spec.passes else 1
         largest = max(spec.width_px, spec.height_px)
@@ -95,23 +99,34 @@ class CameraRenderer:
         return renderer.draw(graph, view, passes, nodes=graph.actor_nodes, background=kept, clip_range_m=clip)
 
     def frame(self, index: int) -> Frame:
+        """The planned passes of one frame. With motion blur planned, radiance is the mean of
+        `samples` sub-frames spread evenly over the exposure, which is centred on the frame time;
+        depth and ids are the scene at the frame time."""
         state = self.camera.states[index]
         spec = self.spec
-        self.graph.place_actors(state.time_s)
         view = render_view(state, spec)
         passes = spec.passes
         s = spec.supersampling
-        if s == 1:
-            result = self._draw(view, passes, "1x")
-        else:
-            result = Passes()
-            if "radiance" in passes:
-                fine = self._draw(view.scaled(s), ("radiance",), f"{s}x")
-                result.radiance = box_downsample(fine.radiance, s)
-            geometric = tuple(p for p in passes if p != "radiance")
-            if geometric:
-                coarse = self._draw(view, geometric, "1x")
-                result.depth_m, result.instance_id = coarse.depth_m, coarse.instance_id
+        if s == 1 and self.motion_samples == 1:
+            self.graph.place_actors(state.time_s)
+            return Frame(index, state.time_s, self._draw(view, passes, "shared"))
+        result = Passes()
+        if "radiance" in passes:
+            offsets = (np.arange(self.motion_samples) + 0.5) / self.motion_samples - 0.5
+            for offset in offsets:
+                self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
+                if s == 1:
+                    radiance = self._draw(view, ("radiance",), "radiance").radiance
+                else:
+                    radiance = box_downsample(self._draw(view.scaled(s), ("radiance",), f"radiance {s}x").radiance, s)
+                result.radiance = radiance if result.radiance is None else result.radiance + radiance
+            if len(offsets) > 1:
+                result.radiance /= len(offsets)
+        geometric = tuple(p for p in passes if p != "radiance")
+        if geometric:
+            self.graph.place_actors(state.time_s)
+            coarse = self._draw(view, geometric, "geometric")
+            result.depth_m, result.instance_id = coarse.depth_m, coarse.instance_id
         return Frame(index, state.time_s, result)
 
 

@@ -1,0 +1,169 @@
+"""Distortion and lateral chromatic aberration as one resampling of the margin-rendered pinhole image.
+
+For every output (sensor) pixel the map holds where its light comes from in the pinhole render: the
+distorted position is first un-magnified per colour channel (lateral CA: channel c is the green
+image magnified by s_c about the principal point), then undistorted by Newton's method with a
+checked residual (`camgen.optics.projection.undistort_points`), then shifted by the render margin.
+Each channel is resampled once, through its own map; geometric passes (depth, instance ids) use the
+green map with nearest-neighbour lookup, so they keep exact values.
+
+Maps are pure functions of (K, distortion, CA scales, output size, margin); `LensMapCache` keeps them
+per camera and zoom step.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from camgen.optics.projection import INVERSE_RESIDUAL_MAX_PX, undistort_points
+
+INTERPOLATIONS = {
+    "nearest": cv2.INTER_NEAREST,
+    "linear": cv2.INTER_LINEAR,
+    "cubic": cv2.INTER_CUBIC,
+    "lanczos": cv2.INTER_LANCZOS4,
+}
+SUPPORT_PX = {"nearest": 1, "linear": 1, "cubic": 2, "lanczos": 4}
+"""Pixels an interpolation reads beyond the sample position (the render margin must hold them)."""
+
+
+@dataclass(frozen=True)
+class LensGeometry:
+    """What the remap depends on. `ca_scales` are per output channel (1 for green, or one entry for
+    monochrome); `margin_px` is (left, top, right, bottom) of the pinhole render."""
+
+    K_px: tuple[tuple[float, ...], ...]
+    distortion: tuple[float, ...]
+    ca_scales: tuple[float, ...]
+    width_px: int
+    height_px: int
+    margin_px: tuple[int, int, int, int]
+
+    @property
+    def K(self) -> np.ndarray:
+        return np.array(self.K_px, dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class LensMaps:
+    """Source coordinates in the pinhole render, px, float32 (H, W) per channel."""
+
+    map_x: tuple[np.ndarray, ...]
+    map_y: tuple[np.ndarray, ...]
+    nearest_index: tuple[np.ndarray, np.ndarray]
+    """Row and column (int32, (H, W)) of the nearest render pixel through the reference (green) map."""
+    undistorted_normalized: np.ndarray
+    """(H, W, 2) float64: the undistorted ray (x, y) = (X/Z, Y/Z) of each output pixel (green)."""
+
+
+def output_grid_px(width_px: int, height_px: int) -> np.ndarray:
+    """Pixel centres (H, W, 2) of an image, OpenCV convention."""
+    u, v = np.meshgrid(np.arange(width_px, dtype=np.float64), np.arange(height_px, dtype=np.float64))
+    return np.stack([u, v], axis=-1)
+
+
+def source_points_px(
+    geometry: LensGeometry,
+    points_px: np.ndarray,
+    *,
+    residual_max_px: float = INVERSE_RESIDUAL_MAX_PX,
+) -> tuple[np.ndarray, ...]:
+    """For output pixel positions (..., 2), the pinhole-render positions each channel samples
+    (without the margin shift): one (..., 2) array per entry of `geometry.ca_scales`."""
+    K = geometry.K
+    cx, cy = K[0, 2], K[1, 2]
+    points = np.asarray(points_px, dtype=np.float64)
+    reference = int(np.argmin([abs(s - 1.0) for s in geometry.ca_scales]))
+    order = [reference] + [i for i in range(len(geometry.ca_scales)) if i != reference]
+    sources: dict[int, np.ndarray] = {}
+    for channel in order:
+        scale = geometry.ca_scales[channel]
+        magnified = np.stack([cx + (points[..., 0] - cx) / scale, cy + (points[..., 1] - cy) / scale], axis=-1)
+        sources[channel] = undistort_points(
+            magnified,
+            K,
+            geometry.distortion,
+            residual_max_px=residual_max_px,
+            initial_px=sources.get(reference),  # the reference solution is a close start
+        )
+    return tuple(sources[c] for c in range(len(geometry.ca_scales)))
+
+
+def lens_maps(geometry: LensGeometry, *, residual_max_px: float = INVERSE_RESIDUAL_MAX_PX) -> LensMaps:
+    """Build the per-channel inverse maps (see the module docstring)."""
+    K = geometry.K
+    left, top, _, _ = geometry.margin_px
+    grid = output_grid_px(geometry.width_px, geometry.height_px)
+    sources = source_points_px(geometry, grid, residual_max_px=residual_max_px)
+    maps_x = tuple((source[..., 0] + left).astype(np.float32) for source in sources)
+    maps_y = tuple((source[..., 1] + top).astype(np.float32) for source in sources)
+    ref = sources[int(np.argmin([abs(s - 1.0) for s in geometry.ca_scales]))]
+    rows = np.floor(ref[..., 1] + top + 0.5).astype(np.int32)
+    cols = np.floor(ref[..., 0] + left + 0.5).astype(np.int32)
+    undistorted = np.stack([(ref[..., 0] - K[0, 2]) / K[0, 0], (ref[..., 1] - K[1, 2]) / K[1, 1]], axis=-1)
+    return LensMaps(maps_x, maps_y, (rows, cols), undistorted)
+
+
+def check_inside(maps: LensMaps, render_width_px: int, render_height_px: int, support_px: int) -> None:
+    """Raise ValueError if a map reads outside the render (the plan's margin is too small)."""
+    for mx, my in zip(maps.map_x, maps.map_y, strict=True):
+        low_x, high_x, low_y, high_y = mx.min(), mx.max(), my.min(), my.max()
+        if low_x < support_px - 1 or low_y < support_px - 1:
+            raise ValueError(f"the lens map reads left/above the render: min ({low_x:.2f}, {low_y:.2f}) px")
+        if high_x > render_width_px - support_px or high_y > render_height_px - support_px:
+            raise ValueError(
+                f"the lens map reads right/below the {render_width_px}×{render_height_px} render: "
+                f"max ({high_x:.2f}, {high_y:.2f}) px"
+            )
+
+
+def remap_image(image: np.ndarray, maps: LensMaps, interpolation: str = "linear") -> np.ndarray:
+    """Resample a (H, W, C) float32 radiance image through the per-channel maps.
+
+    One resampling per channel. Interpolation undershoot (cubic, Lanczos ringing at bright edges) is
+    clipped at zero: radiance is non-negative.
+    """
+    flag = INTERPOLATIONS[interpolation]
+    channels = len(maps.map_x)
+    if image.ndim != 3 or (channels == 3 and image.shape[2] != 3):
+        raise ValueError(f"expected an (H, W, 3) image for a colour lens map, got {image.shape}")
+    if channels == 1:
+        out = cv2.remap(image, maps.map_x[0], maps.map_y[0], flag, borderMode=cv2.BORDER_REPLICATE)
+        out = out.reshape(out.shape[0], out.shape[1], -1)
+    else:
+        out = np.empty((*maps.map_x[0].shape, 3), np.float32)
+        for c in range(3):
+            out[..., c] = cv2.remap(
+                np.ascontiguousarray(image[..., c]), maps.map_x[c], maps.map_y[c], flag, borderMode=cv2.BORDER_REPLICATE
+            )
+    if interpolation in ("cubic", "lanczos"):
+        np.maximum(out, 0.0, out=out)
+    return out
+
+
+def remap_nearest(image: np.ndarray, maps: LensMaps) -> np.ndarray:
+    """Exact values of the nearest render pixel through the reference map (depth, instance ids)."""
+    rows, cols = maps.nearest_index
+    return image[rows, cols]
+
+
+class LensMapCache:
+    """Maps per lens geometry (one per camera and zoom step), least recently used dropped first."""
+
+    def __init__(self, capacity: int = 8):
+        self.capacity = capacity
+        self._maps: OrderedDict[LensGeometry, LensMaps] = OrderedDict()
+
+    def get(self, geometry: LensGeometry) -> LensMaps:
+        if geometry in self._maps:
+            self._maps.move_to_end(geometry)
+            return self._maps[geometry]
+        maps = lens_maps(geometry)
+        self._maps[geometry] = maps
+        while len(self._maps) > self.capacity:
+            self._maps.popitem(last=False)
+        return maps

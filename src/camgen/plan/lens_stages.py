@@ -1,0 +1,130 @@
+"""Run a camera's planned lens stages on its rendered passes (`camgen.optics` wired as the plan says).
+
+Order, and why it differs from the list in DESIGN.md:
+
+1. motion blur — integrated while rendering (sub-frames within the exposure, `camgen.render.sequence`);
+2. depth of field, axial CA, diffraction — on the margin-rendered *pinhole* image, before the remap.
+   The margin already holds the pixels a blur at the frame border reads; depth is exact there (no
+   resampling of depth before it is used); and the image is resampled once, at the end.
+3. distortion + lateral CA — one remap into the output frame; depth and ids by nearest pixel;
+4. vignetting — a gain per output pixel (it depends on the output position and the chief ray).
+
+Blurring before distorting treats a blur spot as a disc in the pinhole image, which the distortion
+then squeezes as it squeezes the scene; for the coefficients surveillance lenses have, the spot's
+shape changes by g'(r) ≈ 1 ± 0.2 at the corner, and its size on axis is exact.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from camgen.optics.depth_of_field import disc_kernel, layered_blur, signed_coc_px
+from camgen.optics.diffraction import diffraction_blur
+from camgen.optics.intrinsics import corner_radius_normalized
+from camgen.optics.remap import LensGeometry, LensMapCache, output_grid_px, remap_image, remap_nearest
+from camgen.optics.vignetting import aperture_weight, relative_illumination
+from camgen.plan.job import CameraJob, CameraState
+from camgen.render.renderer import Passes
+
+
+class LensStages:
+    """The optics stages of one camera; keeps its lens maps and vignetting gain between frames."""
+
+    def __init__(self, camera: CameraJob, cache: LensMapCache | None = None):
+        self.camera = camera
+        self.stages = {stage.name: stage for stage in camera.stages}
+        self.cache = cache or LensMapCache()
+        self._gain_key = None
+        self._gain = None
+        profile = camera.profile
+        self.mono = profile.sensor.cfa == "mono"
+        ca = profile.lens.chromatic_aberration
+        lateral = "optics.remap" in self.stages and self.stages["optics.remap"].params["lateral_ca"]
+        self.ca_scales = (ca.lateral_scale_r, 1.0, ca.lateral_scale_b) if lateral and not self.mono else (1.0,)
+
+    def geometry(self, state: CameraState) -> LensGeometry:
+        spec = self.camera.render
+        return LensGeometry(
+            K_px=state.K_px,
+            distortion=state.distortion,
+            ca_scales=self.ca_scales,
+            width_px=self.camera.width_px,
+            height_px=self.camera.height_px,
+            margin_px=spec.margin_px,
+        )
+
+    def apply(self, state: CameraState, passes: Passes) -> Passes:
+        """Render-size passes (output plus margin) → output-size passes through the lens."""
+        stages, profile = self.stages, self.camera.profile
+        pitch_um = profile.sensor.pixel_pitch_um
+        radiance = passes.radiance
+        if radiance is not None:
+            if "optics.depth_of_field" in stages:
+                params = stages["optics.depth_of_field"].params
+                coc = signed_coc_px(
+                    passes.depth_m,
+                    focal_length_mm=state.focal_length_mm,
+                    f_number=state.f_number,
+                    focus_distance_m=state.focus_distance_m,
+                    pixel_pitch_um=pitch_um,
+                )
+                radiance = layered_blur(radiance, coc, step_px=params["step_px"], step_rel=params["step_rel"])
+            if "optics.axial_ca" in stages:
+                radiance = radiance.copy()
+                for channel, shift_um in enumerate(stages["optics.axial_ca"].params["focus_shift_um"]):
+                    diameter_px = abs(shift_um) / state.f_number / pitch_um
+                    if diameter_px > 0:
+                        radiance[..., channel] = cv2.filter2D(
+                            np.ascontiguousarray(radiance[..., channel]),
+                            -1,
+                            disc_kernel(diameter_px),
+                            borderType=cv2.BORDER_REFLECT,
+                        )
+            if "optics.diffraction" in stages:
+                radiance = diffraction_blur(radiance, f_number=state.f_number, pixel_pitch_um=pitch_um, mono=self.mono)
+        out = Passes()
+        if "optics.remap" in stages:
+            maps = self.cache.get(self.geometry(state))
+            undistorted = maps.undistorted_normalized
+            if radiance is not None:
+                out.radiance = remap_image(radiance, maps, stages["optics.remap"].params["interpolation"])
+            if passes.depth_m is not None:
+                out.depth_m = remap_nearest(passes.depth_m, maps)
+            if passes.instance_id is not None:
+                out.instance_id = remap_nearest(passes.instance_id, maps)
+        else:
+            undistorted = None
+            out.radiance = None if radiance is None else _crop(radiance, self.camera)
+            out.depth_m = None if passes.depth_m is None else _crop(passes.depth_m, self.camera)
+            out.instance_id = None if passes.instance_id is None else _crop(passes.instance_id, self.camera)
+        if "optics.vignetting" in stages and out.radiance is not None:
+            out.radiance = out.radiance * self._vignetting_gain(state, undistorted)[..., None]
+        return out
+
+    def _vignetting_gain(self, state: CameraState, undistorted: np.ndarray | None) -> np.ndarray:
+        key = (state.K_px, state.distortion, state.f_number)
+        if key != self._gain_key:
+            camera, vignetting = self.camera, self.camera.profile.lens.vignetting
+            K = np.array(state.K_px)
+            grid = output_grid_px(camera.width_px, camera.height_px)
+            distorted = np.stack([(grid[..., 0] - K[0, 2]) / K[0, 0], (grid[..., 1] - K[1, 2]) / K[1, 1]], -1)
+            gain = relative_illumination(
+                distorted if undistorted is None else undistorted,
+                distorted,
+                corner_radius_normalized=corner_radius_normalized(K, camera.width_px, camera.height_px),
+                natural_cos4=vignetting.natural_cos4,
+                polynomial=vignetting.optical_polynomial,
+                weight=aperture_weight(
+                    state.f_number,
+                    camera.profile.lens.at_focal_length(state.focal_length_mm)[0],
+                    vignetting.full_illumination_f_number,
+                ),
+            )
+            self._gain_key, self._gain = key, gain.astype(np.float32)
+        return self._gain
+
+
+def _crop(image: np.ndarray, camera: CameraJob) -> np.ndarray:
+    left, top, right, bottom = camera.render.margin_px
+    return image[top : image.shape[0] - bottom, left : image.shape[1] - right]

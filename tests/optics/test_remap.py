@@ -1,0 +1,106 @@
+"""The distortion + lateral-CA remap: direction, margin convention, per-channel maps and exact ids."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from camgen.optics.projection import distort_points
+from camgen.optics.remap import (
+    LensGeometry,
+    LensMapCache,
+    check_inside,
+    lens_maps,
+    remap_image,
+    remap_nearest,
+    source_points_px,
+)
+
+K = ((400.0, 0.0, 159.5), (0.0, 410.0, 119.5), (0.0, 0.0, 1.0))
+BARREL = (-0.3, 0.08, 0.001, -0.0008, 0.0, 0.0, 0.0, 0.0)
+
+
+def _geometry(distortion=BARREL, ca_scales=(1.0,), margin=(40, 30, 40, 30)) -> LensGeometry:
+    return LensGeometry(K, distortion, ca_scales, 320, 240, margin)
+
+
+def _blob_image(centres_px: np.ndarray, width: int, height: int, sigma_px: float = 1.2) -> np.ndarray:
+    u, v = np.meshgrid(np.arange(width), np.arange(height))
+    image = np.zeros((height, width), np.float64)
+    for cu, cv in centres_px:
+        image += np.exp(-((u - cu) ** 2 + (v - cv) ** 2) / (2 * sigma_px**2))
+    return image.astype(np.float32)
+
+
+def _centroid(image: np.ndarray, near: np.ndarray, radius: int = 5) -> np.ndarray:
+    u0, v0 = np.round(near).astype(int)
+    window = image[v0 - radius : v0 + radius + 1, u0 - radius : u0 + radius + 1].astype(np.float64)
+    v, u = np.mgrid[v0 - radius : v0 + radius + 1, u0 - radius : u0 + radius + 1]
+    return np.array([(window * u).sum(), (window * v).sum()]) / window.sum()
+
+
+def test_zero_lens_is_the_identity():
+    image = np.random.default_rng(0).random((240, 320, 3), dtype=np.float32)
+    maps = lens_maps(_geometry(distortion=(0.0,) * 8, margin=(0, 0, 0, 0)))
+    np.testing.assert_array_equal(remap_image(image, maps), image)
+
+
+def test_a_point_lands_where_cv2_project_points_puts_it():
+    """Blobs drawn at pinhole positions in the margin render come out at their distorted positions."""
+    geometry = _geometry()
+    left, top, right, bottom = geometry.margin_px
+    u, v = np.meshgrid(np.linspace(12, 308, 9), np.linspace(12, 228, 7))
+    undistorted = np.column_stack([u.ravel(), v.ravel()]) + 0.37  # sub-pixel, blobs ≥ 27 px apart
+    render = _blob_image(undistorted + np.array([left, top]), 320 + left + right, 240 + top + bottom)
+    maps = lens_maps(geometry)
+    check_inside(maps, render.shape[1], render.shape[0], support_px=1)
+    out = remap_image(np.repeat(render[..., None], 3, axis=2), maps)[..., 1]
+    expected = distort_points(undistorted, np.array(K), BARREL)
+    measured = np.array([_centroid(out, p) for p in expected])
+    # Linear resampling of a σ = 1.2 px blob moves its centroid by up to ≈ 0.04 px (the interpolant's
+    # phase error); a wrong direction, margin or half-pixel convention moves it by ≥ 0.5 px.
+    assert np.max(np.hypot(*(measured - expected).T)) < 0.08
+
+
+def test_lateral_ca_maps_are_the_green_map_magnified_about_the_principal_point():
+    scales = (1.002, 1.0, 0.997)
+    geometry = _geometry(ca_scales=scales)
+    maps = lens_maps(geometry)
+    cx, cy = K[0][2], K[1][2]
+    points = np.array([[0.0, 0.0], [319.0, 239.0], [200.0, 17.0]])
+    green = _geometry(ca_scales=(1.0,))
+    left, top = geometry.margin_px[:2]
+    for channel, scale in enumerate(scales):
+        shrunk = np.column_stack([cx + (points[:, 0] - cx) / scale, cy + (points[:, 1] - cy) / scale])
+        (expected,) = source_points_px(green, shrunk)
+        rows, cols = points[:, 1].astype(int), points[:, 0].astype(int)
+        got = np.column_stack([maps.map_x[channel][rows, cols] - left, maps.map_y[channel][rows, cols] - top])
+        np.testing.assert_allclose(got, expected, atol=2e-4)  # float32 maps
+
+
+def test_geometric_passes_keep_exact_values():
+    geometry = _geometry()
+    maps = lens_maps(geometry)
+    ids = np.random.default_rng(2).integers(0, 2**32 - 1, size=(300, 400), dtype=np.uint32)
+    out = remap_nearest(ids, maps)
+    assert out.dtype == np.uint32 and out.shape == (240, 320)
+    assert set(np.unique(out)) <= set(np.unique(ids))
+    rows, cols = maps.nearest_index
+    assert np.all(np.abs(rows - maps.map_y[1 % len(maps.map_y)]) <= 0.5)
+    assert np.all(np.abs(cols - maps.map_x[0]) <= 0.5)
+
+
+def test_a_margin_too_small_for_the_lens_is_caught():
+    maps = lens_maps(_geometry(margin=(5, 5, 5, 5)))
+    with pytest.raises(ValueError, match="reads left/above the render"):
+        check_inside(maps, 330, 250, support_px=1)
+
+
+def test_cache_returns_the_same_maps_and_drops_the_oldest():
+    cache = LensMapCache(capacity=2)
+    a, b, c = _geometry(), _geometry(distortion=(-0.1,) + (0.0,) * 7), _geometry(distortion=(0.1,) + (0.0,) * 7)
+    first = cache.get(a)
+    assert cache.get(a) is first
+    cache.get(b)
+    cache.get(c)
+    assert cache.get(a) is not first
