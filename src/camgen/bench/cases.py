@@ -1,4 +1,4 @@
-"""The benchmark cases that exist so far: configuration, planning, the lens inverse and rendering."""
+"""The benchmark cases that exist so far: configuration, planning, rendering and the lens stages."""
 
 from __future__ import annotations
 
@@ -6,7 +6,9 @@ from pathlib import Path
 
 import numpy as np
 
+from camgen.bench.dof_cases import dof_cases
 from camgen.bench.harness import Case
+from camgen.bench.optics_cases import optics_cases
 from camgen.bench.render_cases import render_cases
 from camgen.config import load_scene
 from camgen.optics.distortion import distort_normalized, undistort_normalized
@@ -22,6 +24,8 @@ def default_cases(repo: Path) -> list[Case]:
         cases.append(Case(name=f"compile plan {path.stem}", run=lambda s=loaded: _compile(s)))
     cases.append(_undistort_case())
     cases += render_cases(repo)
+    cases += optics_cases(repo)
+    cases += dof_cases()
     return cases
 
 
