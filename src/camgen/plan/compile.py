@@ -495,9 +495,17 @@ def _compile_camera(
         )
     )
     # Blur stages run on the margin-rendered pinhole image, before the remap (see `camgen.plan.optics`).
-    motion_samples = min(MOTION_SAMPLES_MAX, max(2, math.ceil(motion_px / MOTION_SAMPLE_STEP_PX)))
     blur_stages = (
-        ("optics.motion_blur", {"displacement_max_px": motion_px, "samples": motion_samples}),
+        (
+            "optics.motion_blur",
+            {
+                "displacement_max_px": motion_px,
+                "exposure_longest_s": exposure_longest_s,
+                "sample_step_px": MOTION_SAMPLE_STEP_PX,
+                "samples_max": MOTION_SAMPLES_MAX,
+                "threshold_px": blur_max,
+            },
+        ),
         (
             "optics.depth_of_field",
             {

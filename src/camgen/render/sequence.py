@@ -22,6 +22,7 @@ import cv2
 import numpy as np
 
 from camgen.errors import ConfigError
+from camgen.optics.motion_blur import sub_frame_count, sub_frame_offsets
 from camgen.plan.job import CameraJob, CameraState, Job, RenderSpec
 from camgen.plan.visibility import box_corners
 from camgen.render.renderer import Passes, Renderer, View, clip_planes_m
@@ -61,8 +62,8 @@ class CameraRenderer:
         self.spec = camera.render
         self._kept_views: dict[str, View] = {}
         self._reach_points_m, self._reach_radius_m = _reach(graph)
-        motion = [stage for stage in camera.stages if stage.name == "optics.motion_blur"]
-        self.motion_samples = int(motion[0].params["samples"]) if motion else 1
+        motion = [stage.params for stage in camera.stages if stage.name == "optics.motion_blur"]
+        self._motion = motion[0] if motion else None
         spec = self.spec
         s = spec.supersampling if "radiance" in spec.passes else 1
         largest = max(spec.width_px, spec.height_px)
@@ -98,6 +99,17 @@ class CameraRenderer:
             self._kept_views[kept] = view
         return renderer.draw(graph, view, passes, nodes=graph.actor_nodes, background=kept, clip_range_m=clip)
 
+    def motion_samples(self, state: CameraState) -> int:
+        """Sub-frames for this frame's exposure: the plan's largest motion scales with the exposure
+        actually used (the longest possible one is what the plan measured)."""
+        if self._motion is None:
+            return 1
+        p = self._motion
+        displacement_px = p["displacement_max_px"] * state.exposure_time_s / p["exposure_longest_s"]
+        return sub_frame_count(
+            displacement_px, step_px=p["sample_step_px"], samples_max=p["samples_max"], threshold_px=p["threshold_px"]
+        )
+
     def frame(self, index: int) -> Frame:
         """The planned passes of one frame. With motion blur planned, radiance is the mean of
         `samples` sub-frames spread evenly over the exposure, which is centred on the frame time;
@@ -107,12 +119,13 @@ class CameraRenderer:
         view = render_view(state, spec)
         passes = spec.passes
         s = spec.supersampling
-        if s == 1 and self.motion_samples == 1:
+        samples = self.motion_samples(state)
+        if s == 1 and samples == 1:
             self.graph.place_actors(state.time_s)
             return Frame(index, state.time_s, self._draw(view, passes, "shared"))
         result = Passes()
         if "radiance" in passes:
-            offsets = (np.arange(self.motion_samples) + 0.5) / self.motion_samples - 0.5
+            offsets = sub_frame_offsets(samples)
             for offset in offsets:
                 self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
                 if s == 1:
