@@ -32,7 +32,7 @@ def test_render_writes_video_passes_and_job(workspace, capsys):
     instances = json.loads((camera_dir / "passes" / "instances.json").read_text())
     assert instances[0] == {"instance_id": 1, "name": "walker", "kind": "actor"}
     assert not list(workspace.rglob("*.partial*"))
-    assert "ideal pinhole" in capsys.readouterr().err
+    assert "radiance through the lens" in capsys.readouterr().err
 
 
 def test_render_rejects_an_unknown_camera(workspace, capsys):

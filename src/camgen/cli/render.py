@@ -1,4 +1,4 @@
-"""camgen render SCENE -o OUT: compile a scene and render it (the ideal pinhole image so far)."""
+"""camgen render SCENE -o OUT: compile a scene and render it (radiance through the lens so far)."""
 
 from __future__ import annotations
 
@@ -61,7 +61,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         skipped = unimplemented_stages(camera)
         if skipped:
             err.print(
-                f"[yellow]note[/yellow] {escape(camera.name)}: rendering the ideal pinhole image; planned stages not "
+                f"[yellow]note[/yellow] {escape(camera.name)}: rendering radiance through the lens; planned stages not "
                 f"implemented in this version are skipped: {', '.join(skipped)}",
                 soft_wrap=True,
             )
