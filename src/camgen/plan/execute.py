@@ -19,6 +19,7 @@ import numpy as np
 
 from camgen.io.files import atomic_path, write_text_atomic
 from camgen.isp.preview import preview_exposure_scale, preview_srgb8
+from camgen.optics.remap import LensMapCache
 from camgen.plan.job import CameraJob, Job
 from camgen.plan.lens_stages import LensStages
 from camgen.render.renderer import Renderer
@@ -80,18 +81,23 @@ def execute(
     indices = list(range(job.frame_count) if frames is None else frames)
     wanted = None if cameras is None else set(cameras)
     results = []
+    maps = LensMapCache()  # cameras with the same lens and zoom share their maps
     for camera in job.cameras:
         if wanted is not None and camera.name not in wanted:
             continue
         results.append(
-            _execute_camera(job, camera, job_dir / camera.name, renderer, indices, resolve_path, save_passes, on_frame)
+            _execute_camera(
+                job, camera, job_dir / camera.name, renderer, indices, resolve_path, save_passes, on_frame, maps
+            )
         )
     # Written last: a job directory with job.json in it holds a complete render.
     write_text_atomic(job_dir / "job.json", job.to_json())
     return results
 
 
-def _execute_camera(job, camera, directory, renderer, indices, resolve_path, save_passes, on_frame) -> CameraResult:
+def _execute_camera(
+    job, camera, directory, renderer, indices, resolve_path, save_passes, on_frame, maps
+) -> CameraResult:
     from camgen.io.video import VideoWriter
 
     result = CameraResult(camera.name, directory)
@@ -101,7 +107,7 @@ def _execute_camera(job, camera, directory, renderer, indices, resolve_path, sav
     video = None
     exposure_scale = None
     frames = render_camera(renderer, job, camera, frames=indices, resolve_path=resolve_path)
-    lens = LensStages(camera)
+    lens = LensStages(camera, maps)
     try:
         while True:
             tick = time.perf_counter()
