@@ -26,6 +26,7 @@ from camgen.optics.remap import (
     lens_maps,
     output_grid_px,
     remap_image,
+    source_overshoot_px,
     source_points_px,
 )
 
@@ -37,15 +38,6 @@ HD = (1920, 1080)
 
 def optics_cases(repo: Path) -> list[Case]:
     return _interpolation_cases(repo) + _stage_cases()
-
-
-def _margin(geometry: LensGeometry, support_px: int) -> tuple[int, int, int, int]:
-    W, H = geometry.width_px, geometry.height_px
-    u, v = np.meshgrid(np.linspace(-0.5, W - 0.5, 97), np.linspace(-0.5, H - 0.5, 97))
-    points = np.concatenate(source_points_px(geometry, np.stack([u, v], -1).reshape(-1, 2)))
-    low, high = points.min(axis=0), points.max(axis=0)
-    overshoot = (-0.5 - low[0], -0.5 - low[1], high[0] - (W - 0.5), high[1] - (H - 0.5))
-    return tuple(math.ceil(max(0.0, x)) + support_px for x in overshoot)
 
 
 def _interpolation_cases(repo: Path) -> list[Case]:
@@ -62,7 +54,7 @@ def _interpolation_cases(repo: Path) -> list[Case]:
         graph.place_actors(2.0)
         view = _view(camera, size)
         probe = LensGeometry(tuple(map(tuple, view.K_px)), BARREL, (1.0,), *size, (0, 0, 0, 0))
-        margin = _margin(probe, max(SUPPORT_PX.values()))
+        margin = tuple(math.ceil(x) + max(SUPPORT_PX.values()) for x in source_overshoot_px(probe))
         geometry = LensGeometry(probe.K_px, BARREL, (1.0,), *size, margin)
         left, top, right, bottom = margin
         K = view.K_px.copy()

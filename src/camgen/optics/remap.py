@@ -66,6 +66,36 @@ def output_grid_px(width_px: int, height_px: int) -> np.ndarray:
     return np.stack([u, v], axis=-1)
 
 
+def border_points_px(width_px: int, height_px: int, step_px: float = 8.0) -> np.ndarray:
+    """Points (N, 2) along the outer pixel edges of an image, at most `step_px` apart, corners included."""
+    xs = np.append(np.arange(-0.5, width_px - 0.5, step_px), width_px - 0.5)
+    ys = np.append(np.arange(-0.5, height_px - 0.5, step_px), height_px - 0.5)
+    top = np.stack([xs, np.full_like(xs, -0.5)], -1)
+    bottom = np.stack([xs, np.full_like(xs, height_px - 0.5)], -1)
+    left = np.stack([np.full_like(ys, -0.5), ys], -1)
+    right = np.stack([np.full_like(ys, width_px - 0.5), ys], -1)
+    return np.concatenate([top, bottom, left, right])
+
+
+def source_overshoot_px(geometry: LensGeometry, points_px: np.ndarray | None = None) -> tuple[float, ...]:
+    """How far (left, top, right, bottom), px, the pinhole positions that `points_px` (default: the
+    frame border) sample through the lens lie beyond the frame's outer pixel edges; 0 where inside.
+
+    The render margin is this plus the interpolation's support. Raises `LensInversionError` where the
+    lens cannot be inverted.
+    """
+    W, H = geometry.width_px, geometry.height_px
+    points = border_points_px(W, H) if points_px is None else points_px
+    sources = np.concatenate(source_points_px(geometry, points))
+    low, high = sources.min(axis=0), sources.max(axis=0)
+    return tuple(max(0.0, float(x)) for x in (-0.5 - low[0], -0.5 - low[1], high[0] - (W - 0.5), high[1] - (H - 0.5)))
+
+
+def _reference_channel(ca_scales: tuple[float, ...]) -> int:
+    """The channel with the least lateral CA (green): its map also serves depth, ids and vignetting."""
+    return int(np.argmin([abs(s - 1.0) for s in ca_scales]))
+
+
 def source_points_px(
     geometry: LensGeometry,
     points_px: np.ndarray,
@@ -77,7 +107,7 @@ def source_points_px(
     K = geometry.K
     cx, cy = K[0, 2], K[1, 2]
     points = np.asarray(points_px, dtype=np.float64)
-    reference = int(np.argmin([abs(s - 1.0) for s in geometry.ca_scales]))
+    reference = _reference_channel(geometry.ca_scales)
     order = [reference] + [i for i in range(len(geometry.ca_scales)) if i != reference]
     sources: dict[int, np.ndarray] = {}
     for channel in order:
@@ -101,7 +131,7 @@ def lens_maps(geometry: LensGeometry, *, residual_max_px: float = INVERSE_RESIDU
     sources = source_points_px(geometry, grid, residual_max_px=residual_max_px)
     maps_x = tuple((source[..., 0] + left).astype(np.float32) for source in sources)
     maps_y = tuple((source[..., 1] + top).astype(np.float32) for source in sources)
-    ref = sources[int(np.argmin([abs(s - 1.0) for s in geometry.ca_scales]))]
+    ref = sources[_reference_channel(geometry.ca_scales)]
     rows = np.floor(ref[..., 1] + top + 0.5).astype(np.int32)
     cols = np.floor(ref[..., 0] + left + 0.5).astype(np.int32)
     undistorted = np.stack([(ref[..., 0] - K[0, 2]) / K[0, 0], (ref[..., 1] - K[1, 2]) / K[1, 1]], axis=-1)

@@ -41,7 +41,7 @@ from camgen.optics.intrinsics import (
     hyperfocal_distance_m,
 )
 from camgen.optics.projection import LensInversionError
-from camgen.optics.remap import SUPPORT_PX, LensGeometry, source_points_px
+from camgen.optics.remap import SUPPORT_PX, LensGeometry, border_points_px, source_overshoot_px
 from camgen.optics.vignetting import aperture_weight, relative_illumination
 from camgen.plan.job import CameraJob, CameraState, Decision, Job, PlanSettings, RenderSpec, Stage
 from camgen.plan.visibility import box_corners, visible_depth_range_m
@@ -129,20 +129,10 @@ def _camera_focal_length_mm(camera: Camera, profile: Profile) -> tuple[float, fl
     return lens.focal_length_min_mm, 1.0
 
 
-def _border_points_px(width_px: int, height_px: int, step_px: float = 8.0) -> np.ndarray:
-    xs = np.append(np.arange(-0.5, width_px - 0.5, step_px), width_px - 0.5)
-    ys = np.append(np.arange(-0.5, height_px - 0.5, step_px), height_px - 0.5)
-    top = np.stack([xs, np.full_like(xs, -0.5)], -1)
-    bottom = np.stack([xs, np.full_like(xs, height_px - 0.5)], -1)
-    left = np.stack([np.full_like(ys, -0.5), ys], -1)
-    right = np.stack([np.full_like(ys, width_px - 0.5), ys], -1)
-    return np.concatenate([top, bottom, left, right])
-
-
-def _source_bounds_px(
+def _source_overshoot_px(
     K: np.ndarray, distortion: np.ndarray, ca_scales: tuple[float, ...], width_px: int, height_px: int, where: str
-) -> tuple[float, float, float, float]:
-    """Pinhole-image extent (u_min, v_min, u_max, v_max) the output frame samples through the lens."""
+) -> tuple[float, ...]:
+    """How far beyond each frame edge the output frame samples the pinhole image through the lens, px."""
     geometry = LensGeometry(
         K_px=tuple(map(tuple, K.tolist())),
         distortion=tuple(float(c) for c in distortion),
@@ -152,19 +142,17 @@ def _source_bounds_px(
         margin_px=(0, 0, 0, 0),
     )
     try:
-        sources = source_points_px(geometry, _border_points_px(width_px, height_px))
+        return source_overshoot_px(geometry)
     except LensInversionError as error:
         raise ConfigError(
             f"{where}: the distortion cannot be inverted at the image border ({error}); the coefficients do "
             "not describe a valid lens there"
         ) from None
-    points = np.concatenate(sources)
-    return float(points[:, 0].min()), float(points[:, 1].min()), float(points[:, 0].max()), float(points[:, 1].max())
 
 
 def _corner_illumination(K, distortion, width_px, height_px, vignetting, weight) -> float:
     """Darkest relative illumination along the frame border (the corners, for a centred lens)."""
-    border = _border_points_px(width_px, height_px)
+    border = border_points_px(width_px, height_px)
     fx, fy, cx, cy = K[0, 0], K[1, 1], K[0, 2], K[1, 2]
     distorted = np.stack([(border[:, 0] - cx) / fx, (border[:, 1] - cy) / fy], -1)
     undistorted = undistort_normalized(distorted, distortion).points
@@ -317,7 +305,7 @@ def _compile_camera(
     remap = decisions[-2].included or decisions[-1].included
     geometric_margin = (0.0, 0.0, 0.0, 0.0)
     if remap:
-        u0, v0, u1, v1 = _source_bounds_px(
+        overshoot = _source_overshoot_px(
             K,
             dist if decisions[-2].included else np.zeros(8),
             ca_scales if decisions[-1].included else (1.0,),
@@ -325,10 +313,7 @@ def _compile_camera(
             H,
             f"cameras[{camera_index}]",
         )
-        geometric_margin = tuple(
-            x + SUPPORT_PX[settings.remap_interpolation]
-            for x in (max(0.0, -0.5 - u0), max(0.0, -0.5 - v0), max(0.0, u1 - (W - 0.5)), max(0.0, v1 - (H - 0.5)))
-        )
+        geometric_margin = tuple(x + SUPPORT_PX[settings.remap_interpolation] for x in overshoot)
     # What the lens actually sees: the pinhole extent the output frame samples (wider under barrel).
     seen_left, seen_top, seen_right, seen_bottom = (math.ceil(x) for x in geometric_margin)
     K_seen = K.copy()

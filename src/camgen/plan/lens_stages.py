@@ -26,6 +26,7 @@ from camgen.optics.remap import LensGeometry, LensMapCache, output_grid_px, rema
 from camgen.optics.vignetting import aperture_weight, relative_illumination
 from camgen.plan.job import CameraJob, CameraState
 from camgen.render.renderer import Passes
+from camgen.render.sequence import crop_to_output
 
 
 class LensStages:
@@ -95,9 +96,10 @@ class LensStages:
                 out.instance_id = remap_nearest(passes.instance_id, maps)
         else:
             undistorted = None
-            out.radiance = None if radiance is None else _crop(radiance, self.camera)
-            out.depth_m = None if passes.depth_m is None else _crop(passes.depth_m, self.camera)
-            out.instance_id = None if passes.instance_id is None else _crop(passes.instance_id, self.camera)
+            spec = self.camera.render
+            out.radiance = None if radiance is None else crop_to_output(radiance, spec)
+            out.depth_m = None if passes.depth_m is None else crop_to_output(passes.depth_m, spec)
+            out.instance_id = None if passes.instance_id is None else crop_to_output(passes.instance_id, spec)
         if "optics.vignetting" in stages and out.radiance is not None:
             out.radiance = out.radiance * self._vignetting_gain(state, undistorted)[..., None]
         return out
@@ -123,8 +125,3 @@ class LensStages:
             )
             self._gain_key, self._gain = key, gain.astype(np.float32)
         return self._gain
-
-
-def _crop(image: np.ndarray, camera: CameraJob) -> np.ndarray:
-    left, top, right, bottom = camera.render.margin_px
-    return image[top : image.shape[0] - bottom, left : image.shape[1] - right]
