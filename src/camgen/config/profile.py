@@ -98,7 +98,10 @@ class Sensor(Model):
     bit_depth: Annotated[int, Field(ge=8, le=16)] = 12
     """ADC resolution, bits."""
     full_well_e: PositiveFloat
-    """Saturation capacity, electrons (EMVA 1288 μ_e.sat)."""
+    """Charge a pixel holds before it clips, electrons. An EMVA 1288 measurement places the saturation
+    capacity μ_e.sat at the peak of the photon-transfer variance, where shot noise and PRNU have
+    started clipping pixels: about 4 % below this figure for 10 ke⁻ and 1 % PRNU (tests/sensor).
+    Enter a datasheet's μ_e.sat a few σ higher."""
     conversion_gain_dn_per_e: PositiveFloat
     """System gain K at 0 dB analog gain, DN per electron."""
     black_level_dn: NonNegativeFloat = 0.0
@@ -401,6 +404,12 @@ class ContrastStretch(Model):
     high_percentile: Annotated[float, Field(gt=0, le=100)] = 99.5
     adaptation_time_s: NonNegativeFloat = 0.5
     """Time constant of the limits' adaptation after a lighting change, s (0 = instant)."""
+    max_gain: Annotated[float, Field(ge=1, le=1000)] = 8.0
+    """Largest amplification of the stretch: a flat scene keeps its low contrast rather than having
+    its noise stretched over the output range (an estimate; cameras rarely publish it)."""
+    output_range_frac: tuple[Fraction, Fraction] = (0.0, 1.0)
+    """[low, high] output levels (fractions of 255) the stretched range maps to after the tone
+    curve: the lower and upper limit of the stretched histogram (a washed-out camera has e.g. [0.06, 0.92])."""
 
     @model_validator(mode="after")
     def _check(self) -> ContrastStretch:
@@ -409,6 +418,9 @@ class ContrastStretch(Model):
                 "low_percentile",
                 f"must be below high_percentile ({self.high_percentile:g}), got {self.low_percentile:g}",
             )
+        low, high = self.output_range_frac
+        if low >= high:
+            raise invalid("output_range_frac", f"must be [low, high] with low < high, got [{low:g}, {high:g}]")
         return self
 
 
@@ -444,6 +456,11 @@ class Codec(Model):
     crf: Annotated[int, Field(ge=0, le=51)] = 23
     gop_frames: Annotated[int, Field(ge=1)] = 50
     """Frames between key frames (I-frame interval)."""
+    preset: Literal["ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower", "veryslow"] = (
+        "veryfast"
+    )
+    """x264/x265 speed preset (ignored by MJPEG). Camera encoders are real-time hardware that trade
+    compression efficiency for speed, nearer the fast presets than `medium` (an estimate)."""
     pixel_format: Literal["yuv420p", "yuv422p", "yuv444p"] = "yuv420p"
 
 

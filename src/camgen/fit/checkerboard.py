@@ -12,7 +12,9 @@ import cv2
 import numpy as np
 
 from camgen.config.scene import CheckerboardMesh
-from camgen.isp.preview import LUMINANCE_WEIGHTS_BT709
+
+LUMINANCE_WEIGHTS_BT709 = np.array([0.2126, 0.7152, 0.0722], np.float32)
+"""Y of linear BT.709 RGB (ITU-R BT.709-6, item 3.2)."""
 
 
 @dataclass(frozen=True)

@@ -197,3 +197,78 @@ class LensMapCache:
         while len(self._maps) > self.capacity:
             self._maps.popitem(last=False)
         return maps
+
+
+@dataclass(frozen=True)
+class MosaicMap:
+    """Where each photosite's light comes from in the channel-stacked render (`stack_channels`).
+
+    A colour site reads only its own CFA channel, so distortion, lateral CA and the CFA sampling are
+    one resampling of H·W samples (a third of resampling three full channels): site (v, u) of
+    channel c reads the stacked image at (map_x, map_y) = (x_c, y_c + c·H_render).
+    """
+
+    map_x: np.ndarray
+    map_y: np.ndarray
+    exact: bool
+    """The map only crops (no lens geometry): nearest-pixel lookup is exact and cheapest."""
+
+
+def mosaic_map(
+    maps: LensMaps | None,
+    channel_index: np.ndarray | None,
+    *,
+    width_px: int,
+    height_px: int,
+    margin_px: tuple[int, int, int, int],
+    render_height_px: int,
+) -> MosaicMap:
+    """The photosite map of an output frame.
+
+    Parameters
+    ----------
+    maps : LensMaps or None
+        The lens maps (one or three channels); None when no lens stage resamples (a pure crop).
+    channel_index : (H, W) uint8 or None
+        The CFA channel of each site (`camgen.sensor.cfa.cfa_channel_index`); None for a single plane
+        (a mono sensor).
+    width_px, height_px, margin_px, render_height_px
+        Output size, the render margin (left, top, right, bottom) and the render height.
+    """
+    if maps is None:
+        left, top, _, _ = margin_px
+        u, v = np.meshgrid(np.arange(width_px, dtype=np.float32), np.arange(height_px, dtype=np.float32))
+        map_x, map_y = u + left, v + top
+        if channel_index is not None:
+            map_y = map_y + channel_index.astype(np.float32) * render_height_px
+        return MosaicMap(map_x, map_y, exact=True)
+    if channel_index is None or len(maps.map_x) == 1:
+        map_x, map_y = maps.map_x[0], maps.map_y[0]
+        if channel_index is not None:
+            map_y = map_y + channel_index.astype(np.float32) * render_height_px
+        return MosaicMap(map_x, map_y, exact=False)
+    map_x = np.choose(channel_index, maps.map_x).astype(np.float32)
+    map_y = np.choose(channel_index, maps.map_y) + channel_index.astype(np.float32) * render_height_px
+    return MosaicMap(map_x, map_y.astype(np.float32), exact=False)
+
+
+def stack_channels(image: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """(H, W, C) → (C·H, W): the channels one above the other (the layout `MosaicMap` reads)."""
+    height, width, channels = image.shape
+    if out is None:
+        out = np.empty((channels * height, width), np.float32)
+    for c in range(channels):
+        out[c * height : (c + 1) * height] = image[..., c]
+    return out
+
+
+def remap_mosaic(stacked: np.ndarray, mosaic: MosaicMap, interpolation: str = "linear") -> np.ndarray:
+    """(H, W) float32 light at each photosite from the channel-stacked render (or a single plane).
+
+    Cubic and Lanczos undershoot is clipped at zero, as in `remap_image`.
+    """
+    flag = cv2.INTER_NEAREST if mosaic.exact else INTERPOLATIONS[interpolation]
+    out = cv2.remap(stacked, mosaic.map_x, mosaic.map_y, flag, borderMode=cv2.BORDER_REPLICATE)
+    if not mosaic.exact and interpolation in ("cubic", "lanczos"):
+        np.maximum(out, 0.0, out=out)
+    return out

@@ -1,10 +1,10 @@
 """Run a compiled Job: render each camera's planned passes and write what this version can write.
 
-Implemented so far: the render stage (ideal pinhole radiance, depth, ids), the lens stages
-(`camgen.plan.lens_stages`) and a preview video of the radiance (global exposure, sRGB;
-`camgen.isp.preview`) encoded with the profile's codec. The sensor, ISP and annotation stages come
-with their issues; `unimplemented_stages` names those a job
-plans but this version skips, so callers can say so.
+Implemented so far: the render stage (ideal pinhole radiance, depth, ids), the camera model
+(`camgen.plan.camera_pipeline`: lens, sensor with auto-exposure, ISP), the video encoded with the
+profile's codec, and per-frame camera states (`camera.jsonl`). The annotation and file-output stages
+come with their issues; `unimplemented_stages` names those a job plans but this version skips, so
+callers can say so.
 """
 
 from __future__ import annotations
@@ -12,19 +12,23 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable, Iterable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from camgen.io.files import atomic_path, write_text_atomic
-from camgen.isp.preview import preview_exposure_scale, preview_srgb8
 from camgen.optics.remap import LensMapCache
+from camgen.plan.camera_pipeline import CameraPipeline, frame_rng
 from camgen.plan.job import CameraJob, Job
 from camgen.plan.lens_stages import LensStages
 from camgen.render.renderer import Renderer
-from camgen.render.scene_graph import instance_table
-from camgen.render.sequence import render_camera
+from camgen.render.scene_graph import build_scene_graph, instance_table
+from camgen.render.sequence import CameraRenderer
+
+NOISE_THREADS = 2
+"""Threads for the sensor's row bands and the tone lookup (the machines here have 2 cores)."""
 
 IMPLEMENTED_STAGES = frozenset(
     {
@@ -35,7 +39,18 @@ IMPLEMENTED_STAGES = frozenset(
         "optics.diffraction",
         "optics.remap",
         "optics.vignetting",
+        "sensor.exposure",
+        "sensor.noise",
+        "sensor.adc",
+        "isp.demosaic",
+        "isp.white_balance",
+        "isp.ccm",
+        "isp.denoise",
+        "isp.contrast_stretch",
+        "isp.tone",
+        "isp.sharpen",
         "io.video",
+        "io.camera_metadata",
     }
 )
 
@@ -73,8 +88,10 @@ def execute(
 ) -> list[CameraResult]:
     """Render `job` into ``out_dir/<scene>-<hash>/<camera>/`` and return what was written.
 
-    frames: frame indices to render (default: all). save_passes: also write each frame's passes,
-    through the lens into the output frame, as ``passes/<frame>.npz`` (radiance_cd_m2, depth_m, instance_id).
+    frames: frame indices to render (default: all). Auto-exposure runs from the first frame rendered,
+    so a subset starts from the profile's exposure, not where a full render would be. save_passes:
+    also write each frame's passes, through the lens into the output frame, as
+    ``passes/<frame>.npz`` (radiance_cd_m2, depth_m, instance_id) and its raw DN.
     on_frame(camera, index) is called after each frame (for progress).
     """
     job_dir = Path(out_dir) / job_directory_name(job)
@@ -82,80 +99,115 @@ def execute(
     wanted = None if cameras is None else set(cameras)
     results = []
     maps = LensMapCache()  # cameras with the same lens and zoom share their maps
-    for camera in job.cameras:
-        if wanted is not None and camera.name not in wanted:
-            continue
-        results.append(
-            _execute_camera(
-                job, camera, job_dir / camera.name, renderer, indices, resolve_path, save_passes, on_frame, maps
-            )
-        )
+    with ThreadPoolExecutor(NOISE_THREADS) as executor:
+        for camera_index, camera in enumerate(job.cameras):
+            if wanted is not None and camera.name not in wanted:
+                continue
+            context = _Context(job, camera_index, job_dir / camera.name, renderer, maps, executor)
+            results.append(_execute_camera(context, indices, resolve_path, save_passes, on_frame))
     # Written last: a job directory with job.json in it holds a complete render.
     write_text_atomic(job_dir / "job.json", job.to_json())
     return results
 
 
-def _execute_camera(
-    job, camera, directory, renderer, indices, resolve_path, save_passes, on_frame, maps
-) -> CameraResult:
+@dataclass
+class _Context:
+    job: Job
+    camera_index: int
+    directory: Path
+    renderer: Renderer
+    maps: LensMapCache
+    executor: ThreadPoolExecutor
+
+
+def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_frame) -> CameraResult:
     from camgen.io.video import VideoWriter
 
+    job, directory = context.job, context.directory
+    camera = job.cameras[context.camera_index]
     result = CameraResult(camera.name, directory)
     started = time.perf_counter()
-    spec = camera.render
-    wants_video = "radiance" in spec.passes and job.scene.outputs.video
+    stages = {stage.name for stage in camera.stages}
+    pipeline = (
+        CameraPipeline(job, camera, maps=context.maps, executor=context.executor)
+        if "radiance" in camera.render.passes
+        else None
+    )
+    lens = pipeline.lens if pipeline is not None else LensStages(camera, context.maps)
     video = None
-    exposure_scale = None
-    frames = render_camera(renderer, job, camera, frames=indices, resolve_path=resolve_path)
-    lens = LensStages(camera, maps)
+    metadata: list[str] = []
+    camera_renderer = CameraRenderer(context.renderer, build_scene_graph(job.scene, resolve_path), camera)
+    converge = (
+        pipeline is not None and camera.exposure_mode == "auto" and job.settings.auto_exposure_start == "converged"
+    )
     try:
-        while True:
+        for index in indices:
             tick = time.perf_counter()
-            frame = next(frames, None)
+            state = camera.states[index] if pipeline is None else pipeline.state_for(index)
+            frame = camera_renderer.frame(index, state)
+            if converge:
+                # Start as a camera that has watched this view for a while, not from the profile's guess.
+                converge = False
+                pipeline.converge_exposure(state, frame.passes)
+                settled = pipeline.state_for(index)
+                if settled.exposure_time_s != state.exposure_time_s and camera_renderer.motion_samples(settled) > 1:
+                    frame = camera_renderer.frame(index, settled)  # the blur spans the settled exposure
+                state = settled
             result.render_s += time.perf_counter() - tick
-            if frame is None:
-                break
-            passes = lens.apply(camera.states[frame.index], frame.passes)
-            if wants_video:
-                radiance = passes.radiance
+            captured = None
+            if pipeline is not None:
+                rng = frame_rng(job.seed, context.camera_index, frame.index)
+                captured = pipeline.process(state, frame.passes, rng=rng)
+            if captured is not None and captured.rgb8 is not None and "io.video" in stages:
                 if video is None:
-                    exposure_scale = preview_exposure_scale(radiance)
                     video = VideoWriter(
                         directory / "video.mp4",
                         width_px=camera.width_px,
                         height_px=camera.height_px,
                         fps=job.fps,
                         codec=camera.profile.codec,
+                        preset=camera.profile.codec.preset,
                     )
-                video.write(preview_srgb8(radiance, exposure_scale))
+                video.write(captured.rgb8)
+            if "io.camera_metadata" in stages:
+                record = state.model_dump(mode="json")
+                if captured is not None:
+                    record["metered_level_frac"] = captured.metered_level_frac
+                metadata.append(json.dumps(record, separators=(",", ":")))
             if save_passes:
                 if result.frames == 0:
                     table = [vars(instance) for instance in instance_table(job.scene)]
                     write_text_atomic(directory / "passes" / "instances.json", json.dumps(table, indent=1))
-                _save_passes(directory / "passes" / f"{frame.index:06d}.npz", passes, result)
+                passes = lens.apply(state, frame.passes)
+                raw = None if captured is None else captured.raw_dn
+                _save_passes(directory / "passes" / f"{frame.index:06d}.npz", passes, raw, result)
             result.frames += 1
             if on_frame is not None:
                 on_frame(camera.name, frame.index)
         if video is not None:
             video.close()
             result.files.append(directory / "video.mp4")
+        if metadata:
+            write_text_atomic(directory / "camera.jsonl", "\n".join(metadata) + "\n")
+            result.files.append(directory / "camera.jsonl")
     except BaseException:
         if video is not None:
             video.abort()
         raise
     finally:
-        frames.close()
+        camera_renderer.close()
     result.total_s = time.perf_counter() - started
     return result
 
 
-def _save_passes(path: Path, passes, result: CameraResult) -> None:
+def _save_passes(path: Path, passes, raw_dn, result: CameraResult) -> None:
     arrays = {
         key: value
         for key, value in (
             ("radiance_cd_m2", passes.radiance),
             ("depth_m", passes.depth_m),
             ("instance_id", passes.instance_id),
+            ("raw_dn", raw_dn),
         )
         if value is not None
     }

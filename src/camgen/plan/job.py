@@ -51,6 +51,12 @@ class PlanSettings(Frozen):
     """Depth-of-field layers: the widest blur-diameter bin, px, for small blur circles."""
     dof_step_rel: Annotated[float, Field(gt=0, le=1)] = 0.1
     """Depth-of-field layers: bin width relative to the blur diameter, for large blur circles."""
+    gaussian_above_e: Annotated[float, Field(gt=0)] = 20.0
+    """Expected electrons above which shot noise is drawn as a Gaussian (exact Poisson below).
+    BENCHMARKS.md: run time against error by photon level."""
+    auto_exposure_start: Literal["converged", "profile"] = "converged"
+    """Where auto-exposure starts: settled on the first frame's view (as a camera that has been
+    running), or at the profile's exposure (to watch it adapt from there)."""
     force_all_stages: bool = False
     """Plan every stage regardless of its effect (for checking that skipping changes nothing)."""
 

@@ -22,7 +22,7 @@ import numpy as np
 from camgen.optics.depth_of_field import disc_kernel, layered_blur, signed_coc_px
 from camgen.optics.diffraction import diffraction_blur
 from camgen.optics.intrinsics import corner_radius_normalized
-from camgen.optics.remap import LensGeometry, LensMapCache, output_grid_px, remap_image, remap_nearest
+from camgen.optics.remap import LensGeometry, LensMapCache, LensMaps, output_grid_px, remap_image, remap_nearest
 from camgen.optics.vignetting import aperture_weight, relative_illumination
 from camgen.plan.job import CameraJob, CameraState
 from camgen.render.renderer import Passes
@@ -55,35 +55,46 @@ class LensStages:
             margin_px=spec.margin_px,
         )
 
-    def apply(self, state: CameraState, passes: Passes) -> Passes:
-        """Render-size passes (output plus margin) → output-size passes through the lens."""
+    def blur(self, state: CameraState, passes: Passes) -> np.ndarray | None:
+        """The planned blurs (depth of field, axial CA, diffraction) of the render-size radiance."""
         stages, profile = self.stages, self.camera.profile
         pitch_um = profile.sensor.pixel_pitch_um
         radiance = passes.radiance
-        if radiance is not None:
-            if "optics.depth_of_field" in stages:
-                params = stages["optics.depth_of_field"].params
-                coc = signed_coc_px(
-                    passes.depth_m,
-                    focal_length_mm=state.focal_length_mm,
-                    f_number=state.f_number,
-                    focus_distance_m=state.focus_distance_m,
-                    pixel_pitch_um=pitch_um,
-                )
-                radiance = layered_blur(radiance, coc, step_px=params["step_px"], step_rel=params["step_rel"])
-            if "optics.axial_ca" in stages:
-                radiance = radiance.copy()
-                for channel, shift_um in enumerate(stages["optics.axial_ca"].params["focus_shift_um"]):
-                    diameter_px = abs(shift_um) / state.f_number / pitch_um
-                    if diameter_px > 0:
-                        radiance[..., channel] = cv2.filter2D(
-                            np.ascontiguousarray(radiance[..., channel]),
-                            -1,
-                            disc_kernel(diameter_px),
-                            borderType=cv2.BORDER_REFLECT,
-                        )
-            if "optics.diffraction" in stages:
-                radiance = diffraction_blur(radiance, f_number=state.f_number, pixel_pitch_um=pitch_um, mono=self.mono)
+        if radiance is None:
+            return None
+        if "optics.depth_of_field" in stages:
+            params = stages["optics.depth_of_field"].params
+            coc = signed_coc_px(
+                passes.depth_m,
+                focal_length_mm=state.focal_length_mm,
+                f_number=state.f_number,
+                focus_distance_m=state.focus_distance_m,
+                pixel_pitch_um=pitch_um,
+            )
+            radiance = layered_blur(radiance, coc, step_px=params["step_px"], step_rel=params["step_rel"])
+        if "optics.axial_ca" in stages:
+            radiance = radiance.copy()
+            for channel, shift_um in enumerate(stages["optics.axial_ca"].params["focus_shift_um"]):
+                diameter_px = abs(shift_um) / state.f_number / pitch_um
+                if diameter_px > 0:
+                    radiance[..., channel] = cv2.filter2D(
+                        np.ascontiguousarray(radiance[..., channel]),
+                        -1,
+                        disc_kernel(diameter_px),
+                        borderType=cv2.BORDER_REFLECT,
+                    )
+        if "optics.diffraction" in stages:
+            radiance = diffraction_blur(radiance, f_number=state.f_number, pixel_pitch_um=pitch_um, mono=self.mono)
+        return radiance
+
+    def maps(self, state: CameraState) -> LensMaps | None:
+        """The lens maps of this state, or None when no lens stage resamples."""
+        return self.cache.get(self.geometry(state)) if "optics.remap" in self.stages else None
+
+    def apply(self, state: CameraState, passes: Passes) -> Passes:
+        """Render-size passes (output plus margin) → output-size passes through the lens."""
+        stages = self.stages
+        radiance = self.blur(state, passes)
         out = Passes()
         if "optics.remap" in stages:
             maps = self.cache.get(self.geometry(state))
@@ -101,11 +112,18 @@ class LensStages:
             out.depth_m = None if passes.depth_m is None else crop_to_output(passes.depth_m, spec)
             out.instance_id = None if passes.instance_id is None else crop_to_output(passes.instance_id, spec)
         if "optics.vignetting" in stages and out.radiance is not None:
-            out.radiance = out.radiance * self._vignetting_gain(state, undistorted)[..., None]
+            out.radiance = out.radiance * self.vignetting_gain(state, undistorted)[..., None]
         return out
 
-    def _vignetting_gain(self, state: CameraState, undistorted: np.ndarray | None) -> np.ndarray:
+    def vignetting_gain(self, state: CameraState, undistorted: np.ndarray | None = None) -> np.ndarray | None:
+        """Relative illumination of each output pixel, (H, W) float32; None when not planned.
+
+        `undistorted`: the maps' undistorted rays, when the caller has them (else looked up)."""
+        if "optics.vignetting" not in self.stages:
+            return None
         key = (state.K_px, state.distortion, state.f_number)
+        if key != self._gain_key and undistorted is None and "optics.remap" in self.stages:
+            undistorted = self.maps(state).undistorted_normalized
         if key != self._gain_key:
             camera, vignetting = self.camera, self.camera.profile.lens.vignetting
             K = np.array(state.K_px)

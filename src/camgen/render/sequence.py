@@ -110,11 +110,14 @@ class CameraRenderer:
             displacement_px, step_px=p["sample_step_px"], samples_max=p["samples_max"], threshold_px=p["threshold_px"]
         )
 
-    def frame(self, index: int) -> Frame:
+    def frame(self, index: int, state: CameraState | None = None) -> Frame:
         """The planned passes of one frame. With motion blur planned, radiance is the mean of
         `samples` sub-frames spread evenly over the exposure, which is centred on the frame time;
-        depth and ids are the scene at the frame time."""
-        state = self.camera.states[index]
+        depth and ids are the scene at the frame time.
+
+        `state`: the frame's camera state with the exposure actually used (auto-exposure decides it
+        while rendering); default the plan's state of frame `index`."""
+        state = self.camera.states[index] if state is None else state
         spec = self.spec
         view = render_view(state, spec)
         passes = spec.passes

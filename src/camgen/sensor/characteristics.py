@@ -17,7 +17,8 @@ def saturation_e(
 ) -> tuple[float, str]:
     """Electrons at which the raw output saturates, and what limits it ('full well' or 'ADC').
 
-    The ADC clips at 2^bits − 1 DN; with gain G = 10^(dB/20) one electron gives K·G DN.
+    The ADC clips at 2^bits − 1 DN; with gain G = 10^(dB/20) one electron gives K·G DN. This is the
+    clip level; EMVA 1288's μ_e.sat (the variance peak) lies a few shot-noise σ below it.
     """
     adc_limit_e = (2**bit_depth - 1 - black_level_dn) / (conversion_gain_dn_per_e * 10 ** (gain_db / 20))
     if adc_limit_e < full_well_e:

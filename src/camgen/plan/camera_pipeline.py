@@ -1,0 +1,235 @@
+"""The post-render camera model of one camera: lens → sensor → ISP, frame by frame, as the plan says.
+
+Per frame:
+
+1. the planned blurs of the pinhole radiance (`LensStages.blur`);
+2. distortion, lateral CA and the CFA in one resampling straight onto the photosites
+   (`camgen.optics.remap.remap_mosaic`): each site reads only its own colour channel;
+3. photons per site from the camera equation, times QE, PRNU and vignetting in one cached per-site
+   factor; the exposure time and gain come from auto-exposure (or the manual setting);
+4. noise and the ADC (`camgen.sensor.capture`) → raw DN;
+5. auto-exposure meters the raw frame and sets the next frame's exposure;
+6. the ISP (`camgen.isp.pipeline`) → 8-bit RGB, when video or frames are asked for.
+
+The pipeline keeps what changes slowly (lens maps, the per-site factor, the sensor's fixed patterns,
+the auto-exposure and contrast-stretch state); everything random comes from the frame's `rng`.
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import Executor
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from camgen.isp.pipeline import CameraIsp
+from camgen.optics.remap import LensMapCache, MosaicMap, mosaic_map, remap_mosaic
+from camgen.plan.job import CameraJob, CameraState, Job
+from camgen.plan.lens_stages import LensStages
+from camgen.render.renderer import Passes
+from camgen.sensor.auto_exposure import (
+    ExposureLimits,
+    ExposureSetting,
+    metered_level_frac,
+    next_exposure,
+    split_exposure,
+)
+from camgen.sensor.capture import SensorModel
+from camgen.sensor.cfa import cfa_channel_index
+from camgen.sensor.exposure import gain_linear, photons_per_cd_m2_s
+
+
+def frame_rng(seed: int, camera_index: int, frame_index: int) -> np.random.Generator:
+    """The generator of one frame of one camera: independent of which other frames are rendered."""
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(camera_index, frame_index)))
+
+
+def exposure_limits(camera: CameraJob, fps: float) -> ExposureLimits:
+    """What the camera can set: its exposure range (at most one frame interval) and analog gain."""
+    exposure, sensor = camera.profile.exposure, camera.profile.sensor
+    longest = min(exposure.exposure_time_max_s, 1.0 / fps)
+    return ExposureLimits(
+        exposure_time_min_s=min(exposure.exposure_time_min_s, longest),
+        exposure_time_max_s=longest,
+        gain_max_db=sensor.analog_gain_max_db,
+    )
+
+
+@dataclass
+class CapturedFrame:
+    raw_dn: np.ndarray
+    """(H, W) uint16 raw mosaic (or mono image)."""
+    rgb8: np.ndarray | None
+    """(H, W, 3) uint8 ISP output; None when no processed output is planned."""
+    state: CameraState
+    """The camera state of this frame, with the exposure time and gain actually used."""
+    metered_level_frac: float
+
+
+class CameraPipeline:
+    """Lens, sensor and ISP of one camera of a job (see the module docstring)."""
+
+    def __init__(
+        self,
+        job: Job,
+        camera: CameraJob,
+        *,
+        maps: LensMapCache | None = None,
+        executor: Executor | None = None,
+    ):
+        self.job, self.camera = job, camera
+        self.stages = {stage.name: stage for stage in camera.stages}
+        self.lens = LensStages(camera, maps)
+        self.executor = executor
+        profile = camera.profile
+        sensor = profile.sensor
+        self.mono = sensor.cfa == "mono"
+        terms = frozenset(self.stages["sensor.noise"].params["terms"])
+        self.sensor_model = SensorModel.build(
+            sensor, camera.serial, terms=terms, gaussian_above_e=job.settings.gaussian_above_e
+        )
+        self.channel_index = None if self.mono else cfa_channel_index(sensor.cfa, sensor.height_px, sensor.width_px)
+        qe = sensor.quantum_efficiency
+        self._mono_weights = np.array([[qe.r, qe.g, qe.b]], np.float32)
+        self.limits = exposure_limits(camera, job.fps)
+        first = camera.states[0]
+        self.setting = ExposureSetting(
+            exposure_time_s=min(
+                max(first.exposure_time_s, self.limits.exposure_time_min_s), self.limits.exposure_time_max_s
+            ),
+            gain_db=first.gain_db,
+        )
+        isp_steps = {name for name in self.stages if name.startswith("isp.")}
+        self.isp = (
+            CameraIsp(profile.isp, sensor, frame_interval_s=1.0 / job.fps, steps=isp_steps, executor=executor)
+            if "io.video" in self.stages or "io.frames" in self.stages
+            else None
+        )
+        self._mosaic_maps: dict = {}
+        self._site_factor_key = None
+        self._site_factor = None
+        self._stacked = None
+
+    def state_for(self, index: int) -> CameraState:
+        """The state of frame `index` with the exposure the camera will use for it."""
+        return self.camera.states[index].model_copy(
+            update={"exposure_time_s": self.setting.exposure_time_s, "gain_db": self.setting.gain_db}
+        )
+
+    def _mosaic_map(self, state: CameraState) -> MosaicMap:
+        geometry = self.lens.geometry(state)
+        if geometry not in self._mosaic_maps:
+            spec = self.camera.render
+            if len(self._mosaic_maps) >= 8:
+                self._mosaic_maps.pop(next(iter(self._mosaic_maps)))
+            self._mosaic_maps[geometry] = mosaic_map(
+                self.lens.maps(state),
+                self.channel_index,
+                width_px=self.camera.width_px,
+                height_px=self.camera.height_px,
+                margin_px=spec.margin_px,
+                render_height_px=spec.height_px,
+            )
+        return self._mosaic_maps[geometry]
+
+    def _electrons_per_cd_m2_s(self, state: CameraState) -> np.ndarray | float:
+        """Per-site factor from scene radiance to electrons per second: camera equation × QE × PRNU
+        × relative illumination (cached while the lens state holds)."""
+        key = (state.K_px, state.distortion, state.f_number)
+        if key != self._site_factor_key:
+            sensor = self.camera.profile.sensor
+            factor = photons_per_cd_m2_s(sensor.pixel_pitch_um * sensor.pitch_y_um, state.f_number)
+            per_site = self.sensor_model.electrons_per_photon
+            vignetting = self.lens.vignetting_gain(state)
+            if vignetting is not None:
+                per_site = vignetting * per_site
+            if isinstance(per_site, np.ndarray):
+                per_site = (per_site * np.float32(factor)).astype(np.float32)
+            else:
+                per_site = float(per_site) * factor
+            self._site_factor_key, self._site_factor = key, per_site
+        return self._site_factor
+
+    def light_at_sites(self, state: CameraState, passes: Passes) -> np.ndarray:
+        """(H, W) float32 radiance each photosite receives through the lens (mono: QE-weighted)."""
+        radiance = self.lens.blur(state, passes)
+        if self.mono:
+            stacked = cv2.transform(radiance, self._mono_weights)
+        else:
+            height, width = radiance.shape[:2]
+            if self._stacked is None or self._stacked.shape != (3 * height, width):
+                self._stacked = np.empty((3 * height, width), np.float32)
+            stacked = self._stacked
+            cv2.split(radiance, [stacked[c * height : (c + 1) * height] for c in range(3)])
+        interpolation = (
+            self.stages["optics.remap"].params["interpolation"] if "optics.remap" in self.stages else "linear"
+        )
+        return remap_mosaic(stacked, self._mosaic_map(state), interpolation)
+
+    def converge_exposure(self, state: CameraState, passes: Passes, iterations: int = 30) -> None:
+        """Set the exposure auto-exposure settles at for this view, as if the camera had watched it
+        for a while: the metered level of the noise-free expected raw frame reaches the target.
+
+        The level is linear in the exposure product until sites saturate, so a few multiplicative
+        corrections without the speed limit converge; `iterations` bounds them.
+        """
+        sensor, auto = self.camera.profile.sensor, self.camera.profile.exposure.auto
+        height, width = self.camera.height_px, self.camera.width_px
+        x0, y0, x1, y1 = auto.metering_region_frac
+        window = (
+            slice(int(y0 * height), max(int(np.ceil(y1 * height)), int(y0 * height) + 1), 2),
+            slice(int(x0 * width), max(int(np.ceil(x1 * width)), int(x0 * width) + 1), 2),
+        )
+        light = self.light_at_sites(state, passes)[window]
+        per_site = self._electrons_per_cd_m2_s(state)
+        rate_e_per_s = light * (per_site[window] if isinstance(per_site, np.ndarray) else per_site)
+        dark = self.sensor_model.dark_e_per_s
+        rate_e_per_s = rate_e_per_s + (dark[window] if isinstance(dark, np.ndarray) else dark)
+        black, white = sensor.black_level_dn, sensor.white_level_dn
+        setting = self.setting
+        for _ in range(iterations):
+            electrons = np.minimum(rate_e_per_s * setting.exposure_time_s, sensor.full_well_e)
+            dn = np.minimum(electrons * sensor.conversion_gain_dn_per_e * gain_linear(setting.gain_db), white - black)
+            level = float(np.mean(dn)) / (white - black)
+            if level <= 0:
+                setting = split_exposure(self.limits.product_max, self.limits)
+                break
+            settled = split_exposure(setting.product_s * auto.target_level_frac / level, self.limits)
+            if abs(settled.product_s / setting.product_s - 1) < 1e-4:
+                setting = settled
+                break
+            setting = settled
+        self.setting = setting
+
+    def process(self, state: CameraState, passes: Passes, *, rng: np.random.Generator) -> CapturedFrame:
+        """One frame's raw and ISP output, and the exposure set for the next frame."""
+        light = self.light_at_sites(state, passes)
+        raw = self.sensor_model.capture(
+            light,
+            exposure_time_s=state.exposure_time_s,
+            gain_db=state.gain_db,
+            rng=rng,
+            electrons_per_photon=self._electrons_per_cd_m2_s(state),
+            executor=self.executor,
+        )
+        sensor, exposure = self.camera.profile.sensor, self.camera.profile.exposure
+        auto = exposure.auto
+        level = metered_level_frac(
+            raw,
+            black_level_dn=sensor.black_level_dn,
+            white_level_dn=sensor.white_level_dn,
+            region_frac=auto.metering_region_frac,
+        )
+        if exposure.mode == "auto":
+            self.setting = next_exposure(
+                ExposureSetting(state.exposure_time_s, state.gain_db),
+                level,
+                target_frac=auto.target_level_frac,
+                speed_up_ev_per_s=auto.speed_up_ev_per_s,
+                speed_down_ev_per_s=auto.speed_down_ev_per_s,
+                frame_interval_s=1.0 / self.job.fps,
+                limits=self.limits,
+            )
+        rgb8 = None if self.isp is None else self.isp.process(raw)
+        return CapturedFrame(raw_dn=raw, rgb8=rgb8, state=state, metered_level_frac=level)

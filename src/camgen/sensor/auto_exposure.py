@@ -1,0 +1,106 @@
+"""Auto-exposure: meter the raw frame, step the exposure towards a target level at a limited speed.
+
+Real cameras meter frame n and set frame n+1, and limit how fast they change (in stops per second,
+faster when darkening), so a sudden light change is visible for a number of frames. Here:
+
+    error_ev = log2(target / metered)            (metered: mean above black over full scale)
+    step_ev  = clip(error_ev, −speed_down·Δt, +speed_up·Δt)
+    exposure_{n+1} = exposure_n · 2^step_ev      (exposure = time × linear gain)
+
+so a step change of the light by a factor F is corrected after ⌈|log2 F| / (speed·Δt)⌉ frames
+(`frames_to_adapt`). The exposure product is split as a camera does: exposure time first, up to its
+limit (at most the frame interval), then analog gain; darkening removes gain first.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from camgen.sensor.exposure import gain_db, gain_linear
+
+
+@dataclass(frozen=True)
+class ExposureLimits:
+    exposure_time_min_s: float
+    exposure_time_max_s: float
+    gain_max_db: float
+
+    @property
+    def product_min(self) -> float:
+        return self.exposure_time_min_s
+
+    @property
+    def product_max(self) -> float:
+        return self.exposure_time_max_s * gain_linear(self.gain_max_db)
+
+
+@dataclass(frozen=True)
+class ExposureSetting:
+    exposure_time_s: float
+    gain_db: float
+
+    @property
+    def product_s(self) -> float:
+        """Exposure time × linear gain, s: what the output level is proportional to."""
+        return self.exposure_time_s * gain_linear(self.gain_db)
+
+
+def split_exposure(product_s: float, limits: ExposureLimits) -> ExposureSetting:
+    """Exposure time and gain for an exposure product, clipped to what the camera can do."""
+    product_s = min(max(product_s, limits.product_min), limits.product_max)
+    time_s = min(product_s, limits.exposure_time_max_s)
+    gain = max(product_s / time_s, 1.0)
+    return ExposureSetting(exposure_time_s=time_s, gain_db=min(gain_db(gain), limits.gain_max_db))
+
+
+def metered_level_frac(
+    raw_dn: np.ndarray,
+    *,
+    black_level_dn: float,
+    white_level_dn: float,
+    region_frac: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0),
+    subsample: int = 2,
+) -> float:
+    """Mean raw level above black in the metering window, as a fraction of the range above black.
+
+    The window [x0, y0, x1, y1] is in fractions of the width and height; every `subsample`-th row and
+    column of it is read (an even step keeps the CFA phases in their proportions).
+    """
+    height, width = raw_dn.shape[:2]
+    x0, y0, x1, y1 = region_frac
+    window = raw_dn[
+        int(y0 * height) : max(math.ceil(y1 * height), int(y0 * height) + 1) : subsample,
+        int(x0 * width) : max(math.ceil(x1 * width), int(x0 * width) + 1) : subsample,
+    ]
+    mean_dn = float(np.mean(window, dtype=np.float64))
+    return (mean_dn - black_level_dn) / (white_level_dn - black_level_dn)
+
+
+def next_exposure(
+    current: ExposureSetting,
+    metered_frac: float,
+    *,
+    target_frac: float,
+    speed_up_ev_per_s: float,
+    speed_down_ev_per_s: float,
+    frame_interval_s: float,
+    limits: ExposureLimits,
+) -> ExposureSetting:
+    """The setting of the next frame after metering `metered_frac` with `current` (module docstring).
+
+    A black frame (metered ≤ 0) asks for the fastest brightening.
+    """
+    if metered_frac > 0:
+        error_ev = math.log2(target_frac / metered_frac)
+    else:
+        error_ev = math.inf
+    step_ev = min(max(error_ev, -speed_down_ev_per_s * frame_interval_s), speed_up_ev_per_s * frame_interval_s)
+    return split_exposure(current.product_s * 2.0**step_ev, limits)
+
+
+def frames_to_adapt(light_factor: float, *, speed_ev_per_s: float, frame_interval_s: float) -> int:
+    """Frames after a light change by `light_factor` until auto-exposure has corrected it."""
+    return math.ceil(abs(math.log2(light_factor)) / (speed_ev_per_s * frame_interval_s) - 1e-9)
