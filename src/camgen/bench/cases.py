@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from camgen.bench.camera_cases import camera_cases
 from camgen.bench.dof_cases import dof_cases
 from camgen.bench.harness import Case
 from camgen.bench.optics_cases import optics_cases
@@ -26,6 +27,7 @@ def default_cases(repo: Path) -> list[Case]:
     cases += render_cases(repo)
     cases += optics_cases(repo)
     cases += dof_cases()
+    cases += camera_cases(repo)
     return cases
 
 

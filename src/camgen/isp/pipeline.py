@@ -99,12 +99,11 @@ class CameraIsp:
                 self._site_gains = cfa_gain_image(rgb * self._scale, sensor.cfa, height, width)
                 self._site_gains_for = key
             gains = self._site_gains
-        linear = raw_dn.astype(np.float32)
-        linear -= np.float32(sensor.black_level_dn)
-        linear *= gains
-        np.clip(linear, 0.0, FULL_SCALE, out=linear)
-        linear += np.float32(0.5)
-        return linear.astype(np.uint16)
+        # Saturating uint16 arithmetic clips below black and above full scale, and rounds.
+        above_black = cv2.subtract(raw_dn, float(sensor.black_level_dn))
+        if isinstance(gains, np.ndarray):
+            return cv2.multiply(above_black, gains, dtype=cv2.CV_16U)
+        return cv2.multiply(above_black, float(gains), dtype=cv2.CV_16U)
 
     def _affine(self, lo: float, hi: float) -> np.ndarray:
         """3×4 (colour) or 1×2 (mono) matrix: 65535·(CCM·x − lo)/(hi − lo)."""

@@ -62,13 +62,15 @@ def metered_level_frac(
     black_level_dn: float,
     white_level_dn: float,
     region_frac: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0),
-    subsample: int = 2,
+    subsample: int = 3,
 ) -> float:
     """Mean raw level above black in the metering window, as a fraction of the range above black.
 
     The window [x0, y0, x1, y1] is in fractions of the width and height; every `subsample`-th row and
-    column of it is read (an even step keeps the CFA phases in their proportions).
+    column of it is read. The step must be odd, so that it visits every CFA phase in its proportion.
     """
+    if subsample % 2 == 0:
+        raise ValueError(f"subsample must be odd to visit every CFA phase, got {subsample}")
     height, width = raw_dn.shape[:2]
     x0, y0, x1, y1 = region_frac
     window = raw_dn[

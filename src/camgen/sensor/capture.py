@@ -18,7 +18,7 @@ from camgen.sensor.cfa import cfa_channel_index
 from camgen.sensor.characteristics import dark_current_e_per_s
 from camgen.sensor.exposure import gain_linear
 from camgen.sensor.fixed_pattern import FixedPattern, fixed_pattern
-from camgen.sensor.noise import digitize, sample_electrons
+from camgen.sensor.noise import Adc, TemporalNoise, sample_raw
 
 NOISE_TERMS = (
     "shot",
@@ -119,24 +119,6 @@ class SensorModel:
             gaussian_above_e=gaussian_above_e,
         )
 
-    def expected_electrons(
-        self, photon_rate: np.ndarray, exposure_time_s: float, electrons_per_photon=None
-    ) -> np.ndarray:
-        """μ = photons/s × electrons/photon × t + dark current × t, (H, W) float32.
-
-        `electrons_per_photon` defaults to the model's own (QE and PRNU); pass a product with further
-        per-site factors (vignetting, the camera equation's constant) to save a multiplication.
-        """
-        gain = self.electrons_per_photon if electrons_per_photon is None else electrons_per_photon
-        t = np.float32(exposure_time_s)
-        mean = np.multiply(photon_rate, gain, dtype=np.float32)
-        mean *= t
-        if isinstance(self.dark_e_per_s, np.ndarray):
-            mean += self.dark_e_per_s * t
-        elif self.dark_e_per_s > 0:
-            mean += np.float32(self.dark_e_per_s * exposure_time_s)
-        return mean
-
     def capture(
         self,
         photon_rate: np.ndarray,
@@ -160,28 +142,32 @@ class SensorModel:
             Analog gain, dB; multiplies the system gain K.
         rng : numpy.random.Generator
         electrons_per_photon : (H, W) float32 or float, optional
-            Replaces the model's QE × (1 + PRNU) (see `expected_electrons`).
+            Replaces the model's QE × (1 + PRNU): pass a product with further per-site factors
+            (vignetting, the camera equation's constant) to save a multiplication per frame.
         executor : Executor, optional
             Parallel row bands (see `camgen.sensor.noise.sample_electrons`).
         """
         sensor, noise = self.sensor, self.noise
-        mean = self.expected_electrons(photon_rate, exposure_time_s, electrons_per_photon)
-        electrons = sample_electrons(
-            mean,
-            read_noise_e=noise.read_noise_e,
+        return sample_raw(
+            photon_rate,
+            per_unit=self.electrons_per_photon if electrons_per_photon is None else electrons_per_photon,
+            exposure_time_s=exposure_time_s,
+            dark_e_per_s=self.dark_e_per_s,
             offset_e=self.pattern.offset_e,
-            noise_scale=self.noise_scale,
-            shot_noise=noise.shot_noise,
-            gaussian_above_e=self.gaussian_above_e,
-            read_noise_tail_dof=noise.read_noise_tail_dof,
-            full_well_e=sensor.full_well_e,
-            blooming=noise.blooming,
+            noise=TemporalNoise(
+                read_noise_e=noise.read_noise_e,
+                noise_scale=self.noise_scale,
+                shot_noise=noise.shot_noise,
+                gaussian_above_e=self.gaussian_above_e,
+                read_noise_tail_dof=noise.read_noise_tail_dof,
+                full_well_e=sensor.full_well_e,
+                blooming=noise.blooming,
+            ),
+            adc=Adc(
+                gain_dn_per_e=sensor.conversion_gain_dn_per_e * gain_linear(gain_db),
+                black_level_dn=sensor.black_level_dn,
+                bit_depth=sensor.bit_depth,
+            ),
             rng=rng,
             executor=executor,
-        )
-        return digitize(
-            electrons,
-            gain_dn_per_e=sensor.conversion_gain_dn_per_e * gain_linear(gain_db),
-            black_level_dn=sensor.black_level_dn,
-            bit_depth=sensor.bit_depth,
         )

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import itertools
 from concurrent.futures import Executor
+from dataclasses import dataclass
 from functools import lru_cache
 
 import cv2
@@ -87,27 +88,92 @@ def _shot_electrons(mean_e: np.ndarray, scale, gaussian_above_e: float, rng: np.
     return out
 
 
-def _band(mean_e, offset_e, scale, read_noise_e, shot_noise, gaussian_above_e, tail_dof, rng, out) -> None:
-    """Temporal noise of one band, written into `out` (float32 electrons)."""
-    if not shot_noise:
-        out[...] = mean_e + _read_noise(mean_e.size, read_noise_e, tail_dof, rng).reshape(mean_e.shape) * scale
-    elif tail_dof is not None:
-        out[...] = _shot_electrons(mean_e, scale, gaussian_above_e, rng)
-        out += _read_noise(mean_e.size, read_noise_e, tail_dof, rng).reshape(mean_e.shape) * scale
+@dataclass(frozen=True)
+class TemporalNoise:
+    """What `sample_electrons` and `sample_raw` draw (see `sample_electrons` for each field)."""
+
+    read_noise_e: float
+    noise_scale: np.ndarray | float = 1.0
+    shot_noise: bool = True
+    gaussian_above_e: float = 20.0
+    read_noise_tail_dof: float | None = None
+    full_well_e: float = np.inf
+    blooming: bool = False
+
+
+@dataclass(frozen=True)
+class Adc:
+    """The ADC: DN = clip(round(gain·e + black), 0, 2^bits − 1) (`digitize`)."""
+
+    gain_dn_per_e: float
+    black_level_dn: float
+    bit_depth: int
+
+
+@dataclass
+class _Band:
+    rows: slice
+    mean: np.ndarray
+    electrons: np.ndarray
+    dn: np.ndarray | None
+
+
+def _expected(band: _Band, rate, per_unit, exposure_time_s, dark_e_per_s) -> None:
+    """μ = rate · per_unit · t + dark · t into `band.mean` (one pass each, no temporaries)."""
+    t = float(exposure_time_s)
+    if isinstance(per_unit, np.ndarray):
+        cv2.multiply(rate, per_unit, dst=band.mean, scale=t)
     else:
-        z = standard_normal(mean_e.shape, rng=rng)
-        sigma = np.sqrt(mean_e + np.float32(read_noise_e * read_noise_e))
+        cv2.multiply(rate, float(per_unit) * t, dst=band.mean)
+    if isinstance(dark_e_per_s, np.ndarray):
+        cv2.scaleAdd(dark_e_per_s, t, band.mean, dst=band.mean)
+    elif dark_e_per_s:
+        band.mean += np.float32(dark_e_per_s * t)
+
+
+def _temporal(band: _Band, offset_e, scale, noise: TemporalNoise, rng: np.random.Generator) -> None:
+    """Shot and read noise of one band (and its offsets), into `band.electrons`."""
+    mean, out = band.mean, band.electrons
+    read, tail = noise.read_noise_e, noise.read_noise_tail_dof
+    if not noise.shot_noise:
+        np.add(mean, _read_noise(mean.size, read, tail, rng).reshape(mean.shape) * scale, out=out)
+    elif tail is not None:
+        out[...] = _shot_electrons(mean, scale, noise.gaussian_above_e, rng)
+        out += _read_noise(mean.size, read, tail, rng).reshape(mean.shape) * scale
+    else:
+        z = standard_normal(mean.shape, rng=rng)
+        sigma = np.add(mean, np.float32(read * read))
+        cv2.sqrt(sigma, dst=sigma)
         if isinstance(scale, np.ndarray) or scale != 1.0:
             sigma *= scale
-        np.multiply(sigma, z, out=out)
-        out += mean_e
-        low = mean_e < gaussian_above_e
+        cv2.multiply(sigma, z, dst=out)
+        out += mean
+        low = mean < noise.gaussian_above_e
         if low.any():
-            mu = mean_e[low]
+            mu = mean[low]
             s = scale[low] if isinstance(scale, np.ndarray) else np.float32(scale)
-            out[low] = mu + (rng.poisson(mu).astype(np.float32) - mu + z[low] * np.float32(read_noise_e)) * s
+            out[low] = mu + (rng.poisson(mu).astype(np.float32) - mu + z[low] * np.float32(read)) * s
     if offset_e is not None:
         out += offset_e
+
+
+def _run_bands(height: int, width: int, work, rng: np.random.Generator, executor: Executor | None, adc: Adc | None):
+    """Split the frame into `BANDS` row bands, run `work(band, rng)` on each, return the bands and the
+    generator left for the saturated sites."""
+    streams = rng.spawn(BANDS + 1)
+    mean = np.empty((height, width), np.float32)
+    electrons = np.empty((height, width), np.float32)
+    dn = None if adc is None else np.empty((height, width), np.uint16)
+    bands = [
+        _Band(rows, mean[rows], electrons[rows], None if dn is None else dn[rows]) for rows in _band_slices(height)
+    ]
+    if executor is None:
+        for band, stream in zip(bands, streams, strict=False):
+            work(band, stream)
+    else:
+        for future in [executor.submit(work, band, stream) for band, stream in zip(bands, streams, strict=False)]:
+            future.result()
+    return _Band(slice(0, height), mean, electrons, dn), streams[-1]
 
 
 def sample_electrons(
@@ -160,62 +226,90 @@ def sample_electrons(
     mean_e = np.asarray(mean_e, dtype=np.float32)
     if mean_e.ndim != 2:
         raise ValueError(f"mean_e must be an (H, W) array, got shape {mean_e.shape}")
-    streams = rng.spawn(BANDS + 1)
-    out = np.empty_like(mean_e)
-    scale = noise_scale if isinstance(noise_scale, np.ndarray) else float(noise_scale)
-    jobs = [
-        (
-            mean_e[rows],
-            _part(offset_e, rows),
-            _part(scale, rows),
-            read_noise_e,
-            shot_noise,
-            gaussian_above_e,
-            read_noise_tail_dof,
-            stream,
-            out[rows],
-        )
-        for rows, stream in zip(_band_slices(mean_e.shape[0]), streams, strict=False)
-    ]
-    if executor is None:
-        for job in jobs:
-            _band(*job)
-    else:
-        for future in [executor.submit(_band, *job) for job in jobs]:
-            future.result()
-    if np.isfinite(full_well_e):
-        _saturate(
-            mean_e,
-            out,
-            offset_e,
-            scale,
-            read_noise_e,
-            shot_noise,
-            gaussian_above_e,
-            read_noise_tail_dof,
-            full_well_e,
-            blooming,
-            streams[-1],
-        )
-    return out
+    noise = TemporalNoise(
+        read_noise_e=read_noise_e,
+        noise_scale=noise_scale if isinstance(noise_scale, np.ndarray) else float(noise_scale),
+        shot_noise=shot_noise,
+        gaussian_above_e=gaussian_above_e,
+        read_noise_tail_dof=read_noise_tail_dof,
+        full_well_e=full_well_e,
+        blooming=blooming,
+    )
+
+    def work(band: _Band, stream: np.random.Generator) -> None:
+        band.mean[...] = mean_e[band.rows]
+        _temporal(band, _part(offset_e, band.rows), _part(noise.noise_scale, band.rows), noise, stream)
+
+    frame, rest = _run_bands(*mean_e.shape, work, rng, executor, None)
+    _saturate(frame, offset_e, noise, rest, None)
+    return frame.electrons
 
 
-def _saturate(
-    mean_e, out, offset_e, scale, read_noise_e, shot_noise, gaussian_above_e, tail_dof, full_well_e, blooming, rng
-):
+def sample_raw(
+    rate: np.ndarray,
+    *,
+    per_unit: np.ndarray | float,
+    exposure_time_s: float,
+    dark_e_per_s: np.ndarray | float,
+    offset_e: np.ndarray | None,
+    noise: TemporalNoise,
+    adc: Adc,
+    rng: np.random.Generator,
+    executor: Executor | None = None,
+) -> np.ndarray:
+    """Raw DN of one exposure, fused: μ = rate·per_unit·t + dark·t, then `sample_electrons`'s noise,
+    then `digitize`, band by band (each band's pass over memory does all three).
+
+    Parameters
+    ----------
+    rate : (H, W) float32
+        Light at each site in any linear unit that `per_unit` turns into electrons per second.
+    per_unit : (H, W) float32 or float
+        Electrons per second per unit of `rate` (QE, PRNU, the camera equation, vignetting).
+    exposure_time_s : float
+    dark_e_per_s : (H, W) float32 or float
+        Dark current of each site at the operating temperature, e⁻/s.
+    offset_e, noise, adc, rng, executor
+        As in `sample_electrons` and `digitize`.
+
+    Returns
+    -------
+    (H, W) uint16
+        Raw DN. The same draws as `digitize(sample_electrons(μ, …))`.
+    """
+    rate = np.asarray(rate, dtype=np.float32)
+    if rate.ndim != 2:
+        raise ValueError(f"rate must be an (H, W) array, got shape {rate.shape}")
+
+    def work(band: _Band, stream: np.random.Generator) -> None:
+        rows = band.rows
+        _expected(band, rate[rows], _part(per_unit, rows), exposure_time_s, _part(dark_e_per_s, rows))
+        _temporal(band, _part(offset_e, rows), _part(noise.noise_scale, rows), noise, stream)
+        band.dn[...] = digitize(band.electrons, **vars(adc))
+
+    frame, rest = _run_bands(*rate.shape, work, rng, executor, adc)
+    _saturate(frame, offset_e, noise, rest, adc)
+    return frame.dn
+
+
+def _saturate(frame: _Band, offset_e, noise: TemporalNoise, rng: np.random.Generator, adc: Adc | None) -> None:
     """Redo the sites that may reach full well in the physical order: shot noise, clip, spill, read."""
+    full_well_e = noise.full_well_e
+    if not np.isfinite(full_well_e):
+        return
+    mean_e, out, scale = frame.mean, frame.electrons, noise.noise_scale
     scale_max = float(np.max(scale)) if isinstance(scale, np.ndarray) else scale
-    margin = SATURATION_MARGIN_SIGMA * scale_max * np.sqrt(full_well_e) if shot_noise else 0.0
+    margin = SATURATION_MARGIN_SIGMA * scale_max * np.sqrt(full_well_e) if noise.shot_noise else 0.0
     near = mean_e > np.float32(full_well_e - margin)
     if not near.any():
         return
-    if blooming:
+    if noise.blooming:
         near = cv2.dilate(near.view(np.uint8), np.ones((3, 3), np.uint8)).view(bool)
     index = np.flatnonzero(near)
     mu = mean_e.ravel()[index]
     s = scale.ravel()[index] if isinstance(scale, np.ndarray) else np.float32(scale)
-    signal = _shot_electrons(mu, s, gaussian_above_e, rng) if shot_noise else mu.copy()
-    if blooming:
+    signal = _shot_electrons(mu, s, noise.gaussian_above_e, rng) if noise.shot_noise else mu.copy()
+    if noise.blooming:
         excess = np.zeros(mean_e.shape, np.float32)
         excess.ravel()[index] = np.maximum(signal - np.float32(full_well_e), 0.0)
         spill = cv2.filter2D(
@@ -226,10 +320,12 @@ def _saturate(
         )
         signal += spill.ravel()[index]
     np.minimum(signal, np.float32(full_well_e), out=signal)
-    signal += _read_noise(index.size, read_noise_e, tail_dof, rng) * s
+    signal += _read_noise(index.size, noise.read_noise_e, noise.read_noise_tail_dof, rng) * s
     if offset_e is not None:
         signal += offset_e.ravel()[index]
     out.ravel()[index] = signal
+    if adc is not None:
+        frame.dn.ravel()[index] = digitize(signal, **vars(adc))
 
 
 def digitize(electrons: np.ndarray, *, gain_dn_per_e: float, black_level_dn: float, bit_depth: int) -> np.ndarray:
