@@ -31,8 +31,15 @@ def test_render_writes_video_passes_and_job(workspace, capsys):
     assert set(np.unique(passes["instance_id"])) <= {0, 1, 2}
     instances = json.loads((camera_dir / "passes" / "instances.json").read_text())
     assert instances[0] == {"instance_id": 1, "name": "walker", "kind": "actor"}
+    assert passes["raw_dn"].shape == (480, 640) and passes["raw_dn"].dtype == np.uint16
+    states = [json.loads(line) for line in (camera_dir / "camera.jsonl").read_text().splitlines()]
+    assert [s["frame"] for s in states] == [0, 1, 2, 3]
+    assert {"exposure_time_s", "gain_db", "K_px", "distortion", "T_world_from_cam", "pan_deg"} <= set(states[0])
+    # Auto-exposure starts settled on the view: the first frame is already at the target level.
+    assert states[0]["metered_level_frac"] == pytest.approx(0.18, rel=0.05)
+    assert 20 < frames[0].mean() < 235
     assert not list(workspace.rglob("*.partial*"))
-    assert "radiance through the lens" in capsys.readouterr().err
+    assert "skipped: annotate" in capsys.readouterr().err
 
 
 def test_render_rejects_an_unknown_camera(workspace, capsys):

@@ -119,6 +119,27 @@ CASES = [
         "must be above the wide-open f_number (2)",
     ),
     (
+        "stretch_output_range_reversed",
+        "profile",
+        FIXED_PROFILE + "isp:\n  contrast_stretch: {output_range_frac: [0.9, 0.1]} #<\n",
+        "isp.contrast_stretch.output_range_frac",
+        "must be [low, high] with low < high, got [0.9, 0.1]",
+    ),
+    (
+        "stretch_gain_below_one",
+        "profile",
+        FIXED_PROFILE + "isp:\n  contrast_stretch: {max_gain: 0.5} #<\n",
+        "isp.contrast_stretch.max_gain",
+        "must be ≥ 1, got 0.5",
+    ),
+    (
+        "codec_preset_unknown",
+        "profile",
+        FIXED_PROFILE + "codec: {preset: turbo} #<\n",
+        "codec.preset",
+        "'veryfast'",
+    ),
+    (
         "axial_ca_shift_too_large",
         "profile",
         edit(FIXED_PROFILE, "f_number: 2.0", "f_number: 2.0\n  chromatic_aberration: {axial_focus_shift_r_um: 900} #<"),

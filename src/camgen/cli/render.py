@@ -1,4 +1,5 @@
-"""camgen render SCENE -o OUT: compile a scene and render it (radiance through the lens so far)."""
+"""camgen render SCENE -o OUT: compile a scene and render it through the camera model (lens, sensor, ISP,
+codec), with per-frame camera states."""
 
 from __future__ import annotations
 
@@ -61,8 +62,8 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         skipped = unimplemented_stages(camera)
         if skipped:
             err.print(
-                f"[yellow]note[/yellow] {escape(camera.name)}: rendering radiance through the lens; planned stages not "
-                f"implemented in this version are skipped: {', '.join(skipped)}",
+                f"[yellow]note[/yellow] {escape(camera.name)}: planned stages not implemented in this version are "
+                f"skipped: {', '.join(skipped)}",
                 soft_wrap=True,
             )
     resolve = loaded.path.parent.joinpath

@@ -32,6 +32,7 @@ from camgen.sensor.auto_exposure import (
     ExposureLimits,
     ExposureSetting,
     metered_level_frac,
+    metering_window,
     next_exposure,
     split_exposure,
 )
@@ -172,15 +173,11 @@ class CameraPipeline:
         for a while: the metered level of the noise-free expected raw frame reaches the target.
 
         The level is linear in the exposure product until sites saturate, so a few multiplicative
-        corrections without the speed limit converge; `iterations` bounds them.
+        corrections without the speed limit converge; `iterations` bounds them. The window is the
+        metering's (`metering_window`).
         """
         sensor, auto = self.camera.profile.sensor, self.camera.profile.exposure.auto
-        height, width = self.camera.height_px, self.camera.width_px
-        x0, y0, x1, y1 = auto.metering_region_frac
-        window = (
-            slice(int(y0 * height), max(int(np.ceil(y1 * height)), int(y0 * height) + 1), 2),
-            slice(int(x0 * width), max(int(np.ceil(x1 * width)), int(x0 * width) + 1), 2),
-        )
+        window = metering_window(self.camera.height_px, self.camera.width_px, auto.metering_region_frac)
         light = self.light_at_sites(state, passes)[window]
         per_site = self._electrons_per_cd_m2_s(state)
         rate_e_per_s = light * (per_site[window] if isinstance(per_site, np.ndarray) else per_site)

@@ -56,27 +56,34 @@ def split_exposure(product_s: float, limits: ExposureLimits) -> ExposureSetting:
     return ExposureSetting(exposure_time_s=time_s, gain_db=min(gain_db(gain), limits.gain_max_db))
 
 
+METERING_STRIDE = 3
+"""Every third row and column is metered: an odd step visits every CFA phase in its proportion."""
+
+
+def metering_window(
+    height_px: int, width_px: int, region_frac: tuple[float, float, float, float], stride: int = METERING_STRIDE
+) -> tuple[slice, slice]:
+    """Row and column slices of the metering window [x0, y0, x1, y1] (fractions of width and height),
+    read every `stride`-th site; the stride must be odd so that every CFA phase counts."""
+    if stride % 2 == 0:
+        raise ValueError(f"stride must be odd to visit every CFA phase, got {stride}")
+    x0, y0, x1, y1 = region_frac
+    return (
+        slice(int(y0 * height_px), max(math.ceil(y1 * height_px), int(y0 * height_px) + 1), stride),
+        slice(int(x0 * width_px), max(math.ceil(x1 * width_px), int(x0 * width_px) + 1), stride),
+    )
+
+
 def metered_level_frac(
     raw_dn: np.ndarray,
     *,
     black_level_dn: float,
     white_level_dn: float,
     region_frac: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0),
-    subsample: int = 3,
 ) -> float:
-    """Mean raw level above black in the metering window, as a fraction of the range above black.
-
-    The window [x0, y0, x1, y1] is in fractions of the width and height; every `subsample`-th row and
-    column of it is read. The step must be odd, so that it visits every CFA phase in its proportion.
-    """
-    if subsample % 2 == 0:
-        raise ValueError(f"subsample must be odd to visit every CFA phase, got {subsample}")
-    height, width = raw_dn.shape[:2]
-    x0, y0, x1, y1 = region_frac
-    window = raw_dn[
-        int(y0 * height) : max(math.ceil(y1 * height), int(y0 * height) + 1) : subsample,
-        int(x0 * width) : max(math.ceil(x1 * width), int(x0 * width) + 1) : subsample,
-    ]
+    """Mean raw level above black in the metering window (`metering_window`), as a fraction of the
+    range above black."""
+    window = raw_dn[metering_window(raw_dn.shape[0], raw_dn.shape[1], region_frac)]
     mean_dn = float(np.mean(window, dtype=np.float64))
     return (mean_dn - black_level_dn) / (white_level_dn - black_level_dn)
 
