@@ -133,6 +133,13 @@ CASES = [
         "must be ≥ 1, got 0.5",
     ),
     (
+        "ccm_row_not_white_preserving",
+        "profile",
+        FIXED_PROFILE + "isp:\n  ccm: [[1.5, -0.3, -0.1], [0, 1, 0], [0, 0, 1]] #<\n",
+        "isp.ccm[0]",
+        "must sum to 1 so that a grey stays grey",
+    ),
+    (
         "codec_preset_unknown",
         "profile",
         FIXED_PROFILE + "codec: {preset: turbo} #<\n",

@@ -168,3 +168,18 @@ def test_fast_raw_matches_the_naive_reference_statistics(workspace, radiance_cd_
             mean_a, mean_b = a.mean() - black, b.mean() - black
             assert abs(mean_a - mean_b) <= 0.01 * abs(mean_b) + 0.02, (dy, dx, mean_a, mean_b)
             assert a.var() == pytest.approx(b.var(), rel=0.01), (dy, dx)
+
+
+def test_tall_renders_fall_back_to_per_channel_resampling(workspace, monkeypatch):
+    """cv2.remap reads < 32 767 rows: a render too tall to stack takes the per-channel path, same light."""
+    import camgen.plan.camera_pipeline as module
+
+    job, camera = camera_job(workspace, profile=DISTORTED)
+    spec = camera.render
+    radiance = np.random.default_rng(5).uniform(0, 100, (spec.height_px, spec.width_px, 3)).astype(np.float32)
+    pipeline = CameraPipeline(job, camera)
+    state = pipeline.state_for(0)
+    stacked = pipeline.light_at_sites(state, Passes(radiance=radiance))
+    monkeypatch.setattr(module, "STACKED_ROWS_MAX", spec.height_px)
+    fallback = pipeline.light_at_sites(state, Passes(radiance=radiance))
+    np.testing.assert_allclose(fallback, stacked, rtol=1e-3, atol=1e-2)

@@ -446,6 +446,18 @@ class Isp(Model):
     def ccm_is_identity(self) -> bool:
         return bool(np.allclose(np.array(self.ccm), np.eye(3)))
 
+    @model_validator(mode="after")
+    def _check(self) -> Isp:
+        sums = np.array(self.ccm).sum(axis=1)
+        for i, total in enumerate(sums):
+            if abs(total - 1.0) > 1e-3:
+                raise invalid(
+                    f"ccm[{i}]",
+                    f"must sum to 1 so that a grey stays grey (the contrast stretch is measured before the "
+                    f"CCM and applied after it), got {total:.4g}; scale the row or put the excess in white_balance",
+                )
+        return self
+
 
 class Codec(Model):
     """How the camera encodes its stream."""

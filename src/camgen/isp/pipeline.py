@@ -2,7 +2,7 @@
 
 Order, as in camera ISPs (DESIGN.md):
 
-    lin   = (raw − black) · wb_c · 65535/(white − black)            on the mosaic, 16-bit linear code
+    lin   = (raw − black) · wb_c · 65535/(sat − black)              on the mosaic, 16-bit linear code
     rgb   = demosaic(lin)                                            OpenCV (bilinear, edge-aware, VNG)
     out   = 65535 · (CCM·rgb − lo) / (hi − lo)                       one 3×4 affine (`cv2.transform`)
     out8  = tone(out)                                                a 65 536-entry table
@@ -30,9 +30,14 @@ from camgen.isp.demosaic import demosaic
 from camgen.isp.enhance import denoise, sharpen
 from camgen.isp.tone import apply_lut, tone_lut
 from camgen.isp.white_balance import cfa_gain_image, grey_world_gains
+from camgen.sensor.exposure import gain_linear
 
 FULL_SCALE = 65535.0
-"""The 16-bit linear code of the ISP: the sensor's range above black maps onto 0…65535."""
+"""The 16-bit linear code of the ISP: black to saturation (full well or ADC) maps onto 0…65535."""
+SATURATED_FRAC = 0.98
+"""Sites above this fraction of the range from black to saturation count as clipped (grey world ignores them)."""
+WHITE_BALANCE_GAIN_RANGE = (0.25, 4.0)
+"""Grey-world gains are clamped to this range (a dark or single-coloured frame would ask for more)."""
 
 
 class CameraIsp:
@@ -63,7 +68,8 @@ class CameraIsp:
         self.limits: tuple[float, float] | None = None
         """The contrast-stretch limits used for the last frame, 16-bit linear code."""
         self.white_balance_gains = np.ones(3)
-        self._scale = FULL_SCALE / (sensor.white_level_dn - sensor.black_level_dn)
+        """The white-balance gains (R, G, B) of the last frame, smallest 1."""
+        self._white_balance_log = None
         low, high = isp.contrast_stretch.output_range_frac if isp.contrast_stretch is not None else (0.0, 1.0)
         self._lut = tone_lut(
             isp.tone_curve if "isp.tone" in steps else "linear",
@@ -74,29 +80,55 @@ class CameraIsp:
         self._site_gains = None
         self._site_gains_for = None
 
-    def _linear_mosaic(self, raw_dn: np.ndarray) -> np.ndarray:
-        """Black level, white balance and scaling to the 16-bit linear code, on the mosaic."""
+    def saturation_dn(self, gain_db: float) -> float:
+        """Raw DN of a saturated site at this gain: the full well or the ADC, whichever clips first."""
         sensor = self.sensor
-        if self.mono:
-            gains = np.float32(self._scale)
+        full_well_dn = sensor.black_level_dn + sensor.full_well_e * sensor.conversion_gain_dn_per_e * gain_linear(
+            gain_db
+        )
+        return min(float(sensor.white_level_dn), full_well_dn)
+
+    def _white_balance(self, raw_dn: np.ndarray, saturation_dn: float) -> np.ndarray:
+        """This frame's gains (R, G, B): fixed, or grey world over the unsaturated sites, clamped to
+        `WHITE_BALANCE_GAIN_RANGE` and smoothed over frames in log with the stretch's adaptation time
+        (night frames near black would otherwise flicker in colour)."""
+        wb, sensor = self.isp.white_balance, self.sensor
+        if "isp.white_balance" not in self.steps:
+            return np.ones(3)
+        if wb.mode == "fixed":
+            return np.array(wb.gains_rgb, np.float64)
+        black = sensor.black_level_dn
+        target = grey_world_gains(
+            raw_dn, sensor.cfa, black, white_level_dn=black + SATURATED_FRAC * (saturation_dn - black)
+        )
+        target_log = np.log(np.clip(target, *WHITE_BALANCE_GAIN_RANGE))
+        stretch = self.isp.contrast_stretch
+        time_constant_s = stretch.adaptation_time_s if stretch is not None else 0.0
+        if self._white_balance_log is None or time_constant_s == 0:
+            self._white_balance_log = target_log
         else:
-            wb = self.isp.white_balance
-            if "isp.white_balance" not in self.steps:
-                rgb = np.ones(3)
-            elif wb.mode == "fixed":
-                rgb = np.array(wb.gains_rgb, np.float64)
-            else:
-                rgb = grey_world_gains(
-                    raw_dn, sensor.cfa, sensor.black_level_dn, white_level_dn=float(sensor.white_level_dn)
-                )
+            step = 1.0 - np.exp(-self.frame_interval_s / time_constant_s)
+            self._white_balance_log = self._white_balance_log + step * (target_log - self._white_balance_log)
+        return np.exp(self._white_balance_log)
+
+    def _linear_mosaic(self, raw_dn: np.ndarray, gain_db: float) -> np.ndarray:
+        """Black level, white balance and scaling to the 16-bit linear code, on the mosaic: the
+        saturation level maps to full scale."""
+        sensor = self.sensor
+        saturation_dn = self.saturation_dn(gain_db)
+        scale = FULL_SCALE / (saturation_dn - sensor.black_level_dn)
+        if self.mono:
+            gains = np.float32(scale)
+        else:
             # The smallest gain is 1, so every channel of a saturated site reaches full scale and clips
             # to white (a green-normalised gain below 1 would tint highlights).
+            rgb = self._white_balance(raw_dn, saturation_dn)
             rgb = rgb / np.min(rgb)
             self.white_balance_gains = rgb
-            key = tuple(np.round(rgb, 6))
+            key = (*np.round(rgb, 6), scale)
             if key != self._site_gains_for:
                 height, width = raw_dn.shape
-                self._site_gains = cfa_gain_image(rgb * self._scale, sensor.cfa, height, width)
+                self._site_gains = cfa_gain_image(rgb * scale, sensor.cfa, height, width)
                 self._site_gains_for = key
             gains = self._site_gains
         # Saturating uint16 arithmetic clips below black and above full scale, and rounds.
@@ -113,10 +145,10 @@ class CameraIsp:
         ccm = np.array(self.isp.ccm, np.float64) if "isp.ccm" in self.steps else np.eye(3)
         return np.hstack([ccm * gain, np.full((3, 1), -gain * lo)]).astype(np.float32)
 
-    def process(self, raw_dn: np.ndarray) -> np.ndarray:
-        """(H, W) uint16 raw → (H, W, 3) uint8 RGB (a mono camera's grey in all three)."""
+    def process(self, raw_dn: np.ndarray, gain_db: float = 0.0) -> np.ndarray:
+        """(H, W) uint16 raw taken at `gain_db` → (H, W, 3) uint8 RGB (a mono camera's grey in all three)."""
         isp, steps = self.isp, self.steps
-        linear = self._linear_mosaic(raw_dn)
+        linear = self._linear_mosaic(raw_dn, gain_db)
         stretch = isp.contrast_stretch
         if stretch is not None and "isp.contrast_stretch" in steps:
             target = limit_stretch_gain(

@@ -252,13 +252,19 @@ def mosaic_map(
     return MosaicMap(map_x, map_y.astype(np.float32), exact=False)
 
 
+STACKED_ROWS_MAX = 32766
+"""`cv2.remap` reads sources of fewer than 32 767 rows (SHRT_MAX): the channel stack must fit."""
+
+
 def stack_channels(image: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-    """(H, W, C) → (C·H, W): the channels one above the other (the layout `MosaicMap` reads)."""
+    """(H, W, C) float32 → (C·H, W): the channels one above the other (the layout `MosaicMap` reads).
+
+    `out`, when given, is reused (it must have that shape); `cv2.split` writes into it directly.
+    """
     height, width, channels = image.shape
-    if out is None:
+    if out is None or out.shape != (channels * height, width):
         out = np.empty((channels * height, width), np.float32)
-    for c in range(channels):
-        out[c * height : (c + 1) * height] = image[..., c]
+    cv2.split(image, [out[c * height : (c + 1) * height] for c in range(channels)])
     return out
 
 

@@ -24,10 +24,19 @@ import cv2
 import numpy as np
 
 from camgen.isp.pipeline import CameraIsp
-from camgen.optics.remap import LensMapCache, MosaicMap, mosaic_map, remap_mosaic
+from camgen.optics.remap import (
+    STACKED_ROWS_MAX,
+    LensMapCache,
+    MosaicMap,
+    mosaic_map,
+    remap_image,
+    remap_mosaic,
+    stack_channels,
+)
 from camgen.plan.job import CameraJob, CameraState, Job
 from camgen.plan.lens_stages import LensStages
 from camgen.render.renderer import Passes
+from camgen.render.sequence import crop_to_output
 from camgen.sensor.auto_exposure import (
     ExposureLimits,
     ExposureSetting,
@@ -37,7 +46,7 @@ from camgen.sensor.auto_exposure import (
     split_exposure,
 )
 from camgen.sensor.capture import SensorModel
-from camgen.sensor.cfa import cfa_channel_index
+from camgen.sensor.cfa import cfa_channel_index, mosaic
 from camgen.sensor.exposure import gain_linear, photons_per_cd_m2_s
 
 
@@ -66,6 +75,8 @@ class CapturedFrame:
     state: CameraState
     """The camera state of this frame, with the exposure time and gain actually used."""
     metered_level_frac: float
+    white_balance_rgb: tuple[float, float, float] | None = None
+    """The ISP's white-balance gains (R, G, B) for this frame; None without ISP or for mono."""
 
 
 class CameraPipeline:
@@ -155,17 +166,23 @@ class CameraPipeline:
     def light_at_sites(self, state: CameraState, passes: Passes) -> np.ndarray:
         """(H, W) float32 radiance each photosite receives through the lens (mono: QE-weighted)."""
         radiance = self.lens.blur(state, passes)
-        if self.mono:
-            stacked = cv2.transform(radiance, self._mono_weights)
-        else:
-            height, width = radiance.shape[:2]
-            if self._stacked is None or self._stacked.shape != (3 * height, width):
-                self._stacked = np.empty((3 * height, width), np.float32)
-            stacked = self._stacked
-            cv2.split(radiance, [stacked[c * height : (c + 1) * height] for c in range(3)])
         interpolation = (
             self.stages["optics.remap"].params["interpolation"] if "optics.remap" in self.stages else "linear"
         )
+        rows = radiance.shape[0] * (1 if self.mono else 3)
+        if rows > STACKED_ROWS_MAX:
+            # Too tall to stack for one remap (above ~10 000 rows): resample each channel, then sample.
+            maps = self.lens.maps(state)
+            rgb = (
+                crop_to_output(radiance, self.camera.render)
+                if maps is None
+                else remap_image(radiance, maps, interpolation)
+            )
+            return rgb @ self._mono_weights[0] if self.mono else mosaic(rgb, self.camera.profile.sensor.cfa)
+        if self.mono:
+            stacked = cv2.transform(radiance, self._mono_weights)
+        else:
+            self._stacked = stacked = stack_channels(radiance, self._stacked)
         return remap_mosaic(stacked, self._mosaic_map(state), interpolation)
 
     def converge_exposure(self, state: CameraState, passes: Passes, iterations: int = 30) -> None:
@@ -190,7 +207,7 @@ class CameraPipeline:
             dn = np.minimum(electrons * sensor.conversion_gain_dn_per_e * gain_linear(setting.gain_db), white - black)
             level = float(np.mean(dn)) / (white - black)
             if level <= 0:
-                setting = split_exposure(self.limits.product_max, self.limits)
+                setting = split_exposure(self.limits.product_max_s, self.limits)
                 break
             settled = split_exposure(setting.product_s * auto.target_level_frac / level, self.limits)
             if abs(settled.product_s / setting.product_s - 1) < 1e-4:
@@ -228,5 +245,8 @@ class CameraPipeline:
                 frame_interval_s=1.0 / self.job.fps,
                 limits=self.limits,
             )
-        rgb8 = None if self.isp is None else self.isp.process(raw)
-        return CapturedFrame(raw_dn=raw, rgb8=rgb8, state=state, metered_level_frac=level)
+        rgb8 = None if self.isp is None else self.isp.process(raw, state.gain_db)
+        white_balance = None if self.isp is None or self.mono else tuple(self.isp.white_balance_gains.tolist())
+        return CapturedFrame(
+            raw_dn=raw, rgb8=rgb8, state=state, metered_level_frac=level, white_balance_rgb=white_balance
+        )

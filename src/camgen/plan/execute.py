@@ -150,7 +150,8 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                 converge = False
                 pipeline.converge_exposure(state, frame.passes)
                 settled = pipeline.state_for(index)
-                if settled.exposure_time_s != state.exposure_time_s and camera_renderer.motion_samples(settled) > 1:
+                blurred = camera_renderer.motion_samples(state) > 1 or camera_renderer.motion_samples(settled) > 1
+                if settled.exposure_time_s != state.exposure_time_s and blurred:
                     frame = camera_renderer.frame(index, settled)  # the blur spans the settled exposure
                 state = settled
             result.render_s += time.perf_counter() - tick
@@ -173,6 +174,8 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                 record = state.model_dump(mode="json")
                 if captured is not None:
                     record["metered_level_frac"] = captured.metered_level_frac
+                    if captured.white_balance_rgb is not None:
+                        record["white_balance_rgb"] = captured.white_balance_rgb
                 metadata.append(json.dumps(record, separators=(",", ":")))
             if save_passes:
                 if result.frames == 0:

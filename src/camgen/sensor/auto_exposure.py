@@ -29,11 +29,11 @@ class ExposureLimits:
     gain_max_db: float
 
     @property
-    def product_min(self) -> float:
+    def product_min_s(self) -> float:
         return self.exposure_time_min_s
 
     @property
-    def product_max(self) -> float:
+    def product_max_s(self) -> float:
         return self.exposure_time_max_s * gain_linear(self.gain_max_db)
 
 
@@ -50,7 +50,7 @@ class ExposureSetting:
 
 def split_exposure(product_s: float, limits: ExposureLimits) -> ExposureSetting:
     """Exposure time and gain for an exposure product, clipped to what the camera can do."""
-    product_s = min(max(product_s, limits.product_min), limits.product_max)
+    product_s = min(max(product_s, limits.product_min_s), limits.product_max_s)
     time_s = min(product_s, limits.exposure_time_max_s)
     gain = max(product_s / time_s, 1.0)
     return ExposureSetting(exposure_time_s=time_s, gain_db=min(gain_db(gain), limits.gain_max_db))

@@ -129,6 +129,8 @@ def _expected(band: _Band, rate, per_unit, exposure_time_s, dark_e_per_s) -> Non
         cv2.scaleAdd(dark_e_per_s, t, band.mean, dst=band.mean)
     elif dark_e_per_s:
         band.mean += np.float32(dark_e_per_s * t)
+    # FFT convolutions (large blur discs) leave round-off such as −3e-12 where the light is zero.
+    np.maximum(band.mean, 0.0, out=band.mean)
 
 
 def _temporal(band: _Band, offset_e, scale, noise: TemporalNoise, rng: np.random.Generator) -> None:
@@ -195,7 +197,8 @@ def sample_electrons(
     Parameters
     ----------
     mean_e : (H, W) float32
-        Expected collected electrons μ (photo-electrons plus dark-current electrons), ≥ 0.
+        Expected collected electrons μ (photo-electrons plus dark-current electrons); round-off below
+        0 is taken as 0.
     read_noise_e : float
         Temporal read noise σ_read, electrons rms.
     offset_e : (H, W) float32, optional
@@ -237,7 +240,7 @@ def sample_electrons(
     )
 
     def work(band: _Band, stream: np.random.Generator) -> None:
-        band.mean[...] = mean_e[band.rows]
+        np.maximum(mean_e[band.rows], 0.0, out=band.mean)
         _temporal(band, _part(offset_e, band.rows), _part(noise.noise_scale, band.rows), noise, stream)
 
     frame, rest = _run_bands(*mean_e.shape, work, rng, executor, None)
