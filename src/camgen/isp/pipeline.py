@@ -123,9 +123,10 @@ class CameraIsp:
             # The smallest gain is 1, so every channel of a saturated site reaches full scale and clips
             # to white (a green-normalised gain below 1 would tint highlights).
             rgb = self._white_balance(raw_dn, saturation_dn)
-            rgb = rgb / np.min(rgb)
+            # Gains move in steps of 0.1 % (invisible), so the per-site map is rebuilt only when they do.
+            rgb = np.exp(np.round(np.log(rgb / np.min(rgb)), 3))
             self.white_balance_gains = rgb
-            key = (*np.round(rgb, 6), scale)
+            key = (*rgb, scale)
             if key != self._site_gains_for:
                 height, width = raw_dn.shape
                 self._site_gains = cfa_gain_image(rgb * scale, sensor.cfa, height, width)
