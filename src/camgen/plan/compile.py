@@ -45,6 +45,7 @@ from camgen.optics.remap import SUPPORT_PX, LensGeometry, border_points_px, sour
 from camgen.optics.vignetting import aperture_weight, relative_illumination
 from camgen.plan.job import CameraJob, CameraState, Decision, Job, PlanSettings, RenderSpec, Stage
 from camgen.plan.visibility import box_corners, visible_depth_range_m
+from camgen.sensor.capture import NOISE_TERM_OFF, NOISE_TERMS, noise_term_is_on
 
 WAVELENGTH_UM = 0.55  # mid-visible, for the diffraction estimate
 MOTION_SAMPLE_STEP_PX = 1.0
@@ -583,20 +584,11 @@ def _compile_camera(
 def _sensor_and_isp(profile, outputs, needs_isp, mono, force, stages, decisions) -> None:
     sensor, noise, isp = profile.sensor, profile.sensor.noise, profile.isp
     stages.append(Stage(name="sensor.exposure", passes=("radiance",), params={"mode": profile.exposure.mode}))
-    terms = {
-        "shot": (noise.shot_noise, "shot_noise is false"),
-        "prnu": (noise.prnu_pct > 0, "prnu_pct is 0"),
-        "dsnu": (noise.dsnu_e > 0, "dsnu_e is 0"),
-        "row_fpn": (noise.row_fpn_e > 0, "row_fpn_e is 0"),
-        "column_fpn": (noise.column_fpn_e > 0, "column_fpn_e is 0"),
-        "dark_current": (noise.dark_current_e_per_s > 0, "dark_current_e_per_s is 0"),
-        "hot_pixels": (noise.hot_pixel_fraction > 0, "hot_pixel_fraction is 0"),
-        "dead_pixels": (noise.dead_pixel_fraction > 0, "dead_pixel_fraction is 0"),
-        "read": (noise.read_noise_e > 0, "read_noise_e is 0"),
-        "blooming": (noise.blooming, "blooming is false"),
-    }
     active = []
-    for term, (on, off_reason) in terms.items():
+    for term in NOISE_TERMS:
+        on = noise_term_is_on(noise, term)
+        key, off = NOISE_TERM_OFF[term]
+        off_reason = f"{key} is {'false' if isinstance(off, bool) else f'{off:g}'}"
         decisions.append(_decision(f"sensor.noise.{term}", on, force, "set in the profile" if on else off_reason))
         if on or force:
             active.append(term)

@@ -20,19 +20,27 @@ from camgen.sensor.exposure import gain_linear
 from camgen.sensor.fixed_pattern import FixedPattern, fixed_pattern
 from camgen.sensor.noise import Adc, TemporalNoise, sample_raw
 
-NOISE_TERMS = (
-    "shot",
-    "prnu",
-    "dsnu",
-    "row_fpn",
-    "column_fpn",
-    "dark_current",
-    "hot_pixels",
-    "dead_pixels",
-    "read",
-    "blooming",
-)
+NOISE_TERM_OFF = {
+    "shot": ("shot_noise", False),
+    "prnu": ("prnu_pct", 0.0),
+    "dsnu": ("dsnu_e", 0.0),
+    "row_fpn": ("row_fpn_e", 0.0),
+    "column_fpn": ("column_fpn_e", 0.0),
+    "dark_current": ("dark_current_e_per_s", 0.0),
+    "hot_pixels": ("hot_pixel_fraction", 0.0),
+    "dead_pixels": ("dead_pixel_fraction", 0.0),
+    "read": ("read_noise_e", 0.0),
+    "blooming": ("blooming", False),
+}
+"""Each switchable term of the sensor model: the `Noise` key that sets it, and the value that turns it off."""
+NOISE_TERMS = tuple(NOISE_TERM_OFF)
 """Switchable terms of the sensor model (the plan's `sensor.noise` stage lists those it keeps)."""
+
+
+def noise_term_is_on(noise: Noise, term: str) -> bool:
+    """Whether the profile's `noise` has `term` switched on (its key differs from the off value)."""
+    key, off = NOISE_TERM_OFF[term]
+    return getattr(noise, key) != off
 
 
 def noise_with_terms(noise: Noise, terms: frozenset[str] | set[str]) -> Noise:
@@ -40,23 +48,7 @@ def noise_with_terms(noise: Noise, terms: frozenset[str] | set[str]) -> Noise:
     unknown = set(terms) - set(NOISE_TERMS)
     if unknown:
         raise ValueError(f"unknown noise term(s) {sorted(unknown)}; the terms are {', '.join(NOISE_TERMS)}")
-    off = {
-        "shot": {"shot_noise": False},
-        "prnu": {"prnu_pct": 0.0},
-        "dsnu": {"dsnu_e": 0.0},
-        "row_fpn": {"row_fpn_e": 0.0},
-        "column_fpn": {"column_fpn_e": 0.0},
-        "dark_current": {"dark_current_e_per_s": 0.0},
-        "hot_pixels": {"hot_pixel_fraction": 0.0},
-        "dead_pixels": {"dead_pixel_fraction": 0.0},
-        "read": {"read_noise_e": 0.0},
-        "blooming": {"blooming": False},
-    }
-    update = {}
-    for term in NOISE_TERMS:
-        if term not in terms:
-            update.update(off[term])
-    return noise.model_copy(update=update)
+    return noise.model_copy(update=dict(value for term, value in NOISE_TERM_OFF.items() if term not in terms))
 
 
 @dataclass(frozen=True)
