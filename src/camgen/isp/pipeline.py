@@ -30,6 +30,7 @@ from camgen.isp.demosaic import demosaic
 from camgen.isp.enhance import denoise, sharpen
 from camgen.isp.tone import apply_lut, tone_lut
 from camgen.isp.white_balance import cfa_gain_image, grey_world_gains
+from camgen.sensor.characteristics import saturation_e
 from camgen.sensor.exposure import gain_linear
 
 FULL_SCALE = 65535.0
@@ -83,10 +84,10 @@ class CameraIsp:
     def saturation_dn(self, gain_db: float) -> float:
         """Raw DN of a saturated site at this gain: the full well or the ADC, whichever clips first."""
         sensor = self.sensor
-        full_well_dn = sensor.black_level_dn + sensor.full_well_e * sensor.conversion_gain_dn_per_e * gain_linear(
-            gain_db
+        electrons, _ = saturation_e(
+            sensor.full_well_e, sensor.conversion_gain_dn_per_e, sensor.black_level_dn, sensor.bit_depth, gain_db
         )
-        return min(float(sensor.white_level_dn), full_well_dn)
+        return sensor.black_level_dn + electrons * sensor.conversion_gain_dn_per_e * gain_linear(gain_db)
 
     def _white_balance(self, raw_dn: np.ndarray, saturation_dn: float) -> np.ndarray:
         """This frame's gains (R, G, B): fixed, or grey world over the unsaturated sites, clamped to

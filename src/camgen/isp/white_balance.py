@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from camgen.sensor.cfa import cfa_phase_channels, tile_phases
+from camgen.sensor.cfa import cfa_phase_channels, cfa_site_values
 
 UNITY_GAINS_RGB = (1.0, 1.0, 1.0)
 
@@ -125,5 +125,4 @@ def cfa_gain_image(gains_rgb: np.ndarray, cfa: str, height_px: int, width_px: in
     gains = np.asarray(gains_rgb, dtype=np.float64)
     if gains.shape != (3,) or not np.all(np.isfinite(gains)) or np.any(gains < 0):
         raise ValueError(f"gains_rgb must be 3 finite numbers ≥ 0 (R, G, B), got {gains_rgb!r}")
-    block = gains.astype(np.float32)[list(cfa_phase_channels(cfa))].reshape(2, 2)
-    return tile_phases(block, height_px, width_px)
+    return cfa_site_values(gains, cfa, height_px, width_px)

@@ -47,6 +47,7 @@ from camgen.sensor.auto_exposure import (
 )
 from camgen.sensor.capture import SensorModel
 from camgen.sensor.cfa import cfa_channel_index, mosaic
+from camgen.sensor.characteristics import saturation_e
 from camgen.sensor.exposure import gain_linear, photons_per_cd_m2_s
 
 
@@ -200,12 +201,20 @@ class CameraPipeline:
         rate_e_per_s = light * (per_site[window] if isinstance(per_site, np.ndarray) else per_site)
         dark = self.sensor_model.dark_e_per_s
         rate_e_per_s = rate_e_per_s + (dark[window] if isinstance(dark, np.ndarray) else dark)
-        black, white = sensor.black_level_dn, sensor.white_level_dn
+        range_dn = sensor.white_level_dn - sensor.black_level_dn
         setting = self.setting
         for _ in range(iterations):
-            electrons = np.minimum(rate_e_per_s * setting.exposure_time_s, sensor.full_well_e)
-            dn = np.minimum(electrons * sensor.conversion_gain_dn_per_e * gain_linear(setting.gain_db), white - black)
-            level = float(np.mean(dn)) / (white - black)
+            clip_e, _ = saturation_e(
+                sensor.full_well_e,
+                sensor.conversion_gain_dn_per_e,
+                sensor.black_level_dn,
+                sensor.bit_depth,
+                setting.gain_db,
+            )
+            electrons = np.minimum(rate_e_per_s * setting.exposure_time_s, clip_e)
+            level = (
+                float(np.mean(electrons)) * sensor.conversion_gain_dn_per_e * gain_linear(setting.gain_db) / range_dn
+            )
             if level <= 0:
                 setting = split_exposure(self.limits.product_max_s, self.limits)
                 break

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from camgen.config.profile import Noise, Sensor
-from camgen.sensor.cfa import cfa_channel_index
+from camgen.sensor.cfa import cfa_site_values
 from camgen.sensor.characteristics import dark_current_e_per_s
 from camgen.sensor.exposure import gain_linear
 from camgen.sensor.fixed_pattern import FixedPattern, fixed_pattern
@@ -49,6 +49,13 @@ def noise_with_terms(noise: Noise, terms: frozenset[str] | set[str]) -> Noise:
     if unknown:
         raise ValueError(f"unknown noise term(s) {sorted(unknown)}; the terms are {', '.join(NOISE_TERMS)}")
     return noise.model_copy(update=dict(value for term, value in NOISE_TERM_OFF.items() if term not in terms))
+
+
+def _per_site(values_rgb: tuple[float, float, float], cfa: str, height: int, width: int) -> np.ndarray | float:
+    """One value per site, or a float32 scalar when the three channels agree (saves a pass per frame)."""
+    if len(set(values_rgb)) == 1:
+        return float(np.float32(values_rgb[0]))
+    return cfa_site_values(values_rgb, cfa, height, width)
 
 
 @dataclass(frozen=True)
@@ -88,11 +95,8 @@ class SensorModel:
             qe_site: np.ndarray | float = 1.0
             scale_site: np.ndarray | float = scale.g
         else:
-            index = cfa_channel_index(sensor.cfa, height, width)
-            qe_values = np.array([qe.r, qe.g, qe.b], np.float32)
-            qe_site = qe_values[index] if len(set(qe_values.tolist())) > 1 else float(qe_values[0])
-            scale_values = np.array([scale.r, scale.g, scale.b], np.float32)
-            scale_site = scale_values[index] if len(set(scale_values.tolist())) > 1 else float(scale_values[0])
+            qe_site = _per_site((qe.r, qe.g, qe.b), sensor.cfa, height, width)
+            scale_site = _per_site((scale.r, scale.g, scale.b), sensor.cfa, height, width)
         per_photon = qe_site if pattern.response is None else pattern.response * np.float32(qe_site)
         temperature_factor = dark_current_e_per_s(
             1.0, sensor.temperature_c, noise.dark_current_reference_c, noise.dark_current_doubling_c
