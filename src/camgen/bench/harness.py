@@ -7,6 +7,8 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
+
 
 @dataclass(frozen=True)
 class Case:
@@ -35,6 +37,11 @@ class Result:
     error: float | None
     error_unit: str
     baseline: str | None = None
+
+
+def relative_rms_pct(image: np.ndarray, reference: np.ndarray) -> float:
+    """RMS of image − reference as a percentage of the reference's mean (the cases' image error)."""
+    return float(100 * np.sqrt(np.mean((image - reference) ** 2)) / np.mean(reference))
 
 
 def run_case(case: Case, repeats: int = 7, warmup: int = 1, clock=time.perf_counter) -> Result:

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from camgen.bench.harness import Case
+from camgen.bench.harness import Case, relative_rms_pct
 from camgen.optics.diffraction import diffraction_blur
 from camgen.optics.remap import (
     INTERPOLATIONS,
@@ -80,7 +80,7 @@ def _interpolation_cases(repo: Path) -> list[Case]:
     def run(method: str) -> float:
         planned, reference, maps = inputs()
         out = remap_image(planned, maps, method)
-        return float(100 * np.sqrt(np.mean((out - reference) ** 2)) / np.mean(reference))
+        return relative_rms_pct(out, reference)
 
     label = f"{size[0]}×{size[1]}, barrel k1 = −0.3, vs {REFERENCE_FACTOR}× reference"
     return [

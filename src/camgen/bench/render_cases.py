@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from camgen.bench.harness import Case
+from camgen.bench.harness import Case, relative_rms_pct
 from camgen.config import load_scene
 from camgen.plan import PlanSettings, compile_scene
 
@@ -127,8 +127,7 @@ def _supersampling_cases(camera, graph) -> list[Case]:
     def run(s: int) -> float:
         graph.place_actors(2.0)
         radiance = box_downsample(_renderer().draw(graph, view.scaled(s), ("radiance",)).radiance, s)
-        ref = reference()
-        return float(100 * np.sqrt(np.mean((radiance - ref) ** 2)) / np.mean(ref))
+        return relative_rms_pct(radiance, reference())
 
     return [
         Case(
