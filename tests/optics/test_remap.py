@@ -1,18 +1,21 @@
-"""The distortion + lateral-CA remap: direction, margin convention, per-channel maps and exact ids."""
+"""The distortion + lateral-CA remap: direction, margin convention, per-channel maps and exact ids; the
+interpolated maps against Newton on every pixel."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from camgen.optics.projection import distort_points
+from camgen.optics.projection import LensInversionError, distort_points
 from camgen.optics.remap import (
     LensGeometry,
     LensMapCache,
     check_inside,
+    fit_source_spline,
     lens_maps,
     remap_image,
     remap_nearest,
+    source_grid_px,
     source_points_px,
 )
 
@@ -104,3 +107,75 @@ def test_cache_returns_the_same_maps_and_drops_the_oldest():
     cache.get(b)
     cache.get(c)
     assert cache.get(a) is not first
+
+
+K_OFFSET = ((380.0, 0.0, 171.3), (0.0, 395.0, 108.8), (0.0, 0.0, 1.0))
+"""Non-square pixels and a principal point off the image centre."""
+LENSES = {
+    "strong barrel": BARREL,
+    "pincushion": (0.25, 0.05, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+    "tangential": (-0.05, 0.0, 0.01, -0.008, 0.0, 0.0, 0.0, 0.0),
+    "rational": (-0.25, 0.06, 0.0005, 0.0005, 0.01, 0.08, 0.02, 0.005),
+    "zero, CA only": (0.0,) * 8,
+}
+
+
+@pytest.mark.parametrize("size", [(320, 240), (333, 251)])
+@pytest.mark.parametrize("camera_matrix", [K, K_OFFSET], ids=["centred", "offset"])
+@pytest.mark.parametrize("ca_scales", [(1.0,), (1.002, 1.0, 0.997)], ids=["mono", "lateral CA"])
+@pytest.mark.parametrize("lens", LENSES)
+def test_interpolated_maps_match_newton_on_every_pixel(lens, ca_scales, camera_matrix, size):
+    geometry = LensGeometry(camera_matrix, LENSES[lens], ca_scales, *size, (40, 30, 40, 30))
+    spline = fit_source_spline(geometry)
+    assert spline is not None  # the interpolated path, not the per-pixel fallback
+    fast = source_grid_px(geometry)
+    exact = source_grid_px(geometry, exact=True)
+    assert len(fast) == len(exact) == len(ca_scales)
+    error_px = max(float(np.max(np.abs(f - e))) for f, e in zip(fast, exact, strict=True))
+    assert error_px <= 1e-3
+    assert error_px <= 1.25 * spline.check_error_px + 1e-9  # the check sees the worst error (SPLINE_ERROR_MAX_PX)
+    maps, reference = lens_maps(geometry), lens_maps(geometry, exact=True)
+    for name in ("map_x", "map_y"):
+        for got, expected in zip(getattr(maps, name), getattr(reference, name), strict=True):
+            assert got.dtype == np.float32 and got.shape == size[::-1]
+            np.testing.assert_allclose(got, expected, rtol=0, atol=1e-3 + 1e-4)  # + float32 rounding
+    fx, fy = camera_matrix[0][0], camera_matrix[1][1]
+    np.testing.assert_allclose(
+        maps.undistorted_normalized, reference.undistorted_normalized, rtol=0, atol=1e-3 / min(fx, fy)
+    )
+    for got, expected in zip(maps.nearest_index, reference.nearest_index, strict=True):
+        assert got.dtype == np.int32 and np.mean(got != expected) < 1e-4  # differs only at half-pixel ties
+
+
+def test_near_the_fold_the_check_refines_the_nodes_then_falls_back_to_newton():
+    """k1 = −0.3 folds over at distorted radius 0.703; the closer the corner, the steeper the inverse
+    there and the denser the nodes must be, until no spacing passes and every pixel is solved."""
+    fold = (-0.3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    steps = []
+    for focal_px in (600.0, 400.0, 350.0, 300.0):  # corner at normalised radius 0.33, 0.50, 0.57, 0.66
+        camera_matrix = ((focal_px, 0.0, 159.5), (0.0, focal_px, 119.5), (0.0, 0.0, 1.0))
+        geometry = LensGeometry(camera_matrix, fold, (1.002, 1.0, 0.997), 320, 240, (0, 0, 0, 0))
+        spline = fit_source_spline(geometry)
+        steps.append(None if spline is None else spline.node_step_px)
+        fast, exact = source_grid_px(geometry), source_grid_px(geometry, exact=True)
+        for f, e in zip(fast, exact, strict=True):
+            if spline is None:
+                np.testing.assert_array_equal(f, e)
+            else:
+                assert np.max(np.abs(f - e)) <= 1e-3
+    assert steps == [16.0, 8.0, 4.0, None]
+
+
+def test_a_lens_the_nodes_cannot_invert_falls_back_to_the_per_pixel_error():
+    """Nodes beyond the fold fail; the per-pixel path then names the pixel that cannot be inverted."""
+    geometry = LensGeometry(
+        ((250.0, 0.0, 159.5), (0.0, 250.0, 119.5), (0.0, 0.0, 1.0)),
+        (-0.3,) + (0.0,) * 7,
+        (1.0,),
+        320,
+        240,
+        (0, 0, 0, 0),
+    )
+    assert fit_source_spline(geometry) is None
+    with pytest.raises(LensInversionError, match="cannot be inverted at pixel"):
+        lens_maps(geometry)

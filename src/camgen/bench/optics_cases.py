@@ -1,5 +1,6 @@
-"""Lens-stage cases: ms per 1080p frame for each stage, and run time against error for the remap's
-interpolation (nearest, linear, cubic, Lanczos) against a 4×-supersampled reference.
+"""Lens-stage cases: ms per 1080p frame for each stage, run time against error for the remap's
+interpolation (nearest, linear, cubic, Lanczos) against a 4×-supersampled reference, and building the
+lens maps by Newton on every pixel against the checked spline of Newton (`lens_map_cases`).
 
 The interpolation reference: the parking lot drawn as the PTZ camera sees it through a strong barrel
 lens (k1 = −0.3) at 960×540, rendered with its margin at 4× per axis, resampled at 4× through the same
@@ -18,6 +19,7 @@ import numpy as np
 
 from camgen.bench.harness import Case, relative_rms_pct
 from camgen.optics.diffraction import diffraction_blur
+from camgen.optics.intrinsics import camera_matrix_px
 from camgen.optics.remap import (
     INTERPOLATIONS,
     SUPPORT_PX,
@@ -26,6 +28,7 @@ from camgen.optics.remap import (
     lens_maps,
     output_grid_px,
     remap_image,
+    source_grid_px,
     source_overshoot_px,
     source_points_px,
 )
@@ -34,10 +37,12 @@ BARREL = (-0.3, 0.08, 0.001, -0.0008, 0.0, 0.0, 0.0, 0.0)
 CA_SCALES = (1.0008, 1.0, 0.9992)
 REFERENCE_FACTOR = 4
 HD = (1920, 1080)
+K_HD = ((1400.0, 0.0, (HD[0] - 1) / 2), (0.0, 1400.0, (HD[1] - 1) / 2), (0.0, 0.0, 1.0))
+"""The camera matrix of the 1080p stage cases, px."""
 
 
 def optics_cases(repo: Path) -> list[Case]:
-    return _interpolation_cases(repo) + _stage_cases()
+    return _interpolation_cases(repo) + lens_map_cases() + _stage_cases()
 
 
 def _interpolation_cases(repo: Path) -> list[Case]:
@@ -94,29 +99,62 @@ def _interpolation_cases(repo: Path) -> list[Case]:
     ]
 
 
+def lens_map_cases() -> list[Case]:
+    """Building the 1080p lens maps: Newton on every pixel (``exact=True``) against the default, a
+    bicubic spline through Newton's solutions on a node grid, checked between the nodes.
+
+    The error is the spline's largest |source − Newton's| over every pixel and channel, px, in float64
+    before the float32 cast; it depends on the lens only, so it is measured once, in the setup. The
+    lenses: the 30× PTZ module at its wide end (the one whose maps change every frame while it zooms),
+    and the strong barrel lens of the other cases with one channel and with lateral CA.
+    """
+    W, H = HD
+    ptz_K = tuple(map(tuple, camera_matrix_px(4.5, 2.9, 2.9, W, H).tolist()))
+    lenses = {
+        "PTZ 4.5 mm k1 = −0.12, lateral CA": LensGeometry(
+            ptz_K, (-0.12, 0.03, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0), (1.0004, 1.0, 0.9995), W, H, (60, 40, 60, 40)
+        ),
+        "barrel k1 = −0.3, one channel": LensGeometry(K_HD, BARREL, (1.0,), W, H, (80, 80, 80, 80)),
+        "barrel k1 = −0.3, lateral CA": LensGeometry(K_HD, BARREL, CA_SCALES, W, H, (80, 80, 80, 80)),
+    }
+    errors_px: dict[LensGeometry, float] = {}
+
+    def measure_error(geometry: LensGeometry) -> None:
+        pairs = zip(source_grid_px(geometry), source_grid_px(geometry, exact=True), strict=True)
+        errors_px[geometry] = max(float(np.max(np.abs(fast - exact))) for fast, exact in pairs)
+
+    def run_spline(geometry: LensGeometry) -> float:
+        lens_maps(geometry)
+        return errors_px[geometry]
+
+    cases = []
+    for label, geometry in lenses.items():
+        newton = f"lens maps, build 1080p, {label}: Newton on every pixel"
+        cases.append(Case(name=newton, run=lambda g=geometry: _discard(lens_maps(g, exact=True)), repeats=3))
+        cases.append(
+            Case(
+                name=f"lens maps, build 1080p, {label}: checked spline of Newton",
+                setup=lambda g=geometry: measure_error(g),
+                run=lambda g=geometry: run_spline(g),
+                error_unit="px",
+                repeats=15,
+                baseline=newton,
+            )
+        )
+    return cases
+
+
 def _stage_cases() -> list[Case]:
     W, H = HD
-    K = ((1400.0, 0.0, (W - 1) / 2), (0.0, 1400.0, (H - 1) / 2), (0.0, 0.0, 1.0))
     rng = np.random.default_rng(0)
     image = rng.random((H + 2 * 80, W + 2 * 80, 3), dtype=np.float32) * 100
 
     @cache
     def maps(with_ca: bool) -> LensMaps:
-        return lens_maps(LensGeometry(K, BARREL, CA_SCALES if with_ca else (1.0,), W, H, (80, 80, 80, 80)))
+        return lens_maps(LensGeometry(K_HD, BARREL, CA_SCALES if with_ca else (1.0,), W, H, (80, 80, 80, 80)))
 
     gain = np.linspace(0.5, 1.0, W * H, dtype=np.float32).reshape(H, W)
-    cases = [
-        Case(
-            name="lens maps, build 1080p (Newton, one channel)",
-            run=lambda: _discard(lens_maps(LensGeometry(K, BARREL, (1.0,), W, H, (80, 80, 80, 80)))),
-            repeats=3,
-        ),
-        Case(
-            name="lens maps, build 1080p with lateral CA (three channels)",
-            run=lambda: _discard(lens_maps(LensGeometry(K, BARREL, CA_SCALES, W, H, (80, 80, 80, 80)))),
-            repeats=3,
-        ),
-    ]
+    cases = []
     for method in INTERPOLATIONS:
         for with_ca in (False, True):
             what = "per-channel maps (lateral CA)" if with_ca else "one map"
