@@ -307,7 +307,7 @@ CASES = [
             edit(SCENE, "profile: fixed", "profile: ptz"), "pitch_deg: -20\n", "pitch_deg: 0\n    ptz: {zoom_x: 12} #<"
         ),
         "cameras[0].ptz.zoom_x",
-        "must be ≤ 10 (the lens zooms 4–40 mm), got 12",
+        "must lie in [1, 10] (the lens zooms 4–40 mm), got 12",
     ),
     (
         "tilt_outside_head",
@@ -318,7 +318,7 @@ CASES = [
             "pitch_deg: 0\n    ptz: {tilt_deg: 45} #<",
         ),
         "cameras[0].ptz.tilt_deg",
-        "must lie in the head's tilt range [-90, 10]°, got 45",
+        "must lie in [-90, 10] (the head's tilt range), got 45",
     ),
     (
         "ptz_on_fixed_camera",
@@ -461,6 +461,189 @@ CASES = [
         "scenes:\n  - scenes/nope.yaml #<\n",
         "scenes[0]",
         "refers to 'scenes/nope.yaml', but",
+    ),
+    (
+        "negative_pause",
+        "scene",
+        edit(SCENE, "speed_m_s: 1.4", "speed_m_s: 1.4\n      pause_s: -2 #<"),
+        "actors[0].path.pause_s",
+        "must be ≥ 0, got -2; give the seconds to stand at each waypoint",
+    ),
+    (
+        "negative_pause_in_list",
+        "scene",
+        edit(SCENE, "speed_m_s: 1.4", "speed_m_s: 1.4\n      pause_s: [0, -1] #<"),
+        "actors[0].path.pause_s[1]",
+        "must be a number ≥ 0 (seconds at waypoint 1), got -1",
+    ),
+    (
+        "pause_list_length",
+        "scene",
+        edit(SCENE, "speed_m_s: 1.4", "speed_m_s: 1.4\n      pause_s: [1, 2, 3] #<"),
+        "actors[0].path.pause_s",
+        "must have one pause per waypoint (2), got 3: [1, 2, 3]; add or remove values",
+    ),
+    (
+        "actor_without_motion",
+        "scene",
+        edit(
+            edit(SCENE, "  - name: walker", "  - name: walker #<"),
+            "    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n      speed_m_s: 1.4\n",
+            "",
+        ),
+        "actors[0]",
+        "needs a path or a random_walk, got neither",
+    ),
+    (
+        "path_and_random_walk",
+        "scene",
+        edit(
+            SCENE,
+            "      speed_m_s: 1.4\n",
+            "      speed_m_s: 1.4\n    random_walk: #<\n      region_m: [[-5, 0], [5, 10]]\n",
+        ),
+        "actors[0].random_walk",
+        "cannot be given together with path; keep one of the two",
+    ),
+    (
+        "random_walk_region_unordered",
+        "scene",
+        edit(
+            SCENE,
+            "    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n",
+            "    random_walk:\n      region_m: [[5, 0], [-5, 10]] #<\n",
+        ),
+        "actors[0].random_walk.region_m",
+        "with x_min < x_max and y_min < y_max, got [[5, 0], [-5, 10]]; give the lower-left corner first",
+    ),
+    (
+        "random_walk_start_outside",
+        "scene",
+        edit(
+            SCENE,
+            "    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n",
+            "    random_walk:\n      region_m: [[-5, 0], [5, 10]]\n      start_m: [8, 5] #<\n",
+        ),
+        "actors[0].random_walk.start_m",
+        "must lie inside region_m [[-5, 0], [5, 10]], got [8, 5]; move it inside",
+    ),
+    (
+        "random_walk_legs_unordered",
+        "scene",
+        edit(
+            SCENE,
+            "    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n",
+            "    random_walk:\n      region_m: [[-5, 0], [5, 10]]\n      leg_length_m: [10, 3] #<\n",
+        ),
+        "actors[0].random_walk.leg_length_m",
+        "must be ordered [min, max] with min ≤ max, got [10, 3] m; swap them",
+    ),
+    (
+        "random_walk_pauses_unordered",
+        "scene",
+        edit(
+            SCENE,
+            "    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n",
+            "    random_walk:\n      region_m: [[-5, 0], [5, 10]]\n      pause_s: [3, 1] #<\n",
+        ),
+        "actors[0].random_walk.pause_s",
+        "with min ≤ max, got [3, 1] s; swap them",
+    ),
+    (
+        "random_walk_zero_leg",
+        "scene",
+        edit(
+            SCENE,
+            "    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n",
+            "    random_walk:\n      region_m: [[-5, 0], [5, 10]]\n      leg_length_m: [0, 3] #<\n",
+        ),
+        "actors[0].random_walk.leg_length_m[0]",
+        "must be > 0, got 0",
+    ),
+    (
+        "tour_names_unknown_preset",
+        "scene",
+        edit(
+            edit(SCENE, "profile: fixed", "profile: ptz"),
+            "pitch_deg: -20\n",
+            "pitch_deg: 0\n    ptz: {presets: [{name: gate}], program: {type: tour, stops: [{preset: gat}]}} #<\n",
+        ),
+        "cameras[0].ptz.program.stops[0].preset",
+        "names preset 'gat', which this camera does not have (presets: 'gate')",
+    ),
+    (
+        "follow_unknown_actor",
+        "scene",
+        edit(
+            edit(SCENE, "profile: fixed", "profile: ptz"),
+            "pitch_deg: -20\n",
+            "pitch_deg: 0\n    ptz: {program: {type: follow, target: walkr}} #<\n",
+        ),
+        "cameras[0].ptz.program.target",
+        "names actor 'walkr', which the scene does not have (actors: 'walker')",
+    ),
+    (
+        "keyframes_out_of_order",
+        "scene",
+        edit(
+            edit(SCENE, "profile: fixed", "profile: ptz"),
+            "pitch_deg: -20\n",
+            "pitch_deg: 0\n    ptz: {program: {type: keyframes, keys: [{time_s: 2}, {time_s: 1}]}} #<\n",
+        ),
+        "cameras[0].ptz.program.keys[1].time_s",
+        "must be later than keys[0].time_s (2 s), got 1",
+    ),
+    (
+        "keyframes_too_fast",
+        "scene",
+        edit(
+            edit(SCENE, "profile: fixed", "profile: ptz"),
+            "pitch_deg: -20\n",
+            "pitch_deg: 0\n    ptz: {program: {type: keyframes, keys: [{time_s: 0}, {time_s: 0.5, pan_deg: 90}]}} #<\n",
+        ),
+        "cameras[0].ptz.program.keys[1]",
+        "asks for 180 deg/s of pan from keys[0] (90° in 0.5 s), more than the 100 deg/s the head may move",
+    ),
+    (
+        "preset_outside_tilt_range",
+        "scene",
+        edit(
+            edit(SCENE, "profile: fixed", "profile: ptz"),
+            "pitch_deg: -20\n",
+            "pitch_deg: 0\n    ptz: {presets: [{name: sky, tilt_deg: 40}]} #<\n",
+        ),
+        "cameras[0].ptz.presets[0].tilt_deg",
+        "must lie in [-90, 10] (the head's tilt range), got 40",
+    ),
+    (
+        "eptz_with_ptz",
+        "scene",
+        edit(
+            edit(SCENE, "profile: fixed", "profile: ptz"),
+            "pitch_deg: -20\n",
+            "pitch_deg: 0\n    ptz: {pan_deg: 0}\n    eptz: {output_size_px: [320, 240]} #<\n",
+        ),
+        "cameras[0].eptz",
+        "must not be set together with ptz",
+    ),
+    (
+        "eptz_output_larger_than_sensor",
+        "scene",
+        edit(SCENE, "pitch_deg: -20\n", "pitch_deg: -20\n    eptz: {output_size_px: [1280, 720]} #<\n"),
+        "cameras[0].eptz.output_size_px",
+        "must fit the 640×480 sensor, got 1280×720",
+    ),
+    (
+        "eptz_zoom_beyond_its_maximum",
+        "scene",
+        edit(
+            SCENE,
+            "pitch_deg: -20\n",
+            "pitch_deg: -20\n    eptz: {output_size_px: [320, 240], zoom_max_x: 2, presets: [{name: a, zoom_x: 3}]}"
+            " #<\n",
+        ),
+        "cameras[0].eptz.presets[0].zoom_x",
+        "must be ≤ zoom_max_x (2), got 3",
     ),
 ]
 

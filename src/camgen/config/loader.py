@@ -6,6 +6,7 @@ This is the only place that reads configuration files. Everything returned is a 
 from __future__ import annotations
 
 import difflib
+import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -13,7 +14,7 @@ from pathlib import Path
 
 from camgen.config.dataset import Dataset
 from camgen.config.profile import Profile
-from camgen.config.scene import FileMesh, Scene
+from camgen.config.scene import Camera, FileMesh, Scene
 from camgen.config.validation import show_value, validate
 from camgen.config.yaml_source import YamlDocument, load_yaml, merge_documents
 from camgen.errors import ConfigError, Location, Problem
@@ -197,6 +198,149 @@ def load_dataset(path: str | Path) -> Dataset:
     return dataset
 
 
+def _ptz_positions(ptz) -> list[tuple[tuple, float | None, float | None, float | None]]:
+    """(key path below ptz, pan, tilt, zoom) of every head position a camera's settings name."""
+    positions: list[tuple[tuple, float | None, float | None, float | None]] = [
+        (("pan_deg",), ptz.pan_deg, None, None),
+        (("tilt_deg",), None, ptz.tilt_deg, None),
+        (("zoom_x",), None, None, ptz.zoom_x),
+    ]
+    for i, preset in enumerate(ptz.presets):
+        positions.append((("presets", i), preset.pan_deg, preset.tilt_deg, preset.zoom_x))
+    program, prefix = ptz.program, ("program",)
+    if getattr(program, "type", None) == "follow":
+        program, prefix = program.fallback, ("program", "fallback")
+    kind = getattr(program, "type", None)
+    if kind == "scan":
+        for j, pan in enumerate(program.pan_range_deg):
+            positions.append(((*prefix, "pan_range_deg", j), pan, None, None))
+        positions.append(((*prefix, "tilt_deg"), None, program.tilt_deg, None))
+        positions.append(((*prefix, "zoom_x"), None, None, program.zoom_x))
+    if kind == "keyframes":
+        for j, key in enumerate(program.keys):
+            positions.append(((*prefix, "keys", j), key.pan_deg, key.tilt_deg, key.zoom_x))
+    return positions
+
+
+@dataclass(frozen=True)
+class HeadRanges:
+    """Where a camera's (mechanical or virtual) head can point and how fast it may turn."""
+
+    key: str
+    """`ptz` or `eptz`: the scene key of the head's settings."""
+    pan_deg: tuple[float, float] | None
+    """None: endless pan."""
+    pan_what: str
+    tilt_deg: tuple[float, float]
+    tilt_what: str
+    zoom_max_x: float
+    zoom_what: str
+    pan_max_deg_s: float
+    tilt_max_deg_s: float
+
+
+def head_ranges(camera: Camera, profile: Profile) -> HeadRanges | None:
+    """The ranges of the camera's PTZ head (profile and camera limits) or of its virtual PTZ (the
+    sensor's field of view: the window centre stays on the sensor); None without either."""
+    lens = profile.lens
+    if camera.ptz is not None and profile.ptz is not None:
+        head, ptz = profile.ptz, camera.ptz
+        return HeadRanges(
+            "ptz",
+            None if head.pan_continuous else tuple(head.pan_range_deg),
+            "the head's pan range",
+            tuple(head.tilt_range_deg),
+            "the head's tilt range",
+            lens.zoom_max_x,
+            f"the lens zooms {lens.focal_length_min_mm:g}–{lens.focal_length_max_mm:g} mm",
+            min(head.pan_max_deg_s, ptz.pan_max_deg_s or math.inf),
+            min(head.tilt_max_deg_s, ptz.tilt_max_deg_s or math.inf),
+        )
+    if camera.eptz is not None:
+        eptz, sensor = camera.eptz, profile.sensor
+        focal_length_mm = camera.focal_length_mm or lens.focal_length_min_mm
+        half_pan = math.degrees(math.atan(sensor.width_mm / 2 / focal_length_mm))
+        half_tilt = math.degrees(math.atan(sensor.height_mm / 2 / focal_length_mm))
+        what = f"the sensor's field of view at {focal_length_mm:g} mm"
+        return HeadRanges(
+            "eptz",
+            (-half_pan, half_pan),
+            what,
+            (-half_tilt, half_tilt),
+            what,
+            eptz.zoom_max_x,
+            "eptz.zoom_max_x",
+            eptz.pan_max_deg_s,
+            eptz.tilt_max_deg_s,
+        )
+    return None
+
+
+def _check_head_position(path: tuple, pan, tilt, zoom, ranges: HeadRanges) -> list[Problem]:
+    """A position must lie within the head's pan and tilt ranges and its zoom range."""
+    problems = []
+    checks = [("zoom_x", zoom, 1.0, ranges.zoom_max_x, ranges.zoom_what)]
+    if ranges.pan_deg is not None:
+        checks.append(("pan_deg", pan, *ranges.pan_deg, ranges.pan_what))
+    checks.append(("tilt_deg", tilt, *ranges.tilt_deg, ranges.tilt_what))
+    for key, value, low, high, what in checks:
+        if value is None or low - 1e-9 <= value <= high + 1e-9:
+            continue
+        where = path if path and path[-1] == key else (*path, key)
+        problems.append(Problem(where, f"must lie in [{low:.4g}, {high:.4g}] ({what}), got {value:g}"))
+    return problems
+
+
+def _check_keyframe_speeds(path: tuple, program, ranges: HeadRanges) -> list[Problem]:
+    """Consecutive keyframes must not ask for more pan or tilt speed than the head has."""
+    problems = []
+    for j in range(1, len(program.keys)):
+        a, b = program.keys[j - 1], program.keys[j]
+        span_s = b.time_s - a.time_s
+        for axis, delta in (
+            ("pan", ((b.pan_deg - a.pan_deg + 180.0) % 360.0) - 180.0),
+            ("tilt", b.tilt_deg - a.tilt_deg),
+        ):
+            limit = getattr(ranges, f"{axis}_max_deg_s")
+            if abs(delta) / span_s > limit + 1e-9:
+                problems.append(
+                    Problem(
+                        (*path, "keys", j),
+                        f"asks for {abs(delta) / span_s:.4g} deg/s of {axis} from keys[{j - 1}] "
+                        f"({abs(delta):g}° in {span_s:g} s), more than the {limit:g} deg/s the head may move; "
+                        "move the keyframe later",
+                    )
+                )
+    return problems
+
+
+def _check_head(base: tuple, camera: Camera, profile: Profile) -> list[Problem]:
+    """Every position and program of a camera's (mechanical or virtual) head against its ranges."""
+    ranges = head_ranges(camera, profile)
+    if ranges is None:
+        return []
+    settings = camera.head
+    where = (*base, ranges.key)
+    problems = []
+    for path, pan, tilt, zoom in _ptz_positions(settings):
+        problems += _check_head_position((*where, *path), pan, tilt, zoom, ranges)
+    program, prefix = settings.program, ("program",)
+    if getattr(program, "type", None) == "follow":
+        program, prefix = program.fallback, ("program", "fallback")
+    if getattr(program, "type", None) == "scan" and ranges.pan_deg is not None:
+        start, end = program.pan_range_deg
+        if start == end:
+            problems.append(
+                Problem(
+                    (*where, *prefix, "pan_range_deg"),
+                    f"must give two different angles on a head with a limited pan range, got [{start:g}, {end:g}]",
+                )
+            )
+    if getattr(program, "type", None) == "keyframes":
+        problems += _check_keyframe_speeds((*where, *prefix), program, ranges)
+    return problems
+
+
 def check_cameras(scene: Scene, profiles: dict[str, Profile]) -> list[Problem]:
     """Checks that need both a camera and its profile; key paths are relative to the scene."""
     problems = []
@@ -230,32 +374,26 @@ def check_cameras(scene: Scene, profiles: dict[str, Profile]) -> list[Problem]:
                     "mount.yaw_deg and mount.pitch_deg",
                 )
             )
+        problems += _check_head(base, camera, profile)
+        if camera.eptz is not None:
+            sensor, output = profile.sensor, camera.eptz.output_size_px
+            if head is not None:
+                problems.append(
+                    Problem(
+                        (*base, "eptz"),
+                        f"is for fixed cameras, but profile {camera.profile!r} has a PTZ head; use ptz instead",
+                    )
+                )
+            if output[0] > sensor.width_px or output[1] > sensor.height_px:
+                problems.append(
+                    Problem(
+                        (*base, "eptz", "output_size_px"),
+                        f"must fit the {sensor.width_px}×{sensor.height_px} sensor, got {output[0]}×{output[1]}; "
+                        "the stream is a crop of the sensor, scaled down",
+                    )
+                )
         if camera.ptz is not None and head is not None:
             ptz = camera.ptz
-            if ptz.zoom_x > lens.zoom_max_x + 1e-9:
-                problems.append(
-                    Problem(
-                        (*base, "ptz", "zoom_x"),
-                        f"must be ≤ {lens.zoom_max_x:.4g} (the lens zooms {lens.focal_length_min_mm:g}–"
-                        f"{lens.focal_length_max_mm:g} mm), got {ptz.zoom_x:g}",
-                    )
-                )
-            if not head.pan_continuous and not head.pan_range_deg[0] <= ptz.pan_deg <= head.pan_range_deg[1]:
-                low, high = head.pan_range_deg
-                problems.append(
-                    Problem(
-                        (*base, "ptz", "pan_deg"),
-                        f"must lie in the head's pan range [{low:g}, {high:g}]°, got {ptz.pan_deg:g}",
-                    )
-                )
-            low, high = head.tilt_range_deg
-            if not low <= ptz.tilt_deg <= high:
-                problems.append(
-                    Problem(
-                        (*base, "ptz", "tilt_deg"),
-                        f"must lie in the head's tilt range [{low:g}, {high:g}]°, got {ptz.tilt_deg:g}",
-                    )
-                )
             for axis in ("pan", "tilt"):
                 limit = getattr(ptz, f"{axis}_max_deg_s")
                 head_max = getattr(head, f"{axis}_max_deg_s")

@@ -492,7 +492,12 @@ class Ptz(Model):
     """Mechanical resolution of pan, degrees (0 = continuous)."""
     tilt_step_deg: NonNegativeFloat = 0.0
     zoom_wide_to_tele_s: PositiveFloat = 3.5
-    """Time for a full zoom sweep, s."""
+    """Time for a full zoom sweep, s. The zoom motor moves magnification at a constant rate in log
+    scale (1×→2× takes as long as 10×→20×) and reaches that rate in `ZOOM_RAMP_S` (camgen.plan.ptz)."""
+    autofocus_time_s: NonNegativeFloat = 0.0
+    """Time constant with which the focus follows the distance of the view after the head moves or
+    zooms, s (first order in dioptres); 0 focuses instantly. Autofocus lag blurs the first frames
+    after a zoom."""
 
     @model_validator(mode="after")
     def _check(self) -> Ptz:

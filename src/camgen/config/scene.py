@@ -6,11 +6,12 @@ World frame: right-handed, Z up, metres, ground at z = 0 (DESIGN.md "Conventions
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, ValidationError, ValidatorFunctionWrapHandler, field_validator, model_validator
 
 from camgen.config.base import Model, invalid
+from camgen.config.ptz_program import FollowProgram, PtzPreset, PtzProgram, program_presets
 
 # Lights the renderer shades per type. Sun and spot lights each need a shadow-map texture unit;
 # OpenGL 3.3 guarantees 16 units, of which pyrender reserves 6, so 4 of each fit anywhere.
@@ -146,7 +147,7 @@ class Environment(Model):
 
 
 class ActorPath(Model):
-    """Constant-speed motion along straight segments between ground waypoints."""
+    """Constant-speed motion along straight segments between ground waypoints, pausing at each."""
 
     waypoints_m: Annotated[list[tuple[float, float]], Field(min_length=1)]
     """[[x, y], …] on the ground, m. One waypoint: the actor stands still."""
@@ -155,6 +156,29 @@ class ActorPath(Model):
     """When the actor leaves the first waypoint, s."""
     loop: bool = False
     """Return to the first waypoint and repeat; otherwise stop at the last one."""
+    pause_s: NonNegativeFloat | list[NonNegativeFloat] = 0.0
+    """How long the actor stands at each waypoint it reaches before walking on, s: one number for every
+    waypoint, or a list with one per waypoint. A loop also pauses at the first waypoint on each return;
+    the wait before the first departure is start_s. The actor keeps the heading it arrived with."""
+
+    @field_validator("pause_s", mode="wrap")
+    @classmethod
+    def _one_pause_error(cls, value: Any, handler: ValidatorFunctionWrapHandler) -> float | list[float]:
+        # Both forms of the union would report a failure; report it once, for the form that was meant.
+        try:
+            return handler(value)
+        except ValidationError:
+            pass
+        if isinstance(value, list):
+            for i, item in enumerate(value):
+                if not _is_number(item) or item < 0:
+                    raise invalid(f"[{i}]", f"must be a number ≥ 0 (seconds at waypoint {i}), got {item!r}") from None
+        if _is_number(value):
+            raise invalid("", f"must be ≥ 0, got {value:g}; give the seconds to stand at each waypoint") from None
+        raise invalid(
+            "",
+            f"must be a number of seconds ≥ 0 or a list of them (one per waypoint), got {value!r}",
+        ) from None
 
     @model_validator(mode="after")
     def _check(self) -> ActorPath:
@@ -163,7 +187,68 @@ class ActorPath(Model):
             if points[i] == points[i - 1]:
                 raise invalid(
                     f"waypoints_m[{i}]",
-                    f"repeats the previous waypoint {list(points[i])}; remove it (use start_s to wait)",
+                    f"repeats the previous waypoint {list(points[i])}; remove it (use pause_s or start_s to wait)",
+                )
+        if isinstance(self.pause_s, list) and len(self.pause_s) != len(points):
+            raise invalid(
+                "pause_s",
+                f"must have one pause per waypoint ({len(points)}), got {len(self.pause_s)}: "
+                f"[{', '.join(f'{p:g}' for p in self.pause_s)}]; add or remove values, or give one number "
+                "for every waypoint",
+            )
+        return self
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+class RandomWalk(Model):
+    """Wandering inside a rectangle on the ground: straight legs of random heading and length, each
+    followed by a random pause.
+
+    Each leg draws a heading uniformly, a length uniformly in leg_length_m and a pause uniformly in
+    pause_s. A leg that would leave the region is shortened to end on its edge; from an edge, a heading
+    that points out of the region is mirrored back into it. The walk is resolved into waypoints once
+    per scene, so the same seed always gives the same walk.
+    """
+
+    region_m: tuple[tuple[float, float], tuple[float, float]]
+    """[[x_min, y_min], [x_max, y_max]]: the rectangle (aligned with the world axes) the actor stays in, m."""
+    start_m: tuple[float, float] | None = None
+    """[x, y] where the walk starts, inside region_m, m; null is the region's centre."""
+    speed_m_s: Annotated[float, Field(gt=0, le=100)] = 1.4
+    leg_length_m: tuple[PositiveFloat, PositiveFloat] = (3.0, 10.0)
+    """[min, max] length of one straight leg, m (shorter where the region's edge stops it)."""
+    pause_s: tuple[NonNegativeFloat, NonNegativeFloat] = (0.0, 2.0)
+    """[min, max] time the actor stands still after each leg, s."""
+    start_s: NonNegativeFloat = 0.0
+    """When the actor leaves its start point, s."""
+    seed: Annotated[int, Field(ge=0)] | None = None
+    """Seed of this walk; null derives one from the scene's seed and the actor's place in the scene."""
+
+    @model_validator(mode="after")
+    def _check(self) -> RandomWalk:
+        (x_min, y_min), (x_max, y_max) = self.region_m
+        if not (x_min < x_max and y_min < y_max):
+            raise invalid(
+                "region_m",
+                f"must be [[x_min, y_min], [x_max, y_max]] with x_min < x_max and y_min < y_max, got "
+                f"[[{x_min:g}, {y_min:g}], [{x_max:g}, {y_max:g}]]; give the lower-left corner first",
+            )
+        if self.start_m is not None:
+            x, y = self.start_m
+            if not (x_min <= x <= x_max and y_min <= y <= y_max):
+                raise invalid(
+                    "start_m",
+                    f"must lie inside region_m [[{x_min:g}, {y_min:g}], [{x_max:g}, {y_max:g}]], got "
+                    f"[{x:g}, {y:g}]; move it inside, or use null to start at the region's centre",
+                )
+        for key, unit in (("leg_length_m", "m"), ("pause_s", "s")):
+            low, high = getattr(self, key)
+            if low > high:
+                raise invalid(
+                    key, f"must be ordered [min, max] with min ≤ max, got [{low:g}, {high:g}] {unit}; swap them"
                 )
         return self
 
@@ -181,7 +266,22 @@ class Actor(Model):
     shape: ActorShape | None = None
     """Geometry in the actor's frame (x forward, z up, origin on the ground): shapes are centred on their
     position_m, so give z = height/2 to stand on the ground. null uses a class-typical size."""
-    path: ActorPath
+    path: ActorPath | None = None
+    """Waypoints to follow; give either this or random_walk."""
+    random_walk: RandomWalk | None = None
+    """A region to wander in; give either this or path."""
+
+    @model_validator(mode="after")
+    def _check(self) -> Actor:
+        if self.path is None and self.random_walk is None:
+            raise invalid(
+                "",
+                "needs a path or a random_walk, got neither; add path: {waypoints_m: [[x, y], …]} or "
+                "random_walk: {region_m: [[x_min, y_min], [x_max, y_max]]}",
+            )
+        if self.path is not None and self.random_walk is not None:
+            raise invalid("random_walk", "cannot be given together with path; keep one of the two")
+        return self
 
 
 class Mount(Model):
@@ -197,18 +297,79 @@ class Mount(Model):
     seen from behind it, so the picture's content turns counter-clockwise."""
 
 
-class PtzPosition(Model):
-    """Position of a PTZ head relative to its mount, and speed limits set on this camera."""
+class HeadPositions(Model):
+    """Where a (mechanical or virtual) PTZ starts, its stored presets and its program."""
 
     pan_deg: float = 0.0
     """Counter-clockwise about the mount's up axis, degrees."""
     tilt_deg: float = 0.0
     """Up about the mount's right axis, degrees; negative looks down."""
     zoom_x: Annotated[float, Field(ge=1)] = 1.0
-    """Optical zoom factor: focal length = wide-end focal length × zoom_x."""
+    presets: list[PtzPreset] = []
+    """Named positions stored in this camera (for `preset` and `tour` programs)."""
+    program: PtzProgram | None = None
+    """What the head does over time; null holds the position above (which is also where any
+    program starts)."""
+
+    @model_validator(mode="after")
+    def _check_presets(self) -> HeadPositions:
+        names: dict[str, int] = {}
+        for i, preset in enumerate(self.presets):
+            if preset.name in names:
+                raise invalid(
+                    f"presets[{i}].name",
+                    f"must be unique, got {preset.name!r} again (first at presets[{names[preset.name]}])",
+                )
+            names[preset.name] = i
+        for path, name in program_presets(self.program):
+            if name not in names:
+                known = ", ".join(repr(n) for n in names) or "none"
+                raise invalid(
+                    f"program.{path}",
+                    f"names preset {name!r}, which this camera does not have (presets: {known}); add it under presets",
+                )
+        return self
+
+
+class PtzPosition(HeadPositions):
+    """Position of a PTZ head relative to its mount, and speed limits set on this camera.
+
+    zoom_x is the optical zoom: focal length = wide-end focal length × zoom_x."""
+
     pan_max_deg_s: PositiveFloat | None = None
     """Pan speed limit configured on this camera, deg/s; null uses the head's maximum."""
     tilt_max_deg_s: PositiveFloat | None = None
+
+
+class Eptz(HeadPositions):
+    """Virtual PTZ (ePTZ): a window cropped from a fixed high-resolution sensor and scaled to the
+    output size, as the seed paper describes. Nothing moves physically.
+
+    Pan and tilt aim the window's centre along that direction from the mount (the window is centred
+    on where the lens images it); zoom_x = 1 is the largest window of the output's aspect ratio that
+    fits the sensor, zoom_x = z one z times smaller. The window never leaves the sensor (it is
+    stopped at the border). The stream is `output_size_px`; beyond the sensor's native resolution
+    (window smaller than the output) the scaler interpolates, as real cameras do."""
+
+    output_size_px: tuple[Annotated[int, Field(ge=16, le=16384)], Annotated[int, Field(ge=16, le=16384)]]
+    """[width, height] of the stream, px."""
+    zoom_max_x: Annotated[float, Field(ge=1, le=64)] = 4.0
+    """Largest digital zoom."""
+    pan_max_deg_s: PositiveFloat = 30.0
+    """Fastest virtual pan, deg/s."""
+    tilt_max_deg_s: PositiveFloat = 30.0
+    accel_deg_s2: PositiveFloat = 120.0
+    """Acceleration of the virtual pan and tilt, deg/s²."""
+    zoom_wide_to_tele_s: PositiveFloat = 2.0
+    """Time for the full digital zoom range, s (constant rate in log scale)."""
+
+    @model_validator(mode="after")
+    def _check_zoom(self) -> Eptz:
+        zooms = [("zoom_x", self.zoom_x)] + [(f"presets[{i}].zoom_x", p.zoom_x) for i, p in enumerate(self.presets)]
+        for key, zoom in zooms:
+            if zoom > self.zoom_max_x + 1e-9:
+                raise invalid(key, f"must be ≤ zoom_max_x ({self.zoom_max_x:g}), got {zoom:g}")
+        return self
 
 
 class Camera(Model):
@@ -220,10 +381,25 @@ class Camera(Model):
     mount: Mount
     ptz: PtzPosition | None = None
     """Head position for PTZ cameras; a fixed camera is aimed by its mount alone."""
+    eptz: Eptz | None = None
+    """Virtual PTZ on a fixed camera: the stream is a moving crop of the sensor."""
     focal_length_mm: PositiveFloat | None = None
     """Installed focal length of a varifocal (non-PTZ) lens, mm; null uses the wide end."""
     focus_distance_m: PositiveFloat | None = None
     """Overrides the profile's focus distance, m."""
+
+    @model_validator(mode="after")
+    def _check_heads(self) -> Camera:
+        if self.ptz is not None and self.eptz is not None:
+            raise invalid(
+                "eptz", "must not be set together with ptz: a camera has a mechanical or a virtual head; drop one"
+            )
+        return self
+
+    @property
+    def head(self) -> HeadPositions | None:
+        """The camera's (mechanical or virtual) PTZ settings, if any."""
+        return self.ptz if self.ptz is not None else self.eptz
 
 
 class Outputs(Model):
@@ -267,6 +443,15 @@ class Scene(Model):
                         f"must be unique, got {item.name!r} again (first at {key}[{seen[item.name]}])",
                     )
                 seen[item.name] = i
+        actor_names = [actor.name for actor in self.actors]
+        for i, camera in enumerate(self.cameras):
+            program = camera.head.program if camera.head is not None else None
+            if isinstance(program, FollowProgram) and program.target not in actor_names:
+                known = ", ".join(repr(n) for n in actor_names) or "none"
+                raise invalid(
+                    f"cameras[{i}].{'ptz' if camera.ptz is not None else 'eptz'}.program.target",
+                    f"names actor {program.target!r}, which the scene does not have (actors: {known})",
+                )
         for kind, limit in MAX_LIGHTS.items():
             indices = [i for i, light in enumerate(self.lights) if light.type == kind]
             if len(indices) > limit:

@@ -49,6 +49,8 @@ def _data_path(loc: tuple, data: Any) -> KeyPath:
         elif isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node):
             node = node[part]
             path.append(part)
+        elif isinstance(node, dict) and part == node.get("type"):
+            continue  # the tag of a discriminated union, also when a model validator's error ends on it
         elif last or not isinstance(node, dict):
             path.append(part)
         # else: a discriminator tag such as 'box' in ('meshes', 0, 'box', 'size_m'): not user data

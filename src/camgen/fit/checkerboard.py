@@ -54,10 +54,18 @@ def find_corners(gray8: np.ndarray, inner: tuple[int, int]) -> np.ndarray | None
     return corners if found else None
 
 
-def calibrate(board: CheckerboardMesh, corners: list[np.ndarray], size_px: tuple[int, int]) -> Calibration:
-    """`cv2.calibrateCamera` over the views whose corners were found (k1, k2, p1, p2, k3 free)."""
+RECTILINEAR = cv2.CALIB_ZERO_TANGENT_DIST | cv2.CALIB_FIX_K1 | cv2.CALIB_FIX_K2 | cv2.CALIB_FIX_K3
+"""`calibrate` flags for a lens known to be free of distortion: only the intrinsics are fitted, which
+removes their correlation with k1…k3 (it matters at long focal lengths, where perspective is weak)."""
+
+
+def calibrate(
+    board: CheckerboardMesh, corners: list[np.ndarray], size_px: tuple[int, int], flags: int = 0
+) -> Calibration:
+    """`cv2.calibrateCamera` over the views whose corners were found (k1, k2, p1, p2, k3 free unless
+    `flags` fix them, e.g. `RECTILINEAR`)."""
     if len(corners) < 3:
         raise ValueError(f"calibration needs the board in at least 3 views, found it in {len(corners)}")
     points = board_points_m(board)
-    rms, K, dist, _, _ = cv2.calibrateCamera([points] * len(corners), corners, size_px, None, None)
+    rms, K, dist, _, _ = cv2.calibrateCamera([points] * len(corners), corners, size_px, None, None, flags=flags)
     return Calibration(float(rms), K, dist.ravel(), len(corners))

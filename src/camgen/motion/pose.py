@@ -31,13 +31,20 @@ def rot_z(angle_rad: float) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
+def R_world_from_mount(yaw_deg: float, pitch_deg: float, roll_deg: float) -> np.ndarray:
+    """Rotation taking the mount's head-frame axes (x forward, y left, z up at pan = tilt = 0) to world axes."""
+    return rot_z(math.radians(yaw_deg)) @ rot_y(-math.radians(pitch_deg)) @ rot_x(math.radians(roll_deg))
+
+
+def R_mount_from_head(pan_deg: float, tilt_deg: float) -> np.ndarray:
+    return rot_z(math.radians(pan_deg)) @ rot_y(-math.radians(tilt_deg))
+
+
 def R_world_from_cam(
     yaw_deg: float, pitch_deg: float, roll_deg: float, pan_deg: float = 0.0, tilt_deg: float = 0.0
 ) -> np.ndarray:
     """Rotation taking OpenCV camera axes to world axes (3×3, float64)."""
-    mount = rot_z(math.radians(yaw_deg)) @ rot_y(-math.radians(pitch_deg)) @ rot_x(math.radians(roll_deg))
-    head = rot_z(math.radians(pan_deg)) @ rot_y(-math.radians(tilt_deg))
-    return mount @ head @ R_HEAD_FROM_CV
+    return R_world_from_mount(yaw_deg, pitch_deg, roll_deg) @ R_mount_from_head(pan_deg, tilt_deg) @ R_HEAD_FROM_CV
 
 
 def T_world_from_cam(position_m, R: np.ndarray) -> np.ndarray:

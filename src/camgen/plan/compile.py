@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -17,19 +18,14 @@ from camgen.config.loader import LoadedScene, check_cameras
 from camgen.config.profile import Profile
 from camgen.config.scene import (
     Actor,
-    BoxMesh,
     Camera,
-    CheckerboardMesh,
-    CylinderMesh,
-    FileMesh,
-    PlaneMesh,
     Scene,
-    SphereMesh,
     actor_shape,
 )
 from camgen.errors import ConfigError
-from camgen.motion.pose import R_world_from_cam, T_world_from_cam, rot_z, rotation_xyz_deg
-from camgen.motion.trajectory import position_on_path
+from camgen.isp.eptz import eptz_window_px, output_camera_matrix, window_centre_px
+from camgen.motion.pose import R_world_from_cam, T_world_from_cam, rot_z
+from camgen.motion.trajectory import Route, actor_routes
 from camgen.optics.diffraction import CHANNEL_WAVELENGTHS_UM
 from camgen.optics.distortion import max_displacement_px, undistort_normalized
 from camgen.optics.intrinsics import (
@@ -44,7 +40,8 @@ from camgen.optics.projection import LensInversionError
 from camgen.optics.remap import SUPPORT_PX, LensGeometry, border_points_px, source_overshoot_px
 from camgen.optics.vignetting import aperture_weight, relative_illumination
 from camgen.plan.job import CameraJob, CameraState, Decision, Job, PlanSettings, RenderSpec, Stage
-from camgen.plan.visibility import box_corners, visible_depth_range_m
+from camgen.plan.ptz import head_track
+from camgen.plan.visibility import Bounds, box_corners, local_bounds, placement, visible_depth_range_m
 from camgen.sensor.capture import NOISE_TERM_OFF, NOISE_TERMS, noise_term_is_on
 
 WAVELENGTH_UM = 0.55  # mid-visible, for the diffraction estimate
@@ -52,73 +49,28 @@ MOTION_SAMPLE_STEP_PX = 1.0
 """Largest image motion between the sub-frames that integrate one exposure, px."""
 MOTION_SAMPLES_MAX = 32
 
-Bounds = tuple[np.ndarray, np.ndarray]
+
+def _path_positions(route: Route, times_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Ground positions (…, 2) m and headings (…) rad of an actor on `route` at `times_s` (…) s."""
+    return route.at(times_s)
 
 
-def local_bounds(shape, file_bounds: Mapping[str, Bounds] | None = None) -> Bounds:
-    """Axis-aligned bounds of a mesh in its own frame, before its placement."""
-    if isinstance(shape, BoxMesh):
-        half = np.array(shape.size_m) / 2
-        return -half, half
-    if isinstance(shape, CylinderMesh):
-        half = np.array([shape.radius_m, shape.radius_m, shape.height_m / 2])
-        return -half, half
-    if isinstance(shape, SphereMesh):
-        return -np.full(3, shape.radius_m), np.full(3, shape.radius_m)
-    if isinstance(shape, PlaneMesh):
-        half = np.array([shape.size_m[0] / 2, shape.size_m[1] / 2, 0.0])
-        return -half, half
-    if isinstance(shape, CheckerboardMesh):
-        border = shape.border_width_m
-        half = np.array([s * shape.square_size_m / 2 + border for s in shape.squares] + [0.0])
-        return -half, half
-    if isinstance(shape, FileMesh):
-        if not file_bounds or shape.path not in file_bounds:
-            raise ConfigError(f"the bounds of mesh file {shape.path!r} were not loaded; use camgen.config.load_scene")
-        low, high = file_bounds[shape.path]
-        return np.asarray(low) * shape.scale, np.asarray(high) * shape.scale
-    raise TypeError(f"unknown shape {type(shape).__name__}")
-
-
-def _placement(shape) -> np.ndarray:
-    return T_world_from_cam(shape.position_m, rotation_xyz_deg(shape.rotation_deg))
-
-
-def _path_positions(actor: Actor, times_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    path = actor.path
-    return position_on_path(np.array(path.waypoints_m), path.speed_m_s, path.start_s, path.loop, times_s)
-
-
-def _actor_swept_boxes(actor: Actor, file_bounds, duration_s: float) -> list[np.ndarray]:
+def _actor_swept_boxes(actor: Actor, route: Route, file_bounds, duration_s: float) -> list[np.ndarray]:
     """World corners of boxes that contain everything the actor occupies during the sequence.
 
-    Along one straight segment the actor's box slides along its heading, so the volume it sweeps is
-    its box stretched by the distance covered: one oriented box per segment travelled.
+    Along one straight leg the actor's box slides along its heading, so the volume it sweeps is its
+    box stretched by the distance covered: one oriented box per leg travelled (a loop's legs once).
+    Standing still sweeps nothing more: a pause is at a leg's end, with that leg's heading.
     """
     shape = actor_shape(actor)
     low, high = local_bounds(shape, file_bounds)
-    corners_local = box_corners(low, high, _placement(shape))
+    corners_local = box_corners(low, high, placement(shape))
     low, high = corners_local.min(axis=0), corners_local.max(axis=0)
-    path = actor.path
-    points = np.array(path.waypoints_m, dtype=np.float64)
-    if len(points) == 1:
-        return [box_corners(low, high, T_world_from_cam((*points[0], 0.0), np.eye(3)))]
-    if path.loop:
-        points = np.vstack([points, points[:1]])
-    lengths = np.hypot(*np.diff(points, axis=0).T)
-    travelled = max(0.0, duration_s - path.start_s) * path.speed_m_s
-    if path.loop:
-        travelled = min(travelled, lengths.sum())
-    boxes, start = [], 0.0
-    for i, length in enumerate(lengths):
-        covered = min(length, travelled - start)
-        if covered < 0:
-            break
-        dx, dy = points[i + 1] - points[i]
-        T = T_world_from_cam((*points[i], 0.0), rot_z(math.atan2(dy, dx)))
-        boxes.append(box_corners(low, high + np.array([covered, 0.0, 0.0]), T))
-        start += length
-    return boxes
+    starts_m, headings_rad, lengths_m = route.legs_until(duration_s)
+    return [
+        box_corners(low, high + np.array([length, 0.0, 0.0]), T_world_from_cam((*start, 0.0), rot_z(heading)))
+        for start, heading, length in zip(starts_m, headings_rad, lengths_m, strict=True)
+    ]
 
 
 def _camera_focal_length_mm(camera: Camera, profile: Profile) -> tuple[float, float]:
@@ -170,6 +122,7 @@ def _corner_illumination(K, distortion, width_px, height_px, vignetting, weight)
 
 def _actor_motion_px(
     actors: list[Actor],
+    routes: Mapping[str, Route],
     times_s: np.ndarray,
     exposure_s: float,
     T_world_from_cam_: np.ndarray,
@@ -182,11 +135,11 @@ def _actor_motion_px(
     T_cam_from_world = np.linalg.inv(T_world_from_cam_)
     worst = 0.0
     for actor in actors:
-        if len(actor.path.waypoints_m) < 2:
+        if not routes[actor.name].moves:
             continue
         shape = actor_shape(actor)
-        top = float(box_corners(*local_bounds(shape, file_bounds), _placement(shape))[:, 2].max())
-        ends = [_path_positions(actor, t)[0] for t in (times_s, times_s + exposure_s)]
+        top = float(box_corners(*local_bounds(shape, file_bounds), placement(shape))[:, 2].max())
+        ends = [_path_positions(routes[actor.name], t)[0] for t in (times_s, times_s + exposure_s)]
         for height in (0.0, top):
             pts = [np.column_stack([xy, np.full(len(xy), height)]) for xy in ends]
             cams = [p @ T_cam_from_world[:3, :3].T + T_cam_from_world[:3, 3] for p in pts]
@@ -204,6 +157,19 @@ def _actor_motion_px(
             if inside.any():
                 worst = max(worst, float(np.max(np.hypot(*(uv[1] - uv[0])[inside].T))))
     return worst
+
+
+def _camera_motion_px(track: dict, frame: int, K: np.ndarray, width_px: int, height_px: int) -> float:
+    """Image speed of the farthest pixel while the head pans, tilts and zooms at frame `frame`, px/s.
+
+    A rotation at angular speed ω moves the image point at normalised radius r by at most f·ω·(1 + r²)
+    (pan and tilt turn about perpendicular axes, so ω = √(pan rate² + tilt rate²)); a zoom at rate
+    d ln f/dt moves it by its distance from the principal point times that rate.
+    """
+    omega_rad_s = math.radians(math.hypot(track["pan_deg_s"][frame], track["tilt_deg_s"][frame]))
+    corner_norm = corner_radius_normalized(K, width_px, height_px)
+    rotation = max(K[0, 0], K[1, 1]) * omega_rad_s * (1.0 + corner_norm**2)
+    return rotation + corner_radius_px(K, width_px, height_px) * abs(track["log_zoom_per_s"][frame])
 
 
 def _focus_distance_m(
@@ -234,6 +200,63 @@ def _decision(stage: str, include: bool, force: bool, reason: str, **measure) ->
     return Decision(stage=stage, included=include, reason=reason, **measure)
 
 
+@dataclass(frozen=True)
+class _LensState:
+    """The lens at one focal length: what the per-frame states and the decisions need."""
+
+    focal_length_mm: float
+    f_number: float
+    distortion: np.ndarray
+    K: np.ndarray
+
+
+def _frame_track(scene: Scene, camera: Camera, profile: Profile, routes, file_bounds):
+    """Per-frame pan, tilt, zoom, their rates, and the program's mode and target (fixed cameras hold)."""
+    frames = scene.frame_count
+    track = head_track(scene, camera, profile, routes, file_bounds)
+    if track is None:
+        focal_length_mm, zoom_x = _camera_focal_length_mm(camera, profile)
+        zeros = np.zeros(frames)
+        return dict(
+            pan_deg=zeros,
+            tilt_deg=zeros,
+            zoom_x=np.full(frames, zoom_x),
+            focal_length_mm=np.full(frames, focal_length_mm),
+            pan_deg_s=zeros,
+            tilt_deg_s=zeros,
+            log_zoom_per_s=zeros,
+            modes=(None,) * frames,
+            targets=(None,) * frames,
+        )
+    optical_zoom = camera.eptz is None  # a virtual PTZ crops: the lens stays where it is installed
+    return dict(
+        pan_deg=track.pan_deg,
+        tilt_deg=track.tilt_deg,
+        zoom_x=track.zoom_x,
+        focal_length_mm=profile.lens.focal_length_min_mm * track.zoom_x
+        if optical_zoom
+        else np.full(frames, _camera_focal_length_mm(camera, profile)[0]),
+        pan_deg_s=track.pan_deg_s,
+        tilt_deg_s=track.tilt_deg_s,
+        log_zoom_per_s=track.log_zoom_per_s,
+        modes=track.modes,
+        targets=track.targets,
+    )
+
+
+def _autofocus(wanted_m: np.ndarray, time_constant_s: float, fps: float) -> np.ndarray:
+    """Focus distance per frame that follows `wanted_m` with a first-order lag in dioptres."""
+    if time_constant_s <= 0 or len(wanted_m) < 2:
+        return wanted_m
+    alpha = 1.0 - math.exp(-1.0 / (fps * time_constant_s))
+    dioptres = 1.0 / wanted_m
+    out = np.empty_like(dioptres)
+    out[0] = dioptres[0]  # the camera has been focused on its first view
+    for k in range(1, len(dioptres)):
+        out[k] = out[k - 1] + alpha * (dioptres[k] - out[k - 1])
+    return 1.0 / out
+
+
 def _compile_camera(
     scene: Scene,
     camera_index: int,
@@ -244,21 +267,35 @@ def _compile_camera(
     static_boxes: list[np.ndarray],
     actor_boxes: list[np.ndarray],
     file_bounds,
+    routes,
 ) -> CameraJob:
     sensor, lens, outputs = profile.sensor, profile.lens, scene.outputs
     force = settings.force_all_stages
     W, H = sensor.width_px, sensor.height_px
     pitch_mm = sensor.pixel_pitch_um * 1e-3
-    focal_length_mm, zoom_x = _camera_focal_length_mm(camera, profile)
-    f_number, distortion = lens.at_focal_length(focal_length_mm)
-    dist = distortion.as_array()
-    K = camera_matrix_px(
-        focal_length_mm, sensor.pixel_pitch_um, sensor.pitch_y_um, W, H, sensor.principal_point_offset_px
-    )
-    pan = camera.ptz.pan_deg if camera.ptz else 0.0
-    tilt = camera.ptz.tilt_deg if camera.ptz else 0.0
+    frames = scene.frame_count
+    times = np.arange(frames) / scene.fps
+    track = _frame_track(scene, camera, profile, routes, file_bounds)
+    # Distinct lens states (zoom steps) and views (pan, tilt, zoom): the decisions take the worst case.
+    lens_of: dict[float, _LensState] = {}
+    for focal_length_mm in track["focal_length_mm"]:
+        key = round(float(focal_length_mm), 9)
+        if key not in lens_of:
+            f_number, distortion = lens.at_focal_length(key)
+            K = camera_matrix_px(key, sensor.pixel_pitch_um, sensor.pitch_y_um, W, H, sensor.principal_point_offset_px)
+            lens_of[key] = _LensState(key, f_number, distortion.as_array(), K)
+    frame_lens = [lens_of[round(float(f), 9)] for f in track["focal_length_mm"]]
+    states_lens = list(lens_of.values())
     m = camera.mount
-    T = T_world_from_cam(m.position_m, R_world_from_cam(m.yaw_deg, m.pitch_deg, m.roll_deg, pan, tilt))
+    virtual = camera.eptz is not None  # the camera itself does not move
+    view_keys = [
+        (0.0, 0.0, ls.focal_length_mm) if virtual else (round(float(p), 9), round(float(t), 9), ls.focal_length_mm)
+        for p, t, ls in zip(track["pan_deg"], track["tilt_deg"], frame_lens, strict=True)
+    ]
+    pose_of = {
+        key: T_world_from_cam(m.position_m, R_world_from_cam(m.yaw_deg, m.pitch_deg, m.roll_deg, key[0], key[1]))
+        for key in dict.fromkeys(view_keys)
+    }
     exposure = profile.exposure
     frame_period_s = 1.0 / scene.fps
     exposure_longest_s = (
@@ -273,16 +310,19 @@ def _compile_camera(
     stages: list[Stage] = []
     tol = settings.geometry_tolerance_px
     blur_max = settings.blur_diameter_threshold_px
+    zooms = len(states_lens) > 1
+    over_zoom = f" over {len(states_lens)} zoom steps" if zooms else ""
 
     # --- geometric lens effects: one remap ------------------------------------------------------
-    distortion_px = max_displacement_px(dist, K, W, H)
+    distortion_px = max(max_displacement_px(ls.distortion, ls.K, W, H) for ls in states_lens)
+    no_distortion = all(not np.any(ls.distortion) for ls in states_lens)
     use_distortion = needs_image or annotations
     decisions.append(
         _decision(
             "optics.distortion",
             distortion_px > tol and use_distortion,
             force,
-            "all coefficients are zero" if distortion.is_zero else f"largest displacement {distortion_px:.3g} px",
+            "all coefficients are zero" if no_distortion else f"largest displacement {distortion_px:.3g} px{over_zoom}",
             effect=distortion_px,
             threshold=tol,
             unit="px",
@@ -290,7 +330,7 @@ def _compile_camera(
     )
     ca = lens.chromatic_aberration
     ca_scales = (1.0,) if mono else (ca.lateral_scale_r, 1.0, ca.lateral_scale_b)
-    corner_px = corner_radius_px(K, W, H)
+    corner_px = max(corner_radius_px(ls.K, W, H) for ls in states_lens)
     ca_px = max(abs(s - 1.0) for s in ca_scales) * corner_px
     decisions.append(
         _decision(
@@ -306,54 +346,78 @@ def _compile_camera(
     remap = decisions[-2].included or decisions[-1].included
     geometric_margin = (0.0, 0.0, 0.0, 0.0)
     if remap:
-        overshoot = _source_overshoot_px(
-            K,
-            dist if decisions[-2].included else np.zeros(8),
-            ca_scales if decisions[-1].included else (1.0,),
-            W,
-            H,
-            f"cameras[{camera_index}]",
+        overshoots = [
+            _source_overshoot_px(
+                ls.K,
+                ls.distortion if decisions[-2].included else np.zeros(8),
+                ca_scales if decisions[-1].included else (1.0,),
+                W,
+                H,
+                f"cameras[{camera_index}]",
+            )
+            for ls in states_lens
+        ]
+        geometric_margin = tuple(
+            max(side) + SUPPORT_PX[settings.remap_interpolation] for side in zip(*overshoots, strict=True)
         )
-        geometric_margin = tuple(x + SUPPORT_PX[settings.remap_interpolation] for x in overshoot)
     # What the lens actually sees: the pinhole extent the output frame samples (wider under barrel).
     seen_left, seen_top, seen_right, seen_bottom = (math.ceil(x) for x in geometric_margin)
-    K_seen = K.copy()
-    K_seen[0, 2] += seen_left
-    K_seen[1, 2] += seen_top
-    depth_range = visible_depth_range_m(
-        static_boxes + actor_boxes, T, K_seen, W + seen_left + seen_right, H + seen_top + seen_bottom
-    )
-    focus_m, focus_reason = _focus_distance_m(camera, profile, focal_length_mm, f_number, depth_range)
+    depth_of_view: dict = {}
+    for key in dict.fromkeys(view_keys):
+        K_seen = lens_of[key[2]].K.copy()
+        K_seen[0, 2] += seen_left
+        K_seen[1, 2] += seen_top
+        depth_of_view[key] = visible_depth_range_m(
+            static_boxes + actor_boxes, pose_of[key], K_seen, W + seen_left + seen_right, H + seen_top + seen_bottom
+        )
+    focus_wanted, focus_reasons = [], []
+    for key, ls in zip(view_keys, frame_lens, strict=True):
+        focus_m, focus_reason = _focus_distance_m(camera, profile, ls.focal_length_mm, ls.f_number, depth_of_view[key])
+        focus_wanted.append(focus_m)
+        focus_reasons.append(focus_reason)
+    autofocus_s = profile.ptz.autofocus_time_s if profile.ptz is not None else 0.0
+    automatic_focus = camera.focus_distance_m is None and lens.focus_distance_m is None
+    focus_per_frame = _autofocus(np.array(focus_wanted), autofocus_s if automatic_focus else 0.0, scene.fps)
 
     # --- photometric lens effects ------------------------------------------------------------------
     vignetting = lens.vignetting
-    vignetting_weight = aperture_weight(
-        f_number, lens.at_focal_length(focal_length_mm)[0], vignetting.full_illumination_f_number
-    )
-    relative = _corner_illumination(K, dist, W, H, vignetting, vignetting_weight)
+    relative, vignetting_weight = 1.0, 1.0
+    for ls in states_lens:
+        weight = aperture_weight(
+            ls.f_number, lens.at_focal_length(ls.focal_length_mm)[0], vignetting.full_illumination_f_number
+        )
+        corner = _corner_illumination(ls.K, ls.distortion, W, H, vignetting, weight)
+        if corner < relative or ls is states_lens[0]:
+            relative, vignetting_weight = corner, weight
     falloff = 1.0 - relative
     decisions.append(
         _decision(
             "optics.vignetting",
             falloff > settings.illumination_tolerance_rel and needs_image,
             force and needs_image,
-            f"darkest border illumination {relative:.3f} of the centre",
+            f"darkest border illumination {relative:.3f} of the centre{over_zoom}",
             effect=falloff,
             threshold=settings.illumination_tolerance_rel,
             unit="relative",
         )
     )
 
-    if depth_range is None:
-        coc_px, dof_reason = 0.0, "no geometry in view"
-    else:
+    coc_px, dof_reason = 0.0, "no geometry in view"
+    for k, (key, ls) in enumerate(zip(view_keys, frame_lens, strict=True)):
+        depth_range = depth_of_view[key]
+        if depth_range is None:
+            continue
         near, far = depth_range
-        coc_mm = blur_circle_diameter_mm(np.array([near, far]), focal_length_mm, f_number, focus_m)
-        coc_px = float(np.max(coc_mm) / pitch_mm)
-        dof_reason = (
-            f"blur circle up to {coc_px:.3g} px over depths {near:.3g}–{far:.3g} m "
-            f"(f = {focal_length_mm:.4g} mm, N = {f_number:.3g}, focus {focus_m:.3g} m, {focus_reason})"
-        )
+        coc_mm = blur_circle_diameter_mm(np.array([near, far]), ls.focal_length_mm, ls.f_number, focus_per_frame[k])
+        frame_coc_px = float(np.max(coc_mm) / pitch_mm)
+        if frame_coc_px >= coc_px:
+            coc_px = frame_coc_px
+            dof_reason = (
+                f"blur circle up to {coc_px:.3g} px over depths {near:.3g}–{far:.3g} m "
+                f"(f = {ls.focal_length_mm:.4g} mm, N = {ls.f_number:.3g}, focus {focus_per_frame[k]:.3g} m, "
+                f"{focus_reasons[k]}{', autofocus lag' if autofocus_s > 0 and automatic_focus else ''}"
+                f"{f', frame {k}' if len(depth_of_view) > 1 else ''})"
+            )
     decisions.append(
         _decision(
             "optics.depth_of_field",
@@ -365,13 +429,15 @@ def _compile_camera(
             unit="px",
         )
     )
-    airy_px = 2.44 * (WAVELENGTH_UM if mono else max(CHANNEL_WAVELENGTHS_UM)) * f_number / sensor.pixel_pitch_um
+    f_number_max = max(ls.f_number for ls in states_lens)
+    f_number_min = min(ls.f_number for ls in states_lens)
+    airy_px = 2.44 * (WAVELENGTH_UM if mono else max(CHANNEL_WAVELENGTHS_UM)) * f_number_max / sensor.pixel_pitch_um
     decisions.append(
         _decision(
             "optics.diffraction",
             airy_px > blur_max and needs_image,
             force and needs_image,
-            f"Airy disc diameter 2.44·λ·N = {airy_px:.3g} px at N = {f_number:.3g}, "
+            f"Airy disc diameter 2.44·λ·N = {airy_px:.3g} px at N = {f_number_max:.3g}, "
             f"λ = {WAVELENGTH_UM if mono else max(CHANNEL_WAVELENGTHS_UM)} µm",
             effect=airy_px,
             threshold=blur_max,
@@ -379,7 +445,7 @@ def _compile_camera(
         )
     )
     axial_shifts_um = (0.0,) if mono else (ca.axial_focus_shift_r_um, 0.0, ca.axial_focus_shift_b_um)
-    axial_px = tuple(abs(shift) / f_number / sensor.pixel_pitch_um for shift in axial_shifts_um)
+    axial_px = tuple(abs(shift) / f_number_min / sensor.pixel_pitch_um for shift in axial_shifts_um)
     decisions.append(
         _decision(
             "optics.axial_ca",
@@ -387,22 +453,46 @@ def _compile_camera(
             force and needs_image and not mono,
             "monochrome sensor"
             if mono
-            else f"per-channel blur discs {axial_px[0]:.3g}, {axial_px[2]:.3g} px (red, blue) at N = {f_number:.3g}",
+            else f"per-channel blur discs {axial_px[0]:.3g}, {axial_px[2]:.3g} px (red, blue) "
+            f"at N = {f_number_min:.3g}",
             effect=max(axial_px),
             threshold=blur_max,
             unit="px",
         )
     )
-    times = np.arange(scene.frame_count) / scene.fps
-    motion_px = _actor_motion_px(scene.actors, times, exposure_longest_s, T, K, W, H, file_bounds)
+    motion_px = 0.0
+    groups: dict = {}
+    for k, key in enumerate(view_keys):
+        groups.setdefault(key, []).append(k)
+    for key, indices in groups.items():
+        motion_px = max(
+            motion_px,
+            _actor_motion_px(
+                scene.actors,
+                routes,
+                times[indices],
+                exposure_longest_s,
+                pose_of[key],
+                lens_of[key[2]].K,
+                W,
+                H,
+                file_bounds,
+            ),
+        )
+    camera_motion_px = [
+        0.0 if virtual else round(_camera_motion_px(track, k, ls.K, W, H) * exposure_longest_s, 3)
+        for k, ls in enumerate(frame_lens)
+    ]
+    camera_worst_px = max(camera_motion_px)
     decisions.append(
         _decision(
             "optics.motion_blur",
-            motion_px > blur_max and needs_image,
+            motion_px + camera_worst_px > blur_max and needs_image,
             force and needs_image,
-            f"largest actor motion {motion_px:.3g} px during a {exposure_longest_s:.3g} s exposure "
-            f"({'manual' if exposure.mode == 'manual' else 'longest auto-exposure'}); the camera is static",
-            effect=motion_px,
+            f"largest actor motion {motion_px:.3g} px and camera motion {camera_worst_px:.3g} px during a "
+            f"{exposure_longest_s:.3g} s exposure "
+            f"({'manual' if exposure.mode == 'manual' else 'longest auto-exposure'})",
+            effect=motion_px + camera_worst_px,
             threshold=blur_max,
             unit="px",
         )
@@ -415,11 +505,13 @@ def _compile_camera(
     if include["optics.depth_of_field"]:
         blur_radius = max(blur_radius, coc_px / 2)
     if include["optics.diffraction"]:
-        blur_radius = max(blur_radius, 4 * airy_sigma_um(f_number, max(CHANNEL_WAVELENGTHS_UM)) / sensor.pixel_pitch_um)
+        blur_radius = max(
+            blur_radius, 4 * airy_sigma_um(f_number_max, max(CHANNEL_WAVELENGTHS_UM)) / sensor.pixel_pitch_um
+        )
     if include["optics.axial_ca"]:
         blur_radius = max(blur_radius, max(axial_px) / 2)
     if include["optics.motion_blur"]:
-        blur_radius = max(blur_radius, motion_px)
+        blur_radius = max(blur_radius, motion_px + camera_worst_px)
     margin = tuple(math.ceil(x + blur_radius) for x in (left, top, right, bottom))
 
     # --- passes -------------------------------------------------------------------------------------
@@ -460,11 +552,21 @@ def _compile_camera(
     )
     if annotations:
         passes.append("instance_id")
-    static = True  # camera poses are constant until PTZ programs exist (motion issue)
+    # The kept background is redrawn whenever the view changes: worth it while the camera mostly rests.
+    still_frames = sum(1 for k in range(1, frames) if view_keys[k] == view_keys[k - 1]) + 1
+    still = still_frames >= frames / 2
     shadow_lights = scene.environment.shadows and any(light.type in ("sun", "spot") for light in scene.lights)
-    static_background = static and bool(scene.actors) and needs_image and not shadow_lights
+    static_background = still and bool(scene.actors) and needs_image and not shadow_lights
     if static_background:
-        static_reason = "camera and environment are static; actors are composited per frame"
+        static_reason = (
+            "camera and environment are static; actors are composited per frame"
+            if len(pose_of) == 1
+            else f"the camera rests in {still_frames} of {frames} frames; the environment is redrawn when it moves"
+        )
+    elif scene.actors and needs_image and not shadow_lights:
+        static_reason = (
+            f"the camera moves in {frames - still_frames} of {frames} frames, so every frame is drawn in full"
+        )
     elif not scene.actors:
         static_reason = "no actors: the environment alone is drawn each frame"
     elif not needs_image:
@@ -486,6 +588,7 @@ def _compile_camera(
             "optics.motion_blur",
             {
                 "displacement_max_px": motion_px,
+                "camera_motion_px": camera_motion_px,
                 "exposure_longest_s": exposure_longest_s,
                 "sample_step_px": MOTION_SAMPLE_STEP_PX,
                 "samples_max": MOTION_SAMPLES_MAX,
@@ -495,7 +598,6 @@ def _compile_camera(
         (
             "optics.depth_of_field",
             {
-                "focus_distance_m": focus_m,
                 "coc_max_px": coc_px,
                 "step_px": settings.dof_step_px,
                 "step_rel": settings.dof_step_rel,
@@ -532,6 +634,15 @@ def _compile_camera(
 
     if needs_image:
         _sensor_and_isp(profile, outputs, needs_isp, mono, force, stages, decisions)
+    if virtual:
+        eptz = camera.eptz
+        stages.append(
+            Stage(
+                name="isp.eptz",
+                passes=tuple(passes),  # the stream and its annotations are the same crop
+                params={"output_size_px": list(eptz.output_size_px), "zoom_max_x": eptz.zoom_max_x},
+            )
+        )
     if needs_isp and outputs.video:
         stages.append(Stage(name="io.video", params={"codec": profile.codec.name}))
     if outputs.frames is not None:
@@ -543,21 +654,39 @@ def _compile_camera(
     if outputs.camera_metadata:
         stages.append(Stage(name="io.camera_metadata"))
 
-    applied_dist = tuple(float(x) for x in (dist if include["optics.distortion"] else np.zeros(8)))
-    state = dict(
-        pan_deg=pan,
-        tilt_deg=tilt,
-        zoom_x=zoom_x,
-        focal_length_mm=focal_length_mm,
-        f_number=f_number,
-        focus_distance_m=focus_m,
-        exposure_time_s=exposure.exposure_time_s,
-        gain_db=exposure.gain_db,
-        K_px=tuple(map(tuple, K.tolist())),
-        distortion=applied_dist,
-        T_world_from_cam=tuple(map(tuple, T.tolist())),
-    )
-    states = tuple(CameraState(frame=i, time_s=float(t), **state) for i, t in enumerate(times))
+    output_size = tuple(camera.eptz.output_size_px) if virtual else None
+
+    def frame_state(k: int, ls: _LensState) -> CameraState:
+        applied = ls.distortion if include["optics.distortion"] else np.zeros(8)
+        window = output_K = None
+        if virtual:
+            centre = window_centre_px(float(track["pan_deg"][k]), float(track["tilt_deg"][k]), ls.K, applied)
+            window = eptz_window_px(centre, float(track["zoom_x"][k]), (W, H), output_size)
+            output_K = tuple(map(tuple, output_camera_matrix(ls.K, window, output_size).tolist()))
+        return CameraState(
+            frame=k,
+            time_s=float(times[k]),
+            pan_deg=float(track["pan_deg"][k]),
+            tilt_deg=float(track["tilt_deg"][k]),
+            zoom_x=float(track["zoom_x"][k]),
+            focal_length_mm=ls.focal_length_mm,
+            f_number=ls.f_number,
+            focus_distance_m=float(focus_per_frame[k]),
+            exposure_time_s=exposure.exposure_time_s,
+            gain_db=exposure.gain_db,
+            K_px=tuple(map(tuple, ls.K.tolist())),
+            distortion=tuple(float(x) for x in applied),
+            T_world_from_cam=tuple(map(tuple, pose_of[view_keys[k]].tolist())),
+            pan_deg_s=float(track["pan_deg_s"][k]),
+            tilt_deg_s=float(track["tilt_deg_s"][k]),
+            log_zoom_per_s=float(track["log_zoom_per_s"][k]),
+            ptz_mode=track["modes"][k],
+            follow_target=track["targets"][k],
+            window_px=window,
+            output_K_px=output_K,
+        )
+
+    states = tuple(frame_state(k, ls) for k, ls in enumerate(frame_lens))
     render = RenderSpec(
         width_px=W + margin[0] + margin[2],
         height_px=H + margin[1] + margin[3],
@@ -574,6 +703,7 @@ def _compile_camera(
         width_px=W,
         height_px=H,
         exposure_mode=exposure.mode,
+        output_size_px=output_size,
         render=render,
         stages=tuple(stages),
         decisions=tuple(decisions),
@@ -656,10 +786,13 @@ def compile(
     problems = check_cameras(scene, dict(profiles))
     if problems:
         raise ConfigError(problems)
-    static_boxes = [
-        box_corners(*local_bounds(mesh, file_bounds), _placement(mesh)) for mesh in scene.environment.meshes
+    static_boxes = [box_corners(*local_bounds(mesh, file_bounds), placement(mesh)) for mesh in scene.environment.meshes]
+    routes = actor_routes(scene)
+    actor_boxes = [
+        box
+        for actor in scene.actors
+        for box in _actor_swept_boxes(actor, routes[actor.name], file_bounds, scene.duration_s)
     ]
-    actor_boxes = [box for actor in scene.actors for box in _actor_swept_boxes(actor, file_bounds, scene.duration_s)]
     cameras = tuple(
         _compile_camera(
             scene,
@@ -671,6 +804,7 @@ def compile(
             static_boxes,
             actor_boxes,
             file_bounds,
+            routes,
         )
         for i, camera in enumerate(scene.cameras)
     )

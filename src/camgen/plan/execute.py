@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from camgen.io.files import atomic_path, write_text_atomic
+from camgen.isp.eptz import crop_and_scale
 from camgen.optics.remap import LensMapCache
 from camgen.plan.camera_pipeline import CameraPipeline, frame_rng
 from camgen.plan.job import CameraJob, Job
@@ -49,6 +50,7 @@ IMPLEMENTED_STAGES = frozenset(
         "isp.contrast_stretch",
         "isp.tone",
         "isp.sharpen",
+        "isp.eptz",
         "io.video",
         "io.camera_metadata",
     }
@@ -159,19 +161,26 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
             if pipeline is not None:
                 rng = frame_rng(job.seed, context.camera_index, frame.index)
                 captured = pipeline.process(state, frame.passes, rng=rng)
-            if captured is not None and captured.rgb8 is not None and "io.video" in stages:
+            rgb8 = None if captured is None else captured.rgb8
+            if rgb8 is not None and state.window_px is not None:
+                rgb8 = crop_and_scale(rgb8, state.window_px, camera.output_size_px)
+            if rgb8 is not None and "io.video" in stages:
                 if video is None:
+                    width_px, height_px = camera.output_size_px or (camera.width_px, camera.height_px)
                     video = VideoWriter(
                         directory / "video.mp4",
-                        width_px=camera.width_px,
-                        height_px=camera.height_px,
+                        width_px=width_px,
+                        height_px=height_px,
                         fps=job.fps,
                         codec=camera.profile.codec,
                         preset=camera.profile.codec.preset,
                     )
-                video.write(captured.rgb8)
+                video.write(rgb8)
             if "io.camera_metadata" in stages:
-                record = state.model_dump(mode="json")
+                record = state.model_dump(mode="json", exclude_none=True)
+                if state.window_px is not None:  # K_px describes the stream; the sensor's is kept beside it
+                    record["sensor_K_px"] = record["K_px"]
+                    record["K_px"] = record.pop("output_K_px")
                 if captured is not None:
                     record["metered_level_frac"] = captured.metered_level_frac
                     if captured.white_balance_rgb is not None:
@@ -182,6 +191,8 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                     table = [vars(instance) for instance in instance_table(job.scene)]
                     write_text_atomic(directory / "passes" / "instances.json", json.dumps(table, indent=1))
                 passes = lens.apply(state, frame.passes)
+                if state.window_px is not None:
+                    passes = _eptz_passes(passes, state.window_px, camera.output_size_px)
                 raw = None if captured is None else captured.raw_dn
                 _save_passes(directory / "passes" / f"{frame.index:06d}.npz", passes, raw, result)
             result.frames += 1
@@ -201,6 +212,19 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
         camera_renderer.close()
     result.total_s = time.perf_counter() - started
     return result
+
+
+def _eptz_passes(passes, window, output_size_px):
+    """The stream's crop of output-size passes: radiance averaged, depth and ids by nearest pixel."""
+    return type(passes)(
+        radiance=None if passes.radiance is None else crop_and_scale(passes.radiance, window, output_size_px),
+        depth_m=None
+        if passes.depth_m is None
+        else crop_and_scale(passes.depth_m, window, output_size_px, nearest=True),
+        instance_id=None
+        if passes.instance_id is None
+        else crop_and_scale(passes.instance_id, window, output_size_px, nearest=True),
+    )
 
 
 def _save_passes(path: Path, passes, raw_dn, result: CameraResult) -> None:

@@ -78,6 +78,18 @@ class CameraState(Frozen):
     distortion: tuple[float, float, float, float, float, float, float, float]
     """OpenCV order (k1, k2, p1, p2, k3, k4, k5, k6), as applied to the pixels."""
     T_world_from_cam: Matrix4
+    pan_deg_s: float = 0.0
+    """Head rates at the frame time (PTZ cameras): pan and tilt in deg/s, zoom in ln(zoom_x)/s."""
+    tilt_deg_s: float = 0.0
+    log_zoom_per_s: float = 0.0
+    ptz_mode: str | None = None
+    """What the PTZ program does at this frame: hold, move, dwell, scan, keyframes or follow."""
+    follow_target: str | None = None
+    """The actor the camera follows at this frame, if any."""
+    window_px: tuple[int, int, int, int] | None = None
+    """Virtual PTZ: the sensor window (x0, y0, width, height) the stream shows, px."""
+    output_K_px: Matrix3 | None = None
+    """Virtual PTZ: the camera matrix of the stream (the scaled window); K_px is the sensor's."""
 
 
 class Decision(Frozen):
@@ -119,6 +131,8 @@ class CameraJob(Frozen):
     width_px: int
     height_px: int
     exposure_mode: Literal["manual", "auto"]
+    output_size_px: tuple[int, int] | None = None
+    """Virtual PTZ: (width, height) of the stream, a scaled window of the width_px × height_px sensor."""
     render: RenderSpec
     stages: tuple[Stage, ...]
     decisions: tuple[Decision, ...]

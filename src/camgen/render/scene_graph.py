@@ -44,7 +44,7 @@ from camgen.config.scene import (
 )
 from camgen.errors import ConfigError
 from camgen.motion.pose import T_world_from_cam, rot_z, rotation_xyz_deg
-from camgen.motion.trajectory import position_on_path
+from camgen.motion.trajectory import Route, actor_routes
 from camgen.render.gl import pyrender
 
 CYLINDER_SECTIONS = 48
@@ -72,11 +72,13 @@ class SceneGraph:
     sky_luminance_cd_m2: float
     shadows: bool
     actor_local_poses: list[np.ndarray] = field(default_factory=list)
+    actor_routes: list[Route] = field(default_factory=list)
+    """Each actor's route (its path, or its random walk resolved once), in the order of `actors`."""
 
     def place_actors(self, time_s: float) -> None:
-        """Move every actor to where its path puts it at `time_s`."""
-        for actor, node, local in zip(self.actors, self.actor_nodes, self.actor_local_poses, strict=True):
-            self.scene.set_pose(node, actor_pose(actor, time_s) @ local)
+        """Move every actor to where its route puts it at `time_s`."""
+        for route, node, local in zip(self.actor_routes, self.actor_nodes, self.actor_local_poses, strict=True):
+            self.scene.set_pose(node, actor_pose(route, time_s) @ local)
 
 
 def instance_table(scene: Scene) -> tuple[Instance, ...]:
@@ -87,10 +89,9 @@ def instance_table(scene: Scene) -> tuple[Instance, ...]:
     return tuple(Instance(i, name, kind) for i, (name, kind) in enumerate(named, start=1))
 
 
-def actor_pose(actor: Actor, time_s: float) -> np.ndarray:
-    """T_world_from_actor at `time_s`: on the ground at its path position, x along its heading."""
-    path = actor.path
-    xy, heading = position_on_path(np.array(path.waypoints_m), path.speed_m_s, path.start_s, path.loop, time_s)
+def actor_pose(route: Route, time_s: float) -> np.ndarray:
+    """T_world_from_actor at `time_s`: on the ground where its route puts it, x along its heading."""
+    xy, heading = route.at(time_s)
     return T_world_from_cam((float(xy[0]), float(xy[1]), 0.0), rot_z(float(heading)))
 
 
@@ -223,6 +224,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
     # pyrender's shadow passes sort meshes by distance to the main camera; draws set its pose.
     graph.add(pyrender.IntrinsicsCamera(1.0, 1.0, 0.0, 0.0), name="camera")
     instances = instance_table(scene)
+    routes = actor_routes(scene)
     actor_nodes, local_poses, environment_nodes = [], [], []
     for actor in scene.actors:
         shape = actor_shape(actor)
@@ -243,6 +245,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         sky_luminance_cd_m2=scene.environment.sky_luminance_cd_m2,
         shadows=scene.environment.shadows,
         actor_local_poses=local_poses,
+        actor_routes=[routes[actor.name] for actor in scene.actors],
     )
     result.place_actors(0.0)
     return result

@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,6 +23,7 @@ import cv2
 import numpy as np
 
 from camgen.errors import ConfigError
+from camgen.motion.pose import R_HEAD_FROM_CV, R_mount_from_head
 from camgen.optics.motion_blur import sub_frame_count, sub_frame_offsets
 from camgen.plan.job import CameraJob, CameraState, Job, RenderSpec
 from camgen.plan.visibility import box_corners
@@ -36,6 +38,28 @@ def render_view(state: CameraState, spec: RenderSpec) -> View:
     K[0, 2] += left
     K[1, 2] += top
     return View(K, np.array(state.T_world_from_cam, dtype=np.float64), spec.width_px, spec.height_px)
+
+
+def view_at(state: CameraState, spec: RenderSpec, offset_s: float) -> View:
+    """The view `offset_s` after the frame time, with the head moving at the state's rates.
+
+    The mount is recovered from the frame's pose (R_world_from_cam = R_mount·R_head(pan, tilt)·R_cv),
+    pan and tilt advance linearly, and the zoom scales the focal lengths about the principal point.
+    """
+    still = state.pan_deg_s == 0.0 and state.tilt_deg_s == 0.0 and state.log_zoom_per_s == 0.0
+    if offset_s == 0.0 or still or state.window_px is not None:  # a virtual PTZ moves no optics
+        return render_view(state, spec)
+    view = render_view(state, spec)
+    T = view.T_world_from_cam.copy()
+    R_mount = T[:3, :3] @ R_HEAD_FROM_CV.T @ R_mount_from_head(state.pan_deg, state.tilt_deg).T
+    head = R_mount_from_head(state.pan_deg + state.pan_deg_s * offset_s, state.tilt_deg + state.tilt_deg_s * offset_s)
+    T[:3, :3] = R_mount @ head @ R_HEAD_FROM_CV
+    K = view.K_px.copy()
+    scale = math.exp(state.log_zoom_per_s * offset_s)
+    K[0, 0] *= scale
+    K[1, 1] *= scale
+    K[0, 1] *= scale
+    return View(K, T, view.width_px, view.height_px)
 
 
 def box_downsample(image: np.ndarray, factor: int) -> np.ndarray:
@@ -105,7 +129,8 @@ class CameraRenderer:
         if self._motion is None:
             return 1
         p = self._motion
-        displacement_px = p["displacement_max_px"] * state.exposure_time_s / p["exposure_longest_s"]
+        camera_px = p["camera_motion_px"][state.frame] if "camera_motion_px" in p else 0.0
+        displacement_px = (p["displacement_max_px"] + camera_px) * state.exposure_time_s / p["exposure_longest_s"]
         return sub_frame_count(
             displacement_px, step_px=p["sample_step_px"], samples_max=p["samples_max"], threshold_px=p["threshold_px"]
         )
@@ -131,10 +156,13 @@ class CameraRenderer:
             offsets = sub_frame_offsets(samples)
             for offset in offsets:
                 self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
+                sub_view = view_at(state, spec, offset * state.exposure_time_s)  # the head moves too
                 if s == 1:
-                    radiance = self._draw(view, ("radiance",), "radiance").radiance
+                    radiance = self._draw(sub_view, ("radiance",), "radiance").radiance
                 else:
-                    radiance = box_downsample(self._draw(view.scaled(s), ("radiance",), f"radiance {s}x").radiance, s)
+                    radiance = box_downsample(
+                        self._draw(sub_view.scaled(s), ("radiance",), f"radiance {s}x").radiance, s
+                    )
                 result.radiance = radiance if result.radiance is None else result.radiance + radiance
             if len(offsets) > 1:
                 result.radiance /= len(offsets)
@@ -148,17 +176,18 @@ class CameraRenderer:
 
 def _reach(graph: SceneGraph) -> tuple[np.ndarray, np.ndarray]:
     """Points (N, 3) and radii (N,) such that all geometry, at any time, lies within a radius of a
-    point: environment mesh corners (radius 0), and each actor's waypoints with its own extent
-    (an actor moves along straight segments, whose farthest point from a camera is an end)."""
+    point: environment mesh corners (radius 0), and every point each actor's route visits with the
+    actor's own extent (a route runs along straight segments, whose farthest point from a camera is
+    an end; a resolved random walk covers the whole sequence)."""
     points, radii = [], []
     for node in graph.environment_nodes:
         points.append(box_corners(*node.mesh.bounds, graph.scene.get_pose(node)))
         radii.append(np.zeros(8))
-    for actor, node, local in zip(graph.actors, graph.actor_nodes, graph.actor_local_poses, strict=True):
+    for route, node, local in zip(graph.actor_routes, graph.actor_nodes, graph.actor_local_poses, strict=True):
         radius = float(np.max(np.linalg.norm(box_corners(*node.mesh.bounds, local), axis=1)))
-        waypoints = np.array(actor.path.waypoints_m, dtype=np.float64)
-        points.append(np.column_stack([waypoints, np.zeros(len(waypoints))]))
-        radii.append(np.full(len(waypoints), radius))
+        visited = route.points_m
+        points.append(np.column_stack([visited, np.zeros(len(visited))]))
+        radii.append(np.full(len(visited), radius))
     if not points:
         return np.zeros((1, 3)), np.zeros(1)
     return np.concatenate(points), np.concatenate(radii)

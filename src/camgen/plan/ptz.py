@@ -1,0 +1,140 @@
+"""Per-frame pan, tilt and zoom of a scene camera: its program run on its head (`camgen.motion`).
+
+The head's limits come from the profile (`ptz`: ranges, speeds, accelerations, steps, zoom time)
+and the camera (its own speed limits); follow-target sees the scene's actors through their routes.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+
+from camgen.config.loader import head_ranges
+from camgen.config.profile import Profile
+from camgen.config.scene import Camera, Scene, actor_shape
+from camgen.isp.eptz import full_window_size_px
+from camgen.motion.pose import R_world_from_mount, rot_z
+from camgen.motion.programs import Follow, FollowView, Position, build_controller
+from camgen.motion.ptz import AxisLimits, HeadLimits, HeadPose, HeadTrack, simulate_head
+from camgen.motion.trajectory import Route
+from camgen.optics.intrinsics import camera_matrix_px
+from camgen.plan.visibility import box_corners, local_bounds, placement
+
+ZOOM_RAMP_S = 0.2
+"""Time the zoom motor takes to reach its full rate, s (an estimate: zoom modules publish the sweep
+time only)."""
+
+
+def head_limits(camera: Camera, profile: Profile) -> HeadLimits:
+    """The axis limits of a PTZ camera: its profile's head with the camera's own speed limits."""
+    head, ptz, lens = profile.ptz, camera.ptz, profile.lens
+    pan_speed = min(head.pan_max_deg_s, ptz.pan_max_deg_s or math.inf)
+    tilt_speed = min(head.tilt_max_deg_s, ptz.tilt_max_deg_s or math.inf)
+    pan_low, pan_high = head.pan_range_deg
+    log_zoom_max = math.log(lens.zoom_max_x)
+    zoom_rate = log_zoom_max / head.zoom_wide_to_tele_s if log_zoom_max > 0 else 1.0
+    return HeadLimits(
+        pan=AxisLimits(
+            pan_speed,
+            head.pan_accel_deg_s2,
+            low=pan_low,
+            high=pan_high,
+            endless=head.pan_continuous,
+            step=head.pan_step_deg,
+            angular=True,
+        ),
+        tilt=AxisLimits(
+            tilt_speed,
+            head.tilt_accel_deg_s2,
+            low=head.tilt_range_deg[0],
+            high=head.tilt_range_deg[1],
+            step=head.tilt_step_deg,
+        ),
+        zoom=AxisLimits(zoom_rate, zoom_rate / ZOOM_RAMP_S, low=0.0, high=max(log_zoom_max, 1e-12)),
+    )
+
+
+def actor_centre(actor, route: Route, file_bounds=None):
+    """(time_s → world centre (3,) of the actor's bounding box, the box height in m)."""
+    shape = actor_shape(actor)
+    corners = box_corners(*local_bounds(shape, file_bounds), placement(shape))
+    low, high = corners.min(axis=0), corners.max(axis=0)
+    centre_local = (low + high) / 2
+
+    def at(time_s: float) -> np.ndarray:
+        xy, heading = route.at(time_s)
+        offset = rot_z(float(heading)) @ centre_local
+        return np.array([float(xy[0]) + offset[0], float(xy[1]) + offset[1], offset[2]])
+
+    return at, float(high[2] - low[2])
+
+
+def eptz_limits(camera: Camera, profile: Profile) -> HeadLimits:
+    """The virtual head's axes: the window centre stays within the sensor's field of view."""
+    ranges = head_ranges(camera, profile)
+    eptz = camera.eptz
+    log_zoom_max = math.log(eptz.zoom_max_x)
+    zoom_rate = log_zoom_max / eptz.zoom_wide_to_tele_s if log_zoom_max > 0 else 1.0
+    return HeadLimits(
+        pan=AxisLimits(eptz.pan_max_deg_s, eptz.accel_deg_s2, low=ranges.pan_deg[0], high=ranges.pan_deg[1]),
+        tilt=AxisLimits(eptz.tilt_max_deg_s, eptz.accel_deg_s2, low=ranges.tilt_deg[0], high=ranges.tilt_deg[1]),
+        zoom=AxisLimits(zoom_rate, zoom_rate / ZOOM_RAMP_S, low=0.0, high=max(log_zoom_max, 1e-12)),
+    )
+
+
+def head_track(
+    scene: Scene,
+    camera: Camera,
+    profile: Profile,
+    routes: Mapping[str, Route],
+    file_bounds=None,
+) -> HeadTrack | None:
+    """The (mechanical or virtual) head's motion at every frame, or None for a fixed camera."""
+    settings = camera.head
+    if settings is None:
+        return None
+    virtual = camera.eptz is not None
+    limits = eptz_limits(camera, profile) if virtual else head_limits(camera, profile)
+    home = Position(settings.pan_deg, settings.tilt_deg, settings.zoom_x)
+    mount = camera.mount
+    sensor = profile.sensor
+    focal_length_mm = (
+        (camera.focal_length_mm or profile.lens.focal_length_min_mm) if virtual else profile.lens.focal_length_min_mm
+    )
+    K = camera_matrix_px(
+        focal_length_mm,
+        sensor.pixel_pitch_um,
+        sensor.pitch_y_um,
+        sensor.width_px,
+        sensor.height_px,
+        sensor.principal_point_offset_px,
+    )
+    width_px, height_px = sensor.width_px, sensor.height_px
+    fx, fy = float(K[0, 0]), float(K[1, 1])
+    if virtual:  # the stream at zoom 1: the full window scaled to the output size
+        width_px, height_px = camera.eptz.output_size_px
+        full_w, full_h = full_window_size_px((sensor.width_px, sensor.height_px), (width_px, height_px))
+        fx, fy = fx * width_px / full_w, fy * height_px / full_h
+    view = FollowView(
+        mount_position_m=tuple(mount.position_m),
+        R_world_from_mount=R_world_from_mount(mount.yaw_deg, mount.pitch_deg, mount.roll_deg),
+        fx_wide_px=fx,
+        fy_wide_px=fy,
+        width_px=width_px,
+        height_px=height_px,
+        zoom_max_x=math.exp(limits.zoom.high),
+        fps=scene.fps,
+    )
+    actors = {actor.name: actor for actor in scene.actors}
+
+    def follow(program, fallback):
+        target_at, height_m = actor_centre(actors[program.target], routes[program.target], file_bounds)
+        return Follow(program, view, target_at, height_m, fallback)
+
+    controller = build_controller(
+        settings.program, home, settings.presets, endless_pan=limits.pan.endless, follow=follow
+    )
+    start = HeadPose(settings.pan_deg, settings.tilt_deg, settings.zoom_x)
+    return simulate_head(controller, limits, start, scene.frame_count, scene.fps)
