@@ -645,6 +645,24 @@ CASES = [
         "cameras[0].eptz.presets[0].zoom_x",
         "must be ≤ zoom_max_x (2), got 3",
     ),
+    (
+        "eptz_odd_output_size",
+        "scene",
+        edit(SCENE, "pitch_deg: -20\n", "pitch_deg: -20\n    eptz: {output_size_px: [321, 181]} #<\n"),
+        "cameras[0].eptz.output_size_px",
+        "must be even for the profile's yuv420p chroma subsampling, got 321×181; use e.g. 322×182",
+    ),
+    (
+        "random_walk_legs_too_short",
+        "scene",
+        edit(
+            SCENE,
+            "    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n      speed_m_s: 1.4\n",
+            "    random_walk: {region_m: [[0, 0], [5, 5]], leg_length_m: [0.001, 1]} #<\n",
+        ),
+        "actors[0].random_walk.leg_length_m",
+        "must give legs and a region of at least 0.1 m",
+    ),
 ]
 
 

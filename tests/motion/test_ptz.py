@@ -211,3 +211,42 @@ def test_a_still_goal_is_reached_without_overshoot_in_the_trapezoid_time():
         assert position <= 90.0 + 1e-9
         steps += 1
     assert steps * dt == pytest.approx(90.0 / 100.0 + 100.0 / 200.0, abs=0.01)
+
+
+@pytest.mark.parametrize(
+    ("endless", "pan_range", "ends"),
+    [
+        (True, (-170.0, 170.0), (-170.0, 170.0)),
+        (False, (-170.0, 170.0), (-170.0, 170.0)),
+        (True, (150.0, -150.0), (150.0, 210.0)),
+    ],
+)
+def test_a_scan_sweeps_to_both_ends_and_back(endless, pan_range, ends):
+    """Endless: counter-clockwise from the first angle to the second (340° or 60° here); limited:
+    between the angles as given, never across the range's ends."""
+    limits = head(endless)
+    program = ScanProgram(type="scan", pan_range_deg=pan_range, tilt_deg=-10.0, speed_deg_s=100.0, dwell_s=0.2)
+    controller = build_controller(program, Position(0.0, 0.0, 1.0), [], endless_pan=endless)
+    track = simulate_head(controller, limits, HeadPose(0.0, 0.0, 1.0), 1500, 100.0, steps_per_frame=1)
+    check_limits(track, limits, 0.01)
+    pan = track.pan_unwrapped_deg
+    first = int(np.argmax(np.isclose(pan, ends[0], atol=1e-6)))
+    assert np.isclose(pan[first], ends[0], atol=1e-6)
+    swept = pan[first:]
+    assert swept.max() == pytest.approx(ends[1], abs=1e-6) and swept.min() == pytest.approx(ends[0], abs=1e-6)
+    back = int(np.argmax(np.isclose(swept, ends[1], atol=1e-6)))
+    assert np.all(np.diff(swept[: back + 1]) >= -1e-12)  # out in one direction …
+    assert np.isclose(swept[back:], ends[0], atol=1e-6).any()  # … and back again
+
+
+def test_keyframes_on_a_limited_head_never_cross_its_ends():
+    """170° → −170° is 20° the short way, but a head limited to [−170°, 170°] must turn 340° back."""
+    limits = head(False)
+    keys = [Keyframe(time_s=0.0, pan_deg=170.0), Keyframe(time_s=10.0, pan_deg=-170.0)]
+    controller = build_controller(
+        KeyframeProgram(type="keyframes", keys=keys), Position(170.0, 0.0, 1.0), [], endless_pan=False
+    )
+    track = simulate_head(controller, limits, HeadPose(170.0, 0.0, 1.0), 1100, 100.0, steps_per_frame=1)
+    check_limits(track, limits, 0.01)
+    assert np.all(np.diff(track.pan_unwrapped_deg) <= 1e-12)
+    assert track.pan_unwrapped_deg[-1] == pytest.approx(-170.0, abs=1e-6)

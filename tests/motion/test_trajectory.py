@@ -324,8 +324,8 @@ def test_random_walk_is_reproducible_and_a_longer_horizon_only_extends_it(walk, 
 
 
 def test_random_walk_in_a_tiny_region_still_moves():
-    walk = RandomWalk(region_m=((0, 0), (0.01, 0.02)), leg_length_m=(5, 10), pause_s=(0, 0), seed=3)
-    route = walk_route(walk, horizon_s=2.0)
+    walk = RandomWalk(region_m=((0, 0), (0.1, 0.2)), leg_length_m=(5, 10), pause_s=(0, 0), seed=3)
+    route = walk_route(walk, horizon_s=20.0)
     assert route.moves and len(route.points_m) > 20
     assert np.all(np.hypot(*np.diff(route.points_m, axis=0).T) > 0)
 

@@ -172,3 +172,31 @@ def test_autofocus_lags_behind_a_zoom(tmp_path):
     assert now[20] > now[0] * 1.2
     assert 1 / lag[20] > 1 / now[20] + 0.1 * abs(1 / now[20] - 1 / now[0])
     assert lag[-1] == pytest.approx(now[-1], rel=0.02)  # 5 time constants later it has caught up
+
+
+def test_a_virtual_ptz_acquires_its_target_only_inside_its_window(tmp_path):
+    """ePTZ aimed away from the walker (window centre at pan −20°): it must not start following before
+    the walker, as the tracker saw it 0.2 s late, is inside the window; and while it follows, the
+    walker stays in the window."""
+    data = yaml.safe_load((REPO / "scenes/eptz_follow.yaml").read_text())
+    data["duration_s"] = 4
+    data["cameras"][0]["eptz"].update(pan_deg=-20, zoom_x=2)
+    path = tmp_path / "eptz.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    job = compile_scene(load_scene(path))
+    camera = job.cameras[0]
+    centre_at, _ = actor_centre(job.scene.actors[0], actor_routes(job.scene)["walker_1"])
+    following = [s for s in camera.states if s.follow_target == "walker_1"]
+    assert following and camera.states[0].follow_target is None
+
+    def in_window(state, time_s) -> bool:
+        uv, depth = project_points(
+            centre_at(time_s)[None], np.array(state.T_world_from_cam), np.array(state.K_px), np.array(state.distortion)
+        )
+        x0, y0, w, h = state.window_px
+        return bool(depth[0] > 0 and x0 - 0.5 <= uv[0, 0] <= x0 + w - 0.5 and y0 - 0.5 <= uv[0, 1] <= y0 + h - 0.5)
+
+    before = camera.states[following[0].frame - 1]
+    assert in_window(before, max(before.time_s - 0.2, 0.0))  # acquired from a sighting inside the window
+    assert not any(in_window(s, s.time_s) for s in camera.states[: following[0].frame - 10])
+    assert np.mean([in_window(s, s.time_s) for s in following]) > 0.95

@@ -143,3 +143,48 @@ def test_a_render_larger_than_the_gpu_allows_is_refused_with_the_fix(workspace):
     small_gpu = SimpleNamespace(max_size_px=2000)
     with pytest.raises(ConfigError, match=r"at supersampling 4 needs \d+ pixels per side.*use supersampling 2 or less"):
         CameraRenderer(small_gpu, build_scene_graph(job.scene), job.cameras[0])
+
+
+def test_view_at_turns_the_camera_with_the_head_rates():
+    """A sub-frame view `dt` after the frame time is the head's pose at pan + ṗ·dt, tilt + ṫ·dt, with
+    the focal lengths scaled by exp(ż·dt) (from R_world_from_cam, independently)."""
+    from camgen.motion.pose import R_world_from_cam, T_world_from_cam
+    from camgen.plan.job import CameraState, RenderSpec
+    from camgen.render.sequence import view_at
+
+    mount = dict(yaw_deg=30.0, pitch_deg=-5.0, roll_deg=2.0)
+    K = ((1000.0, 0.0, 640.0), (0.0, 1000.0, 360.0), (0.0, 0.0, 1.0))
+    T = T_world_from_cam((1.0, 2.0, 6.0), R_world_from_cam(**mount, pan_deg=40.0, tilt_deg=-12.0))
+    state = CameraState(
+        frame=0,
+        time_s=0.0,
+        pan_deg=40.0,
+        tilt_deg=-12.0,
+        zoom_x=2.0,
+        focal_length_mm=9.0,
+        f_number=2.0,
+        focus_distance_m=10.0,
+        exposure_time_s=0.02,
+        gain_db=0.0,
+        K_px=K,
+        distortion=(0.0,) * 8,
+        T_world_from_cam=tuple(map(tuple, T.tolist())),
+        pan_deg_s=60.0,
+        tilt_deg_s=-20.0,
+        log_zoom_per_s=0.5,
+    )
+    spec = RenderSpec(
+        width_px=1300,
+        height_px=740,
+        margin_px=(10, 10, 10, 10),
+        passes=("radiance",),
+        supersampling=1,
+        static_background=False,
+    )
+    view = view_at(state, spec, 0.01)
+    expected = R_world_from_cam(**mount, pan_deg=40.6, tilt_deg=-12.2)
+    np.testing.assert_allclose(view.T_world_from_cam[:3, :3], expected, atol=1e-12)
+    np.testing.assert_allclose(view.T_world_from_cam[:3, 3], (1.0, 2.0, 6.0))
+    assert view.K_px[0, 0] == pytest.approx(1000.0 * np.exp(0.005))
+    assert view.K_px[0, 2] == pytest.approx(650.0)  # principal point (plus the left margin) unchanged
+    np.testing.assert_array_equal(view_at(state, spec, 0.0).T_world_from_cam, T)

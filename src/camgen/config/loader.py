@@ -297,10 +297,11 @@ def _check_keyframe_speeds(path: tuple, program, ranges: HeadRanges) -> list[Pro
     for j in range(1, len(program.keys)):
         a, b = program.keys[j - 1], program.keys[j]
         span_s = b.time_s - a.time_s
-        for axis, delta in (
-            ("pan", ((b.pan_deg - a.pan_deg + 180.0) % 360.0) - 180.0),
-            ("tilt", b.tilt_deg - a.tilt_deg),
-        ):
+        # an endless head turns the short way; a limited one cannot cross the ends of its range
+        pan_delta = b.pan_deg - a.pan_deg
+        if ranges.pan_deg is None:
+            pan_delta = ((pan_delta + 180.0) % 360.0) - 180.0
+        for axis, delta in (("pan", pan_delta), ("tilt", b.tilt_deg - a.tilt_deg)):
             limit = getattr(ranges, f"{axis}_max_deg_s")
             if abs(delta) / span_s > limit + 1e-9:
                 problems.append(
@@ -382,6 +383,15 @@ def check_cameras(scene: Scene, profiles: dict[str, Profile]) -> list[Problem]:
                     Problem(
                         (*base, "eptz"),
                         f"is for fixed cameras, but profile {camera.profile!r} has a PTZ head; use ptz instead",
+                    )
+                )
+            pixel_format = profile.codec.pixel_format
+            if pixel_format != "yuv444p" and (output[0] % 2 or (output[1] % 2 and pixel_format == "yuv420p")):
+                problems.append(
+                    Problem(
+                        (*base, "eptz", "output_size_px"),
+                        f"must be even for the profile's {pixel_format} chroma subsampling, got "
+                        f"{output[0]}×{output[1]}; use e.g. {output[0] + output[0] % 2}×{output[1] + output[1] % 2}",
                     )
                 )
             if output[0] > sensor.width_px or output[1] > sensor.height_px:

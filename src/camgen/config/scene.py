@@ -203,6 +203,10 @@ def _is_number(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
 
 
+RANDOM_WALK_MIN_M = 0.1
+"""Shortest random-walk leg and smallest region side, m."""
+
+
 class RandomWalk(Model):
     """Wandering inside a rectangle on the ground: straight legs of random heading and length, each
     followed by a random pause.
@@ -235,6 +239,13 @@ class RandomWalk(Model):
                 "region_m",
                 f"must be [[x_min, y_min], [x_max, y_max]] with x_min < x_max and y_min < y_max, got "
                 f"[[{x_min:g}, {y_min:g}], [{x_max:g}, {y_max:g}]]; give the lower-left corner first",
+            )
+        if min(x_max - x_min, y_max - y_min, self.leg_length_m[0]) < RANDOM_WALK_MIN_M:
+            raise invalid(
+                "leg_length_m" if self.leg_length_m[0] < RANDOM_WALK_MIN_M else "region_m",
+                f"must give legs and a region of at least {RANDOM_WALK_MIN_M:g} m (a walk of shorter legs "
+                "would need millions of them), got legs from "
+                f"{self.leg_length_m[0]:g} m in a {x_max - x_min:g} × {y_max - y_min:g} m region",
             )
         if self.start_m is not None:
             x, y = self.start_m

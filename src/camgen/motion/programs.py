@@ -132,8 +132,11 @@ class Scan:
         if self.phase == "approach":
             if not _arrived(pose, start):
                 return _goto(start, "move")
-            first = pose.pan_deg + float(wrap_deg(start.pan_deg - pose.pan_deg))
-            self.ends_unwrapped = [first, first + self.span_deg]
+            if self.endless:
+                first = pose.pan_deg + float(wrap_deg(start.pan_deg - pose.pan_deg))
+                self.ends_unwrapped = [first, first + self.span_deg]
+            else:  # a limited head sweeps between the angles as given, inside its range
+                self.ends_unwrapped = [start.pan_deg, p.pan_range_deg[1]]
             self.phase, self.index, self.arrived_s = "sweep", 1, None
         if self.endless and self.span_deg == 360.0:
             return Command(
@@ -161,12 +164,12 @@ class Scan:
 class Keyframes:
     """Follow the piecewise-linear path through the keys (feed-forward of its rate)."""
 
-    def __init__(self, program: KeyframeProgram):
+    def __init__(self, program: KeyframeProgram, endless: bool = True):
         keys = program.keys
         self.times_s = np.array([k.time_s for k in keys])
         pans = [keys[0].pan_deg]
-        for key in keys[1:]:
-            pans.append(pans[-1] + float(wrap_deg(key.pan_deg - pans[-1])))
+        for key in keys[1:]:  # the short way on an endless head; a limited one cannot cross its ends
+            pans.append(pans[-1] + float(wrap_deg(key.pan_deg - pans[-1])) if endless else key.pan_deg)
         self.pan_deg = np.array(pans)
         self.tilt_deg = np.array([k.tilt_deg for k in keys])
         self.log_zoom = np.log([k.zoom_x for k in keys])
@@ -225,8 +228,10 @@ class Follow:
         target_at: Callable[[float], np.ndarray],
         target_height_m: float,
         fallback: Callable[[float], Controller],
+        in_view: Callable[[np.ndarray, HeadPose], bool] | None = None,
     ):
         self.program, self.view, self.target_at = program, view, target_at
+        self.in_view = in_view or self._in_image
         self.target_height_m = target_height_m
         self.make_fallback = fallback
         self.fallback = fallback(0.0)
@@ -253,22 +258,26 @@ class Follow:
         seen_s = max(time_s - p.reaction_lag_s, 0.0)
         observed = self.target_at(seen_s)
         in_region = p.acquire_region_m is None or _inside_polygon(observed[:2], p.acquire_region_m)
-        visible = in_region and self._in_image(observed, pose)
+        visible = in_region and self.in_view(observed, pose)
         if not self.following:
             if not visible:
                 return self.fallback(time_s, pose)
             self.following, self.last_seen_s = True, time_s
+            self.sighting = (seen_s, observed, np.zeros(3))
             self.goal = Position(pose.pan_deg, pose.tilt_deg, pose.zoom_x)
+        interval_s = 1.0 / v.fps
         if visible:
             self.last_seen_s = time_s
+            velocity = (observed - self.target_at(max(seen_s - interval_s, 0.0))) / interval_s
+            self.sighting = (seen_s, observed, velocity)
         elif not in_region or time_s - self.last_seen_s > p.lost_after_s:
             self.following = False
             self.fallback = self.make_fallback(time_s)  # hand back: the fallback starts again
             return self.fallback(time_s, pose)
-        # Predict where the target is now from the late sighting and its velocity.
-        interval_s = 1.0 / v.fps
-        velocity = (observed - self.target_at(max(seen_s - interval_s, 0.0))) / interval_s
-        predicted = observed + velocity * (time_s - seen_s)
+        # Predict where the target is now from the last (late) sighting and its velocity: out of
+        # view, the tracker coasts on what it last saw rather than on where the target really is.
+        sighted_s, position, velocity = self.sighting
+        predicted = position + velocity * (time_s - sighted_s)
         pan, tilt = self._bearing(predicted)
         pan_before, tilt_before = self._bearing(predicted - velocity * interval_s)
         pan_rate = float(wrap_deg(pan - pan_before)) / interval_s
@@ -334,7 +343,7 @@ def build_controller(
         return Scan(home, program.model_copy(update={"start_s": start_s + program.start_s}), endless_pan)
     if isinstance(program, KeyframeProgram):
         keys = [k.model_copy(update={"time_s": k.time_s + start_s}) for k in program.keys]
-        return Keyframes(program.model_copy(update={"keys": keys}))
+        return Keyframes(program.model_copy(update={"keys": keys}), endless_pan)
     if isinstance(program, FollowProgram):
         if follow is None:
             raise ValueError("a follow program needs the scene (pass `follow`)")

@@ -42,8 +42,9 @@ class AxisLimits:
     step: float = 0.0
     """Mechanical resolution of the reported position (0 = continuous)."""
     angular: bool = False
-    """Positions are angles in degrees: a goal is first taken at the turn (±360°) that lies in the
-    range nearest the position (a pan range of [−90°, 270°] reaches a bearing of −170° as 190°)."""
+    """Positions are angles in degrees: a goal outside the range is first taken at the turn (±360°)
+    that lies in it, nearest the position (a pan range of [−90°, 270°] reaches a bearing of −170° as
+    190°); a goal inside the range is taken as given."""
 
     def __post_init__(self) -> None:
         if not (self.speed_max > 0 and self.accel_max > 0):
@@ -80,8 +81,8 @@ def axis_error(goal: float, position: float, limits: AxisLimits) -> float:
     clamped into the range (a goal beyond a limit is approached up to the limit)."""
     if limits.endless:
         return float(wrap_deg(goal - position))
-    if limits.angular:
-        turns = [goal + 360.0 * k for k in (-2, -1, 0, 1, 2) if limits.low <= goal + 360.0 * k <= limits.high]
+    if limits.angular and not limits.low <= goal <= limits.high:
+        turns = [goal + 360.0 * k for k in (-2, -1, 1, 2) if limits.low <= goal + 360.0 * k <= limits.high]
         if turns:
             goal = min(turns, key=lambda g: abs(g - position))
     return min(max(goal, limits.low), limits.high) - position

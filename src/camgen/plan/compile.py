@@ -166,6 +166,8 @@ def _camera_motion_px(track: dict, frame: int, K: np.ndarray, width_px: int, hei
     (pan and tilt turn about perpendicular axes, so ω = √(pan rate² + tilt rate²)); a zoom at rate
     d ln f/dt moves it by its distance from the principal point times that rate.
     """
+    if track["pan_deg_s"][frame] == 0 and track["tilt_deg_s"][frame] == 0 and track["log_zoom_per_s"][frame] == 0:
+        return 0.0
     omega_rad_s = math.radians(math.hypot(track["pan_deg_s"][frame], track["tilt_deg_s"][frame]))
     corner_norm = corner_radius_normalized(K, width_px, height_px)
     rotation = max(K[0, 0], K[1, 1]) * omega_rad_s * (1.0 + corner_norm**2)
@@ -511,7 +513,8 @@ def _compile_camera(
     if include["optics.axial_ca"]:
         blur_radius = max(blur_radius, max(axial_px) / 2)
     if include["optics.motion_blur"]:
-        blur_radius = max(blur_radius, motion_px + camera_worst_px)
+        # Camera motion needs no margin: each sub-frame is a complete render of its own view.
+        blur_radius = max(blur_radius, motion_px)
     margin = tuple(math.ceil(x + blur_radius) for x in (left, top, right, bottom))
 
     # --- passes -------------------------------------------------------------------------------------

@@ -177,10 +177,11 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                     )
                 video.write(rgb8)
             if "io.camera_metadata" in stages:
-                record = state.model_dump(mode="json", exclude_none=True)
+                record = state.model_dump(mode="json")
+                output_K = record.pop("output_K_px")
                 if state.window_px is not None:  # K_px describes the stream; the sensor's is kept beside it
                     record["sensor_K_px"] = record["K_px"]
-                    record["K_px"] = record.pop("output_K_px")
+                    record["K_px"] = output_K
                 if captured is not None:
                     record["metered_level_frac"] = captured.metered_level_frac
                     if captured.white_balance_rgb is not None:

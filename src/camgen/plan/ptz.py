@@ -14,12 +14,13 @@ import numpy as np
 from camgen.config.loader import head_ranges
 from camgen.config.profile import Profile
 from camgen.config.scene import Camera, Scene, actor_shape
-from camgen.isp.eptz import full_window_size_px
-from camgen.motion.pose import R_world_from_mount, rot_z
+from camgen.isp.eptz import eptz_window_px, full_window_size_px, window_centre_px
+from camgen.motion.pose import R_world_from_cam, R_world_from_mount, T_world_from_cam, rot_z
 from camgen.motion.programs import Follow, FollowView, Position, build_controller
 from camgen.motion.ptz import AxisLimits, HeadLimits, HeadPose, HeadTrack, simulate_head
 from camgen.motion.trajectory import Route
 from camgen.optics.intrinsics import camera_matrix_px
+from camgen.optics.projection import project_points
 from camgen.plan.visibility import box_corners, local_bounds, placement
 
 ZOOM_RAMP_S = 0.2
@@ -84,6 +85,41 @@ def eptz_limits(camera: Camera, profile: Profile) -> HeadLimits:
     )
 
 
+def _window_view(camera: Camera, profile: Profile, K: np.ndarray):
+    """Whether a world point is in a virtual PTZ's window at a pose (the sensor image, cropped)."""
+    mount, sensor = camera.mount, profile.sensor
+    T = T_world_from_cam(mount.position_m, R_world_from_cam(mount.yaw_deg, mount.pitch_deg, mount.roll_deg))
+    focal_length_mm = camera.focal_length_mm or profile.lens.focal_length_min_mm
+    distortion = profile.lens.at_focal_length(focal_length_mm)[1].as_array()
+    sensor_size = (sensor.width_px, sensor.height_px)
+
+    def in_view(point_m: np.ndarray, pose: HeadPose) -> bool:
+        centre = window_centre_px(pose.pan_deg, pose.tilt_deg, K, distortion)
+        x0, y0, width, height = eptz_window_px(centre, pose.zoom_x, sensor_size, camera.eptz.output_size_px)
+        uv, depth = project_points(point_m[None], T, K, distortion)
+        u, v = uv[0]
+        return bool(depth[0] > 0 and x0 - 0.5 <= u <= x0 + width - 0.5 and y0 - 0.5 <= v <= y0 + height - 0.5)
+
+    return in_view
+
+
+def _holding(settings, scene: Scene) -> HeadTrack:
+    frames = scene.frame_count
+    zeros = np.zeros(frames)
+    return HeadTrack(
+        time_s=np.arange(frames) / scene.fps,
+        pan_deg=np.full(frames, settings.pan_deg),
+        tilt_deg=np.full(frames, settings.tilt_deg),
+        zoom_x=np.full(frames, settings.zoom_x),
+        pan_unwrapped_deg=np.full(frames, settings.pan_deg),
+        pan_deg_s=zeros,
+        tilt_deg_s=zeros,
+        log_zoom_per_s=zeros,
+        modes=("hold",) * frames,
+        targets=(None,) * frames,
+    )
+
+
 def head_track(
     scene: Scene,
     camera: Camera,
@@ -129,10 +165,14 @@ def head_track(
     )
     actors = {actor.name: actor for actor in scene.actors}
 
+    in_view = _window_view(camera, profile, K) if virtual else None
+
     def follow(program, fallback):
         target_at, height_m = actor_centre(actors[program.target], routes[program.target], file_bounds)
-        return Follow(program, view, target_at, height_m, fallback)
+        return Follow(program, view, target_at, height_m, fallback, in_view)
 
+    if settings.program is None or settings.program.type == "hold":
+        return _holding(settings, scene)  # nothing to simulate: the head stays at home
     controller = build_controller(
         settings.program, home, settings.presets, endless_pan=limits.pan.endless, follow=follow
     )
