@@ -39,7 +39,8 @@ def test_render_writes_video_passes_and_job(workspace, capsys):
     assert states[0]["metered_level_frac"] == pytest.approx(0.18, rel=0.05)
     assert 20 < frames[0].mean() < 235
     assert not list(workspace.rglob("*.partial*"))
-    assert "skipped: annotate" in capsys.readouterr().err
+    assert "annotate" not in capsys.readouterr().err  # annotations are written, not skipped
+    assert (job_dir / "cam" / "gt" / "gt.txt").exists() and (job_dir / "cam" / "coco.json").exists()
 
 
 def test_render_rejects_an_unknown_camera(workspace, capsys):

@@ -18,13 +18,18 @@ from pathlib import Path
 
 import numpy as np
 
+from camgen.io.annotations import SequenceAnnotations
+from camgen.io.dng import SRGB_FROM_XYZ, write_dng
 from camgen.io.files import atomic_path, write_text_atomic
+from camgen.io.frames import write_depth, write_frame
+from camgen.io.manifest import write_manifest
 from camgen.isp.eptz import crop_and_scale
 from camgen.optics.remap import LensMapCache
+from camgen.plan.annotations import Annotator
 from camgen.plan.camera_pipeline import CameraPipeline, frame_rng
 from camgen.plan.job import CameraJob, Job
 from camgen.plan.lens_stages import LensStages
-from camgen.render.renderer import Renderer
+from camgen.render.renderer import Passes, Renderer
 from camgen.render.scene_graph import build_scene_graph, instance_table
 from camgen.render.sequence import CameraRenderer
 
@@ -53,6 +58,10 @@ IMPLEMENTED_STAGES = frozenset(
         "isp.eptz",
         "io.video",
         "io.camera_metadata",
+        "annotate",
+        "io.raw_dng",
+        "io.frames",
+        "io.depth",
     }
 )
 
@@ -109,6 +118,7 @@ def execute(
             results.append(_execute_camera(context, indices, resolve_path, save_passes, on_frame))
     # Written last: a job directory with job.json in it holds a complete render.
     write_text_atomic(job_dir / "job.json", job.to_json())
+    write_manifest(job, job_dir)  # after everything, job.json included: it hashes what is on disk now
     return results
 
 
@@ -139,6 +149,13 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
     video = None
     metadata: list[str] = []
     camera_renderer = CameraRenderer(context.renderer, build_scene_graph(job.scene, resolve_path), camera)
+    annotator = sequence = None
+    if "annotate" in stages:
+        annotator = Annotator(camera_renderer, lens)
+        width_px, height_px = camera.output_size_px or (camera.width_px, camera.height_px)
+        sequence = SequenceAnnotations(
+            name=camera.name, fps=job.fps, width_px=width_px, height_px=height_px, frame_count=len(indices)
+        )
     converge = (
         pipeline is not None and camera.exposure_mode == "auto" and job.settings.auto_exposure_start == "converged"
     )
@@ -176,6 +193,17 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                         preset=camera.profile.codec.preset,
                     )
                 video.write(rgb8)
+            _write_files(context, stages, state, frame, captured, rgb8, lens, result)
+            if annotator is not None:
+                ids = lens.apply(state, Passes(instance_id=frame.passes.instance_id)).instance_id
+                window = state.window_px
+
+                def to_stream(image, window=window):
+                    return (
+                        image if window is None else crop_and_scale(image, window, camera.output_size_px, nearest=True)
+                    )
+
+                sequence.add(annotator.annotate(state, Passes(instance_id=to_stream(ids)), post=to_stream))
             if "io.camera_metadata" in stages:
                 record = state.model_dump(mode="json")
                 output_K = record.pop("output_K_px")
@@ -205,6 +233,12 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
         if metadata:
             write_text_atomic(directory / "camera.jsonl", "\n".join(metadata) + "\n")
             result.files.append(directory / "camera.jsonl")
+        if sequence is not None:
+            formats = next(stage.params["formats"] for stage in camera.stages if stage.name == "annotate")
+            if "mot" in formats:
+                result.files += sequence.write_mot(directory)
+            if "coco" in formats:
+                result.files.append(sequence.write_coco(directory / "coco.json"))
     except BaseException:
         if video is not None:
             video.abort()
@@ -213,6 +247,55 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
         camera_renderer.close()
     result.total_s = time.perf_counter() - started
     return result
+
+
+FRAME_SUFFIX = {"png": ".png", "tiff": ".tiff", "exr": ".exr"}
+DEPTH_SUFFIX = {"png16": ".png", "exr": ".exr"}
+
+
+def _write_files(context: _Context, stages, state, frame, captured, rgb8, lens, result: CameraResult) -> None:
+    """The optional per-frame files: raw DNG, frames (8-bit stream or linear EXR radiance), depth."""
+    camera = context.job.cameras[context.camera_index]
+    directory, name = context.directory, f"{frame.index:06d}"
+    if "io.raw_dng" in stages and captured is not None:
+        sensor = camera.profile.sensor
+        qe = sensor.quantum_efficiency
+        mono = sensor.cfa == "mono"
+        gains = captured.white_balance_rgb
+        path = directory / "raw" / f"{name}.dng"
+        write_dng(
+            path,
+            captured.raw_dn,
+            cfa=sensor.cfa,
+            black_level_dn=sensor.black_level_dn,
+            white_level_dn=sensor.white_level_dn,
+            bit_depth=sensor.bit_depth,
+            color_matrix_xyz_to_camera=None if mono else np.diag([qe.r, qe.g, qe.b]) @ SRGB_FROM_XYZ,
+            as_shot_neutral_rgb=None if mono or gains is None else tuple(min(gains) / g for g in gains),
+            camera_name=camera.profile_name,
+            exposure_time_s=state.exposure_time_s,
+            f_number=state.f_number,
+        )
+        result.files.append(path)
+    if "io.frames" in stages:
+        kind = next(stage.params["format"] for stage in camera.stages if stage.name == "io.frames")
+        path = directory / "frames" / f"{name}{FRAME_SUFFIX[kind]}"
+        if kind == "exr":  # linear: the scene radiance through the lens, cd/m², before the sensor
+            image = lens.apply(state, Passes(radiance=frame.passes.radiance)).radiance
+            if state.window_px is not None:
+                image = crop_and_scale(image, state.window_px, camera.output_size_px)
+            write_frame(path, np.ascontiguousarray(image, dtype=np.float32), format="exr")
+        elif rgb8 is not None:
+            write_frame(path, rgb8, format=kind)
+        result.files.append(path)
+    if "io.depth" in stages:
+        kind = next(stage.params["format"] for stage in camera.stages if stage.name == "io.depth")
+        depth = lens.apply(state, Passes(depth_m=frame.passes.depth_m)).depth_m
+        if state.window_px is not None:
+            depth = crop_and_scale(depth, state.window_px, camera.output_size_px, nearest=True)
+        path = directory / "depth" / f"{name}{DEPTH_SUFFIX[kind]}"
+        write_depth(path, depth, format=kind)
+        result.files.append(path)
 
 
 def _eptz_passes(passes, window, output_size_px):

@@ -1,0 +1,120 @@
+"""MOTChallenge and COCO files of one camera's annotated sequence.
+
+MOTChallenge (`gt/gt.txt`, `seqinfo.ini`; the MOT17/MOT20 ground-truth layout), one line per object
+and frame: ``frame, id, bb_left, bb_top, bb_width, bb_height, conf, class, visibility`` with frames
+counted from 1 and boxes in MOT's 1-based pixel coordinates (bb_left = x0 + 1 for camgen's pixel-edge
+x0). The box is the amodal box clipped to the image (MOT boxes cover the whole object, occluded parts
+included); conf is 1 (consider) when some of the object is visible, else 0; visibility, as MOT17
+counts it, includes cropping by the image border: (visible / unoccluded pixels) × (1 − truncation),
+truncation being the share of the amodal box outside the image. Classes follow MOT17's table
+(`MOT_CLASSES`).
+
+COCO (`coco.json`, one file per sequence, with the video/track extension used by TAO and
+YouTube-VIS-style datasets): ``videos``, ``images`` (one per frame, with ``video_id`` and
+``frame_index``), ``annotations`` (one per visible object and frame: ``bbox`` [x, y, w, h] of the
+visible pixels, ``segmentation`` as compressed RLE of the visible mask, ``area`` in pixels,
+``track_id``, ``amodal_bbox``, ``visibility``, ``truncation``, ``bbox_3d_world_m`` and
+``bbox_3d_cam_m`` (8 corners each)) and ``categories`` (camgen's actor classes).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+from pycocotools import mask as mask_utils
+
+from camgen.io.files import write_text_atomic
+
+MOT_CLASSES = {"person": 1, "car": 3, "truck": 3, "bus": 3, "bicycle": 4, "motorcycle": 5, "other": 6}
+"""MOT17 class ids: 1 pedestrian, 3 car (all motor vehicles of four or more wheels), 4 bicycle,
+5 motorbike, 6 non-motorised vehicle (camgen's 'other')."""
+COCO_CATEGORIES = ("person", "car", "truck", "bus", "bicycle", "motorcycle", "other")
+
+
+class SequenceAnnotations:
+    """Collects a camera's annotations frame by frame (masks become RLE at once, so no frame's
+    instance image is kept) and writes the MOTChallenge and COCO files at the end."""
+
+    def __init__(self, *, name: str, fps: float, width_px: int, height_px: int, frame_count: int):
+        self.name, self.fps, self.width_px, self.height_px = name, fps, width_px, height_px
+        self.frame_count = frame_count
+        self.mot: list[str] = []
+        self.images: list[dict] = []
+        self.annotations: list[dict] = []
+
+    def add(self, frame) -> None:
+        """One `camgen.plan.annotations.FrameAnnotations`."""
+        image_id = frame.frame + 1
+        self.images.append(
+            {
+                "id": image_id,
+                "video_id": 1,
+                "frame_index": frame.frame,
+                "file_name": f"{self.name}/{frame.frame:06d}.png",
+                "width": self.width_px,
+                "height": self.height_px,
+            }
+        )
+        for obj in frame.objects:
+            x0, y0, x1, y1 = obj.amodal_box
+            self.mot.append(
+                f"{frame.frame + 1},{obj.track_id},{x0 + 1:.3f},{y0 + 1:.3f},{x1 - x0:.3f},{y1 - y0:.3f},"
+                f"{1 if obj.visible_pixels > 0 else 0},{MOT_CLASSES[obj.cls]},"
+                f"{obj.visibility * (1.0 - obj.truncation):.4f}"
+            )
+            if obj.visible_box is None:
+                continue
+            vx0, vy0, vx1, vy1 = obj.visible_box
+            self.annotations.append(
+                {
+                    "id": len(self.annotations) + 1,
+                    "image_id": image_id,
+                    "video_id": 1,
+                    "category_id": COCO_CATEGORIES.index(obj.cls) + 1,
+                    "track_id": obj.track_id,
+                    "instance_name": obj.name,
+                    "bbox": [vx0, vy0, vx1 - vx0, vy1 - vy0],
+                    "area": obj.visible_pixels,
+                    "segmentation": rle(frame.instance_id == obj.track_id),
+                    "iscrowd": 0,
+                    "amodal_bbox": [x0, y0, x1 - x0, y1 - y0],
+                    "visibility": round(obj.visibility, 6),
+                    "truncation": round(obj.truncation, 6),
+                    "bbox_3d_world_m": np.round(obj.box_3d_world_m, 6).tolist(),
+                    "bbox_3d_cam_m": np.round(obj.box_3d_cam_m, 6).tolist(),
+                }
+            )
+
+    def coco_document(self) -> dict:
+        return {
+            "info": {"description": f"camgen sequence {self.name}"},
+            "videos": [{"id": 1, "name": self.name, "width": self.width_px, "height": self.height_px}],
+            "images": self.images,
+            "annotations": self.annotations,
+            "categories": [{"id": i + 1, "name": name} for i, name in enumerate(COCO_CATEGORIES)],
+        }
+
+    def write_mot(self, directory: Path) -> list[Path]:
+        """`gt/gt.txt` and `seqinfo.ini` under `directory`."""
+        gt = directory / "gt" / "gt.txt"
+        write_text_atomic(gt, "\n".join(self.mot) + ("\n" if self.mot else ""))
+        seqinfo = directory / "seqinfo.ini"
+        write_text_atomic(
+            seqinfo,
+            "[Sequence]\n"
+            f"name={self.name}\nimDir=img1\nframeRate={self.fps:g}\nseqLength={self.frame_count}\n"
+            f"imWidth={self.width_px}\nimHeight={self.height_px}\nimExt=.png\n",
+        )
+        return [gt, seqinfo]
+
+    def write_coco(self, path: Path) -> Path:
+        write_text_atomic(path, json.dumps(self.coco_document(), separators=(",", ":")))
+        return path
+
+
+def rle(mask: np.ndarray) -> dict:
+    """COCO compressed RLE of a boolean (H, W) mask, JSON-ready."""
+    encoded = mask_utils.encode(np.asfortranarray(mask.astype(np.uint8)))
+    return {"size": [int(s) for s in encoded["size"]], "counts": encoded["counts"].decode("ascii")}

@@ -1,0 +1,136 @@
+"""Per-frame annotations of one camera: the rendered actor meshes and passes, through its lens.
+
+For every actor in view at a frame:
+
+- the visible box and mask from the instance pass after the lens (`LensStages.apply`: the same
+  nearest-pixel remap as the pixels);
+- the amodal box from the actor's rendered mesh (its vertices and edges, posed as drawn) projected
+  through the frame's camera matrix and distortion (`camgen.annotate.boxes.amodal_box`);
+- visibility = visible pixels / pixels of the actor drawn alone (an unoccluded instance draw through
+  the same lens), and truncation from the amodal box;
+- the 3D box of the actor's local bounds in world and camera frames.
+
+Track ids are the global instance ids (`camgen.render.scene_graph.instance_table`): the same in every
+camera of a scene and over the whole sequence.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from camgen.annotate.boxes import Box, amodal_box, clip_box, mask_boxes, truncation, unique_edges
+from camgen.plan.job import CameraState
+from camgen.plan.lens_stages import LensStages
+from camgen.render.renderer import Passes
+from camgen.render.sequence import CameraRenderer, render_view
+
+
+@dataclass(frozen=True)
+class ObjectAnnotation:
+    track_id: int
+    name: str
+    cls: str
+    visible_box: Box | None
+    """Tight box of the visible pixels (pixel edges); None when fully occluded."""
+    amodal_box: Box | None
+    """The whole object's projection, clipped to the image (pixel edges)."""
+    visible_pixels: int
+    unoccluded_pixels: int
+    visibility: float
+    truncation: float
+    box_3d_world_m: np.ndarray
+    """(8, 3) corners of the actor's local bounding box in the world."""
+    box_3d_cam_m: np.ndarray
+
+
+@dataclass
+class FrameAnnotations:
+    frame: int
+    objects: list[ObjectAnnotation] = field(default_factory=list)
+    instance_id: np.ndarray | None = None
+    """(H, W) uint32 ids of the frame after the lens (for masks)."""
+
+
+def _mesh_geometry(node) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (V, 3) in the node's frame and unique edges (E, 2) of a pyrender mesh."""
+    vertices, faces, offset = [], [], 0
+    for primitive in node.mesh.primitives:
+        positions = np.asarray(primitive.positions, dtype=np.float64)
+        # Flat-shaded meshes are drawn unindexed: consecutive vertex triplets are the triangles.
+        indices = (
+            np.arange(len(positions)).reshape(-1, 3)
+            if primitive.indices is None
+            else np.asarray(primitive.indices).reshape(-1, 3)
+        )
+        vertices.append(positions)
+        faces.append(indices + offset)
+        offset += len(positions)
+    return np.concatenate(vertices), unique_edges(np.concatenate(faces))
+
+
+class Annotator:
+    """Annotates frames of one camera (the graph's actors must be placed at the frame time)."""
+
+    def __init__(self, drawer: CameraRenderer, lens: LensStages):
+        self.drawer, self.lens = drawer, lens
+        self.camera, self.graph, self.renderer = drawer.camera, drawer.graph, drawer.renderer
+        graph = self.graph
+        self._geometry = [_mesh_geometry(node) for node in graph.actor_nodes]
+        self._ids = [graph.instance_ids[node] for node in graph.actor_nodes]
+
+    def annotate(self, state: CameraState, passes: Passes, *, post=None) -> FrameAnnotations:
+        """`passes`: the frame's passes after the lens (output size). The graph's actors must stand
+        where they were drawn for the frame's instance pass (at the frame time). `post` maps an
+        instance image after the lens onto the stream (the virtual PTZ's crop and scale), applied to
+        the unoccluded draws too; the stream's camera matrix is then the state's `output_K_px`."""
+        camera, graph = self.camera, self.graph
+        post = post or (lambda ids: ids)
+        W, H = camera.output_size_px or (camera.width_px, camera.height_px)
+        K = np.array(state.K_px if state.output_K_px is None else state.output_K_px)
+        T = np.array(state.T_world_from_cam)
+        T_cam_from_world = np.linalg.inv(T)
+        distortion = np.array(state.distortion)
+        instance = passes.instance_id
+        visible = mask_boxes(instance, self._ids)
+        result = FrameAnnotations(state.frame, instance_id=instance)
+        view = render_view(state, camera.render)
+        clip = None
+        for index, (actor, node) in enumerate(zip(graph.actors, graph.actor_nodes, strict=True)):
+            pose = graph.scene.get_pose(node)
+            vertices, edges = self._geometry[index]
+            world = vertices @ pose[:3, :3].T + pose[:3, 3]
+            box = amodal_box(world, edges, T, K, distortion)
+            clipped = None if box is None else clip_box(box, W, H)
+            if clipped is None:
+                continue
+            track_id = self._ids[index]
+            if clip is None:
+                clip = self.drawer.clip_range_m(view)
+            alone = self.renderer.draw(graph, view, ("instance_id",), nodes=[node], clip_range_m=clip)
+            unoccluded = post(self.lens.apply(state, Passes(instance_id=alone.instance_id)).instance_id)
+            unoccluded_pixels = int(np.count_nonzero(unoccluded == track_id))
+            seen = visible.get(track_id)
+            pixels = 0 if seen is None else seen.pixels
+            low, high = vertices.min(axis=0), vertices.max(axis=0)
+            corners = np.array(
+                [[x, y, z] for z in (low[2], high[2]) for y in (low[1], high[1]) for x in (low[0], high[0])]
+            )
+            corners_world = corners @ pose[:3, :3].T + pose[:3, 3]
+            result.objects.append(
+                ObjectAnnotation(
+                    track_id=track_id,
+                    name=actor.name,
+                    cls=actor.cls,
+                    visible_box=None if seen is None else seen.box,
+                    amodal_box=clipped,
+                    visible_pixels=pixels,
+                    unoccluded_pixels=unoccluded_pixels,
+                    visibility=0.0 if unoccluded_pixels == 0 else min(1.0, pixels / unoccluded_pixels),
+                    truncation=truncation(box, W, H),
+                    box_3d_world_m=corners_world,
+                    box_3d_cam_m=corners_world @ T_cam_from_world[:3, :3].T + T_cam_from_world[:3, 3],
+                )
+            )
+        return result
