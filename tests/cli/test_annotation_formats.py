@@ -121,3 +121,21 @@ def test_raw_dng_frames_and_depth_files_match_the_render(workspace):
     np.testing.assert_allclose(depth_mm[finite], np.round(depth_m[finite] * 1000), atol=1)
     radiance = oiio.ImageBuf(str(directory / "frames" / "000001.exr")).get_pixels(oiio.FLOAT)
     np.testing.assert_allclose(radiance, passes["radiance_cd_m2"], rtol=1e-6)
+
+
+def test_a_second_render_into_the_same_directory_leaves_nothing_stale(workspace):
+    text = SCENE.replace(
+        "duration_s: 1", "duration_s: 1\noutputs: {video: false, frames: png, annotations: [mot, coco]}"
+    )
+    scene = write(workspace, "scenes/again.yaml", text)
+    out = workspace / "out"
+    assert main(["render", str(scene), "-o", str(out), "--frames", "5"]) == 0
+    assert main(["render", str(scene), "-o", str(out), "--frames", "2"]) == 0
+    job_dir = next(out.iterdir())
+    assert sorted(p.name for p in (job_dir / "cam" / "frames").iterdir()) == ["000000.png", "000001.png"]
+    manifest = json.loads((job_dir / "manifest.json").read_text())
+    assert manifest["rendered"] == {"cameras": ["cam"], "frames": [0, 1]}
+    coco = json.loads((job_dir / "cam" / "coco.json").read_text())
+    assert [image["file_name"] for image in coco["images"]] == ["frames/000000.png", "frames/000001.png"]
+    assert all((job_dir / "cam" / image["file_name"]).exists() for image in coco["images"])
+    assert main(["verify", str(job_dir)]) == 0

@@ -37,9 +37,13 @@ class SequenceAnnotations:
     """Collects a camera's annotations frame by frame (masks become RLE at once, so no frame's
     instance image is kept) and writes the MOTChallenge and COCO files at the end."""
 
-    def __init__(self, *, name: str, fps: float, width_px: int, height_px: int, frame_count: int):
+    def __init__(
+        self, *, name: str, fps: float, width_px: int, height_px: int, frame_count: int, frame_suffix: str | None = None
+    ):
+        """`frame_suffix`: the extension of the frame files written beside (frames/NNNNNN.ext, frames
+        counted from 0), or None when only the video holds the frames (its frame `frame_index`)."""
         self.name, self.fps, self.width_px, self.height_px = name, fps, width_px, height_px
-        self.frame_count = frame_count
+        self.frame_count, self.frame_suffix = frame_count, frame_suffix
         self.mot: list[str] = []
         self.images: list[dict] = []
         self.annotations: list[dict] = []
@@ -47,18 +51,18 @@ class SequenceAnnotations:
     def add(self, frame) -> None:
         """One `camgen.plan.annotations.FrameAnnotations`."""
         image_id = frame.frame + 1
-        self.images.append(
-            {
-                "id": image_id,
-                "video_id": 1,
-                "frame_index": frame.frame,
-                "file_name": f"{self.name}/{frame.frame:06d}.png",
-                "width": self.width_px,
-                "height": self.height_px,
-            }
-        )
+        image = {
+            "id": image_id,
+            "video_id": 1,
+            "frame_index": frame.frame,
+            "width": self.width_px,
+            "height": self.height_px,
+        }
+        if self.frame_suffix is not None:  # relative to coco.json
+            image["file_name"] = f"frames/{frame.frame:06d}{self.frame_suffix}"
+        self.images.append(image)
         for obj in frame.objects:
-            x0, y0, x1, y1 = obj.amodal_box
+            x0, y0, x1, y1 = (round(v, 4) for v in obj.amodal_box)  # the same digits on every machine
             self.mot.append(
                 f"{frame.frame + 1},{obj.track_id},{x0 + 1:.3f},{y0 + 1:.3f},{x1 - x0:.3f},{y1 - y0:.3f},"
                 f"{1 if obj.visible_pixels > 0 else 0},{MOT_CLASSES[obj.cls]},"
@@ -79,7 +83,7 @@ class SequenceAnnotations:
                     "area": obj.visible_pixels,
                     "segmentation": rle(frame.instance_id == obj.track_id),
                     "iscrowd": 0,
-                    "amodal_bbox": [x0, y0, x1 - x0, y1 - y0],
+                    "amodal_bbox": [x0, y0, round(x1 - x0, 4), round(y1 - y0, 4)],
                     "visibility": round(obj.visibility, 6),
                     "truncation": round(obj.truncation, 6),
                     "bbox_3d_world_m": np.round(obj.box_3d_world_m, 6).tolist(),
@@ -104,8 +108,8 @@ class SequenceAnnotations:
         write_text_atomic(
             seqinfo,
             "[Sequence]\n"
-            f"name={self.name}\nimDir=img1\nframeRate={self.fps:g}\nseqLength={self.frame_count}\n"
-            f"imWidth={self.width_px}\nimHeight={self.height_px}\nimExt=.png\n",
+            f"name={self.name}\nimDir=frames\nframeRate={self.fps:g}\nseqLength={self.frame_count}\n"
+            f"imWidth={self.width_px}\nimHeight={self.height_px}\nimExt={self.frame_suffix or '.png'}\n",
         )
         return [gt, seqinfo]
 

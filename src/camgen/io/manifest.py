@@ -78,7 +78,9 @@ class FileProblem:
         return f"{self.path}: {self.kind}: {self.message}"
 
 
-def build_manifest(job: Job, job_dir: str | Path, *, on_progress: ProgressCallback | None = None) -> dict[str, Any]:
+def build_manifest(
+    job: Job, job_dir: str | Path, *, rendered: dict | None = None, on_progress: ProgressCallback | None = None
+) -> dict[str, Any]:
     """The manifest of `job` rendered into `job_dir`: resolved configuration and every file's hash.
 
     Every regular file under `job_dir` is listed, except ``manifest.json`` at its top. Deterministic:
@@ -109,6 +111,7 @@ def build_manifest(job: Job, job_dir: str | Path, *, on_progress: ProgressCallba
         "manifest_version": MANIFEST_VERSION,
         "camgen_version": camgen.__version__,
         **config,
+        **({} if rendered is None else {"rendered": rendered}),
         "files": files,
     }
 
@@ -118,14 +121,16 @@ def manifest_text(manifest: dict[str, Any]) -> str:
     return json.dumps(manifest, sort_keys=True, indent=1, ensure_ascii=False) + "\n"
 
 
-def write_manifest(job: Job, job_dir: str | Path, *, on_progress: ProgressCallback | None = None) -> Path:
+def write_manifest(
+    job: Job, job_dir: str | Path, *, rendered: dict | None = None, on_progress: ProgressCallback | None = None
+) -> Path:
     """Write ``job_dir/manifest.json`` atomically and return its path.
 
     Call it last, after job.json: it hashes what is in `job_dir` now, and any file written after it
     will read as modified or extra to `verify`.
     """
     path = Path(job_dir) / MANIFEST_NAME
-    write_text_atomic(path, manifest_text(build_manifest(job, job_dir, on_progress=on_progress)))
+    write_text_atomic(path, manifest_text(build_manifest(job, job_dir, rendered=rendered, on_progress=on_progress)))
     return path
 
 

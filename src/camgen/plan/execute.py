@@ -10,6 +10,7 @@ callers can say so.
 from __future__ import annotations
 
 import json
+import shutil
 import time
 from collections.abc import Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
@@ -108,6 +109,13 @@ def execute(
     job_dir = Path(out_dir) / job_directory_name(job)
     indices = list(range(job.frame_count) if frames is None else frames)
     wanted = None if cameras is None else set(cameras)
+    # A render starts clean: no job.json or manifest.json until it completes, and no files left in a
+    # camera's directory by an earlier render of it (fewer frames, other outputs, a killed run).
+    for stale in ("manifest.json", "job.json"):
+        (job_dir / stale).unlink(missing_ok=True)
+    for camera in job.cameras:
+        if (wanted is None or camera.name in wanted) and (job_dir / camera.name).is_dir():
+            shutil.rmtree(job_dir / camera.name)
     results = []
     maps = LensMapCache()  # cameras with the same lens and zoom share their maps
     with ThreadPoolExecutor(NOISE_THREADS) as executor:
@@ -116,9 +124,11 @@ def execute(
                 continue
             context = _Context(job, camera_index, job_dir / camera.name, renderer, maps, executor)
             results.append(_execute_camera(context, indices, resolve_path, save_passes, on_frame))
-    # Written last: a job directory with job.json in it holds a complete render.
+    # Written last: a job directory with job.json in it holds a finished render, of the cameras and
+    # frames the manifest's `rendered` names (all of them unless --camera/--frames chose fewer).
     write_text_atomic(job_dir / "job.json", job.to_json())
-    write_manifest(job, job_dir)  # after everything, job.json included: it hashes what is on disk now
+    rendered = {"cameras": [r.name for r in results], "frames": indices if frames is not None else "all"}
+    write_manifest(job, job_dir, rendered=rendered)  # after everything, job.json included
     return results
 
 
@@ -153,8 +163,14 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
     if "annotate" in stages:
         annotator = Annotator(camera_renderer, lens)
         width_px, height_px = camera.output_size_px or (camera.width_px, camera.height_px)
+        frames_format = next((st.params["format"] for st in camera.stages if st.name == "io.frames"), None)
         sequence = SequenceAnnotations(
-            name=camera.name, fps=job.fps, width_px=width_px, height_px=height_px, frame_count=len(indices)
+            name=camera.name,
+            fps=job.fps,
+            width_px=width_px,
+            height_px=height_px,
+            frame_count=max(indices) + 1 if indices else 0,
+            frame_suffix=None if frames_format is None else FRAME_SUFFIX[frames_format],
         )
     converge = (
         pipeline is not None and camera.exposure_mode == "auto" and job.settings.auto_exposure_start == "converged"
@@ -281,7 +297,7 @@ def _write_files(context: _Context, stages, state, frame, captured, rgb8, lens, 
         kind = next(stage.params["format"] for stage in camera.stages if stage.name == "io.frames")
         path = directory / "frames" / f"{name}{FRAME_SUFFIX[kind]}"
         if kind == "exr":  # linear: the scene radiance through the lens, cd/m², before the sensor
-            image = lens.apply(state, Passes(radiance=frame.passes.radiance)).radiance
+            image = lens.apply(state, Passes(radiance=frame.passes.radiance, depth_m=frame.passes.depth_m)).radiance
             if state.window_px is not None:
                 image = crop_and_scale(image, state.window_px, camera.output_size_px)
             write_frame(path, np.ascontiguousarray(image, dtype=np.float32), format="exr")
