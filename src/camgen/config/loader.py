@@ -198,6 +198,14 @@ def load_dataset(path: str | Path) -> Dataset:
     return dataset
 
 
+def _scripted_program(settings) -> tuple[object, tuple[str, ...]]:
+    """The program that names head positions and its key path: a follow's fallback, or the program."""
+    program = settings.program
+    if getattr(program, "type", None) == "follow":
+        return program.fallback, ("program", "fallback")
+    return program, ("program",)
+
+
 def _ptz_positions(ptz) -> list[tuple[tuple, float | None, float | None, float | None]]:
     """(key path below ptz, pan, tilt, zoom) of every head position a camera's settings name."""
     positions: list[tuple[tuple, float | None, float | None, float | None]] = [
@@ -207,9 +215,7 @@ def _ptz_positions(ptz) -> list[tuple[tuple, float | None, float | None, float |
     ]
     for i, preset in enumerate(ptz.presets):
         positions.append((("presets", i), preset.pan_deg, preset.tilt_deg, preset.zoom_x))
-    program, prefix = ptz.program, ("program",)
-    if getattr(program, "type", None) == "follow":
-        program, prefix = program.fallback, ("program", "fallback")
+    program, prefix = _scripted_program(ptz)
     kind = getattr(program, "type", None)
     if kind == "scan":
         for j, pan in enumerate(program.pan_range_deg):
@@ -325,9 +331,7 @@ def _check_head(base: tuple, camera: Camera, profile: Profile) -> list[Problem]:
     problems = []
     for path, pan, tilt, zoom in _ptz_positions(settings):
         problems += _check_head_position((*where, *path), pan, tilt, zoom, ranges)
-    program, prefix = settings.program, ("program",)
-    if getattr(program, "type", None) == "follow":
-        program, prefix = program.fallback, ("program", "fallback")
+    program, prefix = _scripted_program(settings)
     if getattr(program, "type", None) == "scan" and ranges.pan_deg is not None:
         start, end = program.pan_range_deg
         if start == end:

@@ -23,6 +23,7 @@ import numpy as np
 from camgen.annotate.boxes import Box, amodal_box, clip_box, mask_boxes, truncation, unique_edges
 from camgen.plan.job import CameraState
 from camgen.plan.lens_stages import LensStages
+from camgen.plan.visibility import box_corners
 from camgen.render.renderer import Passes
 from camgen.render.sequence import CameraRenderer, render_view
 
@@ -113,11 +114,7 @@ class Annotator:
             unoccluded_pixels = int(np.count_nonzero(unoccluded == track_id))
             seen = visible.get(track_id)
             pixels = 0 if seen is None else seen.pixels
-            low, high = vertices.min(axis=0), vertices.max(axis=0)
-            corners = np.array(
-                [[x, y, z] for z in (low[2], high[2]) for y in (low[1], high[1]) for x in (low[0], high[0])]
-            )
-            corners_world = corners @ pose[:3, :3].T + pose[:3, 3]
+            corners_world = box_corners(vertices.min(axis=0), vertices.max(axis=0), pose)
             result.objects.append(
                 ObjectAnnotation(
                     track_id=track_id,

@@ -25,13 +25,13 @@ from camgen.config.scene import (
 from camgen.errors import ConfigError
 from camgen.isp.eptz import eptz_window_px, output_camera_matrix, window_centre_px
 from camgen.motion.pose import R_world_from_cam, T_world_from_cam, rot_z
+from camgen.motion.ptz import HeadTrack
 from camgen.motion.trajectory import Route, actor_routes
 from camgen.optics.diffraction import CHANNEL_WAVELENGTHS_UM
 from camgen.optics.distortion import max_displacement_px, undistort_normalized
 from camgen.optics.intrinsics import (
     airy_sigma_um,
     blur_circle_diameter_mm,
-    camera_matrix_px,
     corner_radius_normalized,
     corner_radius_px,
     hyperfocal_distance_m,
@@ -40,7 +40,7 @@ from camgen.optics.projection import LensInversionError
 from camgen.optics.remap import SUPPORT_PX, LensGeometry, border_points_px, source_overshoot_px
 from camgen.optics.vignetting import aperture_weight, relative_illumination
 from camgen.plan.job import CameraJob, CameraState, Decision, Job, PlanSettings, RenderSpec, Stage
-from camgen.plan.ptz import head_track
+from camgen.plan.ptz import head_track, holding_track, installed_focal_length_mm
 from camgen.plan.visibility import Bounds, box_corners, local_bounds, placement, visible_depth_range_m
 from camgen.sensor.capture import NOISE_TERM_OFF, NOISE_TERMS, noise_term_is_on
 
@@ -71,15 +71,6 @@ def _actor_swept_boxes(actor: Actor, route: Route, file_bounds, duration_s: floa
         box_corners(low, high + np.array([length, 0.0, 0.0]), T_world_from_cam((*start, 0.0), rot_z(heading)))
         for start, heading, length in zip(starts_m, headings_rad, lengths_m, strict=True)
     ]
-
-
-def _camera_focal_length_mm(camera: Camera, profile: Profile) -> tuple[float, float]:
-    lens = profile.lens
-    if camera.ptz is not None:
-        return lens.focal_length_min_mm * camera.ptz.zoom_x, camera.ptz.zoom_x
-    if camera.focal_length_mm is not None:
-        return camera.focal_length_mm, camera.focal_length_mm / lens.focal_length_min_mm
-    return lens.focal_length_min_mm, 1.0
 
 
 def _source_overshoot_px(
@@ -159,19 +150,19 @@ def _actor_motion_px(
     return worst
 
 
-def _camera_motion_px(track: dict, frame: int, K: np.ndarray, width_px: int, height_px: int) -> float:
+def _camera_motion_px(track: HeadTrack, frame: int, K: np.ndarray, width_px: int, height_px: int) -> float:
     """Image speed of the farthest pixel while the head pans, tilts and zooms at frame `frame`, px/s.
 
     A rotation at angular speed ω moves the image point at normalised radius r by at most f·ω·(1 + r²)
     (pan and tilt turn about perpendicular axes, so ω = √(pan rate² + tilt rate²)); a zoom at rate
     d ln f/dt moves it by its distance from the principal point times that rate.
     """
-    if track["pan_deg_s"][frame] == 0 and track["tilt_deg_s"][frame] == 0 and track["log_zoom_per_s"][frame] == 0:
+    if track.pan_deg_s[frame] == 0 and track.tilt_deg_s[frame] == 0 and track.log_zoom_per_s[frame] == 0:
         return 0.0
-    omega_rad_s = math.radians(math.hypot(track["pan_deg_s"][frame], track["tilt_deg_s"][frame]))
+    omega_rad_s = math.radians(math.hypot(track.pan_deg_s[frame], track.tilt_deg_s[frame]))
     corner_norm = corner_radius_normalized(K, width_px, height_px)
     rotation = max(K[0, 0], K[1, 1]) * omega_rad_s * (1.0 + corner_norm**2)
-    return rotation + corner_radius_px(K, width_px, height_px) * abs(track["log_zoom_per_s"][frame])
+    return rotation + corner_radius_px(K, width_px, height_px) * abs(track.log_zoom_per_s[frame])
 
 
 def _focus_distance_m(
@@ -212,38 +203,18 @@ class _LensState:
     K: np.ndarray
 
 
-def _frame_track(scene: Scene, camera: Camera, profile: Profile, routes, file_bounds):
-    """Per-frame pan, tilt, zoom, their rates, and the program's mode and target (fixed cameras hold)."""
-    frames = scene.frame_count
+def _frame_track(scene: Scene, camera: Camera, profile: Profile, routes, file_bounds) -> tuple[HeadTrack, np.ndarray]:
+    """Per-frame pan, tilt, zoom, their rates, the program's mode and target, and the focal length.
+
+    A fixed camera holds with no mode; a virtual PTZ crops, so its lens stays where it is installed."""
     track = head_track(scene, camera, profile, routes, file_bounds)
+    if track is not None and camera.eptz is None:
+        return track, profile.lens.focal_length_min_mm * track.zoom_x
+    focal_length_mm = installed_focal_length_mm(camera, profile)
     if track is None:
-        focal_length_mm, zoom_x = _camera_focal_length_mm(camera, profile)
-        zeros = np.zeros(frames)
-        return dict(
-            pan_deg=zeros,
-            tilt_deg=zeros,
-            zoom_x=np.full(frames, zoom_x),
-            focal_length_mm=np.full(frames, focal_length_mm),
-            pan_deg_s=zeros,
-            tilt_deg_s=zeros,
-            log_zoom_per_s=zeros,
-            modes=(None,) * frames,
-            targets=(None,) * frames,
-        )
-    optical_zoom = camera.eptz is None  # a virtual PTZ crops: the lens stays where it is installed
-    return dict(
-        pan_deg=track.pan_deg,
-        tilt_deg=track.tilt_deg,
-        zoom_x=track.zoom_x,
-        focal_length_mm=profile.lens.focal_length_min_mm * track.zoom_x
-        if optical_zoom
-        else np.full(frames, _camera_focal_length_mm(camera, profile)[0]),
-        pan_deg_s=track.pan_deg_s,
-        tilt_deg_s=track.tilt_deg_s,
-        log_zoom_per_s=track.log_zoom_per_s,
-        modes=track.modes,
-        targets=track.targets,
-    )
+        zoom_x = focal_length_mm / profile.lens.focal_length_min_mm
+        track = holding_track(0.0, 0.0, zoom_x, scene.frame_count, scene.fps, None)
+    return track, np.full(scene.frame_count, focal_length_mm)
 
 
 def _autofocus(wanted_m: np.ndarray, time_constant_s: float, fps: float) -> np.ndarray:
@@ -277,22 +248,22 @@ def _compile_camera(
     pitch_mm = sensor.pixel_pitch_um * 1e-3
     frames = scene.frame_count
     times = np.arange(frames) / scene.fps
-    track = _frame_track(scene, camera, profile, routes, file_bounds)
+    track, focal_lengths_mm = _frame_track(scene, camera, profile, routes, file_bounds)
     # Distinct lens states (zoom steps) and views (pan, tilt, zoom): the decisions take the worst case.
     lens_of: dict[float, _LensState] = {}
-    for focal_length_mm in track["focal_length_mm"]:
+    for focal_length_mm in focal_lengths_mm:
         key = round(float(focal_length_mm), 9)
         if key not in lens_of:
             f_number, distortion = lens.at_focal_length(key)
-            K = camera_matrix_px(key, sensor.pixel_pitch_um, sensor.pitch_y_um, W, H, sensor.principal_point_offset_px)
+            K = profile.camera_matrix_px(key)
             lens_of[key] = _LensState(key, f_number, distortion.as_array(), K)
-    frame_lens = [lens_of[round(float(f), 9)] for f in track["focal_length_mm"]]
+    frame_lens = [lens_of[round(float(f), 9)] for f in focal_lengths_mm]
     states_lens = list(lens_of.values())
     m = camera.mount
     virtual = camera.eptz is not None  # the camera itself does not move
     view_keys = [
         (0.0, 0.0, ls.focal_length_mm) if virtual else (round(float(p), 9), round(float(t), 9), ls.focal_length_mm)
-        for p, t, ls in zip(track["pan_deg"], track["tilt_deg"], frame_lens, strict=True)
+        for p, t, ls in zip(track.pan_deg, track.tilt_deg, frame_lens, strict=True)
     ]
     pose_of = {
         key: T_world_from_cam(m.position_m, R_world_from_cam(m.yaw_deg, m.pitch_deg, m.roll_deg, key[0], key[1]))
@@ -663,15 +634,15 @@ def _compile_camera(
         applied = ls.distortion if include["optics.distortion"] else np.zeros(8)
         window = output_K = None
         if virtual:
-            centre = window_centre_px(float(track["pan_deg"][k]), float(track["tilt_deg"][k]), ls.K, applied)
-            window = eptz_window_px(centre, float(track["zoom_x"][k]), (W, H), output_size)
+            centre = window_centre_px(float(track.pan_deg[k]), float(track.tilt_deg[k]), ls.K, applied)
+            window = eptz_window_px(centre, float(track.zoom_x[k]), (W, H), output_size)
             output_K = tuple(map(tuple, output_camera_matrix(ls.K, window, output_size).tolist()))
         return CameraState(
             frame=k,
             time_s=float(times[k]),
-            pan_deg=float(track["pan_deg"][k]),
-            tilt_deg=float(track["tilt_deg"][k]),
-            zoom_x=float(track["zoom_x"][k]),
+            pan_deg=float(track.pan_deg[k]),
+            tilt_deg=float(track.tilt_deg[k]),
+            zoom_x=float(track.zoom_x[k]),
             focal_length_mm=ls.focal_length_mm,
             f_number=ls.f_number,
             focus_distance_m=float(focus_per_frame[k]),
@@ -680,11 +651,11 @@ def _compile_camera(
             K_px=tuple(map(tuple, ls.K.tolist())),
             distortion=tuple(float(x) for x in applied),
             T_world_from_cam=tuple(map(tuple, pose_of[view_keys[k]].tolist())),
-            pan_deg_s=float(track["pan_deg_s"][k]),
-            tilt_deg_s=float(track["tilt_deg_s"][k]),
-            log_zoom_per_s=float(track["log_zoom_per_s"][k]),
-            ptz_mode=track["modes"][k],
-            follow_target=track["targets"][k],
+            pan_deg_s=float(track.pan_deg_s[k]),
+            tilt_deg_s=float(track.tilt_deg_s[k]),
+            log_zoom_per_s=float(track.log_zoom_per_s[k]),
+            ptz_mode=track.modes[k],
+            follow_target=track.targets[k],
             window_px=window,
             output_K_px=output_K,
         )

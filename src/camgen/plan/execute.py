@@ -149,7 +149,7 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
     camera = job.cameras[context.camera_index]
     result = CameraResult(camera.name, directory)
     started = time.perf_counter()
-    stages = {stage.name for stage in camera.stages}
+    stages = {stage.name: stage for stage in camera.stages}
     pipeline = (
         CameraPipeline(job, camera, maps=context.maps, executor=context.executor)
         if "radiance" in camera.render.passes
@@ -163,7 +163,7 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
     if "annotate" in stages:
         annotator = Annotator(camera_renderer, lens)
         width_px, height_px = camera.output_size_px or (camera.width_px, camera.height_px)
-        frames_format = next((st.params["format"] for st in camera.stages if st.name == "io.frames"), None)
+        frames_format = stages["io.frames"].params["format"] if "io.frames" in stages else None
         sequence = SequenceAnnotations(
             name=camera.name,
             fps=job.fps,
@@ -209,9 +209,9 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                         preset=camera.profile.codec.preset,
                     )
                 video.write(rgb8)
-            _write_files(context, stages, state, frame, captured, rgb8, lens, result)
+            stream = _stream_passes(camera, stages, state, frame.passes, lens, save_passes)
+            _write_files(context, stages, state, frame, captured, rgb8, stream, result)
             if annotator is not None:
-                ids = lens.apply(state, Passes(instance_id=frame.passes.instance_id)).instance_id
                 window = state.window_px
 
                 def to_stream(image, window=window):
@@ -219,7 +219,7 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                         image if window is None else crop_and_scale(image, window, camera.output_size_px, nearest=True)
                     )
 
-                sequence.add(annotator.annotate(state, Passes(instance_id=to_stream(ids)), post=to_stream))
+                sequence.add(annotator.annotate(state, stream, post=to_stream))
             if "io.camera_metadata" in stages:
                 record = state.model_dump(mode="json")
                 output_K = record.pop("output_K_px")
@@ -235,11 +235,8 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                 if result.frames == 0:
                     table = [vars(instance) for instance in instance_table(job.scene)]
                     write_text_atomic(directory / "passes" / "instances.json", json.dumps(table, indent=1))
-                passes = lens.apply(state, frame.passes)
-                if state.window_px is not None:
-                    passes = _eptz_passes(passes, state.window_px, camera.output_size_px)
                 raw = None if captured is None else captured.raw_dn
-                _save_passes(directory / "passes" / f"{frame.index:06d}.npz", passes, raw, result)
+                _save_passes(directory / "passes" / f"{frame.index:06d}.npz", stream, raw, result)
             result.frames += 1
             if on_frame is not None:
                 on_frame(camera.name, frame.index)
@@ -250,7 +247,7 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
             write_text_atomic(directory / "camera.jsonl", "\n".join(metadata) + "\n")
             result.files.append(directory / "camera.jsonl")
         if sequence is not None:
-            formats = next(stage.params["formats"] for stage in camera.stages if stage.name == "annotate")
+            formats = stages["annotate"].params["formats"]
             if "mot" in formats:
                 result.files += sequence.write_mot(directory)
             if "coco" in formats:
@@ -269,8 +266,28 @@ FRAME_SUFFIX = {"png": ".png", "tiff": ".tiff", "exr": ".exr"}
 DEPTH_SUFFIX = {"png16": ".png", "exr": ".exr"}
 
 
-def _write_files(context: _Context, stages, state, frame, captured, rgb8, lens, result: CameraResult) -> None:
-    """The optional per-frame files: raw DNG, frames (8-bit stream or linear EXR radiance), depth."""
+def _stream_passes(camera: CameraJob, stages, state, rendered: Passes, lens: LensStages, save_passes: bool) -> Passes:
+    """The frame's passes through the lens and onto the stream (a virtual PTZ's crop), once, holding
+    only those that the saved passes, the EXR frames, the depth files or the annotations use."""
+    radiance = save_passes or ("io.frames" in stages and stages["io.frames"].params["format"] == "exr")
+    depth = save_passes or "io.depth" in stages or radiance  # the blur stages read depth too
+    ids = save_passes or "annotate" in stages
+    if not (radiance or depth or ids):
+        return Passes()
+    through = lens.apply(
+        state,
+        Passes(
+            radiance=rendered.radiance if radiance else None,
+            depth_m=rendered.depth_m if depth else None,
+            instance_id=rendered.instance_id if ids else None,
+        ),
+    )
+    return through if state.window_px is None else _eptz_passes(through, state.window_px, camera.output_size_px)
+
+
+def _write_files(context: _Context, stages, state, frame, captured, rgb8, stream: Passes, result: CameraResult) -> None:
+    """The optional per-frame files: raw DNG, frames (8-bit stream or linear EXR radiance), depth.
+    `stream`: the frame's passes through the lens, on the stream (`_stream_passes`)."""
     camera = context.job.cameras[context.camera_index]
     directory, name = context.directory, f"{frame.index:06d}"
     if "io.raw_dng" in stages and captured is not None:
@@ -294,23 +311,17 @@ def _write_files(context: _Context, stages, state, frame, captured, rgb8, lens, 
         )
         result.files.append(path)
     if "io.frames" in stages:
-        kind = next(stage.params["format"] for stage in camera.stages if stage.name == "io.frames")
+        kind = stages["io.frames"].params["format"]
         path = directory / "frames" / f"{name}{FRAME_SUFFIX[kind]}"
         if kind == "exr":  # linear: the scene radiance through the lens, cd/m², before the sensor
-            image = lens.apply(state, Passes(radiance=frame.passes.radiance, depth_m=frame.passes.depth_m)).radiance
-            if state.window_px is not None:
-                image = crop_and_scale(image, state.window_px, camera.output_size_px)
-            write_frame(path, np.ascontiguousarray(image, dtype=np.float32), format="exr")
+            write_frame(path, np.ascontiguousarray(stream.radiance, dtype=np.float32), format="exr")
         elif rgb8 is not None:
             write_frame(path, rgb8, format=kind)
         result.files.append(path)
     if "io.depth" in stages:
-        kind = next(stage.params["format"] for stage in camera.stages if stage.name == "io.depth")
-        depth = lens.apply(state, Passes(depth_m=frame.passes.depth_m)).depth_m
-        if state.window_px is not None:
-            depth = crop_and_scale(depth, state.window_px, camera.output_size_px, nearest=True)
+        kind = stages["io.depth"].params["format"]
         path = directory / "depth" / f"{name}{DEPTH_SUFFIX[kind]}"
-        write_depth(path, depth, format=kind)
+        write_depth(path, stream.depth_m, format=kind)
         result.files.append(path)
 
 

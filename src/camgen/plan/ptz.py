@@ -19,7 +19,6 @@ from camgen.motion.pose import R_world_from_cam, R_world_from_mount, T_world_fro
 from camgen.motion.programs import Follow, FollowView, Position, build_controller
 from camgen.motion.ptz import AxisLimits, HeadLimits, HeadPose, HeadTrack, simulate_head
 from camgen.motion.trajectory import Route
-from camgen.optics.intrinsics import camera_matrix_px
 from camgen.optics.projection import project_points
 from camgen.plan.visibility import box_corners, local_bounds, placement
 
@@ -89,7 +88,7 @@ def _window_view(camera: Camera, profile: Profile, K: np.ndarray):
     """Whether a world point is in a virtual PTZ's window at a pose (the sensor image, cropped)."""
     mount, sensor = camera.mount, profile.sensor
     T = T_world_from_cam(mount.position_m, R_world_from_cam(mount.yaw_deg, mount.pitch_deg, mount.roll_deg))
-    focal_length_mm = camera.focal_length_mm or profile.lens.focal_length_min_mm
+    focal_length_mm = installed_focal_length_mm(camera, profile)
     distortion = profile.lens.at_focal_length(focal_length_mm)[1].as_array()
     sensor_size = (sensor.width_px, sensor.height_px)
 
@@ -103,20 +102,28 @@ def _window_view(camera: Camera, profile: Profile, K: np.ndarray):
     return in_view
 
 
-def _holding(settings, scene: Scene) -> HeadTrack:
-    frames = scene.frame_count
-    zeros = np.zeros(frames)
+def installed_focal_length_mm(camera: Camera, profile: Profile) -> float:
+    """Where a fixed camera's lens is set (a virtual PTZ's too): the scene's focal length, else the
+    wide end."""
+    return camera.focal_length_mm or profile.lens.focal_length_min_mm
+
+
+def holding_track(
+    pan_deg: float, tilt_deg: float, zoom_x: float, frame_count: int, fps: float, mode: str | None
+) -> HeadTrack:
+    """A head (or a fixed camera, `mode` None) that stays where it is for every frame."""
+    zeros = np.zeros(frame_count)
     return HeadTrack(
-        time_s=np.arange(frames) / scene.fps,
-        pan_deg=np.full(frames, settings.pan_deg),
-        tilt_deg=np.full(frames, settings.tilt_deg),
-        zoom_x=np.full(frames, settings.zoom_x),
-        pan_unwrapped_deg=np.full(frames, settings.pan_deg),
+        time_s=np.arange(frame_count) / fps,
+        pan_deg=np.full(frame_count, pan_deg),
+        tilt_deg=np.full(frame_count, tilt_deg),
+        zoom_x=np.full(frame_count, zoom_x),
+        pan_unwrapped_deg=np.full(frame_count, pan_deg),
         pan_deg_s=zeros,
         tilt_deg_s=zeros,
         log_zoom_per_s=zeros,
-        modes=("hold",) * frames,
-        targets=(None,) * frames,
+        modes=(mode,) * frame_count,
+        targets=(None,) * frame_count,
     )
 
 
@@ -136,17 +143,8 @@ def head_track(
     home = Position(settings.pan_deg, settings.tilt_deg, settings.zoom_x)
     mount = camera.mount
     sensor = profile.sensor
-    focal_length_mm = (
-        (camera.focal_length_mm or profile.lens.focal_length_min_mm) if virtual else profile.lens.focal_length_min_mm
-    )
-    K = camera_matrix_px(
-        focal_length_mm,
-        sensor.pixel_pitch_um,
-        sensor.pitch_y_um,
-        sensor.width_px,
-        sensor.height_px,
-        sensor.principal_point_offset_px,
-    )
+    focal_length_mm = installed_focal_length_mm(camera, profile) if virtual else profile.lens.focal_length_min_mm
+    K = profile.camera_matrix_px(focal_length_mm)
     width_px, height_px = sensor.width_px, sensor.height_px
     fx, fy = float(K[0, 0]), float(K[1, 1])
     if virtual:  # the stream at zoom 1: the full window scaled to the output size
@@ -172,7 +170,8 @@ def head_track(
         return Follow(program, view, target_at, height_m, fallback, in_view)
 
     if settings.program is None or settings.program.type == "hold":
-        return _holding(settings, scene)  # nothing to simulate: the head stays at home
+        # nothing to simulate: the head stays at home
+        return holding_track(settings.pan_deg, settings.tilt_deg, settings.zoom_x, scene.frame_count, scene.fps, "hold")
     controller = build_controller(
         settings.program, home, settings.presets, endless_pan=limits.pan.endless, follow=follow
     )
