@@ -236,6 +236,13 @@ CASES = [
         "must be > 0, got -45",
     ),
     (
+        "negative_autofocus_time",
+        "profile",
+        edit(PTZ_PROFILE, "pan_max_deg_s: 100", "pan_max_deg_s: 100\n  autofocus_time_s: -0.5 #<"),
+        "ptz.autofocus_time_s",
+        "must be ≥ 0, got -0.5",
+    ),
+    (
         "duplicate_key",
         "profile",
         edit(FIXED_PROFILE, "  bit_depth: 12", "  bit_depth: 12\n  bit_depth: 10 #<"),
