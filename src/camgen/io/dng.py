@@ -68,6 +68,7 @@ _TAG = {
     "Model": 272,
     "ExposureTime": 33434,
     "FNumber": 33437,
+    "Temperature": 37888,
     "CFARepeatPatternDim": 33421,
     "CFAPattern": 33422,
     "DNGVersion": 50706,
@@ -97,6 +98,7 @@ def write_dng(
     camera_name: str = "camgen",
     exposure_time_s: float | None = None,
     f_number: float | None = None,
+    temperature_c: float | None = None,
 ) -> None:
     """Write one raw frame, Bayer mosaic or monochrome, as an uncompressed DNG 1.4 file.
 
@@ -104,7 +106,7 @@ def write_dng(
 
     * all frames: DNGVersion 1.4.0.0, DNGBackwardVersion 1.1.0.0, UniqueCameraModel and Model
       (`camera_name`), Make ``camgen``, Software ``camgen <version>``, BlackLevelRepeatDim (1, 1),
-      BlackLevel, WhiteLevel, and ExposureTime / FNumber when given;
+      BlackLevel, WhiteLevel, and ExposureTime / FNumber / Temperature when given;
     * Bayer (PhotometricInterpretation 32803): CFARepeatPatternDim (2, 2), CFAPattern, CFAPlaneColor
       (0, 1, 2), CFALayout 1 (rectangular), ColorMatrix1, CalibrationIlluminant1 21 (D65),
       AsShotNeutral;
@@ -144,6 +146,9 @@ def write_dng(
         ExposureTime, seconds (> 0).
     f_number : float, optional
         FNumber of the lens (> 0).
+    temperature_c : float, optional
+        Sensor temperature, °C, in EXIF 2.31's Temperature tag (37888, SRATIONAL), which `camgen fit
+        noise` reads back to fit the dark current's temperature dependence.
 
     Raises
     ------
@@ -185,6 +190,10 @@ def write_dng(
         tags.append((_TAG["ExposureTime"], DATATYPE.RATIONAL, 1, _rationals("exposure_time_s", [exposure_time_s])))
     if f_number is not None:
         tags.append((_TAG["FNumber"], DATATYPE.RATIONAL, 1, _rationals("f_number", [f_number])))
+    if temperature_c is not None:
+        tags.append(
+            (_TAG["Temperature"], DATATYPE.SRATIONAL, 1, _rationals("temperature_c", [temperature_c], signed=True))
+        )
     if cfa == "mono":
         if color_matrix_xyz_to_camera is not None or as_shot_neutral_rgb is not None:
             raise ConfigError(

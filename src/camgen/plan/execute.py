@@ -308,6 +308,7 @@ def _write_files(context: _Context, stages, state, frame, captured, rgb8, stream
             camera_name=camera.profile_name,
             exposure_time_s=state.exposure_time_s,
             f_number=state.f_number,
+            temperature_c=sensor.temperature_c,
         )
         result.files.append(path)
     if "io.frames" in stages:
