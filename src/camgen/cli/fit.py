@@ -1,0 +1,269 @@
+"""camgen fit noise|lens|match: profiles from real hardware.
+
+Each writes profile YAML (a fragment, or with ``--profile BASE`` a profile that extends the base and
+is checked by loading it) and a PNG report, and prints what it measured with uncertainties.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Sequence
+from contextlib import nullcontext
+from pathlib import Path
+
+import numpy as np
+from rich.console import Console
+from rich.markup import escape
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.table import Table
+
+from camgen.errors import ConfigError
+
+CFA_CHOICES = ("RGGB", "BGGR", "GRBG", "GBRG", "mono")
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "fit",
+        help="build a profile from real hardware: noise (raw frames), lens (board images), match (its video)",
+        description="Build profile YAML from measurements of a real camera.",
+    )
+    kinds = parser.add_subparsers(title="what to fit", metavar="KIND", required=True)
+
+    noise = kinds.add_parser(
+        "noise",
+        help="sensor noise after EMVA 1288 from raw dark (and flat) frames",
+        description="Sensor noise after EMVA 1288 from stacks of raw dark and flat frames. Frames taken at "
+        "the same exposure time and temperature form one stack (a sub-folder is a stack of its own); "
+        "exposure time and temperature come from frames.csv in the folder (columns "
+        "file,exposure_time_s,temperature_c), else from the files' EXIF.",
+    )
+    noise.add_argument("--dark", type=Path, required=True, metavar="DIR", help="folder of dark frames (lens capped)")
+    noise.add_argument("--flat", type=Path, metavar="DIR", help="folder of flat-field frames at several light levels")
+    noise.add_argument("--metadata", type=Path, metavar="CSV", help="side file for both folders (default: frames.csv)")
+    noise.add_argument("--cfa", choices=CFA_CHOICES, help="mosaic of linear TIFF/PNG frames (default mono)")
+    noise.add_argument("--bit-depth", type=int, metavar="BITS", help="ADC bits of linear frames (default: container)")
+    noise.add_argument(
+        "--gain-dn-per-e", type=float, metavar="K", help="system gain when no flats are given (datasheet), DN/e⁻"
+    )
+    _add_output_options(noise, "noise")
+    noise.set_defaults(run=run_noise)
+
+    lens = kinds.add_parser(
+        "lens",
+        help="intrinsics and distortion from checkerboard or ChArUco images",
+        description="Lens intrinsics and Brown–Conrady distortion from images of a board (OpenCV), with "
+        "outlier views rejected and the distortion model chosen by held-out reprojection error.",
+    )
+    lens.add_argument("--images", type=Path, required=True, metavar="DIR", help="folder of board images")
+    lens.add_argument(
+        "--board",
+        required=True,
+        metavar="SPEC",
+        help="checkerboard:COLSxROWS:SIZE (inner corners, e.g. checkerboard:9x6:25mm) or "
+        "charuco:SQUARESXxSQUARESY:SQUARE:MARKER:DICT (e.g. charuco:11x8:30mm:22mm:DICT_5X5_100)",
+    )
+    lens.add_argument("--pixel-pitch-um", type=float, metavar="P", help="sensor pixel pitch, µm (for mm figures)")
+    _add_output_options(lens, "lens")
+    lens.set_defaults(run=run_lens)
+
+    match = kinds.add_parser(
+        "match",
+        help="noise and tone parameters from a camera's ordinary 8-bit output",
+        description="For a camera whose raw frames are not available: measure the noise level function of "
+        "its 8-bit output and fit the base profile's noise and ISP parameters to reproduce it.",
+    )
+    match.add_argument(
+        "--reference", type=Path, nargs="+", required=True, metavar="FILE", help="video file(s) or 8-bit images"
+    )
+    match.add_argument("--max-frames", type=int, default=200, metavar="N", help="frames read from the reference")
+    match.add_argument("--seed", type=int, default=0, help="seed of the simulation the fit compares with")
+    _add_output_options(match, "match", profile_required=True)
+    match.set_defaults(run=run_match)
+
+
+def _add_output_options(parser: argparse.ArgumentParser, kind: str, *, profile_required: bool = False) -> None:
+    parser.add_argument(
+        "--profile",
+        type=Path,
+        required=profile_required,
+        metavar="BASE",
+        help="base profile: the output extends it and is validated"
+        + ("" if profile_required else " (without it the output is a fragment to merge into a profile)"),
+    )
+    parser.add_argument(
+        "-o", "--output", type=Path, default=Path(f"fit-{kind}.yaml"), metavar="YAML", help="default: %(default)s"
+    )
+    parser.add_argument("--report", type=Path, metavar="PNG", help="report plot (default: beside the output, .png)")
+
+
+def _report_path(args: argparse.Namespace) -> Path:
+    return args.report if args.report is not None else args.output.with_suffix(".png")
+
+
+def _progress(err: Console) -> Progress:
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
+    return Progress(*columns, console=err, transient=True, disable=not err.is_terminal)
+
+
+def _significant(value: float, uncertainty: float | None) -> str:
+    """`value ± uncertainty` with the uncertainty to two significant digits and the value to match."""
+    if uncertainty is None or not math.isfinite(uncertainty) or not uncertainty > 0:
+        return f"{value:.4g}"
+    decimals = max(0, 1 - math.floor(math.log10(uncertainty)))
+    return f"{value:.{decimals}f} ± {uncertainty:.{decimals}f}"
+
+
+def _print_rows(out: Console, title: str, rows: Sequence[tuple[str, float, float, str]]) -> None:
+    table = Table(title=title, title_justify="left")
+    table.add_column("quantity")
+    table.add_column("value ± 1σ", justify="right")
+    table.add_column("unit")
+    for name, value, uncertainty, unit in rows:
+        table.add_row(escape(name), _significant(value, uncertainty), escape(unit))
+    out.print(table)
+
+
+def _warn(err: Console, messages: Sequence[str]) -> None:
+    for message in messages:
+        err.print(f"[yellow]warning[/yellow] {escape(message)}", soft_wrap=True)
+
+
+def _check_positive(value: float | None, option: str) -> None:
+    if value is not None and not value > 0:
+        raise ConfigError(f"{option} must be > 0, got {value:g}")
+
+
+def _write_outputs(args, out: Console, fragment: dict, header: list[str], write_report) -> None:
+    from camgen.fit.profile_yaml import write_profile
+
+    report = _report_path(args)
+    write_profile(args.output, fragment, header=header, base=args.profile)
+    write_report(report)
+    kind = "profile" if args.profile is not None else "fragment"
+    out.print(f"wrote {kind} {escape(str(args.output))} and report {escape(str(report))}")
+
+
+def run_noise(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from camgen.fit.frames import listing, scan_stacks
+    from camgen.fit.noise import FrameGroup, StackStatistics, fit_noise
+    from camgen.fit.noise_report import write_noise_report
+
+    _check_positive(args.gain_dn_per_e, "--gain-dn-per-e")
+    if args.bit_depth is not None and not 1 <= args.bit_depth <= 16:
+        raise ConfigError(f"--bit-depth must be 1–16, got {args.bit_depth}")
+    scans = {}
+    with _progress(err) as progress:
+        for kind, directory in (("dark", args.dark), ("flat", args.flat)):
+            if directory is None:
+                continue
+            task = progress.add_task(f"reading {kind} frames", total=None)
+            scans[kind] = scan_stacks(
+                directory,
+                kind,
+                StackStatistics,
+                metadata_file=args.metadata,
+                cfa=args.cfa,
+                white_level_dn=None if args.bit_depth is None else 2**args.bit_depth - 1,
+                on_frame=lambda done, total, task=task: progress.update(task, completed=done, total=total),
+            )
+    dark = scans["dark"]
+    if "flat" in scans:
+        flat = scans["flat"]
+        if flat.cfa != dark.cfa:
+            raise ConfigError(f"the dark frames are {dark.cfa} but the flat frames {flat.cfa}; use one camera mode")
+        dark_shape = next(iter(dark.groups.values())).stats.mean_dn.shape
+        flat_shape = next(iter(flat.groups.values())).stats.mean_dn.shape
+        if dark_shape != flat_shape:
+            raise ConfigError(
+                f"the dark frames are {dark_shape[1]}×{dark_shape[0]} px but the flat frames "
+                f"{flat_shape[1]}×{flat_shape[0]} px; use one sensor mode for both"
+            )
+    white = dark.white_level_dn
+    bit_depth = args.bit_depth or (max(1, white.bit_length()) if white else 16)
+    groups = [
+        FrameGroup(kind, stack.exposure_time_s, stack.temperature_c, stack.stats, stack.label)
+        for kind, scan in scans.items()
+        for stack in scan.groups.values()
+    ]
+    fit = fit_noise(groups, cfa=dark.cfa, bit_depth=bit_depth, gain_dn_per_e=args.gain_dn_per_e)
+
+    warnings = [f"skipped {name}: it {reason}" for scan in scans.values() for name, reason in scan.skipped]
+    warnings += list(fit.warnings)
+    if dark.optical_black_dn:
+        ob = sum(dark.optical_black_dn) / len(dark.optical_black_dn)
+        warnings.append(f"the masked optical-black border reads {ob:.2f} DN on average (for comparison with the fit)")
+    _warn(err, warnings)
+    frames = sum(len(stack.files) for scan in scans.values() for stack in scan.groups.values())
+    _print_rows(out, f"sensor noise ({dark.cfa}, {len(groups)} stacks, {frames} frames)", fit.summary_rows())
+    sources = [f"--dark {args.dark}"] + ([f"--flat {args.flat}"] if args.flat else [])
+    header = [
+        f"camgen fit noise {' '.join(sources)}",
+        f"{len(groups)} stacks: "
+        + listing([f"{g.label} ({len(g.files)})" for s in scans.values() for g in s.groups.values()]),
+        *(f"{name}: {_significant(value, unc)} {unit}" for name, value, unc, unit in fit.summary_rows()),
+    ]
+    _write_outputs(args, out, fit.profile_fragment(), header, lambda path: write_noise_report(fit, path))
+    return 0
+
+
+def run_lens(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from camgen.fit.frames import listing
+    from camgen.fit.lens import detect_in_folder, fit_lens, parse_board
+    from camgen.fit.lens_report import write_lens_report
+
+    _check_positive(args.pixel_pitch_um, "--pixel-pitch-um")
+    board = parse_board(args.board)
+    with _progress(err) as progress:
+        task = progress.add_task("finding the board", total=None)
+        images = detect_in_folder(args.images, board, on_image=lambda path: progress.advance(task))
+    fit = fit_lens(images.detections, images.size_px, unusable=images.unusable, pixel_pitch_um=args.pixel_pitch_um)
+    for name, reason in fit.rejected:
+        err.print(f"[yellow]rejected[/yellow] {escape(name)}: {escape(reason)}", soft_wrap=True)
+    _warn(err, list(fit.warnings))
+    views = len(fit.per_view_rms_px)
+    _print_rows(out, f"lens ({fit.model}, {views} views, RMS {fit.rms_px:.3f} px)", fit.summary_rows())
+    header = [
+        f"camgen fit lens --images {args.images} --board {args.board}",
+        f"model {fit.model}, RMS {fit.rms_px:.4f} px over {views} views; "
+        f"rejected: {listing([name for name, _ in fit.rejected]) or 'none'}",
+        *(f"{name}: {_significant(value, std)} {unit}" for name, value, std, unit in fit.summary_rows()),
+    ]
+    _write_outputs(
+        args, out, fit.profile_fragment(), header, lambda path: write_lens_report(fit, images.detections, path)
+    )
+    return 0
+
+
+def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from camgen.config.loader import load_profile
+    from camgen.fit.frames import read_rgb8_frames
+    from camgen.fit.match import fit_match
+    from camgen.fit.match_report import write_match_report
+
+    if args.max_frames < 1:
+        raise ConfigError(f"--max-frames must be ≥ 1, got {args.max_frames}")
+    base = load_profile(args.profile).profile
+    frames, shapes = [], {}
+    with _progress(err) as progress:
+        task = progress.add_task("reading the reference", total=None)
+        for name, frame in read_rgb8_frames(args.reference, max_frames=args.max_frames):
+            shapes.setdefault(frame.shape[:2], []).append(name)
+            frames.append(frame)
+            progress.advance(task)
+    if len(shapes) > 1:
+        detail = "; ".join(f"{w}×{h}: {names[0]}…" for (h, w), names in shapes.items())
+        raise ConfigError(f"the reference frames differ in size ({detail}); give frames of one camera mode")
+    with err.status("fitting", spinner="dots") if err.is_terminal else nullcontext():
+        fit = fit_match(frames, base, seed=args.seed)
+    _warn(err, list(fit.warnings))
+    rows = [(key, value, 0.0, "") for key, value in fit.parameters.items()]
+    worst = float(np.nanmax(np.abs(fit.relative_error_per_bin)))
+    _print_rows(out, f"fitted to {len(frames)} reference frames (worst NLF bin {worst:.1%})", rows)
+    header = [
+        f"camgen fit match --reference {' '.join(str(p) for p in args.reference)} --profile {args.profile}",
+        f"noise level function ({fit.reference.method}) reproduced within {worst:.1%} in every bin",
+    ]
+    _write_outputs(args, out, fit.profile_fragment(), header, lambda path: write_match_report(fit, path))
+    return 0

@@ -1,0 +1,483 @@
+"""Reading the frames that fitting starts from: raw and linear frame stacks, board images, reference video.
+
+`camgen.fit` is, with `camgen.io`, the only place that reads files (DESIGN.md). Here:
+
+- **Raw frames** through rawpy (LibRaw: DNG, NEF, CR2, CR3, ARW, RAF, ORF, RW2, …): the visible
+  area's DN, the CFA read from the file, its black and white levels, and the mean of the masked
+  optical-black border where the format has one.
+- **Linear frames** (8–16-bit mono or Bayer TIFF/PNG, as industrial cameras deliver them) through
+  OpenImageIO, in their native integer type (never rescaled: nothing infers scale from dtype). Their
+  CFA is not in the file; the caller names it.
+- **Exposure time and temperature** of every frame come from a side file when one is given (or
+  ``frames.csv`` lies in the folder), else from the file's EXIF (ExposureTime 33434, Temperature
+  37888, as camgen's DNG writer stores them).
+- **Grouping**: frames taken at the same settings form one group (one stack). Sub-folders of the
+  folder are groups of their own (flats at several light levels but one exposure time); otherwise
+  frames are grouped by exposure time and temperature.
+
+Every problem with the input is a `ConfigError` or a warning that names the files, never a traceback.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections import defaultdict
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from camgen.errors import ConfigError
+
+RAW_SUFFIXES = frozenset(
+    ".dng .nef .nrw .cr2 .cr3 .crw .arw .srf .sr2 .raf .orf .rw2 .pef .srw .3fr .fff .iiq .erf .kdc .dcr .mos .mrw "
+    ".x3f .rwl .raw".split()
+)
+"""File name endings read through rawpy (LibRaw)."""
+LINEAR_SUFFIXES = frozenset({".tif", ".tiff", ".png", ".pgm", ".pnm"})
+"""File name endings read as linear integer frames through OpenImageIO."""
+VIDEO_SUFFIXES = frozenset({".mp4", ".mkv", ".mov", ".avi", ".ts", ".m4v", ".webm", ".h264", ".h265", ".hevc"})
+IMAGE_SUFFIXES = frozenset({".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".pgm", ".ppm", ".webp"})
+METADATA_FILE = "frames.csv"
+"""Side file looked for in a frame folder: columns ``file,exposure_time_s[,temperature_c]``."""
+BAYER_NAMES = ("RGGB", "BGGR", "GRBG", "GBRG")
+EXIF_EXPOSURE_TIME = 33434
+EXIF_TEMPERATURE = 37888
+SATURATED_DARK_FRAC = 0.9
+"""A "dark" frame whose median is above this fraction of the white level is taken to be saturated."""
+LISTED = 5
+"""File names listed in a message before "and N more"."""
+
+
+def listing(names: Sequence[str]) -> str:
+    """`a, b, c` — at most `LISTED` names, then how many more."""
+    shown = ", ".join(names[:LISTED])
+    return shown + (f" and {len(names) - LISTED} more" if len(names) > LISTED else "")
+
+
+@dataclass(frozen=True)
+class FrameMetadata:
+    exposure_time_s: float | None = None
+    temperature_c: float | None = None
+
+
+@dataclass(frozen=True)
+class RawFrame:
+    """One raw or linear frame as the sensor delivered it."""
+
+    path: Path
+    raw_dn: np.ndarray
+    """(H, W) uint16, DN as read (black level included)."""
+    cfa: str
+    """"RGGB", "BGGR", "GRBG", "GBRG" or "mono"."""
+    white_level_dn: int | None
+    """Largest DN the file says it can hold (LibRaw's white level; 2^bits − 1 for linear files)."""
+    black_level_dn: float | None
+    """Black level the file states (mean over the CFA channels); None for linear files."""
+    optical_black_dn: float | None
+    """Mean DN of the masked optical-black border, where the format keeps one."""
+    metadata: FrameMetadata
+
+    @property
+    def bit_depth(self) -> int | None:
+        return None if self.white_level_dn is None else max(1, math.ceil(math.log2(self.white_level_dn + 1)))
+
+
+class FrameReadError(Exception):
+    """A file that could not be read as a frame (the message says why, without the path)."""
+
+
+def _cfa_from_rawpy(raw) -> str:
+    pattern = np.asarray(raw.raw_pattern)
+    if raw.num_colors == 1 or pattern.shape == (1, 1):
+        return "mono"
+    if pattern.shape != (2, 2):
+        raise FrameReadError(
+            f"has a {pattern.shape[0]}×{pattern.shape[1]} colour filter array (X-Trans?); only 2×2 Bayer and "
+            "mono are supported"
+        )
+    letters = raw.color_desc.decode("ascii")
+    name = "".join(letters[i] for i in pattern.ravel())
+    if name not in BAYER_NAMES:
+        raise FrameReadError(f"has a colour filter array {name!r}; only RGGB, BGGR, GRBG, GBRG and mono are supported")
+    return name
+
+
+def _tiff_metadata(path: Path) -> FrameMetadata:
+    """ExposureTime and Temperature from a TIFF-based file's first IFD or its EXIF IFD (None if absent)."""
+    import tifffile
+
+    def number(value) -> float | None:
+        if isinstance(value, tuple) and len(value) == 2 and value[1]:
+            return value[0] / value[1]
+        return float(value) if isinstance(value, int | float) else None
+
+    try:
+        with tifffile.TiffFile(path) as tif:
+            tags = tif.pages.first.tags
+            exif = tags.get("ExifTag")
+            exif = exif.value if exif is not None and isinstance(exif.value, dict) else {}
+            found = {}
+            for key, code, name in (
+                ("exposure_time_s", EXIF_EXPOSURE_TIME, "ExposureTime"),
+                ("temperature_c", EXIF_TEMPERATURE, "Temperature"),
+            ):
+                tag = tags.get(code)
+                value = number(tag.value) if tag is not None else number(exif.get(name))
+                found[key] = value
+            return FrameMetadata(**found)
+    except Exception:  # not a TIFF container (CR3, RAF…), or no EXIF: the side file must say
+        return FrameMetadata()
+
+
+def _read_rawpy(path: Path) -> RawFrame:
+    import rawpy
+
+    try:
+        with rawpy.imread(str(path)) as raw:
+            cfa = _cfa_from_rawpy(raw)
+            visible = np.array(raw.raw_image_visible, dtype=np.uint16)
+            sizes = raw.sizes
+            optical_black = None
+            if sizes.top_margin or sizes.left_margin:
+                full = raw.raw_image
+                masked = [full[: sizes.top_margin, :], full[:, : sizes.left_margin]]
+                values = np.concatenate([m.ravel() for m in masked if m.size])
+                optical_black = float(values.mean()) if values.size else None
+            black = float(np.mean(raw.black_level_per_channel))
+            white = int(raw.white_level)
+    except (rawpy.LibRawError, OSError, ValueError) as exc:
+        raise FrameReadError(f"is not a raw file LibRaw can read ({type(exc).__name__}: {exc})") from None
+    if visible.ndim != 2:
+        raise FrameReadError(f"holds a {visible.ndim}-D raw image; a one-plane mosaic or mono frame is needed")
+    return RawFrame(path, visible, cfa, white, black, optical_black, _tiff_metadata(path))
+
+
+def _read_linear(path: Path, cfa: str) -> RawFrame:
+    import OpenImageIO as oiio  # noqa: N813 — the library's documented alias
+
+    image_input = oiio.ImageInput.open(str(path))
+    if image_input is None:
+        raise FrameReadError(f"cannot be opened ({oiio.geterror().strip() or 'unknown format'})")
+    try:
+        spec = image_input.spec()
+        if spec.nchannels != 1:
+            raise FrameReadError(
+                f"has {spec.nchannels} channels; a linear sensor frame has one (mono, or a Bayer mosaic named "
+                "with --cfa). Processed RGB images belong to `camgen fit match`"
+            )
+        pixels = image_input.read_image(spec.format)  # native type: no rescaling
+        bits = spec.get_int_attribute("oiio:BitsPerSample", 0)
+        exposure = spec.get_float_attribute("ExposureTime", 0.0) or None
+    finally:
+        image_input.close()
+    if pixels is None or pixels.dtype not in (np.uint8, np.uint16):
+        kind = "no pixels" if pixels is None else f"{pixels.dtype} samples"
+        raise FrameReadError(f"holds {kind}; a linear sensor frame holds 8–16-bit unsigned integers")
+    bits = bits or pixels.dtype.itemsize * 8
+    metadata = FrameMetadata(exposure_time_s=exposure)
+    if path.suffix.lower() in {".tif", ".tiff"}:
+        tiff = _tiff_metadata(path)
+        metadata = FrameMetadata(tiff.exposure_time_s or exposure, tiff.temperature_c)
+    frame = pixels.reshape(pixels.shape[0], pixels.shape[1]).astype(np.uint16)
+    return RawFrame(path, frame, cfa, 2**bits - 1, None, None, metadata)
+
+
+def read_frame(path: Path, *, cfa: str | None = None) -> RawFrame:
+    """One raw (rawpy) or linear (OpenImageIO) frame; `cfa` names a linear file's mosaic (default mono).
+
+    Raises `FrameReadError` with the reason when the file is not a frame camgen can fit from.
+    """
+    suffix = path.suffix.lower()
+    if suffix in RAW_SUFFIXES:
+        frame = _read_rawpy(path)
+        if cfa is not None and cfa != frame.cfa:
+            raise FrameReadError(f"is a {frame.cfa} raw file, but --cfa says {cfa}; leave --cfa out for raw files")
+        return frame
+    if suffix in LINEAR_SUFFIXES:
+        return _read_linear(path, cfa or "mono")
+    raise FrameReadError(f"has an unknown ending {suffix!r}")
+
+
+def frame_files(directory: Path) -> list[Path]:
+    """Frame files in `directory` and its immediate sub-folders, sorted; a missing folder is a ConfigError."""
+    if not directory.is_dir():
+        state = "is not a folder" if directory.exists() else "does not exist"
+        raise ConfigError(f"{directory} {state}; give the folder that holds the frames")
+    suffixes = RAW_SUFFIXES | LINEAR_SUFFIXES
+    files = [p for p in sorted(directory.iterdir()) if p.is_file() and p.suffix.lower() in suffixes]
+    for sub in sorted(p for p in directory.iterdir() if p.is_dir() and not p.name.startswith(".")):
+        files += [p for p in sorted(sub.iterdir()) if p.is_file() and p.suffix.lower() in suffixes]
+    if not files:
+        raise ConfigError(
+            f"{directory} holds no frame files (looked for raw files such as .dng/.nef/.cr2/.arw and linear "
+            ".tif/.png, in the folder and its sub-folders)"
+        )
+    return files
+
+
+def read_metadata_file(path: Path) -> dict[str, FrameMetadata]:
+    """Per-file exposure time and temperature from a CSV side file (``file,exposure_time_s[,temperature_c]``),
+    keyed by file name."""
+
+    def number(row: dict, key: str, line: int) -> float | None:
+        text = (row.get(key) or "").strip()
+        if not text:
+            return None
+        try:
+            value = float(text)
+        except ValueError:
+            raise ConfigError(f"{path}:{line}: {key} must be a number, got {text!r}") from None
+        if not math.isfinite(value) or (key == "exposure_time_s" and value <= 0):
+            raise ConfigError(
+                f"{path}:{line}: {key} must be a finite number{' > 0' if key == 'exposure_time_s' else ''}, got {text}"
+            )
+        return value
+
+    try:
+        with path.open(newline="", encoding="utf-8") as handle:
+            rows = list(csv.DictReader(handle))
+            columns = set(rows[0]) if rows else set()
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read: {exc}") from None
+    if "file" not in columns or not columns & {"exposure_time_s", "temperature_c"}:
+        raise ConfigError(
+            f"{path}: needs a header line with the columns file,exposure_time_s[,temperature_c], got "
+            f"{', '.join(sorted(columns)) or 'no columns'}"
+        )
+    return {
+        Path(row["file"].strip()).name: FrameMetadata(
+            number(row, "exposure_time_s", i), number(row, "temperature_c", i)
+        )
+        for i, row in enumerate(rows, start=2)
+    }
+
+
+@dataclass
+class FrameStack:
+    """The frames of one group: taken at one exposure time and temperature (and in one sub-folder)."""
+
+    label: str
+    exposure_time_s: float
+    temperature_c: float | None
+    stats: object
+    """The accumulator the frames were added to."""
+    files: list[str]
+
+
+@dataclass
+class FrameStackScan:
+    """What `scan_stacks` found in one folder: one stack per group, and what it had to skip."""
+
+    groups: dict[str, FrameStack]
+    """By label."""
+    cfa: str
+    white_level_dn: int | None
+    black_level_dn: float | None
+    optical_black_dn: list[float] = field(default_factory=list)
+    skipped: list[tuple[str, str]] = field(default_factory=list)
+    """(file name, reason) of files that could not be read."""
+
+
+def _group_key(directory: Path, path: Path, metadata: FrameMetadata) -> str:
+    parts = [directory.name] if path.parent == directory else [f"{directory.name}/{path.parent.name}"]
+    parts.append(f"t={metadata.exposure_time_s:.6g} s")
+    if metadata.temperature_c is not None:
+        parts.append(f"T={metadata.temperature_c:.3g} °C")
+    return " ".join(parts)
+
+
+def scan_stacks(
+    directory: Path,
+    kind: str,
+    accumulator: Callable[[tuple[int, int]], object],
+    *,
+    metadata_file: Path | None = None,
+    cfa: str | None = None,
+    white_level_dn: int | None = None,
+    on_frame: Callable[[int, int], None] | None = None,
+) -> FrameStackScan:
+    """Read every frame of `directory` once, adding each to its group's accumulator (frames are never
+    all in memory).
+
+    Parameters
+    ----------
+    directory : Path
+        Folder of frames; sub-folders are groups of their own.
+    kind : {"dark", "flat"}
+        Dark folders are checked for saturated frames.
+    accumulator : callable
+        ``accumulator((H, W))`` makes a stack accumulator with an ``add(frame_dn)`` method.
+    metadata_file : Path, optional
+        CSV side file; default ``directory/frames.csv`` when present.
+    cfa : str, optional
+        Mosaic of linear files (raw files carry their own).
+    white_level_dn : int, optional
+        Replaces the files' white level (a 12-bit ADC in a 16-bit TIFF).
+    on_frame : callable, optional
+        ``on_frame(done, total)`` after each file, for progress.
+    """
+    files = frame_files(directory)
+    if metadata_file is None and (directory / METADATA_FILE).is_file():
+        metadata_file = directory / METADATA_FILE
+    side = read_metadata_file(metadata_file) if metadata_file is not None else {}
+    groups: dict[str, FrameStack] = {}
+    shapes: dict[tuple[int, int], list[str]] = defaultdict(list)
+    cfas: dict[str, list[str]] = defaultdict(list)
+    no_exposure: list[str] = []
+    saturated: list[str] = []
+    scan = FrameStackScan(groups, "mono", None, None)
+    for done, path in enumerate(files, start=1):
+        try:
+            frame = read_frame(path, cfa=cfa)
+        except FrameReadError as exc:
+            scan.skipped.append((path.name, str(exc)))
+            continue
+        finally:
+            if on_frame is not None:
+                on_frame(done, len(files))
+        if white_level_dn is not None:
+            frame = replace(frame, white_level_dn=white_level_dn)
+        meta = side.get(path.name, FrameMetadata())
+        meta = FrameMetadata(
+            meta.exposure_time_s if meta.exposure_time_s is not None else frame.metadata.exposure_time_s,
+            meta.temperature_c if meta.temperature_c is not None else frame.metadata.temperature_c,
+        )
+        shapes[frame.raw_dn.shape].append(path.name)
+        cfas[frame.cfa].append(path.name)
+        if meta.exposure_time_s is None:
+            no_exposure.append(path.name)
+            continue
+        if (
+            kind == "dark"
+            and frame.white_level_dn
+            and np.median(frame.raw_dn) > SATURATED_DARK_FRAC * frame.white_level_dn
+        ):
+            saturated.append(path.name)
+            continue
+        if len(shapes) > 1 or len(cfas) > 1:
+            continue
+        scan.cfa, scan.white_level_dn = frame.cfa, frame.white_level_dn
+        scan.black_level_dn = frame.black_level_dn
+        if frame.optical_black_dn is not None:
+            scan.optical_black_dn.append(frame.optical_black_dn)
+        label = _group_key(directory, path, meta)
+        group = groups.get(label)
+        if group is None:
+            stats = accumulator(frame.raw_dn.shape)
+            group = groups[label] = FrameStack(label, meta.exposure_time_s, meta.temperature_c, stats, [])
+        group.stats.add(frame.raw_dn)
+        group.files.append(path.name)
+    _check_scan(directory, kind, scan, shapes, cfas, no_exposure, saturated, metadata_file)
+    return scan
+
+
+def _check_scan(directory, kind, scan, shapes, cfas, no_exposure, saturated, metadata_file) -> None:
+    if not shapes:
+        reasons = listing([f"{name} {reason}" for name, reason in scan.skipped])
+        raise ConfigError(f"{directory}: no readable frames: {reasons}")
+    if len(shapes) > 1:
+        (common, names), *others = sorted(shapes.items(), key=lambda item: -len(item[1]))
+        odd = listing([f"{n} ({h}×{w})" for (h, w), ns in others for n in ns])
+        raise ConfigError(
+            f"{directory}: frames of mixed resolutions: {len(names)} are {common[1]}×{common[0]} px, but {odd}; "
+            "a fit needs one sensor mode — move the others out"
+        )
+    if len(cfas) > 1:
+        detail = "; ".join(f"{c}: {listing(ns)}" for c, ns in cfas.items())
+        raise ConfigError(f"{directory}: frames with different colour filter arrays ({detail})")
+    if saturated:
+        raise ConfigError(
+            f"{directory}: {listing(saturated)} saturated (median above {SATURATED_DARK_FRAC:.0%} of the white "
+            f"level), so {'it is' if len(saturated) == 1 else 'they are'} not dark frames — cap the lens, or move "
+            "them to the flats"
+        )
+    if no_exposure:
+        where = f"not in {metadata_file}" if metadata_file else "no side file"
+        raise ConfigError(
+            f"{directory}: no exposure time for {listing(no_exposure)} (not in the file's EXIF, {where}); add "
+            f"{METADATA_FILE} to the folder with the columns file,exposure_time_s,temperature_c"
+        )
+    few = {label: group.files for label, group in scan.groups.items() if len(group.files) < 2}
+    if few:
+        detail = "; ".join(f"{label}: {listing(names)}" for label, names in few.items())
+        raise ConfigError(
+            f"{directory}: temporal noise needs at least 2 frames taken at the same settings, but a group has "
+            f"only 1 ({detail}); take two or more frames at each exposure time and temperature"
+        )
+
+
+def read_gray8(path: Path) -> np.ndarray:
+    """An 8-bit grey image for board detection: raw files are demosaiced by LibRaw (sRGB gamma),
+    other images read by OpenCV (16-bit images reduced to 8 bits). Raises `FrameReadError`."""
+    import cv2
+
+    if path.suffix.lower() in RAW_SUFFIXES:
+        import rawpy
+
+        try:
+            with rawpy.imread(str(path)) as raw:
+                rgb = raw.postprocess(output_bps=8, no_auto_bright=False)
+        except (rawpy.LibRawError, OSError, ValueError) as exc:
+            raise FrameReadError(f"is not a raw file LibRaw can read ({type(exc).__name__}: {exc})") from None
+        return cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY)
+    image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE | cv2.IMREAD_IGNORE_ORIENTATION)
+    if image is None:
+        raise FrameReadError("is not an image OpenCV can read")
+    return image
+
+
+def image_files(directory: Path) -> list[Path]:
+    """Board images in `directory` (any image or raw file), sorted."""
+    if not directory.is_dir():
+        state = "is not a folder" if directory.exists() else "does not exist"
+        raise ConfigError(f"{directory} {state}; give the folder that holds the board images")
+    files = [p for p in sorted(directory.iterdir()) if p.suffix.lower() in IMAGE_SUFFIXES | RAW_SUFFIXES]
+    if not files:
+        raise ConfigError(f"{directory} holds no images (.png, .jpg, .tif, raw files)")
+    return files
+
+
+def read_rgb8_frames(paths: Sequence[Path], *, max_frames: int) -> Iterator[tuple[str, np.ndarray]]:
+    """(name, (H, W, 3) uint8 RGB) for each frame of the reference: every decoded frame of a video (up to
+    `max_frames` in all), or each 8-bit image. Raises ConfigError naming a file that is not 8-bit RGB
+    video or image."""
+    import cv2
+
+    count = 0
+    for path in paths:
+        if not path.is_file():
+            raise ConfigError(f"{path} does not exist; give videos or 8-bit images of the camera's output")
+        if path.suffix.lower() in VIDEO_SUFFIXES:
+            import av
+
+            try:
+                with av.open(str(path)) as container:
+                    for index, frame in enumerate(container.decode(video=0)):
+                        if count >= max_frames:
+                            return
+                        count += 1
+                        yield f"{path.name}#{index}", frame.to_ndarray(format="rgb24")
+            except av.FFmpegError as exc:
+                raise ConfigError(f"{path}: cannot decode the video ({exc})") from None
+            continue
+        image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED | cv2.IMREAD_IGNORE_ORIENTATION)
+        if image is None:
+            raise ConfigError(f"{path}: not a video or an image OpenCV can read")
+        if image.dtype != np.uint8:
+            raise ConfigError(
+                f"{path}: holds {image.dtype} samples; `fit match` reads a camera's 8-bit output (raw or 16-bit "
+                "frames belong to `camgen fit noise`)"
+            )
+        if image.ndim == 2:
+            image = cv2.cvtColor(image, cv2.COLOR_GRAY2RGB)
+        elif image.shape[2] == 4:
+            image = cv2.cvtColor(image, cv2.COLOR_BGRA2RGB)
+        else:
+            image = cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
+        if count >= max_frames:
+            return
+        count += 1
+        yield path.name, image

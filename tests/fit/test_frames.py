@@ -1,0 +1,115 @@
+"""Reading the frames a fit starts from: raw files through rawpy, linear files through OpenImageIO, the
+CFA and levels they state, EXIF exposure time and temperature, and the frames.csv side file."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import tifffile
+
+from camgen.errors import ConfigError
+from camgen.fit.frames import FrameReadError, read_frame, read_metadata_file, scan_stacks
+from camgen.io.dng import write_dng
+
+RAW = (np.arange(48 * 64).reshape(48, 64) * 7 % 4000).astype(np.uint16)
+
+
+@pytest.mark.parametrize("cfa", ["RGGB", "BGGR", "GRBG", "GBRG", "mono"])
+def test_a_dng_reads_back_with_its_cfa_levels_and_exif(tmp_path, cfa):
+    path = tmp_path / "f.dng"
+    write_dng(
+        path,
+        RAW,
+        cfa=cfa,
+        black_level_dn=64,
+        white_level_dn=4095,
+        bit_depth=12,
+        exposure_time_s=1 / 60,
+        temperature_c=-12.5,
+    )
+    frame = read_frame(path)
+    np.testing.assert_array_equal(frame.raw_dn, RAW)
+    assert frame.cfa == cfa
+    assert (frame.black_level_dn, frame.white_level_dn, frame.bit_depth) == (64, 4095, 12)
+    assert frame.metadata.exposure_time_s == pytest.approx(1 / 60, rel=1e-9)
+    assert frame.metadata.temperature_c == pytest.approx(-12.5)
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16])
+def test_linear_tiff_and_png_keep_their_integer_values(tmp_path, dtype):
+    import cv2
+
+    values = (RAW % np.iinfo(dtype).max).astype(dtype)
+    tifffile.imwrite(tmp_path / "f.tif", values)
+    cv2.imwrite(str(tmp_path / "f.png"), values)
+    for name in ("f.tif", "f.png"):
+        frame = read_frame(tmp_path / name, cfa="GRBG")
+        np.testing.assert_array_equal(frame.raw_dn, values)
+        assert frame.raw_dn.dtype == np.uint16
+        assert frame.cfa == "GRBG"
+        assert frame.white_level_dn == np.iinfo(dtype).max
+
+
+def test_rgb_and_float_files_are_not_frames(tmp_path):
+    tifffile.imwrite(tmp_path / "rgb.tif", np.zeros((8, 8, 3), np.uint16))
+    tifffile.imwrite(tmp_path / "float.tif", np.zeros((8, 8), np.float32))
+    with pytest.raises(FrameReadError, match="3 channels"):
+        read_frame(tmp_path / "rgb.tif")
+    with pytest.raises(FrameReadError, match="float32"):
+        read_frame(tmp_path / "float.tif")
+
+
+def test_the_side_file_wins_over_exif_and_groups_by_settings(tmp_path):
+    class Count:
+        def __init__(self, shape):
+            self.frames = 0
+
+        def add(self, frame):
+            self.frames += 1
+
+    for i, t in enumerate([0.01, 0.01, 0.02, 0.02, 0.02, 0.02]):
+        write_dng(
+            tmp_path / f"d{i}.dng",
+            RAW,
+            cfa="RGGB",
+            black_level_dn=64,
+            white_level_dn=4095,
+            bit_depth=12,
+            exposure_time_s=t,
+        )
+    (tmp_path / "frames.csv").write_text("file,exposure_time_s,temperature_c\nd4.dng,0.5,30\nd5.dng,0.5,30\n")
+    scan = scan_stacks(tmp_path, "dark", Count)
+    counts = {(g.exposure_time_s, g.temperature_c): g.stats.frames for g in scan.groups.values()}
+    assert counts == {(0.01, None): 2, (0.02, None): 2, (0.5, 30.0): 2}
+
+
+def test_a_side_file_without_the_columns(tmp_path):
+    (tmp_path / "frames.csv").write_text("name,time\na.dng,0.1\n")
+    with pytest.raises(ConfigError, match="file,exposure_time_s"):
+        read_metadata_file(tmp_path / "frames.csv")
+
+
+def test_sub_folders_are_stacks_of_their_own(tmp_path):
+    class Count:
+        def __init__(self, shape):
+            self.frames = 0
+
+        def add(self, frame):
+            self.frames += 1
+
+    for level in ("low", "high"):
+        for i in range(2):
+            write_dng(
+                tmp_path / level / f"{i}.dng",
+                RAW,
+                cfa="RGGB",
+                black_level_dn=64,
+                white_level_dn=4095,
+                bit_depth=12,
+                exposure_time_s=0.01,
+            )
+    scan = scan_stacks(tmp_path, "flat", Count)
+    assert sorted(g.label for g in scan.groups.values()) == [
+        f"{tmp_path.name}/high t=0.01 s",
+        f"{tmp_path.name}/low t=0.01 s",
+    ]
