@@ -140,3 +140,21 @@ def test_match_reference_of_16_bit_images(tmp_path, capsys, request):
     code = main(["fit", "match", "--reference", str(image), "--profile", str(profile), "-o", str(tmp_path / "m.yaml")])
     err = capsys.readouterr().err
     assert code == 2 and "frame.png" in err and "uint16" in err
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--profile", "missing.yaml"], "no such file"),
+        (["--report", "report.pdf"], "give a name ending in .png"),
+        (["-o", "."], "is a folder"),
+    ],
+)
+def test_output_problems_are_found_before_reading_frames(tmp_path, capsys, extra, message):
+    for i in range(2):
+        dng(tmp_path / "dark" / f"d_{i}.dng", dark_frame(seed=i))
+    extra = [str(tmp_path / e) if e in ("missing.yaml", "report.pdf", ".") else e for e in extra]
+    code = main(["fit", "noise", "--dark", str(tmp_path / "dark"), *(["-o", str(tmp_path / "o.yaml")]), *extra])
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and "Traceback" not in err
+    assert not (tmp_path / "o.yaml").exists()

@@ -60,13 +60,6 @@ def test_rgb_and_float_files_are_not_frames(tmp_path):
 
 
 def test_the_side_file_wins_over_exif_and_groups_by_settings(tmp_path):
-    class Count:
-        def __init__(self, shape):
-            self.frames = 0
-
-        def add(self, frame):
-            self.frames += 1
-
     for i, t in enumerate([0.01, 0.01, 0.02, 0.02, 0.02, 0.02]):
         write_dng(
             tmp_path / f"d{i}.dng",
@@ -90,13 +83,6 @@ def test_a_side_file_without_the_columns(tmp_path):
 
 
 def test_sub_folders_are_stacks_of_their_own(tmp_path):
-    class Count:
-        def __init__(self, shape):
-            self.frames = 0
-
-        def add(self, frame):
-            self.frames += 1
-
     for level in ("low", "high"):
         for i in range(2):
             write_dng(
@@ -113,3 +99,67 @@ def test_sub_folders_are_stacks_of_their_own(tmp_path):
         f"{tmp_path.name}/high t=0.01 s",
         f"{tmp_path.name}/low t=0.01 s",
     ]
+
+
+class Count:
+    def __init__(self, shape):
+        self.frames = 0
+
+    def add(self, frame):
+        self.frames += 1
+
+
+def test_a_drifting_temperature_stays_one_stack(tmp_path):
+    """EXIF temperatures drift by tenths of a degree over a stack; 10 °C apart are two stacks."""
+    for i, temperature_c in enumerate([40.0, 40.3, 40.6, 39.8, 50.0, 50.4]):
+        write_dng(
+            tmp_path / f"d{i}.dng",
+            RAW,
+            cfa="RGGB",
+            black_level_dn=64,
+            white_level_dn=4095,
+            bit_depth=12,
+            exposure_time_s=0.01,
+            temperature_c=temperature_c,
+        )
+    scan = scan_stacks(tmp_path, "dark", Count)
+    stacks = sorted((g.temperature_c, g.stats.frames) for g in scan.groups.values())
+    assert [n for _, n in stacks] == [4, 2]
+    assert [t for t, _ in stacks] == pytest.approx([40.175, 50.2])
+
+
+def test_the_side_file_tells_sub_folders_apart(tmp_path):
+    """Frame numbers restart in each sub-folder; the side file names them by their relative path."""
+    for level in ("low", "high"):
+        for i in range(2):
+            write_dng(
+                tmp_path / level / f"{i}.dng", RAW, cfa="RGGB", black_level_dn=64, white_level_dn=4095, bit_depth=12
+            )
+    rows = [f"{level}/{i}.dng,{t}" for level, t in (("low", 0.01), ("high", 0.04)) for i in range(2)]
+    # A spreadsheet's CSV: byte-order mark, CRLF line ends.
+    (tmp_path / "frames.csv").write_bytes(("\ufefffile,exposure_time_s\r\n" + "\r\n".join(rows)).encode("utf-8"))
+    scan = scan_stacks(tmp_path, "flat", Count)
+    assert {g.folder: g.exposure_time_s for g in scan.groups.values()} == {
+        f"{tmp_path.name}/low": 0.01,
+        f"{tmp_path.name}/high": 0.04,
+    }
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("exposure_time_s,file\n0.5\n", "frames.csv:2: the file column is empty"),
+        ("file,exposure_time_s\na.dng,0.1\na.dng,0.2\n", "frames.csv:3: a.dng is listed twice"),
+        ("file,exposure_time_s\na.dng,fast\n", "frames.csv:2: exposure_time_s must be a number"),
+    ],
+)
+def test_side_file_rows_that_are_wrong_name_their_line(tmp_path, text, match):
+    (tmp_path / "frames.csv").write_text(text)
+    with pytest.raises(ConfigError, match=match):
+        read_metadata_file(tmp_path / "frames.csv")
+
+
+def test_a_side_file_that_is_not_utf8(tmp_path):
+    (tmp_path / "frames.csv").write_bytes("file,exposure_time_s,temperature_c\na.dng,0.1,40 \xb0C\n".encode("latin-1"))
+    with pytest.raises(ConfigError, match="UTF-8"):
+        read_metadata_file(tmp_path / "frames.csv")

@@ -296,7 +296,7 @@ def test_the_profile_fragment_follows_camgen_conventions(charuco_fit):
     profile = Profile.model_validate(document)
     K = profile.camera_matrix_px(profile.lens.focal_length_mm)
     # Square pixels unless fx ≠ fy is significant (it is not here: the truth is square).
-    assert not fit.aspect_is_significant and "pixel_pitch_y_um" not in with_pitch["sensor"]
+    assert not fit.aspect_is_significant and with_pitch["sensor"]["pixel_pitch_y_um"] is None
     np.testing.assert_allclose(np.diag(K)[:2], fit.K_px[0, 0], rtol=1e-5)
     np.testing.assert_allclose(K[:2, 2], fit.K_px[:2, 2], atol=0.01)
     assert (profile.sensor.width_px, profile.sensor.height_px) == CHARUCO_SIZE_PX

@@ -135,12 +135,34 @@ def _check_positive(value: float | None, option: str) -> None:
         raise ConfigError(f"{option} must be > 0, got {value:g}")
 
 
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Before any frame is read: the base profile loads, and the output names can be files."""
+    if args.profile is not None:
+        from camgen.config.loader import load_profile
+
+        load_profile(args.profile)
+    report = _report_path(args)
+    if report.suffix.lower() != ".png":
+        raise ConfigError(f"--report {report}: the report is a PNG image; give a name ending in .png")
+    for option, path in (("-o", args.output), ("--report", report)):
+        if path.is_dir():
+            raise ConfigError(f"{option} {path} is a folder; give a file name")
+
+
 def _write_outputs(args, out: Console, fragment: dict, header: list[str], write_report) -> None:
+    """The report, then the profile (each under a temporary name until complete); a file that cannot
+    be written is a ConfigError naming it."""
     from camgen.fit.profile_yaml import write_profile
 
     report = _report_path(args)
-    write_profile(args.output, fragment, header=header, base=args.profile)
-    write_report(report)
+    for path, write in ((report, write_report), (args.output, None)):
+        try:
+            if write is not None:
+                write(path)
+            else:
+                write_profile(path, fragment, header=header, base=args.profile)
+        except OSError as exc:
+            raise ConfigError(f"{path}: cannot write: {exc.strerror or exc}") from None
     kind = "profile" if args.profile is not None else "fragment"
     out.print(f"wrote {kind} {escape(str(args.output))} and report {escape(str(report))}")
 
@@ -151,8 +173,9 @@ def run_noise(args: argparse.Namespace, out: Console, err: Console) -> int:
     from camgen.fit.noise_report import write_noise_report
 
     _check_positive(args.gain_dn_per_e, "--gain-dn-per-e")
-    if args.bit_depth is not None and not 1 <= args.bit_depth <= 16:
-        raise ConfigError(f"--bit-depth must be 1–16, got {args.bit_depth}")
+    if args.bit_depth is not None and not 8 <= args.bit_depth <= 16:
+        raise ConfigError(f"--bit-depth must be 8–16 (the profile's range), got {args.bit_depth}")
+    _check_outputs(args)
     scans = {}
     with _progress(err) as progress:
         for kind, directory in (("dark", args.dark), ("flat", args.flat)):
@@ -180,8 +203,8 @@ def run_noise(args: argparse.Namespace, out: Console, err: Console) -> int:
                 f"the dark frames are {dark_shape[1]}×{dark_shape[0]} px but the flat frames "
                 f"{flat_shape[1]}×{flat_shape[0]} px; use one sensor mode for both"
             )
-    white = dark.white_level_dn
-    bit_depth = args.bit_depth or (max(1, white.bit_length()) if white else 16)
+    raw_file = dark.black_level_dn is not None
+    bit_depth = args.bit_depth or (dark.white_level_dn.bit_length() if dark.white_level_dn else 16)
     groups = [
         FrameGroup(kind, stack.exposure_time_s, stack.temperature_c, stack.stats, stack.label)
         for kind, scan in scans.items()
@@ -191,6 +214,16 @@ def run_noise(args: argparse.Namespace, out: Console, err: Console) -> int:
 
     warnings = [f"skipped {name}: it {reason}" for scan in scans.values() for name, reason in scan.skipped]
     warnings += list(fit.warnings)
+    fragment = fit.profile_fragment()
+    if args.bit_depth is None and not raw_file:
+        # A linear file's container (16 bits) says nothing of the ADC: keep the base profile's.
+        fragment["sensor"].pop("bit_depth", None)
+        warnings.append(f"bit depth unknown (the files are {bit_depth}-bit containers): give --bit-depth to set it")
+    fitted_black = fragment["sensor"].get("black_level_dn")
+    if raw_file and fitted_black is not None and abs(fitted_black - dark.black_level_dn) > 1.0:
+        warnings.append(
+            f"the files state a black level of {dark.black_level_dn:g} DN but the dark frames read {fitted_black:g} DN"
+        )
     if dark.optical_black_dn:
         ob = sum(dark.optical_black_dn) / len(dark.optical_black_dn)
         warnings.append(f"the masked optical-black border reads {ob:.2f} DN on average (for comparison with the fit)")
@@ -204,7 +237,7 @@ def run_noise(args: argparse.Namespace, out: Console, err: Console) -> int:
         + listing([f"{g.label} ({len(g.files)})" for s in scans.values() for g in s.groups.values()]),
         *(f"{name}: {_significant(value, unc)} {unit}" for name, value, unc, unit in fit.summary_rows()),
     ]
-    _write_outputs(args, out, fit.profile_fragment(), header, lambda path: write_noise_report(fit, path))
+    _write_outputs(args, out, fragment, header, lambda path: write_noise_report(fit, path))
     return 0
 
 
@@ -215,13 +248,22 @@ def run_lens(args: argparse.Namespace, out: Console, err: Console) -> int:
 
     _check_positive(args.pixel_pitch_um, "--pixel-pitch-um")
     board = parse_board(args.board)
+    _check_outputs(args)
+    pixel_pitch_um = args.pixel_pitch_um
+    if pixel_pitch_um is None and args.profile is not None:
+        from camgen.config.loader import load_profile
+
+        pixel_pitch_um = load_profile(args.profile).profile.sensor.pixel_pitch_um
     with _progress(err) as progress:
         task = progress.add_task("finding the board", total=None)
         images = detect_in_folder(args.images, board, on_image=lambda path: progress.advance(task))
-    fit = fit_lens(images.detections, images.size_px, unusable=images.unusable, pixel_pitch_um=args.pixel_pitch_um)
+    fit = fit_lens(images.detections, images.size_px, unusable=images.unusable, pixel_pitch_um=pixel_pitch_um)
     for name, reason in fit.rejected:
         err.print(f"[yellow]rejected[/yellow] {escape(name)}: {escape(reason)}", soft_wrap=True)
-    _warn(err, list(fit.warnings))
+    warnings = list(fit.warnings)
+    if pixel_pitch_um is None:
+        warnings.append("no --pixel-pitch-um (or --profile): the focal length in mm is not written, only fx, fy in px")
+    _warn(err, warnings)
     views = len(fit.per_view_rms_px)
     _print_rows(out, f"lens ({fit.model}, {views} views, RMS {fit.rms_px:.3f} px)", fit.summary_rows())
     header = [
@@ -244,6 +286,7 @@ def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
 
     if args.max_frames < 1:
         raise ConfigError(f"--max-frames must be ≥ 1, got {args.max_frames}")
+    _check_outputs(args)
     base = load_profile(args.profile).profile
     frames, shapes = [], {}
     with _progress(err) as progress:

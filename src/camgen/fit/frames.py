@@ -220,7 +220,7 @@ def frame_files(directory: Path) -> list[Path]:
 
 def read_metadata_file(path: Path) -> dict[str, FrameMetadata]:
     """Per-file exposure time and temperature from a CSV side file (``file,exposure_time_s[,temperature_c]``),
-    keyed by file name."""
+    keyed by the file's path as written (relative to the folder scanned, e.g. ``low/0001.tif``)."""
 
     def number(row: dict, key: str, line: int) -> float | None:
         text = (row.get(key) or "").strip()
@@ -237,34 +237,53 @@ def read_metadata_file(path: Path) -> dict[str, FrameMetadata]:
         return value
 
     try:
-        with path.open(newline="", encoding="utf-8") as handle:
+        # utf-8-sig: spreadsheets save CSV with a byte-order mark.
+        with path.open(newline="", encoding="utf-8-sig") as handle:
             rows = list(csv.DictReader(handle))
             columns = set(rows[0]) if rows else set()
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read: {exc}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"{path}: cannot read as UTF-8 CSV: {exc}") from None
     if "file" not in columns or not columns & {"exposure_time_s", "temperature_c"}:
         raise ConfigError(
             f"{path}: needs a header line with the columns file,exposure_time_s[,temperature_c], got "
-            f"{', '.join(sorted(columns)) or 'no columns'}"
+            f"{', '.join(sorted(c for c in columns if c)) or 'no columns'}"
         )
-    return {
-        Path(row["file"].strip()).name: FrameMetadata(
-            number(row, "exposure_time_s", i), number(row, "temperature_c", i)
-        )
-        for i, row in enumerate(rows, start=2)
-    }
+    entries: dict[str, FrameMetadata] = {}
+    for line, row in enumerate(rows, start=2):
+        name = (row.get("file") or "").strip()
+        if not name:
+            raise ConfigError(f"{path}:{line}: the file column is empty; every row names one frame file")
+        key = Path(name).as_posix()
+        if key in entries:
+            raise ConfigError(f"{path}:{line}: {name} is listed twice")
+        entries[key] = FrameMetadata(number(row, "exposure_time_s", line), number(row, "temperature_c", line))
+    return entries
+
+
+def _side_entry(side: dict[str, FrameMetadata], directory: Path, path: Path) -> FrameMetadata:
+    """The side file's entry for `path`: by its path relative to `directory`, else by its bare name when
+    that is unambiguous."""
+    relative = path.relative_to(directory).as_posix()
+    if relative in side:
+        return side[relative]
+    by_name = [key for key in side if Path(key).name == path.name]
+    if len(by_name) == 1 and "/" not in by_name[0]:
+        return side[by_name[0]]
+    return FrameMetadata()
 
 
 @dataclass
 class FrameStack:
-    """The frames of one group: taken at one exposure time and temperature (and in one sub-folder)."""
+    """The frames of one group: one folder, one exposure time, temperatures within `TEMPERATURE_TOLERANCE_C`."""
 
     label: str
     exposure_time_s: float
     temperature_c: float | None
+    """Mean over the stack's frames, °C."""
     stats: object
     """The accumulator the frames were added to."""
     files: list[str]
+    folder: str
 
 
 @dataclass
@@ -281,12 +300,32 @@ class FrameStackScan:
     """(file name, reason) of files that could not be read."""
 
 
-def _group_key(directory: Path, path: Path, metadata: FrameMetadata) -> str:
-    parts = [directory.name] if path.parent == directory else [f"{directory.name}/{path.parent.name}"]
-    parts.append(f"t={metadata.exposure_time_s:.6g} s")
-    if metadata.temperature_c is not None:
-        parts.append(f"T={metadata.temperature_c:.3g} °C")
-    return " ".join(parts)
+TEMPERATURE_TOLERANCE_C = 1.0
+"""Frames of one folder and exposure time whose temperatures lie within this of a stack's mean join it:
+a sensor drifts by tenths of a degree over a stack."""
+
+
+def _stack_for(groups: dict[str, FrameStack], directory: Path, path: Path, meta: FrameMetadata, make) -> FrameStack:
+    """The stack a frame joins: same folder, same exposure time, temperature within the tolerance of the
+    stack's running mean; a new stack otherwise."""
+    folder = directory.name if path.parent == directory else f"{directory.name}/{path.parent.name}"
+    for stack in groups.values():
+        if stack.folder != folder or not math.isclose(stack.exposure_time_s, meta.exposure_time_s, rel_tol=1e-6):
+            continue
+        if (stack.temperature_c is None) != (meta.temperature_c is None):
+            continue
+        if meta.temperature_c is None or abs(stack.temperature_c - meta.temperature_c) <= TEMPERATURE_TOLERANCE_C:
+            if meta.temperature_c is not None:
+                n = len(stack.files)
+                stack.temperature_c = (stack.temperature_c * n + meta.temperature_c) / (n + 1)
+            return stack
+    label = f"{folder} t={meta.exposure_time_s:.6g} s"
+    if meta.temperature_c is not None:
+        label += f" T={meta.temperature_c:.1f} °C"
+    while label in groups:
+        label += "′"
+    groups[label] = FrameStack(label, meta.exposure_time_s, meta.temperature_c, make(), [], folder)
+    return groups[label]
 
 
 def scan_stacks(
@@ -340,7 +379,7 @@ def scan_stacks(
                 on_frame(done, len(files))
         if white_level_dn is not None:
             frame = replace(frame, white_level_dn=white_level_dn)
-        meta = side.get(path.name, FrameMetadata())
+        meta = _side_entry(side, directory, path)
         meta = FrameMetadata(
             meta.exposure_time_s if meta.exposure_time_s is not None else frame.metadata.exposure_time_s,
             meta.temperature_c if meta.temperature_c is not None else frame.metadata.temperature_c,
@@ -363,11 +402,7 @@ def scan_stacks(
         scan.black_level_dn = frame.black_level_dn
         if frame.optical_black_dn is not None:
             scan.optical_black_dn.append(frame.optical_black_dn)
-        label = _group_key(directory, path, meta)
-        group = groups.get(label)
-        if group is None:
-            stats = accumulator(frame.raw_dn.shape)
-            group = groups[label] = FrameStack(label, meta.exposure_time_s, meta.temperature_c, stats, [])
+        group = _stack_for(groups, directory, path, meta, lambda shape=frame.raw_dn.shape: accumulator(shape))
         group.stats.add(frame.raw_dn)
         group.files.append(path.name)
     _check_scan(directory, kind, scan, shapes, cfas, no_exposure, saturated, metadata_file)
@@ -419,7 +454,7 @@ def read_gray8(path: Path) -> np.ndarray:
 
         try:
             with rawpy.imread(str(path)) as raw:
-                rgb = raw.postprocess(output_bps=8, no_auto_bright=False)
+                rgb = raw.postprocess(output_bps=8, user_flip=0)  # sensor orientation, as calibrated
         except (rawpy.LibRawError, OSError, ValueError) as exc:
             raise FrameReadError(f"is not a raw file LibRaw can read ({type(exc).__name__}: {exc})") from None
         return cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY)

@@ -254,6 +254,8 @@ class LensFit:
         lens: dict = {}
         if self.pixel_pitch_um is not None:
             sensor["pixel_pitch_um"] = float(self.pixel_pitch_um)
+            # null (square pixels) rather than absent, so a base profile's own value is not inherited.
+            sensor["pixel_pitch_y_um"] = None
             if self.aspect_is_significant:
                 relative_std = math.hypot(std_fx / self.K_px[0, 0], self.std["fy"] / self.K_px[1, 1])
                 sensor["pixel_pitch_y_um"] = rounded(self.pixel_pitch_y_um, self.pixel_pitch_y_um * relative_std)
