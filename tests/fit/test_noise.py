@@ -27,18 +27,20 @@ dark current ≤ 0.7 %). Over 20 further seeds per CFA every figure's error stay
 column FPN 11.5 %), and the reported uncertainties matched the scatter: z rms 0.7–1.25, max |z| 3.0.
 The K, dark-current and full-well errors are one K error divided out. A vignetted PRNU flat
 (1 − 0.3·ρ²) gives 0.996 % (mono) and 0.995 % (RGGB) with the illumination surface divided out, 7.15 %
-without. The linearity error is 0.013 ± 0.008 % for mono; for RGGB it is 6.4 % in B, whose response
-picks up the charge the saturating green neighbours bloom into it.
+without. The linearity error, EMVA's LE = (max δ − min δ)/2, is 0.012 ± 0.007 % for mono; for RGGB it
+is 3.7 % in B, whose response picks up the charge the saturating green neighbours bloom into it.
 
 Agreement with the EMVA 1288 reference implementation `emva1288` 1.0.2 on the same mono frames
 (20 exposure times with a dark and a bright pair each, plus 16-frame dark and bright stacks at half
 saturation), ours/reference − 1:
 
     K −0.20 % · σ_d +0.21 % · σ_y.dark +0.01 % · DSNU1288 +0.20 % (pixel +0.20 %, row +0.41 %,
-    column +0.41 %) · PRNU1288 0.000 % · dark current (from the mean) +0.20 % · μ_e.sat +0.20 %
+    column +0.41 %) · PRNU1288 0.000 % · dark current (from the mean) +0.20 % · μ_e.sat +0.20 % ·
+    linearity error LE = (LE_max − LE_min)/2 +0.49 % (0.0198 %)
 
-The 0.2 % is all in K: our fit has the 16-frame bright stack as one more photon transfer point. Given
-only the 2-frame pairs, our K, σ_d and dark current are the reference's to 3e-16, 3e-11 and 8e-13.
+The 0.2 % is all in K: our fit has the 16-frame bright stack as one more photon transfer point (and one
+more linearity point). Given only the 2-frame pairs, our K, σ_d and dark current are the reference's to
+3e-16, 3e-11 and 8e-13, and LE to 6e-5 (the photon counts in its descriptor have 4 decimals).
 Two definitions differ and are compared in the reference's terms: it measures DSNU on its spatial
 stack and PRNU without removing illumination shading, so ours runs with ``dsnu_exposure_time_s`` at
 that stack and ``shading_polynomial_order=None``. Our defaults gave DSNU1288 +1.25 % (its own
@@ -47,7 +49,10 @@ temporal variance to subtract) and PRNU1288 −0.004 % (uniform light here). The
 μ_e.sat = R·μ_p.sat/K (fitted responsivity) and our (μ_y.sat − μ_y.dark)/K coincide here; the row and
 column parts differ by O(1/M) in their finite-sample factors.
 
-The module runs in about 10 s on 2 cores.
+Review cases: flats that stop at half the full well give no saturation and no full well; darks whose
+temperature dependence is not resolved give no doubling temperature; figures the profile would refuse
+(a dark current < 0, a 20-bit ADC) are left out of the fragment; frames too small for the tiles are
+refused. The module runs in about 9 s on 2 cores.
 """
 
 from __future__ import annotations
@@ -258,6 +263,12 @@ def test_one_exposure_time_without_temperatures(round_trip):
     assert any("no temperature" in w for w in one.warnings)
     assert any("one exposure time" in w for w in one.warnings)
     assert "temperature_c" not in one.profile_fragment()["sensor"]
+    # The hot pixels' dark current is their excess over the channel median, and the warning says so: the
+    # normal dark current cannot be told from the black level with one exposure time.
+    total_e_per_s = at_celsius(NOISE.hot_pixel_dark_current_e_per_s, FLAT_TEMPERATURE_C)
+    excess_e_per_s = total_e_per_s - expected_figures(profile)["dark_current_e_per_s"]
+    assert one.hot_pixel_dark_current_e_per_s.value == pytest.approx(excess_e_per_s, rel=0.03)
+    assert any("only the excess over the channel median, not the total rate" in w for w in one.warnings)
 
 
 def test_profile_fragment_loads_as_a_sensor(round_trip):
@@ -303,6 +314,80 @@ def test_gain_from_the_argument_without_flats_and_flats_winning_over_it(round_tr
     both = fit_noise(groups, cfa=profile.cfa, bit_depth=12, gain_dn_per_e=0.5)
     assert both.combined.gain_dn_per_e.value == pytest.approx(round_trip.fit.combined.gain_dn_per_e.value)
     assert any("instead of the given 0.5 DN/e⁻" in w for w in both.warnings)
+
+
+def test_flats_that_never_reach_saturation_give_no_full_well(round_trip):
+    """Flats up to half the full well: the variance still rises at the last flat, so it is no saturation
+    point. No full well, μ_y.sat or μ_e.sat (the profile keeps its own), K from every point, PRNU from a
+    flat at 30–70 % of the largest mean (43 % of it here)."""
+    profile, fit = round_trip.profile, round_trip.fit
+    half_s = 0.5 * profile.full_well_e / ELECTRONS_PER_S
+    groups = [g for g in round_trip.groups if g.kind == "dark" or g.exposure_time_s <= half_s * (1 + 1e-9)]
+    dim = fit_noise(groups, cfa=profile.cfa, bit_depth=12)
+    for channel in (*dim.channels, dim.combined):
+        assert channel.full_well_e is None and channel.saturation_dn is None, channel.channel
+        assert channel.saturation_capacity_e is None and channel.full_well_source is None
+        check(channel.gain_dn_per_e, profile.conversion_gain_dn_per_e, rel=0.03)
+    check(dim.combined.prnu_pct, NOISE.prnu_pct, rel=0.05)
+    np.testing.assert_array_equal(dim.dead_pixel_map, fit.dead_pixel_map)
+    for curve in dim.photon_transfer:
+        assert curve.saturation_index is None and curve.used_in_gain_fit.all()
+    assert "full_well_e" not in dim.profile_fragment()["sensor"]
+    assert any(
+        "the flats do not reach saturation: no full well" in w and "add brighter flats" in w for w in dim.warnings
+    )
+    assert not any("full_well_e is EMVA's μ_e.sat" in w for w in dim.warnings)
+    assert len(noise_report_figure(dim).axes) > 0
+
+
+def test_a_dark_current_without_measurable_temperature_dependence_has_no_doubling(round_trip):
+    """Temperatures that do not resolve a rise of the dark current give no doubling temperature (none
+    written, the profile keeps its own) and no temperature scaling: the 30 and 50 °C labels swapped (the
+    current falls with T, ln 2/b ≈ −6.5 °C), and two independent 40 °C stacks labelled 40 and 43 °C (b
+    0.0003 ± 0.0002 /°C, which ln 2/b would make a doubling of 2200 °C)."""
+    profile, groups = round_trip.profile, round_trip.groups
+    swap = {30.0: 50.0, 50.0: 30.0}
+    swapped = [replace(g, temperature_c=swap.get(g.temperature_c, g.temperature_c)) for g in groups]
+    falling = fit_noise(swapped, cfa=profile.cfa, bit_depth=12)
+    rng = np.random.default_rng(SEED + 2)
+    model = SensorModel.build(profile, SERIAL)
+    dark = np.zeros((profile.height_px, profile.width_px), np.float32)
+    flat_line = [
+        FrameGroup("dark", t, temperature_c, stack(model, dark, t, 4, rng), f"dark t={t:g} s T={temperature_c:g} °C")
+        for temperature_c in (40.0, 43.0)
+        for t in DARK_EXPOSURES_S[::3]
+    ]
+    level = fit_noise(flat_line, cfa=profile.cfa, bit_depth=12, gain_dn_per_e=profile.conversion_gain_dn_per_e)
+    for fit in (falling, level):
+        assert fit.dark_current_doubling_c is None
+        assert all(c.dark_current_doubling_c is None for c in fit.channels)
+        assert "dark_current_doubling_c" not in fit.profile_fragment()["sensor"]["noise"]
+        assert any("temperature dependence was not measurable" in w for w in fit.warnings)
+    # Unscaled: the hot pixels at the 40 °C reference as measured there; the dark current of equal
+    # temperatures their mean.
+    check(falling.hot_pixel_dark_current_e_per_s, at_celsius(NOISE.hot_pixel_dark_current_e_per_s, 40.0), rel=0.03)
+    assert level.combined.dark_current_e_per_s.value == pytest.approx(
+        at_celsius(NOISE.dark_current_e_per_s, 40.0), rel=0.01
+    )
+
+
+def test_the_profile_fragment_leaves_out_what_the_profile_would_refuse(round_trip):
+    """Darks whose exposure times are given in reverse (the dark signal falls with t: a dark current
+    < 0) and a 20-bit ADC (the profile allows 8–16 bits): neither is written, each with a warning, and the
+    fragment loads."""
+    profile = round_trip.profile
+    darks = [g for g in round_trip.groups if g.kind == "dark" and g.temperature_c == FLAT_TEMPERATURE_C]
+    times = [g.exposure_time_s for g in darks]
+    reversed_darks = [replace(g, exposure_time_s=t) for g, t in zip(darks, times[::-1], strict=True)]
+    fit = fit_noise(reversed_darks, cfa=profile.cfa, bit_depth=20, gain_dn_per_e=profile.conversion_gain_dn_per_e)
+    assert fit.combined.dark_current_e_per_s.value < 0
+    sensor_fragment = fit.profile_fragment()["sensor"]
+    noise = sensor_fragment.pop("noise")
+    assert "bit_depth" not in sensor_fragment and "dark_current_e_per_s" not in noise
+    assert "dark_current_reference_c" not in noise
+    assert any(w.startswith("sensor.bit_depth = 20 is not written") and "≤ 16" in w for w in fit.warnings)
+    assert any(w.startswith("sensor.noise.dark_current_e_per_s = -") and "≥ 0" in w for w in fit.warnings)
+    Sensor(width_px=256, height_px=256, pixel_pitch_um=3.0, full_well_e=1e4, noise=Noise(**noise), **sensor_fragment)
 
 
 def test_channel_phases_follow_the_cfa():
@@ -411,6 +496,7 @@ def emva(tmp_path_factory) -> SimpleNamespace:
             "PRNU1288": results.PRNU1288,
             "u_I_mean": results.u_I_mean,
             "u_e_sat": results.u_e_sat,
+            "LE": (results.LE_max - results.LE_min) / 2,
         }
     shutil.rmtree(directory)
     fit = fit_noise(
@@ -442,6 +528,7 @@ def test_agrees_with_the_emva1288_reference_implementation(emva):
         "PRNU1288": c.prnu_pct,
         "u_I_mean": c.dark_current_e_per_s,
         "u_e_sat": c.saturation_capacity_e,
+        "LE": c.linearity_error_pct,
     }
     for name, value in ref.items():
         assert ours[name].value == pytest.approx(value, rel=0.01), name
@@ -458,6 +545,9 @@ def test_on_the_frame_pairs_alone_the_estimators_are_the_reference_s(emva):
     assert c.gain_dn_per_e.value == pytest.approx(ref["K"], rel=1e-6)
     assert c.read_noise_e.value == pytest.approx(ref["sigma_d"], rel=1e-6)
     assert c.dark_current_e_per_s.value == pytest.approx(ref["u_I_mean"], rel=1e-6)
+    # LE = (LE_max − LE_min)/2 of the same relative deviations; the reference's photon counts, written to
+    # its descriptor with 4 decimals, shift them by ~1e-6 %.
+    assert c.linearity_error_pct.value == pytest.approx(ref["LE"], rel=1e-3)
 
 
 # --- bad input ----------------------------------------------------------------------------------------
@@ -508,6 +598,28 @@ def test_other_bad_input_names_the_fix():
         StackStatistics((4, 4)).add(np.zeros((4, 5), np.uint16))
     with pytest.raises(ConfigError, match="NaN"):
         StackStatistics((2, 2)).add(np.array([[0.0, np.nan], [1.0, 2.0]]))
+
+
+def test_frames_too_small_for_the_tiles_are_refused():
+    """A channel plane needs 2 px a side for each of the tiles along it: 2×2 px RGGB frames (1×1 px
+    planes) used to end in a ValueError from round(NaN); 8×8 px mono frames are the smallest for 4×4 tiles."""
+    tiny = [
+        small_group("dark", "darks/tiny", shape=(2, 2)),
+        small_group("flat", "flats/tiny", value=2000, shape=(2, 2)),
+    ]
+    with pytest.raises(ConfigError, match=r"darks/tiny: frames of 2×2 px give RGGB channel planes of 1×1 px.*8×8 px"):
+        fit_noise(tiny, cfa="RGGB", bit_depth=12)
+    with pytest.raises(ConfigError, match=r"frames of 7×8 px give mono channel planes of 7×8 px.*at least 8×8 px"):
+        fit_noise([small_group("dark", "darks/narrow", shape=(8, 7))], cfa="mono", bit_depth=12)
+    with pytest.raises(ConfigError, match=r"at least 4×4 px per channel plane.*frames of at least 8×8 px"):
+        fit_noise([small_group("dark", "darks/a", shape=(6, 6))], cfa="GRBG", bit_depth=12, tiles=2)
+    smallest = fit_noise([small_group("dark", "darks/8", shape=(8, 8))], cfa="mono", bit_depth=12)
+    assert math.isfinite(smallest.combined.black_level_dn.uncertainty)
+    assert math.isfinite(smallest.combined.dsnu_dn.uncertainty)
+    with pytest.raises(ConfigError, match=r"tiles must be a whole number ≥ 2"):
+        fit_noise([small_group("dark", "darks/a")], cfa="mono", bit_depth=12, tiles=1)
+    with pytest.raises(ConfigError, match=r"gain_dn_per_e \(--gain-dn-per-e\) must be a system gain > 0"):
+        fit_noise([small_group("dark", "darks/a")], cfa="mono", bit_depth=12, gain_dn_per_e=-0.3)
 
 
 # --- report ---------------------------------------------------------------------------------------------

@@ -12,6 +12,7 @@ import cv2
 import numpy as np
 
 from camgen.config.scene import CheckerboardMesh
+from camgen.fit.lens import BoardSpec, detect_board
 
 LUMINANCE_WEIGHTS_BT709 = np.array([0.2126, 0.7152, 0.0722], np.float32)
 """Y of linear BT.709 RGB (ITU-R BT.709-6, item 3.2)."""
@@ -32,12 +33,14 @@ def inner_corners(board: CheckerboardMesh) -> tuple[int, int]:
     return board.squares[0] - 1, board.squares[1] - 1
 
 
+def board_spec(board: CheckerboardMesh) -> BoardSpec:
+    """The calibration board (`camgen.fit.lens`) a scene's checkerboard mesh is."""
+    return BoardSpec("checkerboard", inner_corners(board), board.square_size_m)
+
+
 def board_points_m(board: CheckerboardMesh) -> np.ndarray:
     """Inner corners in the board's own plane (z = 0), m, in OpenCV's detection order: (N, 3) float32."""
-    nx, ny = inner_corners(board)
-    points = np.zeros((nx * ny, 3), np.float32)
-    points[:, :2] = np.mgrid[0:nx, 0:ny].T.reshape(-1, 2) * board.square_size_m
-    return points
+    return board_spec(board).object_points_m()
 
 
 def gray8_from_radiance(radiance_cd_m2: np.ndarray) -> np.ndarray:
@@ -49,9 +52,10 @@ def gray8_from_radiance(radiance_cd_m2: np.ndarray) -> np.ndarray:
 
 
 def find_corners(gray8: np.ndarray, inner: tuple[int, int]) -> np.ndarray | None:
-    """Sub-pixel inner corners (N, 1, 2) of a board in an 8-bit grey image, or None if not found."""
-    found, corners = cv2.findChessboardCornersSB(gray8, inner, flags=cv2.CALIB_CB_ACCURACY)
-    return corners if found else None
+    """Sub-pixel inner corners (N, 1, 2) of a board in an 8-bit grey image, or None if not found
+    (`camgen.fit.lens.detect_board`)."""
+    found = detect_board(gray8, BoardSpec("checkerboard", inner, 1.0))
+    return None if found is None else found[0]
 
 
 RECTILINEAR = cv2.CALIB_ZERO_TANGENT_DIST | cv2.CALIB_FIX_K1 | cv2.CALIB_FIX_K2 | cv2.CALIB_FIX_K3

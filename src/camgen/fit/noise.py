@@ -14,12 +14,13 @@ Every mean and variance image is split by CFA phase (site (y, x) has the colour 
 - **Dark groups** give the black level (the averaged dark signal extrapolated to t = 0), the temporal
   dark noise σ²_y.dark(t → 0) and from it the read noise (EMVA eq. 6, quantisation 1/12 DN² removed),
   the spatial non-uniformity split into pixel, row and column parts (EMVA 4.0 §8.2), the dark current
-  (slope of the dark mean against exposure time) and its doubling temperature (ln I against T), and
-  the hot pixels.
+  (slope of the dark mean against exposure time) and its doubling temperature (ln I against T, when
+  the temperatures resolve a rise), and the hot pixels.
 - **Flat groups** give the photon transfer curve (σ²_y − σ²_y.dark against μ_y − μ_y.dark), whose
   slope through the origin up to 70 % of saturation is the system gain K; the saturation point (the
-  variance peak) and the clip level (the plateau beyond it); PRNU from the flat nearest half
-  saturation; the linearity error; and the dead pixels.
+  variance peak, when brighter flats show the variance falling beyond it) and the clip level (the
+  plateau beyond it); PRNU from the flat nearest half saturation; the linearity error
+  LE = (max δ − min δ)/2; and the dead pixels.
 
 Uncertainties are 1σ standard uncertainties. Figures computed from images are computed again on
 independent parts of each channel image (4 × 4 tiles; horizontal bands for row noise, vertical bands
@@ -48,12 +49,14 @@ References
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
 
+from camgen.config.profile import Noise, Sensor
 from camgen.errors import ConfigError
 from camgen.fit.lens import rounded
 from camgen.sensor.cfa import CFA_NAMES
@@ -66,9 +69,18 @@ EMVA 1288 then sets σ²_y.dark to 0.24 DN² (as the `emva1288` reference implem
 GAIN_FIT_LIMIT = 0.7
 """The system gain is fitted from the lowest point up to this fraction of saturation (EMVA 1288 4.0)."""
 LINEARITY_RANGE = (0.05, 0.95)
-"""Fraction of saturation over which the linearity error is evaluated (EMVA 1288 4.0)."""
+"""Fraction of saturation over which the linearity error is evaluated (EMVA 1288 4.0, as `emva1288`)."""
 MID_SIGNAL_RANGE = (0.3, 0.7)
 """Flats for PRNU and dead pixels lie in this fraction of saturation (EMVA 1288 asks for 50 %)."""
+SATURATION_DROP_SIGMA = 3.0
+"""The variance peak is the saturation point only if a brighter flat's variance lies below it by more than
+this many standard uncertainties of the difference (see `_saturation_index`)."""
+SATURATION_DROP_FRACTION = 0.1
+"""The variance peak is the saturation point only if a brighter flat's variance lies below it by more than
+this fraction of the peak as well (see `_saturation_index`)."""
+DOUBLING_MIN_SIGNIFICANCE = 2.0
+"""The doubling temperature ln 2/b is reported only when the slope b of ln I against T exceeds this many
+standard uncertainties (see `_dark_current`)."""
 DEAD_RESPONSE_FRACTION = 0.5
 """A pixel is dead when its response is below this fraction of the local median response."""
 DEAD_MEDIAN_BLOCK_PX = 16
@@ -88,6 +100,8 @@ SHADING_GRID_BLOCKS = 64
 CHANNEL_ORDER = ("R", "Gr", "Gb", "B")
 SHARED_ROW_COLUMN_FIELDS = frozenset({"black_level_dn", "row_fpn_dn", "row_fpn_e", "column_fpn_dn", "column_fpn_e"})
 """Figures whose error comes largely from the realised row and column offsets, which Bayer phases share."""
+SATURATION_FIELDS = frozenset({"saturation_dn", "saturation_capacity_e", "full_well_e"})
+"""Figures a channel lacks when the flats do not reach its saturation; combined over the channels that have them."""
 
 
 @dataclass(frozen=True)
@@ -263,17 +277,20 @@ class ChannelNoise:
     """System gain K, DN/e⁻."""
     prnu_pct: Estimate | None
     saturation_dn: Estimate | None
-    """μ_y.sat: mean raw signal at the variance peak, DN (dark level included)."""
+    """μ_y.sat: mean raw signal at the variance peak, DN (dark level included); None when the flats do not
+    reach saturation (`_saturation_index`)."""
     saturation_capacity_e: Estimate | None
     """EMVA's μ_e.sat = (μ_y.sat − μ_y.dark)/K, e⁻."""
     full_well_e: Estimate | None
     """The clip level the profile's `full_well_e` means (see `full_well_source`), e⁻."""
     full_well_source: str | None
     """"plateau" (mean of flats beyond saturation), "ADC" (the ADC clips first: (2^bits − 1 − black)/K),
-    or "variance peak" (μ_e.sat, a few shot-noise σ below the clip level)."""
+    or "variance peak" (μ_e.sat, a few shot-noise σ below the clip level); None without saturation."""
     hot_pixel_fraction: Estimate
     hot_pixel_dark_current_e_per_s: Estimate | None
-    """Median dark current of the hot pixels at the reference temperature, e⁻/s."""
+    """Median dark current of the hot pixels at the reference temperature, e⁻/s: their total rate (the
+    slope of their dark signal) with ≥ 2 dark exposure times; with one, only their excess over the channel
+    median (see `fit_noise`, *Hot pixels*)."""
     dead_pixel_fraction: Estimate | None
     linearity_error_pct: Estimate | None
 
@@ -292,8 +309,8 @@ class PhotonTransferCurve:
     """(n,) float64: σ²_y − σ²_y.dark, DN²."""
     used_in_gain_fit: np.ndarray
     """(n,) bool: the points the system gain was fitted to."""
-    saturation_index: int
-    """Index of the variance peak (the saturation point)."""
+    saturation_index: int | None
+    """Index of the variance peak (the saturation point); None when the flats do not reach saturation."""
     gain_dn_per_e: float | None
     """Slope of the fitted line through the origin, DN/e⁻."""
 
@@ -344,42 +361,76 @@ class NoiseFit:
         """The measured figures as a partial camera profile: nested dicts of plain Python numbers.
 
         Values are rounded to two significant digits of their uncertainty (`camgen.fit.lens.rounded`).
-        Only figures the frames gave are present. ``sensor.temperature_c`` is the reference temperature,
-        so the profile's dark current at its operating temperature is the one measured. The hot-pixel
-        fraction is left out when the hot pixels' dark current is not known (the profile needs both).
-        The system gain is written whenever one was used (measured, or given), since the figures in
-        electrons depend on it.
+        Only figures the frames gave are present, and only values the profile accepts: the bounds of
+        `camgen.config.profile.Sensor` and `Noise` (a doubling temperature > 0, a dark current ≥ 0, a bit
+        depth of 8–16, ...), a black level below the white level, and a hot-pixel fraction only with a
+        dark current > 0 (the profile needs both; the fraction is left out when that current is not
+        known). A figure outside them is left out, so the profile keeps its own value, and `fit_noise`
+        says so in `warnings`. ``sensor.temperature_c`` is the reference temperature, so the profile's
+        dark current at its operating temperature is the one measured. The system gain is written
+        whenever one was used (measured, or given), since the figures in electrons depend on it.
         """
+        return self._fragment()[0]
+
+    def _fragment(self) -> tuple[dict, list[str]]:
+        """`profile_fragment`, and a warning for each figure it leaves out because the profile would refuse it."""
         c = self.combined
+        refused: list[str] = []
 
-        def put(target: dict, key: str, estimate: Estimate | None) -> None:
-            if estimate is not None and math.isfinite(estimate.value):
-                target[key] = rounded(estimate.value, estimate.uncertainty)
+        def measured(estimate: Estimate | None) -> float | None:
+            if estimate is None or not math.isfinite(estimate.value):
+                return None
+            return rounded(estimate.value, estimate.uncertainty)
 
-        sensor: dict = {"bit_depth": int(self.bit_depth)}
-        put(sensor, "black_level_dn", c.black_level_dn)
-        put(sensor, "conversion_gain_dn_per_e", c.gain_dn_per_e)
-        put(sensor, "full_well_e", c.full_well_e)
-        if self.dark_current_reference_c is not None:
-            sensor["temperature_c"] = rounded(self.dark_current_reference_c, 0.01)
+        def refuse(key: str, value: float, requirement: str) -> None:
+            refused.append(
+                f"{key} = {value:g} is not written to the profile, which requires {requirement}; it keeps its own value"
+            )
+
+        def put(target: dict, model: type[Sensor | Noise], key: str, value: float | None) -> bool:
+            if value is None:
+                return False
+            violated = _schema_violation(model, key, value)
+            if violated is not None:
+                refuse(f"{'sensor.noise' if model is Noise else 'sensor'}.{key}", value, violated)
+                return False
+            target[key] = value
+            return True
+
+        sensor: dict = {}
+        put(sensor, Sensor, "bit_depth", int(self.bit_depth))
+        black = measured(c.black_level_dn)
+        white = 2**self.bit_depth - 1
+        if black is not None and black >= white:
+            refuse("sensor.black_level_dn", black, f"< the white level {white} DN")
+        else:
+            put(sensor, Sensor, "black_level_dn", black)
+        put(sensor, Sensor, "conversion_gain_dn_per_e", measured(c.gain_dn_per_e))
+        put(sensor, Sensor, "full_well_e", measured(c.full_well_e))
+        reference_c = None if self.dark_current_reference_c is None else rounded(self.dark_current_reference_c, 0.01)
+        put(sensor, Sensor, "temperature_c", reference_c)
         noise: dict = {}
-        put(noise, "read_noise_e", c.read_noise_e)
-        put(noise, "prnu_pct", c.prnu_pct)
-        put(noise, "dsnu_e", c.dsnu_e)
-        put(noise, "row_fpn_e", c.row_fpn_e)
-        put(noise, "column_fpn_e", c.column_fpn_e)
-        put(noise, "dark_current_e_per_s", c.dark_current_e_per_s)
-        if c.dark_current_e_per_s is not None and self.dark_current_reference_c is not None:
-            noise["dark_current_reference_c"] = rounded(self.dark_current_reference_c, 0.01)
-        put(noise, "dark_current_doubling_c", self.dark_current_doubling_c)
-        if self.hot_pixel_dark_current_e_per_s is not None or self.hot_pixel_fraction.value == 0:
-            put(noise, "hot_pixel_fraction", self.hot_pixel_fraction)
-        if self.hot_pixel_fraction.value > 0:
-            put(noise, "hot_pixel_dark_current_e_per_s", self.hot_pixel_dark_current_e_per_s)
-        put(noise, "dead_pixel_fraction", self.dead_pixel_fraction)
+        put(noise, Noise, "read_noise_e", measured(c.read_noise_e))
+        put(noise, Noise, "prnu_pct", measured(c.prnu_pct))
+        put(noise, Noise, "dsnu_e", measured(c.dsnu_e))
+        put(noise, Noise, "row_fpn_e", measured(c.row_fpn_e))
+        put(noise, Noise, "column_fpn_e", measured(c.column_fpn_e))
+        if put(noise, Noise, "dark_current_e_per_s", measured(c.dark_current_e_per_s)):
+            put(noise, Noise, "dark_current_reference_c", reference_c)
+        put(noise, Noise, "dark_current_doubling_c", measured(self.dark_current_doubling_c))
+        fraction = measured(self.hot_pixel_fraction)
+        hot_current = measured(self.hot_pixel_dark_current_e_per_s)
+        if fraction == 0:
+            put(noise, Noise, "hot_pixel_fraction", fraction)
+        elif hot_current is not None and hot_current <= 0:
+            refuse("sensor.noise.hot_pixel_dark_current_e_per_s", hot_current, "> 0 with hot pixels")
+            refused[-1] += " (hot_pixel_fraction is left out with it)"
+        elif put(noise, Noise, "hot_pixel_dark_current_e_per_s", hot_current):
+            put(noise, Noise, "hot_pixel_fraction", fraction)
+        put(noise, Noise, "dead_pixel_fraction", measured(self.dead_pixel_fraction))
         if noise:
             sensor["noise"] = noise
-        return {"sensor": sensor}
+        return {"sensor": sensor}, refused
 
     def summary_rows(self) -> list[tuple[str, float, float, str]]:
         """(name, value, 1σ uncertainty, unit) of the combined figures, for a table; NaN: no uncertainty."""
@@ -412,6 +463,20 @@ class NoiseFit:
             ("dead pixels", self.dead_pixel_fraction, "fraction"),
         ]
         return [(name, e.value, e.uncertainty, unit) for name, e, unit in rows if e is not None]
+
+
+_BOUNDS = (("gt", operator.gt, ">"), ("ge", operator.ge, "≥"), ("lt", operator.lt, "<"), ("le", operator.le, "≤"))
+
+
+def _schema_violation(model: type[Sensor | Noise], key: str, value: float) -> str | None:
+    """The bound of the profile field `model.key` (its pydantic constraints) that `value` breaks, as
+    text ("> 0"); None when it keeps them all."""
+    for constraint in model.model_fields[key].metadata:
+        for name, holds, symbol in _BOUNDS:
+            limit = getattr(constraint, name, None)
+            if limit is not None and not holds(value, limit):
+                return f"{symbol} {limit:g}"
+    return None
 
 
 # --- channels, regions and small statistics ---------------------------------------------------------
@@ -457,11 +522,9 @@ def _grid_regions(height: int, width: int, rows: int, columns: int) -> list[Regi
 
 
 def _regions(shape: tuple[int, int], tiles: int) -> list[Region]:
-    """The whole image, then its tiles (at least 2 px a side; none when the image is too small)."""
+    """The whole image, then its tiles × tiles tiles (at least 2 px a side: `_check_input`)."""
     height, width = shape
-    n = min(tiles, height // 2, width // 2)
-    whole = (slice(0, height), slice(0, width))
-    return [whole] + (_grid_regions(height, width, n, n) if n >= 2 else [])
+    return [(slice(0, height), slice(0, width)), *_grid_regions(height, width, tiles, tiles)]
 
 
 def _estimate(values: np.ndarray) -> Estimate:
@@ -577,12 +640,18 @@ def _weighted_mean(estimates: Sequence[Estimate]) -> Estimate:
 # --- input checks and grouping ---------------------------------------------------------------------
 
 
-def _check_input(groups: Sequence[FrameGroup], cfa: str, bit_depth: int) -> tuple[list, list]:
+def _check_input(
+    groups: Sequence[FrameGroup], cfa: str, bit_depth: int, gain_dn_per_e: float | None, tiles: int
+) -> tuple[list, list]:
     """Dark and flat groups after checking what the fit relies on (ConfigError naming the group)."""
     if cfa not in CFA_NAMES:
         raise ConfigError(f"cfa must be one of {', '.join(CFA_NAMES)}, got {cfa!r}")
     if not 1 <= int(bit_depth) <= 32:
         raise ConfigError(f"bit_depth must be 1–32 bits, got {bit_depth}")
+    if gain_dn_per_e is not None and not (math.isfinite(gain_dn_per_e) and gain_dn_per_e > 0):
+        raise ConfigError(f"gain_dn_per_e (--gain-dn-per-e) must be a system gain > 0 DN/e⁻, got {gain_dn_per_e}")
+    if not isinstance(tiles, int | np.integer) or tiles < 2:
+        raise ConfigError(f"tiles must be a whole number ≥ 2 (the uncertainties need ≥ 2 × 2 tiles), got {tiles}")
     white = 2**bit_depth - 1
     for group in groups:
         if group.kind not in ("dark", "flat"):
@@ -616,6 +685,18 @@ def _check_input(groups: Sequence[FrameGroup], cfa: str, bit_depth: int) -> tupl
                 f"{group.label}: values reach {group.stats.maximum_dn:g} DN, above the {white} DN of a "
                 f"{bit_depth}-bit ADC; give the right bit depth (--bit-depth)"
             )
+    # The smallest channel plane (a Bayer phase has ⌊H/2⌋ × ⌊W/2⌋ sites or one more) must hold tiles × tiles
+    # tiles of ≥ 2 × 2 px: a spatial variance, a row and a column variance need 2 rows and 2 columns.
+    step = 1 if cfa == "mono" else 2
+    plane = (shape[0] // step, shape[1] // step)
+    minimum = 2 * tiles
+    if min(plane) < minimum:
+        raise ConfigError(
+            f"{darks[0].label}: frames of {shape[1]}×{shape[0]} px give {cfa} channel planes of "
+            f"{plane[1]}×{plane[0]} px; the fit needs at least {minimum}×{minimum} px per channel plane "
+            f"({tiles}×{tiles} tiles of 2×2 px for the uncertainties), frames of at least "
+            f"{step * minimum}×{step * minimum} px"
+        )
     for group in darks:
         mean = group.stats.mean_dn
         clipped = float(np.mean(mean >= white - 0.5))
@@ -833,10 +914,11 @@ class _Darks:
         return _at_exposure(times, mean, exposure_time_s), _at_exposure(times, variance, exposure_time_s)
 
 
-def _mid_signal_flat(mean_above: np.ndarray, saturation_dn: float, frames: np.ndarray) -> tuple[int, bool]:
-    """The flat for PRNU and dead pixels: within 30–70 % of saturation the one with the most frames
-    (nearest 50 % among equals); else the one nearest 50 %. Returns its index and whether it lay in range."""
-    level = mean_above / saturation_dn
+def _mid_signal_flat(mean_above: np.ndarray, full_scale_dn: float, frames: np.ndarray) -> tuple[int, bool]:
+    """The flat for PRNU and dead pixels: within 30–70 % of `full_scale_dn` (saturation, or the largest
+    mean when the flats do not reach it) the one with the most frames (nearest 50 % among equals); else the
+    one nearest 50 %. Returns its index and whether it lay in range."""
+    level = mean_above / full_scale_dn
     inside = np.flatnonzero((level >= MID_SIGNAL_RANGE[0]) & (level <= MID_SIGNAL_RANGE[1]))
     if inside.size:
         best = min(inside, key=lambda i: (-frames[i], abs(level[i] - 0.5)))
@@ -858,8 +940,51 @@ class _PhotonTransfer:
     """(F, R) μ_y, DN."""
     variance: np.ndarray
     """(F, R) σ²_y, DN²."""
-    saturation: int
-    """Index (in signal order) of the variance peak."""
+    saturation: int | None
+    """Index (in signal order) of the variance peak; None when the flats do not reach saturation."""
+
+    @property
+    def full_scale(self) -> int:
+        """Index of the level the fit ranges are fractions of: saturation, else the largest mean."""
+        return len(self.order) - 1 if self.saturation is None else self.saturation
+
+    @property
+    def full_scale_dn(self) -> float:
+        """μ_y − μ_y.dark at `full_scale` (whole channel), DN."""
+        return float(self.mean_above[self.full_scale, 0])
+
+
+def _saturation_index(variance_above: np.ndarray) -> int | None:
+    """The saturation point: the variance peak, provided the flats go beyond it.
+
+    A peak is only known to be one when a brighter flat's variance has clearly fallen: below the peak by
+    more than `SATURATION_DROP_SIGMA` standard uncertainties of the difference (the tile scatter of both
+    points, so a chance dip of a still rising curve has probability < 0.2 %) and by more than
+    `SATURATION_DROP_FRACTION` of the peak (beyond the few-per-cent systematic scatter of a photon transfer
+    point: flicker, RTS, a tile σ from 16 tiles). Clipping takes the variance far lower, towards zero on
+    the plateau. Without such a flat the brightest flats are still below saturation, and the peak (then
+    simply the brightest flat, or a noise spike below it) would put saturation, the full well and every
+    range measured against them far too low.
+
+    Parameters
+    ----------
+    variance_above : (F, R) float
+        σ²_y − σ²_y.dark of each flat in signal order, whole channel then its tiles, DN².
+
+    Returns
+    -------
+    int or None
+        Index of the peak, or None when no flat beyond it has clearly fallen.
+    """
+    whole = variance_above[:, 0]
+    peak = int(np.nanargmax(whole))
+    u_peak = _estimate(variance_above[peak]).uncertainty
+    for i in range(peak + 1, len(whole)):
+        drop = whole[peak] - whole[i]
+        u = math.hypot(u_peak, _estimate(variance_above[i]).uncertainty)
+        if drop > SATURATION_DROP_SIGMA * u and drop > SATURATION_DROP_FRACTION * whole[peak]:
+            return peak
+    return None
 
 
 def _photon_transfer(
@@ -881,7 +1006,7 @@ def _photon_transfer(
         variance_above=variance_sorted,
         mean=flat_mean[order, c],
         variance=flat_variance[order, c],
-        saturation=int(np.nanargmax(variance_sorted[:, 0])),
+        saturation=_saturation_index(variance_sorted),
     )
 
 
@@ -962,7 +1087,7 @@ def fit_noise(
         Exposure time, s, of the dark group the spatial dark non-uniformity is measured on; default the
         shortest of the reference temperature (the most frames among equals).
     tiles : int
-        Each channel image is cut into tiles × tiles parts for the uncertainties.
+        Each channel image is cut into tiles × tiles parts (≥ 2) for the uncertainties.
 
     Returns
     -------
@@ -972,7 +1097,9 @@ def fit_noise(
     ------
     ConfigError
         No dark group; a group of < 2 frames; a saturated dark group; groups of different shapes;
+        frames whose channel planes (a Bayer phase: half the frame a side) are under 2·tiles px a side;
         values above the white level; mixed known and unknown temperatures. Each names the group.
+        Also a gain_dn_per_e ≤ 0 or tiles < 2.
 
     Notes
     -----
@@ -983,7 +1110,10 @@ def fit_noise(
       Offsets (DSNU, FPN) cancel in a slope, so the rate's spread is temporal noise only. Hot pixels
       are left out of every spatial mean and variance (replaced by the channel median in the dark image
       the DSNU decomposition uses). Fraction = count/pixels (uncertainty √count/pixels); dark current =
-      the hot pixels' median rate ÷ K, scaled to the reference temperature with the fitted doubling.
+      the hot pixels' median rate ÷ K, scaled to the reference temperature with the fitted doubling:
+      with ≥ 2 exposure times the total rate the profile's ``hot_pixel_dark_current_e_per_s`` means;
+      with one, only the excess over the channel median (a warning says so), since the normal dark
+      current cannot then be told from the black level — it is never known in that case.
     - *Black level and read noise*: μ_y.dark(t) and σ²_y.dark(t) (spatial means over good pixels,
       frame-mean variance removed) are fitted with lines in t at the reference temperature; the
       intercepts are the black level and σ²_y.dark(0), so dark-current shot noise (∝ t) drops out.
@@ -995,26 +1125,33 @@ def fit_noise(
       column offsets (tiles in one band share them).
     - *Dark current*: slope of μ_y.dark(t) ÷ K, from the hot-pixel-free mean. With ≥ 2
       temperatures each with ≥ 2 exposure times: ln I(T) = a + b·T by least squares, doubling = ln 2/b,
-      I at the reference temperature (the median measured temperature) = exp(a + b·T_ref).
+      I at the reference temperature (the median measured temperature) = exp(a + b·T_ref) — provided
+      b > 0 by 2 u(b) (`DOUBLING_MIN_SIGNIFICANCE`); otherwise no doubling (a warning; the profile
+      keeps its own), I = the mean of the temperatures' rates, and no temperature scaling.
     - *Photon transfer*: each flat's μ_y − μ_y.dark and σ²_y − σ²_y.dark, the dark values from
       dark groups at the same exposure time (and temperature set) when there are any, else from their
-      lines in t. The saturation point is the variance peak; K is the least-squares slope through the
-      origin over the points up to 70 % of μ_sat (unweighted, as EMVA and `emva1288`); u(K) from the
-      same fit on each tile (see the module docstring). μ_e.sat = (μ_y.sat − μ_y.dark)/K. The
-      profile's full well is the clip level: the mean of the flat deepest beyond saturation when its
-      variance has collapsed (< 5 % of the peak) and the ADC does not clip first, (μ_plateau − black)/K
-      (dark electrons are clipped with the rest); else μ_e.sat, with a warning.
+      lines in t. The saturation point is the variance peak, if a brighter flat's variance has clearly
+      fallen below it (`_saturation_index`); K is the least-squares slope through the origin over the
+      points up to 70 % of μ_sat (unweighted, as EMVA and `emva1288`); u(K) from the same fit on each
+      tile (see the module docstring). μ_e.sat = (μ_y.sat − μ_y.dark)/K. The profile's full well is
+      the clip level: the mean of the flat deepest beyond saturation when its variance has collapsed
+      (< 5 % of the peak) and the ADC does not clip first, (μ_plateau − black)/K (dark electrons are
+      clipped with the rest); else μ_e.sat, with a warning. When the flats do not reach saturation
+      there is no saturation, μ_e.sat or full well (a warning asks for brighter flats), K is fitted to
+      every point, and the ranges below are fractions of the largest measured μ_y − μ_y.dark instead.
     - *Dead pixels*: in the mid-signal flat (30–70 % of saturation), response = mean − per-pixel dark
       line at its exposure time; dead where below 50 % of the median of its 16 × 16 block.
     - *PRNU*: in the mid-signal flat (most frames), the illumination surface is divided out
       of the signal, then s²_y.light = var(flat) − σ²_y/L over good pixels, s²_y.dark likewise from the
       dark group at its exposure time (else the DSNU group), PRNU = sqrt(s²_light − s²_dark)/(μ_y −
       μ_y.dark)·100 %.
-    - *Linearity*: with flats at ≥ 3 exposure times within 5–95 % of μ_sat and constant
-      irradiance, μ_y − μ_y.dark = a·t + b is fitted minimising relative deviations (weights 1/y, as
-      `emva1288`); LE = max |y − fit|/fit·100 %, its uncertainty the temporal noise of that point's mean.
+    - *Linearity* (EMVA 1288 4.0): with flats at ≥ 3 exposure times within 5–95 % of μ_sat (5–100 %
+      of the largest mean without saturation) and constant irradiance, μ_y − μ_y.dark = a·t + b is
+      fitted minimising relative deviations (weights 1/y, as `emva1288`); from the relative deviations
+      δ = (y − fit)/fit·100 %, LE = (max δ − min δ)/2, i.e. (LE_max − LE_min)/2 of `emva1288`
+      (`_linearity`); its uncertainty from the temporal noise of the two extreme points' means.
     """
-    darks, flats = _check_input(groups, cfa, bit_depth)
+    darks, flats = _check_input(groups, cfa, bit_depth, gain_dn_per_e, tiles)
     shape = darks[0].stats.shape_px
     channels = channel_phases(cfa)
     warnings: list[str] = []
@@ -1037,9 +1174,8 @@ def fit_noise(
     dead_map = np.zeros(shape, bool)
     for c, (_, phase) in enumerate(channels if flats else ()):
         transfer = _photon_transfer(flats, flat_mean, flat_variance, dark_stats, flat_sets, c)
-        saturation = transfer.mean_above[transfer.saturation, 0]
         frames = np.array([flats[i].stats.count for i in transfer.order])
-        flat = flats[transfer.order[_mid_signal_flat(transfer.mean_above[:, 0], saturation, frames)[0]]]
+        flat = flats[transfer.order[_mid_signal_flat(transfer.mean_above[:, 0], transfer.full_scale_dn, frames)[0]]]
         response = flat.stats.mean_dn - (intercept_dn + slope_dn_per_s * flat.exposure_time_s)
         _plane(dead_map, phase)[...] = _dead_pixels(_plane(response, phase), _plane(hot_map, phase))
     valid = ~(hot_map | dead_map)
@@ -1072,7 +1208,7 @@ def fit_noise(
     results = [f.noise for f in fits]
     warnings += _summary_warnings(context, results)
     combined = _combine(results, [f.hot_rates_e for f in fits if f.hot_rates_e is not None])
-    return NoiseFit(
+    fit = NoiseFit(
         cfa=cfa,
         bit_depth=int(bit_depth),
         shape_px=shape,
@@ -1088,8 +1224,9 @@ def fit_noise(
         linearity_error_pct=combined.linearity_error_pct,
         photon_transfer=tuple(f.curve for f in fits if f.curve is not None),
         dark_histograms=tuple(f.histogram for f in fits),
-        warnings=tuple(dict.fromkeys(warnings)),
+        warnings=(),
     )
+    return replace(fit, warnings=tuple(dict.fromkeys(warnings + fit._fragment()[1])))
 
 
 def _temperature_warnings(reference_c, flats, flat_sets, tolerance_c) -> list[str]:
@@ -1128,7 +1265,9 @@ def _find_hot_pixels(
         rate = longest.stats.mean_dn / times.max()
         warnings.append(
             "one dark exposure time: hot pixels are found from (mean − median)/t, and their dark current "
-            "excludes the normal dark current"
+            "(hot_pixel_dark_current_e_per_s) is only the excess over the channel median, not the total rate "
+            "the profile means: the normal dark current, which one exposure time cannot tell from the black "
+            "level, is missing from it; add that, or take darks at ≥ 2 exposure times"
         )
     else:
         warnings.append("the dark frames have zero exposure time: hot pixels cannot be found")
@@ -1235,9 +1374,16 @@ def _dark_figures(ctx: _Context, c: int, name: str, warnings: list[str]) -> _Dar
     )
 
 
-def _dark_current(ctx: _Context, c: int) -> tuple[Estimate | None, Estimate | None, Estimate]:
+def _dark_current(ctx: _Context, c: int, warnings: list[str]) -> tuple[Estimate | None, Estimate | None, Estimate]:
     """Channel `c`'s dark signal rate at the reference temperature (DN/s), its doubling temperature
-    (°C), and the factor (with uncertainty) from the reference set's temperature to the reference."""
+    (°C), and the factor (with uncertainty) from the reference set's temperature to the reference.
+
+    The doubling temperature needs a temperature dependence the darks resolve: b > 0 and b >
+    `DOUBLING_MIN_SIGNIFICANCE`·u(b). Below that, u(d)/d = u(b)/b exceeds 50 % and b = 0 (no dependence,
+    d = ∞) lies inside b's 2σ interval, so ln 2/b is noise (or, for b ≤ 0, not a doubling at all): the
+    doubling is None (the profile keeps its own), the rate is the mean of the temperatures' rates, and
+    nothing is scaled.
+    """
     usable = [s for s in ctx.sets if s.has_slope]
     unity = Estimate(1.0, 0.0)
     if len(usable) < 2:
@@ -1249,6 +1395,21 @@ def _dark_current(ctx: _Context, c: int) -> tuple[Estimate | None, Estimate | No
     temperatures = np.array([s.temperature_c for s in usable])
     with np.errstate(invalid="ignore", divide="ignore"):
         b, a = _line_fit(temperatures, np.log(np.where(slopes > 0, slopes, np.nan)))
+    slope = _estimate(b)
+    if not (slope.value > 0 and slope.value > DOUBLING_MIN_SIGNIFICANCE * slope.uncertainty):
+        found = (
+            f"the slope of ln I against T is {slope.value:.3g} ± {slope.uncertainty:.2g} /°C, not > 0 by "
+            f"{DOUBLING_MIN_SIGNIFICANCE:g}σ"
+            if math.isfinite(slope.value)
+            else "a dark current ≤ 0 at some temperature"
+        )
+        warnings.append(
+            f"{ctx.channels[c][0]}: the dark current's temperature dependence was not measurable ({found}): no "
+            "doubling temperature (the profile keeps its own); the dark current is the mean over "
+            f"{temperatures.min():g}–{temperatures.max():g} °C, not scaled to another temperature"
+        )
+        return _estimate(slopes.mean(axis=0)), None, unity
+    with np.errstate(invalid="ignore", divide="ignore"):
         rate = _estimate(np.exp(a + b * ctx.reference_c))
         doubling = _estimate(math.log(2) / b)
     delta = ctx.reference_c - ctx.primary.temperature_c
@@ -1265,11 +1426,12 @@ def _dark_current(ctx: _Context, c: int) -> tuple[Estimate | None, Estimate | No
 @dataclass(frozen=True)
 class _FlatFigures:
     gain_dn_per_e: Estimate | None
-    saturation_dn: Estimate
-    saturation_above_dark_dn: Estimate
-    full_well_dn: Estimate
+    saturation_dn: Estimate | None
+    """None (as the next three) when the flats do not reach saturation."""
+    saturation_above_dark_dn: Estimate | None
+    full_well_dn: Estimate | None
     """Clip level above black, DN."""
-    full_well_source: str
+    full_well_source: str | None
     prnu_pct: Estimate | None
     linearity_error_pct: Estimate | None
     curve: PhotonTransferCurve
@@ -1281,7 +1443,9 @@ def _flat_figures(ctx: _Context, c: int, black_dn: np.ndarray, warnings: list[st
     transfer = ctx.photon_transfer(c)
     sat = transfer.saturation
     x, y = transfer.mean_above, transfer.variance_above
-    fit_points = (x[:, 0] > 0) & (x[:, 0] <= GAIN_FIT_LIMIT * x[sat, 0]) & (np.arange(len(x)) <= sat)
+    fit_points = x[:, 0] > 0
+    if sat is not None:
+        fit_points &= (x[:, 0] <= GAIN_FIT_LIMIT * x[sat, 0]) & (np.arange(len(x)) <= sat)
     gain = None
     if fit_points.any():
         xs, ys = x[fit_points], y[fit_points]
@@ -1301,38 +1465,48 @@ def _flat_figures(ctx: _Context, c: int, black_dn: np.ndarray, warnings: list[st
         saturation_index=sat,
         gain_dn_per_e=None if gain is None else gain.value,
     )
-    collapsed = [i for i in range(sat + 1, len(x)) if y[i, 0] < PLATEAU_VARIANCE_FRACTION * y[sat, 0]]
-    if collapsed:
-        plateau = transfer.mean[max(collapsed, key=lambda i: x[i, 0])]
-        if plateau[0] >= ctx.white_dn - 1.0:
-            source, full_well = "ADC", _estimate(ctx.white_dn - black_dn)
+    figures = {"saturation_dn": None, "saturation_above_dark_dn": None, "full_well_dn": None, "full_well_source": None}
+    if sat is not None:
+        collapsed = [i for i in range(sat + 1, len(x)) if y[i, 0] < PLATEAU_VARIANCE_FRACTION * y[sat, 0]]
+        if collapsed:
+            plateau = transfer.mean[max(collapsed, key=lambda i: x[i, 0])]
+            if plateau[0] >= ctx.white_dn - 1.0:
+                source, full_well = "ADC", _estimate(ctx.white_dn - black_dn)
+            else:
+                source, full_well = "plateau", _estimate(plateau - black_dn)
         else:
-            source, full_well = "plateau", _estimate(plateau - black_dn)
-    else:
-        source, full_well = "variance peak", _estimate(x[sat])
+            source, full_well = "variance peak", _estimate(x[sat])
+        figures = {
+            "saturation_dn": _estimate(transfer.mean[sat]),
+            "saturation_above_dark_dn": _estimate(x[sat]),
+            "full_well_dn": full_well,
+            "full_well_source": source,
+        }
     return _FlatFigures(
         gain_dn_per_e=gain,
-        saturation_dn=_estimate(transfer.mean[sat]),
-        saturation_above_dark_dn=_estimate(x[sat]),
-        full_well_dn=full_well,
-        full_well_source=source,
         prnu_pct=_prnu(ctx, c, transfer, warnings),
         linearity_error_pct=_linearity(ctx, c, transfer, warnings),
         curve=curve,
+        **figures,
     )
+
+
+def _full_scale_name(transfer: _PhotonTransfer) -> str:
+    return "saturation" if transfer.saturation is not None else "the largest mean (no saturation)"
 
 
 def _prnu(ctx: _Context, c: int, transfer: _PhotonTransfer, warnings: list[str]) -> Estimate:
     """PRNU of channel `c`, % (EMVA 1288 4.0; see `fit_noise`)."""
     name, phase = ctx.channels[c]
-    sat_level = transfer.mean_above[transfer.saturation, 0]
-    position, in_range = _mid_signal_flat(transfer.mean_above[:, 0], sat_level, ctx.frames[transfer.order])
+    full_scale = transfer.full_scale_dn
+    position, in_range = _mid_signal_flat(transfer.mean_above[:, 0], full_scale, ctx.frames[transfer.order])
     f = int(transfer.order[position])
     flat, dark_set = ctx.flats[f], ctx.flat_sets[f]
     if not in_range:
-        level = transfer.mean_above[position, 0] / sat_level
+        level = transfer.mean_above[position, 0] / full_scale
         warnings.append(
-            f"{name}: no flat lies within 30–70 % of saturation; PRNU and dead pixels use {flat.label} at {level:.0%}"
+            f"{name}: no flat lies within 30–70 % of {_full_scale_name(transfer)}; PRNU and dead pixels use "
+            f"{flat.label} at {level:.0%}"
         )
     ok = _plane(ctx.valid, phase)
     regions = ctx.regions[c]
@@ -1358,33 +1532,44 @@ def _prnu(ctx: _Context, c: int, transfer: _PhotonTransfer, warnings: list[str])
 
 
 def _linearity(ctx: _Context, c: int, transfer: _PhotonTransfer, warnings: list[str]) -> Estimate | None:
-    """Linearity error of channel `c`, % (EMVA 1288 4.0; see `fit_noise`)."""
+    """Linearity error of channel `c`, % (EMVA 1288 4.0; see `fit_noise`).
+
+    LE = (max δ − min δ)/2 of the relative deviations δ_i = (y_i − (a·t_i + b))/(a·t_i + b)·100 % from the
+    line fitted to y = μ_y − μ_y.dark against t with weights 1/y, over 5–95 % of μ_y.sat − μ_y.dark (up to
+    the largest mean when the flats do not reach saturation). The `emva1288` reference implementation's
+    LE_min and LE_max are min δ and max δ over the same points (it fits against the photon count, which
+    is proportional to t under constant irradiance), so LE = (LE_max − LE_min)/2. u(LE) =
+    sqrt(u(δ_max)² + u(δ_min)²)/2, u(δ_i) the temporal noise of point i's spatial mean relative to the fit.
+    """
     x = transfer.mean_above[:, 0]
-    sat = x[transfer.saturation]
+    full_scale = transfer.full_scale_dn
+    top = LINEARITY_RANGE[1] if transfer.saturation is not None else 1.0
     times = np.array([ctx.flats[i].exposure_time_s for i in transfer.order])
-    inside = (x >= LINEARITY_RANGE[0] * sat) & (x <= LINEARITY_RANGE[1] * sat)
+    inside = (x >= LINEARITY_RANGE[0] * full_scale) & (x <= top * full_scale)
     if np.unique(times[inside]).size < 3:
         if len(ctx.flats) >= 3:
             warnings.append(
-                f"{ctx.channels[c][0]}: fewer than 3 exposure times within 5–95 % of saturation; no linearity error"
+                f"{ctx.channels[c][0]}: fewer than 3 exposure times within {LINEARITY_RANGE[0]:.0%}–{top:.0%} of "
+                f"{_full_scale_name(transfer)}; no linearity error"
             )
         return None
     t, y = times[inside], x[inside]
     offset, slope = np.polynomial.polynomial.polyfit(t, y, 1, w=1.0 / y)
     fitted = offset + slope * t
-    deviation = np.abs(y - fitted) / fitted
-    worst = int(np.argmax(deviation))
+    deviation = 100 * (y - fitted) / fitted
     frames = ctx.frames[transfer.order][inside]
     pixels = np.count_nonzero(_plane(ctx.valid, ctx.channels[c][1]))
-    noise_dn = math.sqrt(max(transfer.variance[inside][worst, 0], 0.0) / (pixels * frames[worst]))
-    return Estimate(100 * deviation[worst], 100 * noise_dn / fitted[worst])
+    noise_dn = np.sqrt(np.maximum(transfer.variance[inside][:, 0], 0.0) / (pixels * frames))
+    u_deviation = 100 * noise_dn / fitted
+    high, low = int(np.argmax(deviation)), int(np.argmin(deviation))
+    return Estimate((deviation[high] - deviation[low]) / 2, math.hypot(u_deviation[high], u_deviation[low]) / 2)
 
 
 def _fit_channel(ctx: _Context, c: int, warnings: list[str]) -> _ChannelFit:
     """Every figure of channel `c`."""
     name, phase = ctx.channels[c]
     dark = _dark_figures(ctx, c, name, warnings)
-    rate_dn, doubling, to_reference = _dark_current(ctx, c)
+    rate_dn, doubling, to_reference = _dark_current(ctx, c, warnings)
     flat = None
     gain = ctx.gain_given
     if ctx.flats:
@@ -1489,6 +1674,17 @@ def _summary_warnings(ctx: _Context, results: list[ChannelNoise]) -> list[str]:
             "dark frames at one temperature: the dark current's doubling temperature is not measured (the "
             "profile keeps its own)"
         )
+    unsaturated = [r.channel for r in results if ctx.flats and r.saturation_dn is None]
+    if unsaturated:
+        which = "" if len(unsaturated) == len(results) else f"{', '.join(unsaturated)}: "
+        others = "" if len(unsaturated) == len(results) else " (the combined ones come from the other channels)"
+        warnings.append(
+            f"{which}the flats do not reach saturation: no full well, saturation or μ_e.sat{others}; add brighter "
+            "flats, up to 1.5× the saturating exposure (no flat beyond the photon-transfer variance peak has a "
+            "clearly lower variance). Meanwhile the system gain is fitted to every point, PRNU and dead pixels use "
+            "a flat at 30–70 % of the largest measured mean (the one with the most frames, then the nearest to "
+            "50 %), and the linearity error covers 5–100 % of that mean"
+        )
     sources = {r.full_well_source for r in results} - {None}
     if "variance peak" in sources:
         warnings.append(
@@ -1504,9 +1700,10 @@ def _summary_warnings(ctx: _Context, results: list[ChannelNoise]) -> list[str]:
 
 
 def _combine(results: list[ChannelNoise], hot_rates_e: list[tuple[np.ndarray, float]]) -> ChannelNoise:
-    """Channel figures combined (`NoiseFit.combined`): inverse-variance weighted means; pixel fractions
-    pooled (count over all pixels); the hot pixels' dark current the median of all of them; the
-    linearity error that of the worst channel.
+    """Channel figures combined (`NoiseFit.combined`): inverse-variance weighted means (saturation, μ_e.sat
+    and full well over the channels that reach saturation); pixel fractions pooled (count over all
+    pixels); the hot pixels' dark current the median of all of them; the linearity error that of the
+    worst channel.
 
     The four Bayer phases are two pairs that share their rows (R, Gr and Gb, B) and two that share their
     columns, so the channels' row and column offsets, and the black level they shift, are two independent
@@ -1518,7 +1715,10 @@ def _combine(results: list[ChannelNoise], hot_rates_e: list[tuple[np.ndarray, fl
 
     def weighted(field: str) -> Estimate | None:
         values = [getattr(r, field) for r in results]
-        if any(v is None for v in values):
+        if field in SATURATION_FIELDS:
+            # One pixel design under every filter: the channels that reach saturation give it.
+            values = [v for v in values if v is not None]
+        if not values or any(v is None for v in values):
             return None
         finite = [v for v in values if math.isfinite(v.value)]
         if not finite:
@@ -1542,13 +1742,13 @@ def _combine(results: list[ChannelNoise], hot_rates_e: list[tuple[np.ndarray, fl
         relative = math.sqrt(sum(rel**2 for _, rel in hot_rates_e)) / len(hot_rates_e)
         hot_current = _median_estimate(np.concatenate([rates for rates, _ in hot_rates_e]), relative)
     linearity = [r.linearity_error_pct for r in results]
-    sources = {r.full_well_source for r in results}
+    sources = {r.full_well_source for r in results} - {None}
     special = ("channel", "pixels", "full_well_source", "hot_pixel_fraction", "dead_pixel_fraction")
     special += ("hot_pixel_dark_current_e_per_s", "linearity_error_pct")
     return ChannelNoise(
         channel="combined",
         pixels=pixels,
-        full_well_source=sources.pop() if len(sources) == 1 else "mixed",
+        full_well_source=None if not sources else sources.pop() if len(sources) == 1 else "mixed",
         hot_pixel_fraction=pooled("hot_pixel_fraction"),
         dead_pixel_fraction=pooled("dead_pixel_fraction"),
         hot_pixel_dark_current_e_per_s=hot_current,

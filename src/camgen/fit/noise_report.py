@@ -1,10 +1,10 @@
 """A one-page PNG report of a sensor noise fit (`camgen.fit.noise.NoiseFit`).
 
 Panels: the photon transfer curve of each channel (EMVA 1288 4.0: σ²_y − σ²_y.dark against
-μ_y − μ_y.dark, the fitted line through the origin, the fit range and the saturation point); the
-histogram of each channel's averaged dark image (pixels per DN on a log scale, hot pixels in the
-logarithmic tail) with the Gaussian the fit predicts; the map of hot and dead pixels; and the table of
-combined figures with the fit's warnings.
+μ_y − μ_y.dark, the fitted line through the origin, the fit range and the saturation point, when the
+flats reach it); the histogram of each channel's averaged dark image (pixels per DN on a log scale, hot
+pixels in the logarithmic tail) with the Gaussian the fit predicts; the map of hot and dead pixels; and
+the table of combined figures with the fit's warnings.
 
 Drawn with matplotlib's object API (`matplotlib.figure.Figure`, no pyplot state) and written through
 `camgen.io.files.atomic_path`, so a partial PNG never appears under the final name.
@@ -30,15 +30,22 @@ DPI = 100
 
 
 def _photon_transfer_panel(ax: Axes, curve: PhotonTransferCurve) -> None:
-    """Variance against mean (both above dark), the gain fit and the saturation point of one channel."""
+    """Variance against mean (both above dark), the gain fit and the saturation point of one channel
+    (when the flats do not reach saturation: every point fitted, and a note instead of the point)."""
     x, y, used = curve.mean_above_dark_dn, curve.variance_above_dark_dn2, curve.used_in_gain_fit
     sat = curve.saturation_index
-    ax.axvspan(0.0, GAIN_FIT_LIMIT * x[sat], color="0.92", label=f"fit range (≤ {GAIN_FIT_LIMIT:.0%} of sat.)")
+    if sat is not None:
+        top = x[sat]
+        ax.axvspan(0.0, GAIN_FIT_LIMIT * top, color="0.92", label=f"fit range (≤ {GAIN_FIT_LIMIT:.0%} of sat.)")
+    else:
+        top = float(np.max(x))
+        ax.axvspan(0.0, top, color="0.92", label="fit range (all points: saturation not reached)")
     ax.plot(x[used], y[used], "o", ms=4, color="C0", label="fitted points")
     ax.plot(x[~used], y[~used], "o", ms=4, mfc="none", color="C0", label="other points")
-    ax.plot(x[sat], y[sat], "*", ms=12, color="C3", label=f"saturation (variance peak), {x[sat]:.0f} DN")
+    if sat is not None:
+        ax.plot(x[sat], y[sat], "*", ms=12, color="C3", label=f"saturation (variance peak), {x[sat]:.0f} DN")
     if curve.gain_dn_per_e is not None:
-        line = np.array([0.0, x[sat]])
+        line = np.array([0.0, top])
         ax.plot(line, curve.gain_dn_per_e * line, "-", color="C1", lw=1.2, label=f"K = {curve.gain_dn_per_e:.4g} DN/e⁻")
     ax.set_xlim(left=0.0)
     ax.set_xlabel("μ_y − μ_y.dark (DN)")
