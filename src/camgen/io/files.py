@@ -1,4 +1,8 @@
-"""File writing that never leaves a partial file under the final name."""
+"""File writing that never leaves a partial file under the final name.
+
+The temporary file `tempfile.mkstemp` makes is private (0600); a finished file gets `FILE_MODE`, as a
+file written in place would under the usual umask, so datasets can be shared.
+"""
 
 from __future__ import annotations
 
@@ -7,6 +11,9 @@ import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+
+FILE_MODE = 0o644
+"""Permissions of a finished file: rw-r--r--."""
 
 
 def write_text_atomic(path: str | Path, text: str) -> None:
@@ -17,6 +24,7 @@ def write_text_atomic(path: str | Path, text: str) -> None:
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as handle:
             handle.write(text)
+        os.chmod(tmp, FILE_MODE)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -35,6 +43,7 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     os.close(fd)
     try:
         yield Path(tmp)
+        os.chmod(tmp, FILE_MODE)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
