@@ -12,7 +12,6 @@ from collections.abc import Sequence
 from contextlib import nullcontext
 from pathlib import Path
 
-import numpy as np
 from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
@@ -79,6 +78,12 @@ def add_parser(subparsers) -> None:
     )
     match.add_argument("--max-frames", type=int, default=200, metavar="N", help="frames read from the reference")
     match.add_argument("--seed", type=int, default=0, help="seed of the simulation the fit compares with")
+    match.add_argument(
+        "--no-codec",
+        action="store_true",
+        help="leave the profile's codec out of the fit's simulation (by default a video reference is "
+        "compared with camgen's output encoded by the profile's codec)",
+    )
     _add_output_options(match, "match", profile_required=True)
     match.set_defaults(run=run_match)
 
@@ -280,7 +285,7 @@ def run_lens(args: argparse.Namespace, out: Console, err: Console) -> int:
 
 def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
     from camgen.config.loader import load_profile
-    from camgen.fit.frames import read_rgb8_frames
+    from camgen.fit.frames import VIDEO_SUFFIXES, read_rgb8_frames
     from camgen.fit.match import fit_match
     from camgen.fit.match_report import write_match_report
 
@@ -288,22 +293,32 @@ def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
         raise ConfigError(f"--max-frames must be ≥ 1, got {args.max_frames}")
     _check_outputs(args)
     base = load_profile(args.profile).profile
-    frames, shapes = [], {}
-    with _progress(err) as progress:
-        task = progress.add_task("reading the reference", total=None)
+    videos = [path for path in args.reference if path.suffix.lower() in VIDEO_SUFFIXES]
+    codec = base.codec if videos and not args.no_codec else None
+    frames_read = 0
+
+    def frames():
+        """The reference's frames, streamed (an hour of 1080p does not fit in memory)."""
+        nonlocal frames_read
+        first = None
         for name, frame in read_rgb8_frames(args.reference, max_frames=args.max_frames):
-            shapes.setdefault(frame.shape[:2], []).append(name)
-            frames.append(frame)
-            progress.advance(task)
-    if len(shapes) > 1:
-        detail = "; ".join(f"{w}×{h}: {names[0]}…" for (h, w), names in shapes.items())
-        raise ConfigError(f"the reference frames differ in size ({detail}); give frames of one camera mode")
-    with err.status("fitting", spinner="dots") if err.is_terminal else nullcontext():
-        fit = fit_match(frames, base, seed=args.seed)
+            if first is None:
+                first = (name, frame.shape)
+            elif frame.shape != first[1]:
+                (h, w), (h0, w0) = frame.shape[:2], first[1][:2]
+                raise ConfigError(
+                    f"the reference frames differ in size: {first[0]} is {w0}×{h0} px but {name} is {w}×{h} px; "
+                    "give frames of one camera mode"
+                )
+            frames_read += 1
+            yield frame
+
+    with err.status("reading the reference and fitting", spinner="dots") if err.is_terminal else nullcontext():
+        fit = fit_match(frames(), base, seed=args.seed, codec=codec)
     _warn(err, list(fit.warnings))
     rows = [(key, value, 0.0, "") for key, value in fit.parameters.items()]
-    worst = float(np.nanmax(np.abs(fit.relative_error_per_bin)))
-    _print_rows(out, f"fitted to {len(frames)} reference frames (worst NLF bin {worst:.1%})", rows)
+    worst = fit.worst_relative_error
+    _print_rows(out, f"fitted to {frames_read} reference frames (worst NLF bin {worst:.1%})", rows)
     header = [
         f"camgen fit match --reference {' '.join(str(p) for p in args.reference)} --profile {args.profile}",
         f"noise level function ({fit.reference.method}) reproduced within {worst:.1%} in every bin",

@@ -487,6 +487,7 @@ def read_rgb8_frames(paths: Sequence[Path], *, max_frames: int) -> Iterator[tupl
             raise ConfigError(f"{path} does not exist; give videos or 8-bit images of the camera's output")
         if path.suffix.lower() in VIDEO_SUFFIXES:
             import av
+            from av.video.reformatter import ColorRange
 
             try:
                 with av.open(str(path)) as container:
@@ -494,7 +495,15 @@ def read_rgb8_frames(paths: Sequence[Path], *, max_frames: int) -> Iterator[tupl
                         if count >= max_frames:
                             return
                         count += 1
-                        yield f"{path.name}#{index}", frame.to_ndarray(format="rgb24")
+                        # Full-range RGB from the stream's own matrix and range (a limited-range
+                        # stream read as full range would scale the noise).
+                        rgb = frame.reformat(
+                            format="rgb24",
+                            src_colorspace=frame.colorspace,
+                            src_color_range=frame.color_range,
+                            dst_color_range=ColorRange.JPEG,
+                        )
+                        yield f"{path.name}#{index}", rgb.to_ndarray()
             except av.FFmpegError as exc:
                 raise ConfigError(f"{path}: cannot decode the video ({exc})") from None
             continue
