@@ -158,3 +158,33 @@ def test_output_problems_are_found_before_reading_frames(tmp_path, capsys, extra
     err = capsys.readouterr().err
     assert code == 2 and message in err and "Traceback" not in err
     assert not (tmp_path / "o.yaml").exists()
+
+
+def test_match_reference_problems(tmp_path, capsys):
+    """An audio-only file, a negative seed and an empty folder: each a clear error naming it."""
+    import av
+
+    from tests.conftest import FIXED_PROFILE
+
+    profile = tmp_path / "base.yaml"
+    profile.write_text(FIXED_PROFILE)
+    audio = tmp_path / "sound.mp4"
+    with av.open(str(audio), "w") as container:
+        stream = container.add_stream("aac", rate=8000)
+        frame = av.AudioFrame.from_ndarray(np.zeros((1, 1024), np.float32), format="fltp", layout="mono")
+        frame.sample_rate = 8000
+        for packet in stream.encode(frame):
+            container.mux(packet)
+        for packet in stream.encode(None):
+            container.mux(packet)
+    (tmp_path / "empty").mkdir()
+    cases = [
+        ([str(audio)], [], "sound.mp4: holds no video stream"),
+        ([str(tmp_path / "empty")], [], "is a folder without videos or images"),
+        ([str(audio)], ["--seed", "-1"], "--seed must be ≥ 0"),
+    ]
+    for reference, extra, message in cases:
+        argv = ["fit", "match", "--reference", *reference, "--profile", str(profile), "-o", str(tmp_path / "m.yaml")]
+        assert main([*argv, *extra]) == 2
+        err = capsys.readouterr().err
+        assert message in err and "Traceback" not in err

@@ -9,6 +9,7 @@ The round trip is the acceptance test: a known profile films a static scene thro
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import cv2
@@ -215,6 +216,32 @@ def test_round_trip_recovers_the_noise_parameters(source: str, truth: Profile, r
     assert fit.light_rgb[0] == pytest.approx(LIGHT_RGB[0], abs=0.05)
 
 
+def test_uncertainties_of_the_round_trip(png_fit: MatchFit, truth: Profile) -> None:
+    assert set(png_fit.uncertainties) == set(png_fit.parameters)
+    for key, value in png_fit.parameters.items():
+        assert 0 < png_fit.uncertainties[key] < 0.1 * value
+    # The residual scatter alone (the simulation's own noise is common to every evaluation and not in it).
+    full_well = png_fit.parameters["sensor.full_well_e"]
+    assert abs(full_well - truth.sensor.full_well_e) < 0.1 * full_well
+
+
+def test_fit_match_is_deterministic(png_frames: list[np.ndarray], base: Profile) -> None:
+    first, second = (fit_match(png_frames[:16], base, seed=5, bins=BINS, max_evaluations=3) for _ in range(2))
+    assert first.parameters == second.parameters and first.uncertainties == second.uncertainties
+    assert first.light_rgb == second.light_rgb and first.warnings == second.warnings
+
+
+def test_scene_without_black_warns_that_read_noise_and_full_well_are_confounded(truth: Profile) -> None:
+    """The ramp's darkest point at 30 % of its peak: the stretch maps it to code 0 as it would black, and
+    the shot noise of that floor looks like read noise (a fit lands on full well −56 %, read noise ×5)."""
+    radiance = ramp_scene_cd_m2()
+    floored = (0.3 * 100.0 * np.array(LIGHT_RGB) + 0.7 * radiance).astype(np.float32)
+    frames = film(truth, floored, FRAMES, seed=1)
+    fit = fit_match(list(frames), truth, seed=3, bins=BINS)
+    assert any("not separable" in w and "true black" in w for w in fit.warnings)
+    assert fit.worst_relative_error < 0.1  # the NLF fits; the parameters are the ambiguity
+
+
 def test_fitted_profile_and_fragment(png_fit: MatchFit, base: Profile) -> None:
     fragment = png_fit.profile_fragment()
     assert fragment == {
@@ -325,8 +352,36 @@ def test_temporal_estimate_rejects_moving_objects_and_drift() -> None:
     nlf = nlf_from_frames(frames, bins=BINS, method="temporal")
     assert 0.5 < nlf.static_fraction < 0.8
     usable = nlf.usable
+    assert usable.sum(axis=1).min() >= 12
     ratio = nlf.variance[usable] / expected_variance(nlf.mean[usable])
     assert np.all(np.abs(ratio - 1) <= 0.04)
+
+
+def ar1_frames(rho: float, frames: int = 32, sigma_code: float = 4.0) -> list[np.ndarray]:
+    """A static ramp (30…220 codes) plus noise correlated between successive frames by `rho` (AR(1), as
+    recursive temporal noise reduction leaves it), σ = `sigma_code` in every frame, rounded."""
+    rng = np.random.default_rng(16)
+    clean = np.tile(np.linspace(30.0, 220.0, WIDTH_PX)[None, :, None], (HEIGHT_PX, 1, 3))
+    noise = sigma_code * rng.standard_normal(clean.shape)
+    out = []
+    for _ in range(frames):
+        noise = rho * noise + math.sqrt(1 - rho**2) * sigma_code * rng.standard_normal(clean.shape)
+        out.append(np.clip(np.rint(clean + noise), 0, 255).astype(np.uint8))
+    return out
+
+
+def test_temporal_correlation_is_measured() -> None:
+    """Successive differences see σ²(1 − ρ₁) of AR(1) noise; the plain temporal variance sees about σ²."""
+    assert nlf_from_frames(ar1_frames(0.0), bins=BINS).difference_to_plain_ratio == pytest.approx(1.0, abs=0.02)
+    correlated = nlf_from_frames(ar1_frames(0.6), bins=BINS)
+    # 1 − ρ = 0.4, and the plain variance of 32 correlated frames is itself a few % low.
+    assert 0.35 < correlated.difference_to_plain_ratio < 0.5
+    assert np.isnan(nlf_from_frames(ar1_frames(0.0, frames=4), bins=BINS, method="spatial").difference_to_plain_ratio)
+
+
+def test_fit_match_warns_of_temporally_correlated_noise(base: Profile) -> None:
+    fit = fit_match(ar1_frames(0.6), base, seed=3, bins=BINS, max_evaluations=2)
+    assert any("correlates between frames" in w for w in fit.warnings)
 
 
 def patchwork(rng: np.random.Generator, height: int = 480, width: int = 640) -> np.ndarray:
@@ -418,6 +473,14 @@ def grey_frames(count: int, value: int = 128, shape: tuple[int, int] = (64, 64))
 def test_bad_reference_is_a_config_error(frames: list, method: str, message: str) -> None:
     with pytest.raises(ConfigError, match=message.replace("(", r"\(").replace(")", r"\)")):
         nlf_from_frames(frames, method=method)
+
+
+def test_too_little_data_names_the_count() -> None:
+    """A single 160 × 120 image: 300 blocks over 32 bins, not clipping, is why no bin is usable."""
+    ramp = np.tile(np.linspace(20.0, 230.0, 160)[None, :, None], (120, 1, 3))
+    image = np.clip(np.rint(ramp + np.random.default_rng(17).normal(0, 3, ramp.shape)), 0, 255).astype(np.uint8)
+    with pytest.raises(ConfigError, match=r"300 8 × 8 blocks from 1 frame\(s\) over 32 .* fewer than the 24 needed"):
+        nlf_from_frames([image])
 
 
 def test_fit_match_refuses_an_unusable_reference(base: Profile) -> None:

@@ -77,7 +77,16 @@ def add_parser(subparsers) -> None:
         "--reference", type=Path, nargs="+", required=True, metavar="FILE", help="video file(s) or 8-bit images"
     )
     match.add_argument("--max-frames", type=int, default=200, metavar="N", help="frames read from the reference")
-    match.add_argument("--seed", type=int, default=0, help="seed of the simulation the fit compares with")
+    match.add_argument("--seed", type=int, default=0, help="seed (≥ 0) of the simulation the fit compares with")
+    match.add_argument(
+        "--method",
+        choices=("auto", "temporal", "spatial"),
+        default="auto",
+        help="noise estimate: temporal (a static view over frames), spatial (flat patches), auto (default)",
+    )
+    match.add_argument("--bins", type=int, default=32, metavar="N", help="intensity bins (default %(default)s)")
+    match.add_argument("--gain-db", type=float, metavar="DB", help="analog gain the reference was taken at, dB")
+    match.add_argument("--fit-denoise", action="store_true", help="also fit isp.denoise_strength")
     match.add_argument(
         "--no-codec",
         action="store_true",
@@ -285,16 +294,23 @@ def run_lens(args: argparse.Namespace, out: Console, err: Console) -> int:
 
 def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
     from camgen.config.loader import load_profile
-    from camgen.fit.frames import VIDEO_SUFFIXES, read_rgb8_frames
+    from camgen.fit.frames import VIDEO_SUFFIXES, read_rgb8_frames, reference_files, video_frame_rate
     from camgen.fit.match import fit_match
     from camgen.fit.match_report import write_match_report
 
     if args.max_frames < 1:
         raise ConfigError(f"--max-frames must be ≥ 1, got {args.max_frames}")
+    if args.seed < 0:
+        raise ConfigError(f"--seed must be ≥ 0, got {args.seed}")
+    if not 2 <= args.bins <= 256:
+        raise ConfigError(f"--bins must be 2–256 (8-bit codes), got {args.bins}")
+    if args.gain_db is not None and not 0 <= args.gain_db <= 72:
+        raise ConfigError(f"--gain-db must be 0–72 dB (the profile's range), got {args.gain_db:g}")
     _check_outputs(args)
     base = load_profile(args.profile).profile
-    videos = [path for path in args.reference if path.suffix.lower() in VIDEO_SUFFIXES]
+    videos = [path for path in reference_files(args.reference) if path.suffix.lower() in VIDEO_SUFFIXES]
     codec = base.codec if videos and not args.no_codec else None
+    codec_fps = video_frame_rate(videos[0]) if codec is not None else None
     frames_read = 0
 
     def frames():
@@ -314,9 +330,19 @@ def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
             yield frame
 
     with err.status("reading the reference and fitting", spinner="dots") if err.is_terminal else nullcontext():
-        fit = fit_match(frames(), base, seed=args.seed, codec=codec)
+        fit = fit_match(
+            frames(),
+            base,
+            seed=args.seed,
+            method=args.method,
+            bins=args.bins,
+            gain_db=args.gain_db,
+            fit_denoise=args.fit_denoise,
+            codec=codec,
+            codec_fps=codec_fps,
+        )
     _warn(err, list(fit.warnings))
-    rows = [(key, value, 0.0, "") for key, value in fit.parameters.items()]
+    rows = [(key, value, fit.uncertainties.get(key, math.nan), "") for key, value in fit.parameters.items()]
     worst = fit.worst_relative_error
     _print_rows(out, f"fitted to {frames_read} reference frames (worst NLF bin {worst:.1%})", rows)
     header = [

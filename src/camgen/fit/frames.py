@@ -482,15 +482,15 @@ def read_rgb8_frames(paths: Sequence[Path], *, max_frames: int) -> Iterator[tupl
     import cv2
 
     count = 0
-    for path in paths:
-        if not path.is_file():
-            raise ConfigError(f"{path} does not exist; give videos or 8-bit images of the camera's output")
+    for path in reference_files(paths):
         if path.suffix.lower() in VIDEO_SUFFIXES:
             import av
             from av.video.reformatter import ColorRange
 
             try:
                 with av.open(str(path)) as container:
+                    if not container.streams.video:
+                        raise ConfigError(f"{path}: holds no video stream")
                     for index, frame in enumerate(container.decode(video=0)):
                         if count >= max_frames:
                             return
@@ -525,3 +525,31 @@ def read_rgb8_frames(paths: Sequence[Path], *, max_frames: int) -> Iterator[tupl
             return
         count += 1
         yield path.name, image
+
+
+def reference_files(paths: Sequence[Path]) -> list[Path]:
+    """The reference's files: each path given, a folder standing for its videos and images (sorted)."""
+    files = []
+    for path in paths:
+        if path.is_dir():
+            inside = [p for p in sorted(path.iterdir()) if p.suffix.lower() in VIDEO_SUFFIXES | IMAGE_SUFFIXES]
+            if not inside:
+                raise ConfigError(f"{path} is a folder without videos or images of the camera's output")
+            files += inside
+        elif path.is_file():
+            files.append(path)
+        else:
+            raise ConfigError(f"{path} does not exist; give videos or 8-bit images of the camera's output")
+    return files
+
+
+def video_frame_rate(path: Path) -> float | None:
+    """The average frame rate of a video's first stream, Hz (None when the container does not say)."""
+    import av
+
+    try:
+        with av.open(str(path)) as container:
+            rate = container.streams.video[0].average_rate if container.streams.video else None
+    except av.FFmpegError:
+        return None
+    return float(rate) if rate else None

@@ -31,8 +31,13 @@ noise of one bin is a mixture (up to 4:1 without denoise), and a χ² cut on the
 noisier phase by an amount that depends on ν (green of a bilinear camera measured −44 % at 48 frames
 against 32). A mean, not a median: 8-bit samples make s² discrete (often 0 when σ is below a code),
 and a median of discrete values has no usable correction, whereas the mean of the differences is
-unbiased for any noise distribution and the cut removes about 0.1 % of the genuine samples (a
-correction of a fraction of a percent, so the χ² approximation there costs nothing measurable).
+unbiased for any distribution of noise that is independent from frame to frame and the cut removes
+about 0.1 % of the genuine samples (a correction of a fraction of a percent, so the χ² approximation
+there costs nothing measurable).
+Noise correlated between successive frames by ρ₁ (temporal noise reduction in the camera, a codec's
+inter-frame prediction) gives E[s²] = σ²(1 − ρ₁), biased low; the plain per-pixel temporal variance of
+the same static pixels is accumulated as well, and their ratio (`NoiseLevelFunction.difference_to_plain_ratio`)
+below `TEMPORAL_CORRELATION_RATIO_MIN` earns `fit_match` a warning.
 
 *Spatial* (images, or a moving camera). Each channel is cut into 8 × 8 blocks; a plane fitted to a
 block by least squares is removed and the residual variance (61 degrees of freedom) is that block's
@@ -89,12 +94,20 @@ Limits: the analog gain the reference was taken at is invisible in its output, s
 reference's noise (its rounding through YUV adds, its quantisation removes) is folded into the fitted
 parameters: an H.264 stream at crf 0 in 4:4:4 measured +9–16 % variance over its PNG frames, a nearly
 constant 0.2 code² that no sensor parameter mimics. Read noise is determined only as far as it shows
-against shot noise in the darkest bins. The contrast stretch's output range is taken from where the
-output piles up at its extremes and its percentiles are only bounded (`estimate_tone`); the tone curve
-stays the base profile's: in a single camera's output its shape is confounded with the scene's own
-distribution of intensities. A colour cast strong enough to clip one channel at the stretch's top
-shifts the simulated stretch by a few percent, which the full well takes up. The spatial method, on a
-few images, gives a rough fit (bins scatter by ±10 %): prefer frames of a static view.
+against shot noise in the darkest bins (`MatchFit.uncertainties`; a warning when one is unconstrained).
+With a contrast stretch, the content is undone through it as if its low limit were black, and nothing
+in the output says otherwise (the stretch sends the scene's darkest point to its output low either way):
+a scene whose darkest point is not black adds that point's shot noise, a constant variance in the
+output that read noise gives as well. The NLF is then matched with the wrong parameters (darkest point
+at 30 % of the peak: NLF within 4.4 %, full well −56 %, read noise ×5.4), so a fit whose read noise
+makes most of the variance at its darkest compared bin warns that read noise and full well are not
+separable from that footage: include true black (a shadow, a dark object) in the view. The contrast
+stretch's output range is taken from where the output piles up at its extremes and its percentiles are
+only bounded (`estimate_tone`); the tone curve stays the base profile's: in a single camera's output its
+shape is confounded with the scene's own distribution of intensities. A colour cast strong enough to
+clip one channel at the stretch's top shifts the simulated stretch by a few percent, which the full well
+takes up. The spatial method, on a few images, gives a rough fit (bins scatter by ±10 %): prefer frames
+of a static view.
 
 References
 ----------
@@ -195,6 +208,21 @@ FIT_COST_TOLERANCE = 1e-2
 FIT_STEP_TOLERANCE = 1e-3
 """Relative step of the parameters below which the fit stops (a looser one stopped a fit whose trust
 region had shrunk on the objective's jitter while the cost still fell by 4 % a step)."""
+TEMPORAL_CORRELATION_RATIO_MIN = 0.85
+"""A temporal reference whose successive-difference variance falls below this fraction of its plain
+temporal variance gets a warning (noise correlated between frames). For frame-independent noise both
+estimate σ² with ≥ 1000 degrees of freedom even at the fewest data the estimate accepts (200 pixels of
+8 frames), so their ratio scatters by ≤ 6 % there (0.998 measured on 8 frames of 320 × 240 px): 0.85 is
+2.5σ below 1 in the worst case and far more in practice, while noise correlated by ρ₁ = 0.6 between
+frames gives 0.57 on 8 frames and 0.42 on 64. A drift of δ codes per frame over T frames lifts the plain
+variance by δ²(T² − 1)/12 (0.85 code² at 0.1 code per frame over 32 frames), which lowers the ratio too."""
+UNCONSTRAINED_SIGMA = 0.5
+"""A fitted value whose 1σ uncertainty exceeds this fraction of it (denoise strength: this much in
+absolute terms) is reported as unconstrained by the reference."""
+PEDESTAL_READ_SHARE = 0.5
+"""With a contrast stretch, a fit whose read noise makes more than this share of the variance at the
+darkest compared bin gets a warning: that constant term is what a stretch low limit above black (a
+scene without black) produces as well (module docstring)."""
 DIFF_STEP = 0.02
 """Finite-difference step of the fit, in log parameter units (2 %; denoise strength: 0.02): far above
 the jitter that 8-bit rounding gives the objective."""
@@ -221,6 +249,12 @@ class NoiseLevelFunction:
         Frames the estimate read.
     static_fraction : float
         Temporal: fraction of the pixels free of motion; spatial: NaN.
+    difference_to_plain_ratio : float
+        Temporal: Σ s² (successive differences) / Σ plain temporal variance over the static, unclipped
+        pixels; 1 for noise independent from frame to frame, 1 − ρ₁ for noise whose successive frames
+        correlate by ρ₁ (temporal noise reduction, a codec), where the NLF is biased low by that factor.
+        NaN for the spatial method, or when a pair of frames was left out (a light step lifts the plain
+        variance).
     """
 
     bin_edges: np.ndarray
@@ -230,6 +264,7 @@ class NoiseLevelFunction:
     method: Literal["temporal", "spatial"]
     frames: int
     static_fraction: float = math.nan
+    difference_to_plain_ratio: float = math.nan
 
     @property
     def usable(self) -> np.ndarray:
@@ -318,6 +353,7 @@ class _Statistics:
     shape: tuple[int, ...] | None = None
     sizes_differ: bool = False
     total: np.ndarray | None = None
+    squares: np.ndarray | None = None
     squared_differences: np.ndarray | None = None
     pairs: int = 0
     skipped_pairs: int = 0
@@ -356,10 +392,12 @@ class _Statistics:
         luma = cv2.boxFilter(cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY), cv2.CV_32F, (MOTION_BOX_PX, MOTION_BOX_PX))
         if self.total is None:
             self.total = np.zeros(frame.shape, np.float64)
+            self.squares = np.zeros(frame.shape, np.float64)
             self.squared_differences = np.zeros(frame.shape, np.float64)
             self.saturated = np.zeros(frame.shape, bool)
             self.moving = np.zeros(frame.shape[:2], bool)
         cv2.accumulate(frame, self.total)
+        cv2.accumulateSquare(frame, self.squares)
         # 0 and 255 are the two values that 8-bit wrap-around of v − 1 sends to 254 and above.
         self.saturated |= (frame - np.uint8(1)) >= 254
         if self._previous is not None:
@@ -550,7 +588,22 @@ def _temporal_nlf(statistics: _Statistics, edges: np.ndarray, min_count: int) ->
         v = np.sum(weight * variances, axis=0)
     v[count < min_count] = np.nan
     m[~np.isfinite(v)] = np.nan
-    return NoiseLevelFunction(edges, m, v, count, "temporal", statistics.frames, statistics.static_fraction)
+    ratio = _difference_to_plain_ratio(statistics)
+    return NoiseLevelFunction(edges, m, v, count, "temporal", statistics.frames, statistics.static_fraction, ratio)
+
+
+def _difference_to_plain_ratio(statistics: _Statistics) -> float:
+    """Σ successive-difference variance / Σ plain temporal variance of the static, unclipped pixels
+    (`NoiseLevelFunction.difference_to_plain_ratio`)."""
+    if statistics.skipped_pairs or statistics.frames < 3:
+        return math.nan
+    n, frames = statistics.pairs, statistics.frames
+    used = ~statistics.moving[..., None] & ~statistics.saturated
+    plain = (statistics.squares - statistics.total**2 / frames) / (frames - 1)
+    plain_sum = float(np.sum(plain[used]))
+    if not plain_sum > 0:
+        return math.nan
+    return float(np.sum(statistics.squared_differences[used])) / (2.0 * n) / plain_sum
 
 
 def _spatial_nlf(statistics: _Statistics, edges: np.ndarray, min_count: int) -> NoiseLevelFunction:
@@ -590,6 +643,17 @@ def _nlf(
     nlf = _temporal_nlf(statistics, edges, count) if chosen == "temporal" else _spatial_nlf(statistics, edges, count)
     if refuse_empty and not nlf.usable.any():
         share = float(np.mean(statistics.first <= 0)), float(np.mean(statistics.first >= 255))
+        if sum(share) < 0.5 and nlf.count.max() < count:
+            # Too little data, not too much clipping: each bin's candidates fall short of `count`.
+            if chosen == "temporal":
+                samples, unit = int(np.count_nonzero(~statistics.moving)), "static pixels"
+            else:
+                samples, unit = sum(b[0].shape[0] for b in statistics.blocks), f"{BLOCK_PX} × {BLOCK_PX} blocks"
+            raise ConfigError(
+                f"{samples} {unit} from {statistics.frames} frame(s) over {edges.size - 1} intensity bins, fewer "
+                f"than the {count} needed per bin for a {chosen} noise estimate (the fullest bin holds "
+                f"{int(nlf.count.max())}); give larger or more frames, or fewer bins"
+            )
         raise ConfigError(
             f"no intensity bin of the reference holds {count} unclipped samples for a {chosen} noise estimate "
             f"(in the first frame {share[0]:.0%} of the samples are 0 and {share[1]:.0%} are 255); give footage "
@@ -749,6 +813,12 @@ class MatchFit:
         and B against G, depend on it. (1, 1, 1) when not fitted.
     evaluations : int
         Simulations the optimiser ran.
+    uncertainties : dict of str to float
+        1σ uncertainty of each fitted noise value in `parameters` (same keys and units; the tone values
+        adopted from the output's clips have none): cov ≈ (JᵀJ)⁻¹·s² of the optimiser's variables, J the
+        Jacobian of the log-NLF residuals at the solution and s² their variance per degree of freedom,
+        carried to the profile's values to first order. inf where the NLF does not respond to a value,
+        NaN where there are no more residuals than variables.
     """
 
     reference: NoiseLevelFunction
@@ -762,6 +832,7 @@ class MatchFit:
     tone: dict
     light_rgb: tuple[float, float, float]
     evaluations: int
+    uncertainties: dict[str, float] = field(default_factory=dict)
 
     def profile_fragment(self) -> dict:
         """YAML-ready nested dict of only the fitted keys (plain floats and lists)."""
@@ -788,6 +859,8 @@ class _Content:
     gain_db: float
     codec: Codec | None
     """The codec the simulated frames pass through (encoded and decoded), or None."""
+    codec_fps: float | None
+    """Frame rate the codec encodes at, Hz; None: the sensor's ``frame_rate_max_hz``."""
     shows_fixed_pattern: bool
     """The content is the reference's temporal mean, which already shows the camera's fixed patterns
     (PRNU, DSNU, row and column offsets, hot and dead pixels): the simulation leaves them out rather than
@@ -841,6 +914,7 @@ def _content(
     gain_db: float,
     codec: Codec | None,
     shows_fixed_pattern: bool,
+    codec_fps: float | None = None,
 ) -> _Content:
     """The reference's picture, downscaled, through the inverse output range and tone curve. A codec's
     bitrate is scaled with the pixel count (the bits per pixel stay the reference's)."""
@@ -848,11 +922,17 @@ def _content(
     image = cv2.resize(picture_rgb8.astype(np.float32), (width, height), interpolation=cv2.INTER_AREA)
     low, high = _output_range(profile.isp)
     linear = _inverse_tone(np.clip((image / 255.0 - low) / (high - low), 0.0, 1.0), profile.isp)
+    if codec_fps is not None and not (math.isfinite(codec_fps) and codec_fps > 0):
+        raise ConfigError(f"codec_fps must be a finite frame rate > 0 Hz, got {codec_fps}")
     if codec is not None and codec.bitrate_kbps is not None:
         ratio = height * width / (picture_rgb8.shape[0] * picture_rgb8.shape[1])
         codec = codec.model_copy(update={"bitrate_kbps": codec.bitrate_kbps * ratio})
     return _Content(
-        linear_rgb=linear.astype(np.float32), gain_db=gain_db, codec=codec, shows_fixed_pattern=shows_fixed_pattern
+        linear_rgb=linear.astype(np.float32),
+        gain_db=gain_db,
+        codec=codec,
+        shows_fixed_pattern=shows_fixed_pattern,
+        codec_fps=codec_fps,
     )
 
 
@@ -961,7 +1041,8 @@ def _simulate(
         raw = model.capture(rate, exposure_time_s=exposure_time_s, gain_db=content.gain_db, rng=rng)
         out.append(isp.process(raw, content.gain_db))
     if content.codec is not None:
-        out = _through_codec(out, content.codec, fps=sensor.frame_rate_max_hz)
+        fps = content.codec_fps if content.codec_fps is not None else sensor.frame_rate_max_hz
+        out = _through_codec(out, content.codec, fps=fps)
     return out
 
 
@@ -1070,6 +1151,7 @@ def fit_match(
     fit_tone: bool = True,
     fit_denoise: bool = False,
     codec: Codec | None = None,
+    codec_fps: float | None = None,
     simulation_max_px: int = 320 * 240,
     max_evaluations: int = 60,
 ) -> MatchFit:
@@ -1098,6 +1180,9 @@ def fit_match(
         The codec the reference went through, when known: the simulated frames are encoded with it
         (bitrate scaled by the pixel count) and decoded before their NLF is measured. None compares
         with the ISP's output, and the fitted parameters take up the codec's effect on the noise.
+    codec_fps : float, optional
+        Frame rate the simulated frames are encoded at, Hz: the reference stream's (average) rate, which
+        sets a rate-controlled codec's bits per frame; default the sensor's ``frame_rate_max_hz``.
     simulation_max_px : int
         Most pixels of the simulated frames (the reference's picture is downscaled to fit).
     max_evaluations : int
@@ -1138,6 +1223,14 @@ def fit_match(
         else:
             why = f"only {statistics.static_fraction:.0%} of the picture is static"
         warnings.append(f"used the spatial noise estimate on {statistics.frames} frames: {why}")
+    if reference.difference_to_plain_ratio < TEMPORAL_CORRELATION_RATIO_MIN:
+        warnings.append(
+            f"the reference's noise correlates between frames: successive differences show "
+            f"{reference.difference_to_plain_ratio:.2f} of its plain temporal variance (1 for independent "
+            "frames), as temporal noise reduction in the camera or a codec's inter-frame prediction make it; the "
+            "temporal NLF is biased low by about that factor, and so is the fitted noise (or a slow drift or "
+            "flicker of the light lifts the plain variance: check the footage)"
+        )
     tone = _tone_from_counts(statistics.counts)
     values: dict[str, float] = {}
     if fit_tone:
@@ -1156,6 +1249,7 @@ def fit_match(
         gain_db=gain,
         codec=codec,
         shows_fixed_pattern=reference.method == "temporal",
+        codec_fps=codec_fps,
     )
     frames = SIMULATION_FRAMES if reference.method == "temporal" else SIMULATION_FRAMES_SPATIAL
     count = min_count if min_count is not None else MIN_COUNT[reference.method]
@@ -1163,7 +1257,15 @@ def fit_match(
     # Denoise trades against the full well in the NLF (strength 0.19 with 24 % more electrons matched a
     # 0.5 reference within 4 %) but not in that of 2 × 2-averaged frames (−5 % there): fit both.
     half_scale = fit_denoise and reference.method == "temporal"
-    reference_half = _nlf(statistics.half, "temporal", edges, max(1, count // 4)) if half_scale else None
+    reference_half = (
+        _nlf(statistics.half, "temporal", edges, max(1, count // 4), refuse_empty=False) if half_scale else None
+    )
+    if half_scale and not reference_half.usable.any():
+        half_scale, reference_half = False, None
+        warnings.append(
+            "the reference averaged over 2 × 2 pixels has no usable intensity bin; fitted the denoise strength "
+            "from the full-resolution NLF alone, where it trades against the full well"
+        )
 
     def measure_both(
         profile: Profile, light_rgb: tuple[float, float, float]
@@ -1284,6 +1386,23 @@ def fit_match(
     if not solution.success:
         warnings.append(f"the optimiser stopped early: {solution.message}")
 
+    sigma_x = _sigma(jacobian(solution.x), residuals(solution.x))
+    pedestal_share = 0.0
+    if start.isp.contrast_stretch is not None:
+        # d log(variance)/d log(read noise) = 2 × read noise's share of the variance; the first compared
+        # bin of each channel is its darkest (the residuals run channel by channel, bins ascending).
+        read_column = jacobian(solution.x)[: int(mask.sum()), 1]
+        channel_rows = np.argwhere(mask)[:, 0]
+        darkest = [int(np.flatnonzero(channel_rows == c)[0]) for c in np.unique(channel_rows)]
+        pedestal_share = float(np.max(read_column[darkest])) / 2.0
+    if pedestal_share > PEDESTAL_READ_SHARE:
+        warnings.append(
+            "the fit attributes most of the noise variance at the darkest levels it compared to read noise; with a "
+            "contrast stretch, a scene whose darkest point is not black (the stretch's low limit above 0) adds "
+            "the same constant variance, so read noise and full well are not separable from this "
+            "footage: include true black in the view (a shadow, a dark object) and fit again"
+        )
+
     fitted_raw = profile_at(solution.x)
     scale = fitted_raw.sensor.full_well_e / sensor.full_well_e
     values["sensor.full_well_e"] = _round(fitted_raw.sensor.full_well_e)
@@ -1291,6 +1410,26 @@ def fit_match(
     values["sensor.noise.read_noise_e"] = _round(fitted_raw.sensor.noise.read_noise_e)
     if fit_denoise:
         values["isp.denoise_strength"] = _round(fitted_raw.isp.denoise_strength)
+    # First order: a value exp(x)·v₀ has σ = value·σ_x; the denoise strength is x itself.
+    log_sigma = {
+        "sensor.full_well_e": sigma_x[0],
+        "sensor.conversion_gain_dn_per_e": sigma_x[0],
+        "sensor.noise.read_noise_e": sigma_x[1],
+    }
+    uncertainties = {key: _round(values[key] * sigma) for key, sigma in log_sigma.items()}
+    if fit_denoise:
+        uncertainties["isp.denoise_strength"] = _round(sigma_x[2])
+    for key in ("sensor.full_well_e", "sensor.noise.read_noise_e", "isp.denoise_strength"):
+        if key not in uncertainties:
+            continue
+        spread = uncertainties[key] if key == "isp.denoise_strength" else log_sigma[key]
+        if spread > UNCONSTRAINED_SIGMA:
+            shown = f"±{spread:.2g}" if key == "isp.denoise_strength" else f"±{spread:.0%}"
+            why = " (swamped by shot noise: it shows only in the darkest bins)" if "read_noise" in key else ""
+            warnings.append(
+                f"{key} is hardly constrained by this reference (1σ {shown}){why}; the fitted value is not a "
+                "measurement"
+            )
     profile = _with_values(base, values)
     light = light_at(solution.x)
     fitted = measure(profile, light)
@@ -1312,4 +1451,25 @@ def fit_match(
         tone=tone,
         light_rgb=light,
         evaluations=len(evaluated),
+        uncertainties=uncertainties,
     )
+
+
+def _sigma(jacobian: np.ndarray, residuals: np.ndarray) -> np.ndarray:
+    """1σ of the least-squares variables: sqrt(diag((JᵀJ)⁻¹)·s²), s² = Σr²/(m − n); inf for a variable
+    the residuals do not respond to, NaN without spare residuals."""
+    m, n = jacobian.shape
+    if m <= n:
+        return np.full(n, math.nan)
+    s2 = float(np.sum(residuals**2)) / (m - n)
+    information = jacobian.T @ jacobian
+    sigma = np.full(n, math.inf)
+    responds = np.any(jacobian != 0, axis=0)
+    if responds.any():
+        sub = information[np.ix_(responds, responds)]
+        try:
+            covariance = np.linalg.inv(sub) * s2
+        except np.linalg.LinAlgError:
+            return sigma
+        sigma[responds] = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+    return sigma
