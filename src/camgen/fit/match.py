@@ -135,11 +135,12 @@ import numpy as np
 from av.video.reformatter import ColorRange
 from scipy import optimize, special
 
-from camgen.config.profile import Codec, Isp, Profile, Sensor
+from camgen.config.profile import Codec, Isp, Profile
 from camgen.errors import ConfigError
 from camgen.io.video import VideoWriter
 from camgen.isp.pipeline import CameraIsp
 from camgen.isp.tone import tone_curve
+from camgen.plan.compile import isp_steps
 from camgen.sensor.auto_exposure import metering_window
 from camgen.sensor.capture import NOISE_TERMS, SensorModel
 from camgen.sensor.cfa import cfa_site_values, mosaic
@@ -875,25 +876,9 @@ def _inverse_tone(encoded: np.ndarray, isp: Isp) -> np.ndarray:
     return np.interp(encoded, forward, grid)
 
 
-def _isp_steps(isp: Isp, sensor: Sensor) -> set[str]:
-    """The ISP stages the plan keeps for this profile (`camgen.plan.compile`)."""
-    mono = sensor.cfa == "mono"
-    wb = isp.white_balance
-    steps = {
-        "isp.demosaic": not mono,
-        "isp.white_balance": not mono and (wb.mode == "auto_grey_world" or wb.gains_rgb != (1.0, 1.0, 1.0)),
-        "isp.ccm": not mono and not isp.ccm_is_identity,
-        "isp.denoise": isp.denoise_strength > 0,
-        "isp.contrast_stretch": isp.contrast_stretch is not None,
-        "isp.tone": isp.tone_curve != "linear",
-        "isp.sharpen": isp.sharpen_amount > 0,
-    }
-    return {name for name, on in steps.items() if on}
-
-
 def _grey_world(profile: Profile) -> bool:
     """Whether the profile balances colour by grey world (then the light's colour is not in its output)."""
-    steps = _isp_steps(profile.isp, profile.sensor)
+    steps = isp_steps(profile.isp, profile.sensor)
     return "isp.white_balance" in steps and profile.isp.white_balance.mode == "auto_grey_world"
 
 
@@ -950,7 +935,7 @@ def _site_levels(content: _Content, profile: Profile, light_rgb: tuple[float, fl
     set to `CLIP_OVERSHOOT` times the clip.
     """
     sensor, isp = profile.sensor, profile.isp
-    steps = _isp_steps(isp, sensor)
+    steps = isp_steps(isp, sensor)
     if sensor.cfa == "mono":
         camera = content.linear_rgb.mean(axis=2, keepdims=True)
         colour = np.ones(1)
@@ -1025,7 +1010,7 @@ def _simulate(
     terms = TEMPORAL_NOISE_TERMS if content.shows_fixed_pattern else NOISE_TERMS
     model = SensorModel.build(sensor, profile.serial, terms=terms)
     isp = CameraIsp(
-        profile.isp, sensor, frame_interval_s=1.0 / sensor.frame_rate_max_hz, steps=_isp_steps(profile.isp, sensor)
+        profile.isp, sensor, frame_interval_s=1.0 / sensor.frame_rate_max_hz, steps=isp_steps(profile.isp, sensor)
     )
     saturation, _ = saturation_e(
         sensor.full_well_e, sensor.conversion_gain_dn_per_e, sensor.black_level_dn, sensor.bit_depth, content.gain_db

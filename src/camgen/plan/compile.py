@@ -15,7 +15,7 @@ import numpy as np
 
 import camgen
 from camgen.config.loader import LoadedScene, check_cameras
-from camgen.config.profile import Profile
+from camgen.config.profile import Isp, Profile, Sensor
 from camgen.config.scene import (
     Actor,
     Camera,
@@ -705,8 +705,20 @@ def _sensor_and_isp(profile, outputs, needs_isp, mono, force, stages, decisions)
     if not needs_isp:
         decisions.append(Decision(stage="isp", included=False, reason="only raw output requested"))
         return
+    isp_steps = isp_stage_choices(isp, sensor)
+    for name, on, reason, params in isp_steps:
+        applicable = not (mono and name in ("isp.demosaic", "isp.white_balance", "isp.ccm"))
+        decision = _decision(name, on, force and applicable, reason)
+        decisions.append(decision)
+        if decision.included:
+            stages.append(Stage(name=name, params=params))
+
+
+def isp_stage_choices(isp: Isp, sensor: Sensor) -> list[tuple[str, bool, str, dict]]:
+    """(stage, wanted, reason, params) of every ISP stage for this profile, in the ISP's order."""
+    mono = sensor.cfa == "mono"
     wb = isp.white_balance
-    isp_steps = [
+    return [
         (
             "isp.demosaic",
             not mono,
@@ -735,12 +747,11 @@ def _sensor_and_isp(profile, outputs, needs_isp, mono, force, stages, decisions)
         ("isp.tone", isp.tone_curve != "linear", f"tone curve {isp.tone_curve}", {"curve": isp.tone_curve}),
         ("isp.sharpen", isp.sharpen_amount > 0, f"amount {isp.sharpen_amount:g}", {}),
     ]
-    for name, on, reason, params in isp_steps:
-        applicable = not (mono and name in ("isp.demosaic", "isp.white_balance", "isp.ccm"))
-        decision = _decision(name, on, force and applicable, reason)
-        decisions.append(decision)
-        if decision.included:
-            stages.append(Stage(name=name, params=params))
+
+
+def isp_steps(isp: Isp, sensor: Sensor) -> set[str]:
+    """The ISP stages a camera with this profile runs (those `isp_stage_choices` wants; not forced)."""
+    return {name for name, wanted, _, _ in isp_stage_choices(isp, sensor) if wanted}
 
 
 def compile(
