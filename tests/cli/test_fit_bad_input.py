@@ -188,3 +188,15 @@ def test_match_reference_problems(tmp_path, capsys):
         assert main([*argv, *extra]) == 2
         err = capsys.readouterr().err
         assert message in err and "Traceback" not in err
+
+
+def test_lens_against_a_zoom_profile_is_refused_before_reading(tmp_path, capsys):
+    from tests.conftest import PTZ_PROFILE
+
+    profile = tmp_path / "ptz.yaml"
+    profile.write_text(PTZ_PROFILE)
+    (tmp_path / "images").mkdir()
+    argv = ["fit", "lens", "--images", str(tmp_path / "images"), "--board", "checkerboard:9x6:25mm"]
+    assert main([*argv, "--profile", str(profile), "-o", str(tmp_path / "l.yaml")]) == 2
+    err = capsys.readouterr().err
+    assert "is a zoom lens" in err and "zoom_table entry" in err

@@ -264,10 +264,18 @@ def run_lens(args: argparse.Namespace, out: Console, err: Console) -> int:
     board = parse_board(args.board)
     _check_outputs(args)
     pixel_pitch_um = args.pixel_pitch_um
-    if pixel_pitch_um is None and args.profile is not None:
+    if args.profile is not None:
         from camgen.config.loader import load_profile
 
-        pixel_pitch_um = load_profile(args.profile).profile.sensor.pixel_pitch_um
+        base = load_profile(args.profile).profile
+        if base.lens.focal_length_range_mm is not None or base.lens.zoom_table:
+            raise ConfigError(
+                f"--profile {args.profile} is a zoom lens (focal_length_range_mm / zoom_table), but board images "
+                "calibrate one focal length; leave --profile out and put the fragment's focal length and "
+                "distortion into a zoom_table entry"
+            )
+        if pixel_pitch_um is None:
+            pixel_pitch_um = base.sensor.pixel_pitch_um
     with _progress(err) as progress:
         task = progress.add_task("finding the board", total=None)
         images = detect_in_folder(args.images, board, on_image=lambda path: progress.advance(task))
