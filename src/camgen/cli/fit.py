@@ -74,9 +74,16 @@ def add_parser(subparsers) -> None:
         "its 8-bit output and fit the base profile's noise and ISP parameters to reproduce it.",
     )
     match.add_argument(
-        "--reference", type=Path, nargs="+", required=True, metavar="FILE", help="video file(s) or 8-bit images"
+        "--reference",
+        type=Path,
+        nargs="+",
+        required=True,
+        metavar="FILE",
+        help="video file(s), 8-bit images, or folders of them",
     )
-    match.add_argument("--max-frames", type=int, default=200, metavar="N", help="frames read from the reference")
+    match.add_argument(
+        "--max-frames", type=int, default=200, metavar="N", help="frames read from the reference (default %(default)s)"
+    )
     match.add_argument("--seed", type=int, default=0, help="seed (≥ 0) of the simulation the fit compares with")
     match.add_argument(
         "--method",
