@@ -1,0 +1,305 @@
+"""Run compiled batch jobs on a local process pool: resumable, retried, interruptible.
+
+Each worker process opens one OpenGL `Renderer` on its first job and keeps it for the rest (a context
+per process; "spawn" start, so no worker inherits the parent's OpenGL or thread state). A job whose
+directory already holds a manifest that `verify` passes, for the same job hash and the same frames, is
+skipped. Anything else is rendered again: `execute` clears stale files and writes the manifest last,
+so a job that was killed half-way never looks complete.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import time
+import traceback
+from collections.abc import Callable, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import camgen
+from camgen.batch.expand import BatchJob
+from camgen.errors import ConfigError
+from camgen.io.files import write_text_atomic
+from camgen.io.manifest import JOB_NAME, read_manifest, verify
+from camgen.plan.execute import job_directory_name
+from camgen.plan.job import Job
+
+BATCH_MANIFEST_NAME = "dataset.json"
+"""The dataset-level record in the output directory. Not manifest.json: `camgen verify OUT` would take a
+directory with a manifest.json in it for a single job directory."""
+README_NAME = "DATASET.md"
+
+Status = Literal["done", "skipped", "failed", "interrupted"]
+
+
+@dataclass(frozen=True)
+class JobOutcome:
+    """What became of one job. seconds: wall time of its last attempt in the worker (0 when skipped)."""
+
+    batch: BatchJob
+    job_id: str
+    directory: Path
+    status: Status
+    frames: int = 0
+    seconds: float = 0.0
+    attempts: int = 0
+    error: str | None = None
+
+
+@dataclass(frozen=True)
+class BatchSummary:
+    outcomes: list[JobOutcome]
+    """One per job, in the order the jobs were given."""
+    wall_s: float
+    interrupted: bool
+
+    def count(self, status: Status) -> int:
+        return sum(outcome.status == status for outcome in self.outcomes)
+
+    @property
+    def frames(self) -> int:
+        return sum(outcome.frames for outcome in self.outcomes if outcome.status == "done")
+
+    @property
+    def ok(self) -> bool:
+        return not self.interrupted and all(o.status in ("done", "skipped") for o in self.outcomes)
+
+
+def rendered_record(job: Job, frame_count: int | None) -> dict:
+    """What `execute` records as `rendered` in the manifest for all cameras and the first `frame_count`
+    frames (None: all of them)."""
+    frames = "all" if frame_count is None or frame_count >= job.frame_count else list(range(frame_count))
+    return {"cameras": [camera.name for camera in job.cameras], "frames": frames}
+
+
+def frames_of(job: Job, frame_count: int | None) -> int:
+    """Frames a render of `job` writes, over all its cameras, for the first `frame_count` (None: all)."""
+    return len(job.cameras) * (job.frame_count if frame_count is None else min(frame_count, job.frame_count))
+
+
+def is_complete(job: Job, job_dir: Path, frame_count: int | None) -> bool:
+    """Whether `job_dir` holds a finished, unmodified render of `job` and of these frames."""
+    manifest, _ = read_manifest(job_dir)
+    if manifest is None or manifest.get("rendered") != rendered_record(job, frame_count):
+        return False
+    try:
+        recorded = json.loads((job_dir / JOB_NAME).read_text(encoding="utf-8")).get("job_id")
+    except (OSError, ValueError, AttributeError):
+        return False
+    return recorded == job.job_id and not verify(job_dir)
+
+
+def run_batch(
+    jobs: Sequence[tuple[BatchJob, Job]],
+    out_dir: str | Path,
+    *,
+    workers: int,
+    retries: int,
+    frames: int | None = None,
+    description: str = "",
+    on_event: Callable[[JobOutcome], None] | None = None,
+) -> BatchSummary:
+    """Render each (batch job, compiled job) into ``out_dir/<scene>-<hash8>/`` with `workers` processes.
+
+    frames: render only the first N frames of each job (None: all). description: the dataset's, for
+    DATASET.md. A job that raises is tried again up
+    to `retries` times, then reported as failed with its error; the others go on. on_event(outcome) is
+    called in this process as each job is skipped, done or failed. A KeyboardInterrupt cancels the jobs
+    not yet started, waits for the running ones, and returns what completed (`interrupted` set). The
+    dataset record and DATASET.md are written at the end, atomically, in every case.
+    """
+    if workers < 1:
+        raise ConfigError(f"--workers must be ≥ 1, got {workers}")
+    if retries < 0:
+        raise ConfigError(f"--retries must be ≥ 0, got {retries}")
+    out_dir = Path(out_dir)
+    started = time.perf_counter()
+    outcomes: dict[int, JobOutcome] = {}
+    attempts = [0] * len(jobs)
+    pending = []
+    for index, (batch, job) in enumerate(jobs):
+        job_dir = out_dir / job_directory_name(job)
+        if is_complete(job, job_dir, frames):
+            outcomes[index] = JobOutcome(batch, job.job_id, job_dir, "skipped", frames=frames_of(job, frames))
+            if on_event is not None:
+                on_event(outcomes[index])
+        else:
+            pending.append(index)
+    interrupted = False
+    if pending:
+        context = multiprocessing.get_context("spawn")
+        pool = ProcessPoolExecutor(max_workers=min(workers, len(pending)), mp_context=context)
+        running: dict[Future, int] = {}
+
+        def record(index: int, frames_done: int, seconds: float, error: str | None) -> None:
+            batch, job = jobs[index]
+            status: Status = "failed" if error is not None else "done"
+            directory = out_dir / job_directory_name(job)
+            outcomes[index] = JobOutcome(
+                batch, job.job_id, directory, status, frames_done, seconds, attempts[index], error
+            )
+            if on_event is not None:
+                on_event(outcomes[index])
+
+        def submit(index: int) -> None:
+            batch, job = jobs[index]
+            attempts[index] += 1
+            try:
+                future = pool.submit(_render_job, job.to_json(), str(out_dir), frames, str(batch.scene_path))
+            except BrokenProcessPool as exc:  # a worker died hard (out of memory, a crash in the driver)
+                record(index, 0, 0.0, _error_text(exc))
+                return
+            running[future] = index
+
+        try:
+            for index in pending:
+                submit(index)
+            while running:
+                finished, _ = wait(running, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    index = running.pop(future)
+                    result = _result(future)
+                    if result is None:  # the worker was interrupted
+                        raise KeyboardInterrupt
+                    if result[2] is not None and attempts[index] <= retries:
+                        submit(index)
+                    else:
+                        record(index, *result)
+        except KeyboardInterrupt:
+            interrupted = True
+            pool.shutdown(wait=True, cancel_futures=True)
+            # Jobs that were running may still have finished; what they wrote counts.
+            for future, index in running.items():
+                result = None if future.cancelled() else _result(future)
+                if result is not None and result[2] is None:
+                    record(index, *result)
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+    summary = BatchSummary(
+        [
+            outcomes.get(index)
+            or JobOutcome(batch, job.job_id, out_dir / job_directory_name(job), "interrupted", attempts=attempts[index])
+            for index, (batch, job) in enumerate(jobs)
+        ],
+        time.perf_counter() - started,
+        interrupted,
+    )
+    write_batch_record(summary, out_dir, frames, description)
+    return summary
+
+
+def _result(future: Future) -> tuple[int, float, str | None] | None:
+    """(frames, seconds, error) of a finished task, or None if the worker was interrupted (Ctrl-C reaches
+    the whole process group); a worker that died otherwise counts as the job's error."""
+    exc = future.exception()
+    if isinstance(exc, KeyboardInterrupt):
+        return None
+    if exc is not None:  # a broken pool or an unpicklable result: the job failed, the batch goes on
+        return 0, 0.0, _error_text(exc)
+    return future.result()
+
+
+def _error_text(exc: BaseException) -> str:
+    """The exception's type and the last line of its message."""
+    lines = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {lines[-1]}" if lines else type(exc).__name__
+
+
+_worker_renderer = None
+"""The worker process's one Renderer, opened on its first job and kept until the process ends."""
+
+
+def _render_job(job_json: str, out_dir: str, frames: int | None, scene_path: str) -> tuple[int, float, str | None]:
+    """Runs in a worker: render one job; returns (frames, seconds, error text or None)."""
+    global _worker_renderer
+    from camgen.plan.execute import execute
+    from camgen.render.renderer import Renderer
+
+    started = time.perf_counter()
+    try:
+        if _worker_renderer is None:
+            _worker_renderer = Renderer()
+        job = Job.from_json(job_json)
+        count = None if frames is None or frames >= job.frame_count else frames
+        results = execute(
+            job,
+            out_dir,
+            renderer=_worker_renderer,
+            frames=None if count is None else range(count),
+            resolve_path=Path(scene_path).resolve().parent.joinpath,
+        )
+    except Exception as exc:  # reported to the parent as this job's error, with the traceback's last frame
+        stack = traceback.extract_tb(exc.__traceback__)
+        where = f" (at {Path(stack[-1].filename).name}:{stack[-1].lineno})" if stack else ""
+        return 0, time.perf_counter() - started, _error_text(exc) + where
+    return sum(result.frames for result in results), time.perf_counter() - started, None
+
+
+def write_batch_record(summary: BatchSummary, out_dir: Path, frames: int | None, description: str) -> None:
+    """Write ``dataset.json`` (machine-readable) and ``DATASET.md`` (for people) into `out_dir`, atomically."""
+    if not summary.outcomes:
+        return
+    dataset_path = summary.outcomes[0].batch.dataset_path
+    record = {
+        "camgen_version": camgen.__version__,
+        "dataset": str(dataset_path),
+        "frames_limit": frames,
+        "interrupted": summary.interrupted,
+        "jobs": [
+            {
+                "name": o.batch.name,
+                "scene": str(o.batch.scene_path),
+                "profile": o.batch.profile,
+                "seed": o.batch.seed,
+                "directory": o.directory.name,
+                "status": o.status,
+                "job_id": o.job_id,
+                "frames": o.frames,
+                "seconds": round(o.seconds, 3),
+                "attempts": o.attempts,
+                "error": o.error,
+            }
+            for o in summary.outcomes
+        ],
+    }
+    write_text_atomic(out_dir / BATCH_MANIFEST_NAME, json.dumps(record, indent=1, ensure_ascii=False) + "\n")
+    write_text_atomic(out_dir / README_NAME, dataset_markdown(summary, description))
+
+
+def dataset_markdown(summary: BatchSummary, dataset_description: str) -> str:
+    """DATASET.md: what the dataset is, how many jobs ended how, a table of jobs, how to check the files."""
+    dataset_path = summary.outcomes[0].batch.dataset_path
+    counts = ", ".join(
+        f"{summary.count(status)} {status}"
+        for status in ("done", "skipped", "failed", "interrupted")
+        if summary.count(status)
+    )
+    lines = [
+        f"# Dataset {dataset_path.stem}",
+        "",
+        dataset_description or "(no description in the dataset file)",
+        "",
+        f"Generated by camgen {camgen.__version__} from `{dataset_path}`: {len(summary.outcomes)} jobs ({counts}).",
+        "",
+        "| job | directory | scene | profile | seed | frames | status |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for o in summary.outcomes:
+        profile = o.batch.profile or "(scene's own)"
+        status = o.status if o.error is None else f"{o.status}: {o.error}"
+        lines.append(
+            f"| {o.batch.name} | {o.directory.name} | {o.batch.scene_path.name} | {profile} | {o.batch.seed} "
+            f"| {o.frames if o.status in ('done', 'skipped') else '–'} | {status.replace('|', '/')} |"
+        )
+    lines += [
+        "",
+        "Each job directory holds a manifest.json with the SHA-256 of every file. To check them all:",
+        "",
+        f"    camgen verify {summary.outcomes[0].directory.parent}",
+        "",
+    ]
+    return "\n".join(lines)

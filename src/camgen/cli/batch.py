@@ -1,0 +1,109 @@
+"""camgen batch DATASET -o OUT: expand a dataset into jobs and render them on a local process pool."""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+from rich.console import Console
+from rich.markup import escape
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.table import Table
+
+from camgen.errors import ConfigError
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser("batch", help="render every job of a dataset (scenes × profiles × seeds)")
+    parser.add_argument("dataset", type=Path, metavar="DATASET")
+    parser.add_argument("-o", "--out", type=Path, required=True, metavar="DIR", help="output directory")
+    parser.add_argument("--plan", action="store_true", help="print the jobs without rendering")
+    parser.add_argument(
+        "--workers", type=int, default=os.cpu_count() or 1, metavar="N", help="worker processes (default: CPU count)"
+    )
+    parser.add_argument("--retries", type=int, default=1, metavar="N", help="tries after a job fails (default 1)")
+    parser.add_argument("--frames", type=int, metavar="N", help="render only the first N frames of each job")
+    parser.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from camgen.batch.expand import compile_batch_job, expand
+    from camgen.batch.run import frames_of, run_batch
+    from camgen.config.loader import load_dataset
+    from camgen.plan.execute import job_directory_name
+
+    if args.frames is not None and args.frames < 1:
+        raise ConfigError(f"--frames must be ≥ 1, got {args.frames}")
+    if args.workers < 1:
+        raise ConfigError(f"--workers must be ≥ 1, got {args.workers}")
+    if args.retries < 0:
+        raise ConfigError(f"--retries must be ≥ 0, got {args.retries}")
+    if args.out.exists() and not args.out.is_dir():
+        raise ConfigError(f"-o {args.out}: is a file; give a directory to write the dataset into")
+    batch_jobs = expand(args.dataset)
+    jobs = [(batch, compile_batch_job(batch)) for batch in batch_jobs]
+    if args.plan:
+        table = Table(title=f"{escape(str(args.dataset))}: {len(jobs)} jobs")
+        for column in ("job", "scene", "profile", "seed", "frames", "directory"):
+            table.add_column(column)
+        for batch, job in jobs:
+            table.add_row(
+                escape(batch.name),
+                escape(batch.scene_path.name),
+                escape(batch.profile or "(scene's own)"),
+                str(batch.seed),
+                str(frames_of(job, args.frames)),
+                escape(job_directory_name(job)),
+            )
+        out.print(table)
+        return 0
+    columns = (
+        TextColumn("jobs"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[fps]:.1f} frames/s"),
+        TimeRemainingColumn(),
+    )
+    with Progress(*columns, console=err) as progress:
+        task = progress.add_task("jobs", total=len(jobs), fps=0.0)
+        frames_done = 0
+
+        def on_event(outcome) -> None:
+            nonlocal frames_done
+            frames_done += outcome.frames if outcome.status == "done" else 0
+            elapsed_s = progress.tasks[task].elapsed or 0.0
+            progress.update(task, advance=1, fps=frames_done / elapsed_s if elapsed_s > 0 else 0.0)
+            if outcome.status == "failed":
+                progress.console.print(
+                    f"[red]failed[/red] {escape(outcome.batch.name)} after {outcome.attempts} tries: "
+                    f"{escape(outcome.error or '')}",
+                    soft_wrap=True,
+                )
+
+        summary = run_batch(
+            jobs,
+            args.out,
+            workers=args.workers,
+            retries=args.retries,
+            frames=args.frames,
+            description=load_dataset(args.dataset).description,
+            on_event=on_event,
+        )
+    table = Table(title=f"{escape(str(args.dataset))} → {escape(str(args.out))}")
+    for column in ("done", "skipped", "failed", "frames", "wall time", "frames/s"):
+        table.add_column(column, justify="right")
+    fps = summary.frames / summary.wall_s if summary.wall_s > 0 else 0.0
+    table.add_row(
+        str(summary.count("done")),
+        str(summary.count("skipped")),
+        str(summary.count("failed")),
+        str(summary.frames),
+        f"{summary.wall_s:.1f} s",
+        f"{fps:.2f}",
+    )
+    out.print(table)
+    if summary.interrupted:
+        err.print(f"interrupted: {summary.count('interrupted')} jobs not rendered; run again to resume")
+        return 130
+    return 0 if summary.ok else 1
