@@ -3,14 +3,23 @@
 The expansion is deterministic: the same dataset file gives the same jobs in the same order, with the
 same names. A job's profile replaces every camera's own and its seed replaces the scene's `seed`, so
 distinct (scene, profile, seed) give distinct scenes and hence distinct job hashes.
+
+A dataset's `randomize:` block is drawn here, per job, into `BatchJob.randomized` (see
+`camgen.batch.randomize` for the seeding), and applied when the job is compiled; the drawn values
+change the compiled scene and so the job hash.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
+from camgen.batch import randomize
 from camgen.config.loader import find_profile, load_dataset, load_profile, load_scene
+from camgen.config.scene import Scene
+from camgen.config.validation import validate
+from camgen.config.yaml_source import load_yaml
 from camgen.errors import ConfigError, Problem
 from camgen.plan import PlanSettings
 from camgen.plan.compile import compile
@@ -31,6 +40,9 @@ class BatchJob:
     """The profile reference as the dataset writes it (a name or a path), or None: keep the scene's."""
     profile_path: Path | None
     seed: int
+    randomized: dict[str, Any] = field(default_factory=dict)
+    """The values the dataset's `randomize:` drew for this job (`camgen.batch.randomize.draw`), plain JSON
+    data; empty without one. Compiling applies exactly these."""
 
 
 def expand(dataset_path: str | Path) -> list[BatchJob]:
@@ -52,17 +64,25 @@ def expand(dataset_path: str | Path) -> list[BatchJob]:
     else:
         entries = [(scene, profile, seed) for scene in scenes for profile in profiles for seed in seeds]
     jobs = []
+    scenes_read: dict[Path, Scene] = {}
     for index, (scene_path, profile, seed) in enumerate(entries):
         label = "own" if profile is None else Path(profile).stem
+        name = f"{scene_path.stem}-{label}-seed{seed}"
+        randomized = {}
+        if dataset.randomize is not None and not dataset.randomize.is_identity:
+            if scene_path not in scenes_read:
+                scenes_read[scene_path] = _read_scene(dataset_path, scene_path)
+            randomized = randomize.draw(dataset.randomize, dataset.seed, name, scenes_read[scene_path])
         jobs.append(
             BatchJob(
-                name=f"{scene_path.stem}-{label}-seed{seed}",
+                name=name,
                 dataset_path=dataset_path,
                 index=index,
                 scene_path=scene_path,
                 profile=profile,
                 profile_path=None if profile is None else profile_paths[profile],
                 seed=seed,
+                randomized=randomized,
             )
         )
     names = [job.name for job in jobs]
@@ -75,8 +95,19 @@ def expand(dataset_path: str | Path) -> list[BatchJob]:
     return jobs
 
 
+def _read_scene(dataset_path: Path, scene_path: Path) -> Scene:
+    """The scene a dataset names, validated alone (its actors and cameras are what `randomize` draws for)."""
+    try:
+        return validate(Scene, load_yaml(scene_path))
+    except ConfigError as exc:
+        raise ConfigError(
+            [Problem((), f"{dataset_path}: scene {scene_path}: {problem}", None) for problem in exc.problems]
+        ) from None
+
+
 def compile_batch_job(batch_job: BatchJob, settings: PlanSettings | None = None) -> Job:
-    """Load the job's scene, give every camera the job's profile (if any) and the scene the job's seed, compile.
+    """Load the job's scene, give every camera the job's profile (if any) and the scene the job's seed, apply
+    the job's randomized values, compile.
 
     Raises ConfigError naming the dataset file and the job when the scene or the combination is invalid.
     """
@@ -90,6 +121,8 @@ def compile_batch_job(batch_job: BatchJob, settings: PlanSettings | None = None)
             profiles = {camera.name: override.profile for camera in cameras}
             profile_names = {camera.name: override.name for camera in cameras}
         scene = loaded.scene.model_copy(update={"cameras": cameras, "seed": batch_job.seed})
+        if batch_job.randomized:
+            scene, profiles = randomize.apply(scene, profiles, batch_job.randomized)
         return compile(
             scene,
             profiles,

@@ -1,7 +1,9 @@
-"""Run compiled batch jobs on a local process pool: resumable, retried, interruptible.
+"""Run compiled batch jobs on a local process pool or a Ray cluster: resumable, retried, interruptible.
 
-Each worker process opens one OpenGL `Renderer` on its first job and keeps it for the rest (a context
-per process; "spawn" start, so no worker inherits the parent's OpenGL or thread state). A job whose
+Both executors run the same `_render_job`, so they write the same bytes; the skip, retry, record and summary
+logic is shared (`run_batch` talks to a `JobExecutor`). Each worker process opens one OpenGL `Renderer` on
+its first job and keeps it for the rest (a context per process; the pool uses a "spawn" start, so no worker
+inherits the parent's OpenGL or thread state). A job whose
 directory already holds a manifest that `verify` passes, for the same job hash and the same frames, is
 skipped. Anything else is rendered again: `execute` clears stale files and writes the manifest last,
 so a job that was killed half-way never looks complete.
@@ -13,12 +15,12 @@ import json
 import multiprocessing
 import time
 import traceback
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Hashable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
+from typing import Literal, Protocol
 
 import camgen
 from camgen.batch.expand import BatchJob
@@ -34,6 +36,8 @@ directory with a manifest.json in it for a single job directory."""
 README_NAME = "DATASET.md"
 
 Status = Literal["done", "skipped", "failed", "interrupted"]
+JobResult = tuple[int, float, str | None]
+"""What `_render_job` returns: (frames written, seconds, error text or None)."""
 
 
 @dataclass(frozen=True)
@@ -56,6 +60,8 @@ class BatchSummary:
     """One per job, in the order the jobs were given."""
     wall_s: float
     interrupted: bool
+    executor: str = "local"
+    """Where the jobs ran: "local" (a process pool) or "ray"."""
 
     def count(self, status: Status) -> int:
         return sum(outcome.status == status for outcome in self.outcomes)
@@ -93,6 +99,66 @@ def is_complete(job: Job, job_dir: Path, frame_count: int | None) -> bool:
     return recorded == job.job_id and not verify(job_dir)
 
 
+class JobExecutor(Protocol):
+    """Where jobs run: submit `_render_job` calls, wait for some to finish, read their results, cancel.
+
+    Handles are whatever the executor returns from `submit` (a Future, a Ray ObjectRef); they must be hashable.
+    """
+
+    name: str
+    """Recorded in dataset.json: "local" or "ray"."""
+
+    def submit(self, job_json: str, out_dir: str, frames: int | None, scene_path: str) -> Hashable:
+        """Start `_render_job` with these arguments; return its handle."""
+        ...
+
+    def wait(self, handles: Collection[Hashable]) -> list[Hashable]:
+        """Block until at least one of `handles` has finished; return those that have."""
+        ...
+
+    def result(self, handle: Hashable) -> JobResult | None:
+        """(frames, seconds, error) of a finished job, or None if it was cancelled or interrupted. A worker
+        that died counts as the job's error."""
+        ...
+
+    def cancel(self, handles: Collection[Hashable]) -> None:
+        """After Ctrl-C: stop `handles` (those not yet started at least) and wait until each has settled, so
+        `result` no longer blocks."""
+        ...
+
+    def close(self) -> None: ...
+
+
+class PoolExecutor:
+    """Jobs on a local "spawn" process pool of `workers` processes."""
+
+    name = "local"
+
+    def __init__(self, workers: int) -> None:
+        self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+
+    def submit(self, job_json: str, out_dir: str, frames: int | None, scene_path: str) -> Future:
+        try:
+            return self._pool.submit(_render_job, job_json, out_dir, frames, scene_path)
+        except BrokenProcessPool as exc:  # a worker died hard (out of memory, a crash in the driver)
+            failed: Future = Future()
+            failed.set_exception(exc)
+            return failed
+
+    def wait(self, handles: Collection[Future]) -> list[Future]:
+        return list(wait(handles, return_when=FIRST_COMPLETED).done)
+
+    def result(self, handle: Future) -> JobResult | None:
+        return None if handle.cancelled() else _result(handle)
+
+    def cancel(self, handles: Collection[Future]) -> None:
+        # Jobs not yet started are dropped; the running ones finish, and what they wrote counts.
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+    def close(self) -> None:
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+
 def run_batch(
     jobs: Sequence[tuple[BatchJob, Job]],
     out_dir: str | Path,
@@ -102,11 +168,15 @@ def run_batch(
     frames: int | None = None,
     description: str = "",
     on_event: Callable[[JobOutcome], None] | None = None,
+    executor: Literal["local", "ray"] = "local",
+    address: str | None = None,
 ) -> BatchSummary:
     """Render each (batch job, compiled job) into ``out_dir/<scene>-<hash8>/`` with `workers` processes.
 
     frames: render only the first N frames of each job (None: all). description: the dataset's, for
-    DATASET.md. A job that raises is tried again up
+    DATASET.md. executor: "local", a process pool on this machine, or "ray", one Ray task per job on the
+    cluster at `address` (None: a local Ray with `workers` CPUs); with Ray, `out_dir` and the scenes must be
+    on a filesystem every node shares. A job that raises is tried again up
     to `retries` times, then reported as failed with its error; the others go on. on_event(outcome) is
     called in this process as each job is skipped, done or failed. A KeyboardInterrupt cancels the jobs
     not yet started, waits for the running ones, and returns what completed (`interrupted` set). The
@@ -116,6 +186,10 @@ def run_batch(
         raise ConfigError(f"--workers must be ≥ 1, got {workers}")
     if retries < 0:
         raise ConfigError(f"--retries must be ≥ 0, got {retries}")
+    if executor not in ("local", "ray"):
+        raise ConfigError(f"--executor must be local or ray, got {executor!r}")
+    if address is not None and executor != "ray":
+        raise ConfigError(f"--address {address} is for --executor ray; leave it out for the local pool")
     out_dir = Path(out_dir)
     started = time.perf_counter()
     outcomes: dict[int, JobOutcome] = {}
@@ -131,9 +205,13 @@ def run_batch(
             pending.append(index)
     interrupted = False
     if pending:
-        context = multiprocessing.get_context("spawn")
-        pool = ProcessPoolExecutor(max_workers=min(workers, len(pending)), mp_context=context)
-        running: dict[Future, int] = {}
+        if executor == "ray":
+            from camgen.batch.ray_executor import RayExecutor
+
+            runner: JobExecutor = RayExecutor(workers=workers, address=address)
+        else:
+            runner = PoolExecutor(min(workers, len(pending)))
+        running: dict[Hashable, int] = {}
 
         def record(index: int, frames_done: int, seconds: float, error: str | None) -> None:
             batch, job = jobs[index]
@@ -148,21 +226,17 @@ def run_batch(
         def submit(index: int) -> None:
             batch, job = jobs[index]
             attempts[index] += 1
-            try:
-                future = pool.submit(_render_job, job.to_json(), str(out_dir), frames, str(batch.scene_path))
-            except BrokenProcessPool as exc:  # a worker died hard (out of memory, a crash in the driver)
-                record(index, 0, 0.0, _error_text(exc))
-                return
-            running[future] = index
+            # Absolute paths: a Ray worker's working directory is not ours.
+            handle = runner.submit(job.to_json(), str(out_dir.resolve()), frames, str(batch.scene_path.resolve()))
+            running[handle] = index
 
         try:
             for index in pending:
                 submit(index)
             while running:
-                finished, _ = wait(running, return_when=FIRST_COMPLETED)
-                for future in finished:
-                    index = running.pop(future)
-                    result = _result(future)
+                for handle in runner.wait(running):
+                    index = running.pop(handle)
+                    result = runner.result(handle)
                     if result is None:  # the worker was interrupted
                         raise KeyboardInterrupt
                     if result[2] is not None and attempts[index] <= retries:
@@ -171,14 +245,14 @@ def run_batch(
                         record(index, *result)
         except KeyboardInterrupt:
             interrupted = True
-            pool.shutdown(wait=True, cancel_futures=True)
+            runner.cancel(running)
             # Jobs that were running may still have finished; what they wrote counts.
-            for future, index in running.items():
-                result = None if future.cancelled() else _result(future)
+            for handle, index in running.items():
+                result = runner.result(handle)
                 if result is not None and result[2] is None:
                     record(index, *result)
         finally:
-            pool.shutdown(wait=True, cancel_futures=True)
+            runner.close()
     summary = BatchSummary(
         [
             outcomes.get(index)
@@ -187,12 +261,13 @@ def run_batch(
         ],
         time.perf_counter() - started,
         interrupted,
+        executor,
     )
     write_batch_record(summary, out_dir, frames, description)
     return summary
 
 
-def _result(future: Future) -> tuple[int, float, str | None] | None:
+def _result(future: Future) -> JobResult | None:
     """(frames, seconds, error) of a finished task, or None if the worker was interrupted (Ctrl-C reaches
     the whole process group); a worker that died otherwise counts as the job's error."""
     exc = future.exception()
@@ -213,7 +288,7 @@ _worker_renderer = None
 """The worker process's one Renderer, opened on its first job and kept until the process ends."""
 
 
-def _render_job(job_json: str, out_dir: str, frames: int | None, scene_path: str) -> tuple[int, float, str | None]:
+def _render_job(job_json: str, out_dir: str, frames: int | None, scene_path: str) -> JobResult:
     """Runs in a worker: render one job; returns (frames, seconds, error text or None)."""
     global _worker_renderer
     from camgen.plan.execute import execute
@@ -248,6 +323,7 @@ def write_batch_record(summary: BatchSummary, out_dir: Path, frames: int | None,
         "camgen_version": camgen.__version__,
         "dataset": str(dataset_path),
         "frames_limit": frames,
+        "executor": summary.executor,
         "interrupted": summary.interrupted,
         "jobs": [
             {
@@ -255,6 +331,7 @@ def write_batch_record(summary: BatchSummary, out_dir: Path, frames: int | None,
                 "scene": str(o.batch.scene_path),
                 "profile": o.batch.profile,
                 "seed": o.batch.seed,
+                "randomized": o.batch.randomized,
                 "directory": o.directory.name,
                 "status": o.status,
                 "job_id": o.job_id,

@@ -1,4 +1,4 @@
-"""camgen batch DATASET -o OUT: expand a dataset into jobs and render them on a local process pool."""
+"""camgen batch DATASET -o OUT: expand a dataset into jobs and render them on a local process pool or Ray."""
 
 from __future__ import annotations
 
@@ -20,10 +20,26 @@ def add_parser(subparsers) -> None:
     parser.add_argument("-o", "--out", type=Path, required=True, metavar="DIR", help="output directory")
     parser.add_argument("--plan", action="store_true", help="print the jobs without rendering")
     parser.add_argument(
-        "--workers", type=int, default=os.cpu_count() or 1, metavar="N", help="worker processes (default: CPU count)"
+        "--workers",
+        type=int,
+        default=os.cpu_count() or 1,
+        metavar="N",
+        help="worker processes, or CPUs of a local Ray (default: CPU count); unused with --address",
     )
     parser.add_argument("--retries", type=int, default=1, metavar="N", help="tries after a job fails (default 1)")
     parser.add_argument("--frames", type=int, metavar="N", help="render only the first N frames of each job")
+    parser.add_argument(
+        "--executor",
+        choices=("local", "ray"),
+        default="local",
+        help="local: a process pool on this machine (default); ray: one Ray task per job (needs camgen[ray]). "
+        "With Ray, -o and the dataset's files must be on a filesystem shared by every node, at the same path",
+    )
+    parser.add_argument(
+        "--address",
+        metavar="ADDR",
+        help="the Ray cluster to run on (e.g. auto, HOST:6379, ray://HOST:10001); default: start a local Ray",
+    )
     parser.set_defaults(run=run)
 
 
@@ -39,15 +55,19 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         raise ConfigError(f"--workers must be ≥ 1, got {args.workers}")
     if args.retries < 0:
         raise ConfigError(f"--retries must be ≥ 0, got {args.retries}")
+    if args.address is not None and args.executor != "ray":
+        raise ConfigError(f"--address {args.address} is for --executor ray; add --executor ray or leave it out")
     if args.out.exists() and not args.out.is_dir():
         raise ConfigError(f"-o {args.out}: is a file; give a directory to write the dataset into")
     batch_jobs = expand(args.dataset)
     jobs = [(batch, compile_batch_job(batch)) for batch in batch_jobs]
     if args.plan:
         table = Table(title=f"{escape(str(args.dataset))}: {len(jobs)} jobs")
-        for column in ("job", "scene", "profile", "seed", "frames", "directory"):
+        randomized = any(batch.randomized for batch, _ in jobs)
+        for column in ("job", "scene", "profile", "seed", "frames", "directory", *(["light ×"] if randomized else [])):
             table.add_column(column)
         for batch, job in jobs:
+            light = batch.randomized.get("light_scale")
             table.add_row(
                 escape(batch.name),
                 escape(batch.scene_path.name),
@@ -55,6 +75,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
                 str(batch.seed),
                 str(frames_of(job, args.frames)),
                 escape(job_directory_name(job)),
+                *([f"{light:.3g}" if light is not None else "–"] if randomized else []),
             )
         out.print(table)
         return 0
@@ -89,6 +110,8 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             frames=args.frames,
             description=load_dataset(args.dataset).description,
             on_event=on_event,
+            executor=args.executor,
+            address=args.address,
         )
     table = Table(title=f"{escape(str(args.dataset))} → {escape(str(args.out))}")
     for column in ("done", "skipped", "failed", "frames", "wall time", "frames/s"):

@@ -1,4 +1,5 @@
-"""Dataset: which scenes, profiles and seeds to render, as a product or a zip of lists."""
+"""Dataset: which scenes, profiles and seeds to render, as a product or a zip of lists, and what to randomise
+per job (`camgen.batch.randomize` draws and applies it)."""
 
 from __future__ import annotations
 
@@ -7,11 +8,67 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from camgen.config.base import Model, invalid
+from camgen.config.ptz_program import PtzProgram
+
+PositiveFloat = Annotated[float, Field(gt=0)]
+NonNegativeFloat = Annotated[float, Field(ge=0)]
+Percent = Annotated[float, Field(ge=0, le=100)]
 
 
 class SeedRange(Model):
     start: Annotated[int, Field(ge=0)] = 0
     count: Annotated[int, Field(ge=1, le=1_000_000)]
+
+
+class ProfileSpread(Model):
+    """Unit-to-unit variation, % rms: each value is multiplied by (1 + N(0, pct/100)), clipped to stay valid."""
+
+    read_noise_e: Percent = 0.0
+    prnu_pct: Percent = 0.0
+    dsnu_e: Percent = 0.0
+    dark_current_e_per_s: Percent = 0.0
+    focus_distance_m: Percent = 0.0
+    """Of the focus the camera or its profile sets; a lens focused at its hyperfocal distance is left alone."""
+
+
+class Randomize(Model):
+    """What varies between real deployments, drawn per job from the dataset's `seed` and the job's name.
+
+    Every knob left at its default changes nothing."""
+
+    light_scale_range: tuple[PositiveFloat, PositiveFloat] | None = None
+    """[min, max] factor on every light (illuminance_lux, intensity_cd) and the sky's luminance, drawn
+    log-uniformly: time of day and light level. A sun or ambient light stops at the schema's 200 000 lux."""
+    mount_position_jitter_m: Annotated[float, Field(ge=0, le=100)] = 0.0
+    """Each camera's mount moves by a uniform offset in [-d, d] along each world axis, m."""
+    mount_angle_jitter_deg: Annotated[float, Field(ge=0, le=180)] = 0.0
+    """Each camera's mount yaw, pitch and roll each turn by a uniform offset in [-d, d], degrees (pitch
+    stops at ±90°, roll at ±180°)."""
+    actor_count_range: tuple[Annotated[int, Field(ge=0)], Annotated[int, Field(ge=0)]] | None = None
+    """[min, max] number of the scene's actors to keep (capped by how many it has), a random subset in
+    scene order; actors a PTZ follow program targets are always kept."""
+    walk_seeds: bool = False
+    """Give every actor's random_walk a new seed drawn per job (new paths)."""
+    profile_spread_pct: ProfileSpread | None = None
+    """Per-camera unit-to-unit variation of the profile; also gives each camera a new serial (its own
+    fixed-pattern noise)."""
+    ptz_programs: list[PtzProgram] = []
+    """Programs to choose from, one drawn uniformly per camera with a (mechanical or virtual) PTZ head;
+    empty keeps the scene's. Presets they name must exist in every such camera."""
+
+    @property
+    def is_identity(self) -> bool:
+        return self == Randomize()
+
+    @model_validator(mode="after")
+    def _check(self) -> Randomize:
+        for key, unit in (("light_scale_range", ""), ("actor_count_range", " actors")):
+            value = getattr(self, key)
+            if value is not None and value[0] > value[1]:
+                raise invalid(
+                    key, f"must be ordered [min, max] with min ≤ max, got [{value[0]:g}, {value[1]:g}]{unit}; swap them"
+                )
+        return self
 
 
 class Dataset(Model):
@@ -23,6 +80,10 @@ class Dataset(Model):
     seeds: list[Annotated[int, Field(ge=0)]] | SeedRange = [0]
     combine: Literal["product", "zip"] = "product"
     """product: every scene × profile × seed; zip: the i-th of each list together."""
+    seed: Annotated[int, Field(ge=0)] = 0
+    """Root seed of `randomize`: with a job's name it fixes that job's draws (not the scenes' seeds)."""
+    randomize: Randomize | None = None
+    """Per-job variation of the scenes and profiles; null renders them as written."""
 
     @property
     def seed_list(self) -> list[int]:

@@ -1,0 +1,97 @@
+"""Batch jobs as Ray tasks: one task per job, on a local Ray or the cluster at an address.
+
+Each task runs the pool's `_render_job`, so it writes the same bytes. Ray reuses worker processes, so a
+worker keeps the one Renderer that `_render_job` opens on its first job. The output directory and the scenes
+must be on a filesystem that every node sees at the same path, and camgen must be installed on every node.
+Ray's own task retries are off (``max_retries=0``): `run_batch` retries failed jobs itself.
+"""
+
+from __future__ import annotations
+
+import socket
+from collections.abc import Collection
+
+from camgen.batch.run import JobResult, _error_text, _render_job
+from camgen.errors import ConfigError
+
+try:
+    import ray
+    from ray.exceptions import RayError, RayTaskError, TaskCancelledError
+except ImportError as exc:
+    raise ConfigError("--executor ray needs Ray: install camgen[ray] (pip install 'camgen[ray]')") from exc
+
+CONNECT_TIMEOUT_S = 5.0
+"""How long to try reaching a cluster's address before `ray.init`, which otherwise retries for minutes."""
+CANCEL_SETTLE_S = 30.0
+"""After Ctrl-C, how long to wait for cancelled tasks to stop before giving up on their results."""
+
+_render_task = ray.remote(num_cpus=1, max_retries=0)(_render_job)
+
+
+class RayExecutor:
+    """`JobExecutor` on Ray. address: a running cluster's ("auto", "ray://host:10001", "host:6379"), or None
+    to start a local Ray with `workers` CPUs, shut down again by `close`."""
+
+    name = "ray"
+
+    def __init__(self, *, workers: int, address: str | None) -> None:
+        self._started_ray = not ray.is_initialized()
+        if not self._started_ray:
+            return
+        try:
+            if address is None:
+                ray.init(num_cpus=workers, include_dashboard=False)
+            else:
+                _check_reachable(address)
+                ray.init(address=address)
+        except Exception as exc:  # Ray raises ConnectionError, RuntimeError, ValueError… for a bad address
+            if address is None:
+                raise ConfigError(f"cannot start a local Ray ({_error_text(exc)}); its logs are in /tmp/ray") from exc
+            raise ConfigError(
+                f"--address {address}: cannot reach a Ray cluster ({_error_text(exc)}); start one with "
+                "`ray start --head` and pass its address, or leave out --address for a local Ray"
+            ) from exc
+
+    def submit(self, job_json: str, out_dir: str, frames: int | None, scene_path: str) -> ray.ObjectRef:
+        return _render_task.remote(job_json, out_dir, frames, scene_path)
+
+    def wait(self, handles: Collection[ray.ObjectRef]) -> list[ray.ObjectRef]:
+        refs = list(handles)
+        ready, _ = ray.wait(refs, num_returns=1)
+        more, _ = ray.wait(refs, num_returns=len(refs), timeout=0)
+        return list({*ready, *more})
+
+    def result(self, handle: ray.ObjectRef) -> JobResult | None:
+        try:
+            return ray.get(handle, timeout=0)
+        except TaskCancelledError:
+            return None
+        except RayTaskError as exc:
+            if isinstance(exc.cause, KeyboardInterrupt):
+                return None
+            return 0, 0.0, _error_text(exc)
+        except RayError as exc:  # the worker died, or (after a cancel) the task never settled
+            return 0, 0.0, _error_text(exc)
+
+    def cancel(self, handles: Collection[ray.ObjectRef]) -> None:
+        refs = list(handles)
+        for ref in refs:
+            ray.cancel(ref)
+        if refs:
+            ray.wait(refs, num_returns=len(refs), timeout=CANCEL_SETTLE_S)
+
+    def close(self) -> None:
+        if self._started_ray:
+            ray.shutdown()
+
+
+def _check_reachable(address: str) -> None:
+    """Raise ConnectionError if nothing listens at a HOST:PORT or ray://HOST:PORT `address` (others, such as
+    "auto", are left to Ray)."""
+    host, colon, port = address.removeprefix("ray://").rpartition(":")
+    if not colon or not port.isdigit():
+        return
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=CONNECT_TIMEOUT_S).close()
+    except OSError as exc:
+        raise ConnectionError(f"nothing answers at {host}:{port} within {CONNECT_TIMEOUT_S:g} s ({exc})") from exc
