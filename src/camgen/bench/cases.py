@@ -1,4 +1,4 @@
-"""The benchmark cases that exist so far: configuration, planning, rendering and the lens stages."""
+"""The benchmark cases: configuration, planning, rendering, the lens stages, the camera model and batch throughput."""
 
 from __future__ import annotations
 
@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from camgen.bench.batch_cases import batch_cases
 from camgen.bench.camera_cases import camera_cases
 from camgen.bench.dof_cases import dof_cases
 from camgen.bench.harness import Case
@@ -28,6 +29,7 @@ def default_cases(repo: Path) -> list[Case]:
     cases += optics_cases(repo)
     cases += dof_cases()
     cases += camera_cases(repo)
+    cases += batch_cases()
     return cases
 
 

@@ -1,0 +1,63 @@
+"""Batch throughput: a 20-job dataset rendered by 1 and by 2 worker processes (scaling on this machine).
+
+Each timed run renders the whole dataset into a fresh directory (a run into a finished one would skip
+every job), process start-up and one OpenGL context per worker included: what `camgen batch` costs.
+The 2-worker case gives its ratio to the 1-worker case; scaling efficiency = 1 / (2 × ratio).
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from pathlib import Path
+
+from camgen.bench.harness import Case
+
+JOBS = 20
+FRAMES = 5
+PROFILE = """\
+description: bench camera, 320×240
+sensor: {width_px: 320, height_px: 240, pixel_pitch_um: 3.0, cfa: RGGB, full_well_e: 10000,
+         conversion_gain_dn_per_e: 0.4, black_level_dn: 64, noise: {read_noise_e: 2.0}}
+lens: {focal_length_mm: 2.0, f_number: 2.0}
+"""
+SCENE = """\
+duration_s: 1
+fps: 10
+environment:
+  meshes: [{type: plane, name: ground, size_m: [20, 20]}]
+lights: [{type: ambient, illuminance_lux: 1000}]
+actors:
+  - {name: walker, class: person, path: {waypoints_m: [[-3, 5], [3, 5]], speed_m_s: 1.4}}
+cameras:
+  - {name: cam, profile: bench, mount: {position_m: [0, -5, 3], yaw_deg: 90, pitch_deg: -20}}
+"""
+DATASET = f"""\
+description: {JOBS} seeds of one walker through a 320×240 camera
+scenes: [scene.yaml]
+seeds: {{start: 0, count: {JOBS}}}
+"""
+
+
+def batch_cases() -> list[Case]:
+    from camgen.batch.expand import compile_batch_job, expand
+    from camgen.batch.run import run_batch
+
+    workspace = Path(tempfile.mkdtemp(prefix="camgen-bench-batch-"))
+    (workspace / "bench.yaml").write_text(PROFILE, encoding="utf-8")
+    (workspace / "scene.yaml").write_text(SCENE, encoding="utf-8")
+    (workspace / "dataset.yaml").write_text(DATASET, encoding="utf-8")
+    jobs = [(batch, compile_batch_job(batch)) for batch in expand(workspace / "dataset.yaml")]
+
+    def run(workers: int) -> None:
+        out = workspace / f"out{workers}"
+        shutil.rmtree(out, ignore_errors=True)
+        summary = run_batch(jobs, out, workers=workers, retries=0, frames=FRAMES)
+        if not summary.ok:
+            raise RuntimeError(f"bench batch failed: {[o.error for o in summary.outcomes if o.error]}")
+
+    name = f"batch {JOBS} jobs × {FRAMES} frames 320×240"
+    return [
+        Case(name=f"{name}, 1 worker", run=lambda: run(1), repeats=2, warmup=0),
+        Case(name=f"{name}, 2 workers", run=lambda: run(2), repeats=2, warmup=0, baseline=f"{name}, 1 worker"),
+    ]
