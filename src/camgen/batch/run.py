@@ -46,7 +46,8 @@ class JobOutcome:
 
     batch: BatchJob
     job_id: str
-    directory: Path
+    directory: Path | None
+    """The job's directory; None for a job that did not compile (it has none)."""
     status: Status
     frames: int = 0
     seconds: float = 0.0
@@ -160,7 +161,7 @@ class PoolExecutor:
 
 
 def run_batch(
-    jobs: Sequence[tuple[BatchJob, Job]],
+    jobs: Sequence[tuple[BatchJob, Job | str]],
     out_dir: str | Path,
     *,
     workers: int,
@@ -172,6 +173,9 @@ def run_batch(
     address: str | None = None,
 ) -> BatchSummary:
     """Render each (batch job, compiled job) into ``out_dir/<scene>-<hash8>/`` with `workers` processes.
+
+    A job given as an error text instead of a Job (it did not compile: a missing mesh file, a drawn
+    value its scene rejects) is reported as failed with that text; the others go on.
 
     frames: render only the first N frames of each job (None: all). description: the dataset's, for
     DATASET.md. executor: "local", a process pool on this machine, or "ray", one Ray task per job on the
@@ -196,6 +200,11 @@ def run_batch(
     attempts = [0] * len(jobs)
     pending = []
     for index, (batch, job) in enumerate(jobs):
+        if isinstance(job, str):
+            outcomes[index] = JobOutcome(batch, "", None, "failed", error=job)
+            if on_event is not None:
+                on_event(outcomes[index])
+            continue
         job_dir = out_dir / job_directory_name(job)
         if is_complete(job, job_dir, frames):
             outcomes[index] = JobOutcome(batch, job.job_id, job_dir, "skipped", frames=frames_of(job, frames))
@@ -332,7 +341,7 @@ def write_batch_record(summary: BatchSummary, out_dir: Path, frames: int | None,
                 "profile": o.batch.profile,
                 "seed": o.batch.seed,
                 "randomized": o.batch.randomized,
-                "directory": o.directory.name,
+                "directory": None if o.directory is None else o.directory.name,
                 "status": o.status,
                 "job_id": o.job_id,
                 "frames": o.frames,
@@ -344,10 +353,10 @@ def write_batch_record(summary: BatchSummary, out_dir: Path, frames: int | None,
         ],
     }
     write_text_atomic(out_dir / BATCH_MANIFEST_NAME, json.dumps(record, indent=1, ensure_ascii=False) + "\n")
-    write_text_atomic(out_dir / README_NAME, dataset_markdown(summary, description))
+    write_text_atomic(out_dir / README_NAME, dataset_markdown(summary, description, out_dir))
 
 
-def dataset_markdown(summary: BatchSummary, dataset_description: str) -> str:
+def dataset_markdown(summary: BatchSummary, dataset_description: str, out_dir: Path) -> str:
     """DATASET.md: what the dataset is, how many jobs ended how, a table of jobs, how to check the files."""
     dataset_path = summary.outcomes[0].batch.dataset_path
     counts = ", ".join(
@@ -368,15 +377,16 @@ def dataset_markdown(summary: BatchSummary, dataset_description: str) -> str:
     for o in summary.outcomes:
         profile = o.batch.profile or "(scene's own)"
         status = o.status if o.error is None else f"{o.status}: {o.error}"
+        directory = "–" if o.directory is None else o.directory.name
         lines.append(
-            f"| {o.batch.name} | {o.directory.name} | {o.batch.scene_path.name} | {profile} | {o.batch.seed} "
+            f"| {o.batch.name} | {directory} | {o.batch.scene_path.name} | {profile} | {o.batch.seed} "
             f"| {o.frames if o.status in ('done', 'skipped') else '–'} | {status.replace('|', '/')} |"
         )
     lines += [
         "",
         "Each job directory holds a manifest.json with the SHA-256 of every file. To check them all:",
         "",
-        f"    camgen verify {summary.outcomes[0].directory.parent}",
+        f"    camgen verify {out_dir}",
         "",
     ]
     return "\n".join(lines)

@@ -60,7 +60,12 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     if args.out.exists() and not args.out.is_dir():
         raise ConfigError(f"-o {args.out}: is a file; give a directory to write the dataset into")
     batch_jobs = expand(args.dataset)
-    jobs = [(batch, compile_batch_job(batch)) for batch in batch_jobs]
+    jobs = []
+    for batch in batch_jobs:
+        try:
+            jobs.append((batch, compile_batch_job(batch)))
+        except ConfigError as exc:  # this job fails (reported, no render); the others go on
+            jobs.append((batch, "; ".join(str(problem) for problem in exc.problems)))
     if args.plan:
         table = Table(title=f"{escape(str(args.dataset))}: {len(jobs)} jobs")
         randomized = any(batch.randomized for batch, _ in jobs)
@@ -73,8 +78,8 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
                 escape(batch.scene_path.name),
                 escape(batch.profile or "(scene's own)"),
                 str(batch.seed),
-                str(frames_of(job, args.frames)),
-                escape(job_directory_name(job)),
+                "–" if isinstance(job, str) else str(frames_of(job, args.frames)),
+                escape(f"does not compile: {job}" if isinstance(job, str) else job_directory_name(job)),
                 *([f"{light:.3g}" if light is not None else "–"] if randomized else []),
             )
         out.print(table)
