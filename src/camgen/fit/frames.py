@@ -485,7 +485,8 @@ def read_rgb8_frames(paths: Sequence[Path], *, max_frames: int) -> Iterator[tupl
     for path in reference_files(paths):
         if path.suffix.lower() in VIDEO_SUFFIXES:
             import av
-            from av.video.reformatter import ColorRange
+
+            from camgen.io.video import decoded_rgb8
 
             try:
                 with av.open(str(path)) as container:
@@ -495,15 +496,7 @@ def read_rgb8_frames(paths: Sequence[Path], *, max_frames: int) -> Iterator[tupl
                         if count >= max_frames:
                             return
                         count += 1
-                        # Full-range RGB from the stream's own matrix and range (a limited-range
-                        # stream read as full range would scale the noise).
-                        rgb = frame.reformat(
-                            format="rgb24",
-                            src_colorspace=frame.colorspace,
-                            src_color_range=frame.color_range,
-                            dst_color_range=ColorRange.JPEG,
-                        )
-                        yield f"{path.name}#{index}", rgb.to_ndarray()
+                        yield f"{path.name}#{index}", decoded_rgb8(frame)
             except av.FFmpegError as exc:
                 raise ConfigError(f"{path}: cannot decode the video ({exc})") from None
             continue

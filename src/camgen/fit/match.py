@@ -132,12 +132,11 @@ from typing import Literal
 import av
 import cv2
 import numpy as np
-from av.video.reformatter import ColorRange
 from scipy import optimize, special
 
 from camgen.config.profile import Codec, Isp, Profile
 from camgen.errors import ConfigError
-from camgen.io.video import VideoWriter
+from camgen.io.video import VideoWriter, decoded_rgb8
 from camgen.isp.pipeline import CameraIsp
 from camgen.isp.tone import tone_curve
 from camgen.plan.compile import isp_steps
@@ -1041,15 +1040,7 @@ def _through_codec(frames_rgb8: list[np.ndarray], codec: Codec, *, fps: float) -
             for frame in frames_rgb8:
                 writer.write(frame)
         with av.open(path) as container:
-            return [
-                frame.reformat(
-                    format="rgb24",
-                    src_colorspace=frame.colorspace,
-                    src_color_range=frame.color_range,
-                    dst_color_range=ColorRange.JPEG,
-                ).to_ndarray()
-                for frame in container.decode(video=0)
-            ]
+            return [decoded_rgb8(frame) for frame in container.decode(video=0)]
 
 
 def _round(value: float) -> float:

@@ -233,6 +233,18 @@ class VideoWriter:
             self._tmp_path.unlink(missing_ok=True)
 
 
+def decoded_rgb8(frame: av.VideoFrame) -> np.ndarray:
+    """(H, W, 3) uint8 full-range RGB of a decoded frame, converted with the colour matrix and range its
+    stream is tagged with (a limited-range stream read as full range would stretch its levels and noise)."""
+    rgb = frame.reformat(
+        format="rgb24",
+        src_colorspace=frame.colorspace,
+        src_color_range=frame.color_range,
+        dst_color_range=ColorRange.JPEG,
+    )
+    return rgb.to_ndarray()
+
+
 def _frame_rate(fps: float) -> Fraction:
     """`fps` as an exact fraction: integer, NTSC ``n · 1000/1001``, or nearest with denominator ≤ 1001."""
     if isinstance(fps, bool) or not isinstance(fps, numbers.Real) or not (math.isfinite(fps) and fps > 0):
