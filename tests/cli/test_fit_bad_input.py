@@ -60,7 +60,7 @@ def test_mixed_resolutions_name_the_odd_files(tmp_path, capsys):
     dng(tmp_path / "dark" / "small.dng", dark_frame((32, 32)))
     code, err = fit_noise(tmp_path, capsys)
     assert code == 2
-    assert "mixed resolutions" in err and "small.dng (32×32)" in err and "big_0" not in err
+    assert "mixed resolutions" in err and "small.dng (32×32 px)" in err and "big_0" not in err
 
 
 def test_a_saturated_dark_frame_is_named(tmp_path, capsys):

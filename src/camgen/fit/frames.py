@@ -57,6 +57,14 @@ def listing(names: Sequence[str]) -> str:
     return shown + (f" and {len(names) - LISTED} more" if len(names) > LISTED else "")
 
 
+def mixed_sizes_error(directory: Path, what: str, sizes_px: dict[tuple[int, int], list[str]], fix: str) -> ConfigError:
+    """The error for a folder whose files differ in size: the most common (width, height) and every
+    other file with its own."""
+    ((width, height), common), *others = sorted(sizes_px.items(), key=lambda item: -len(item[1]))
+    odd = listing([f"{name} ({w}×{h} px)" for (w, h), names in others for name in names])
+    return ConfigError(f"{directory}: {what}: {len(common)} are {width}×{height} px, but {odd}; {fix}")
+
+
 @dataclass(frozen=True)
 class FrameMetadata:
     exposure_time_s: float | None = None
@@ -414,11 +422,9 @@ def _check_scan(directory, kind, scan, shapes, cfas, no_exposure, saturated, met
         reasons = listing([f"{name} {reason}" for name, reason in scan.skipped])
         raise ConfigError(f"{directory}: no readable frames: {reasons}")
     if len(shapes) > 1:
-        (common, names), *others = sorted(shapes.items(), key=lambda item: -len(item[1]))
-        odd = listing([f"{n} ({h}×{w})" for (h, w), ns in others for n in ns])
-        raise ConfigError(
-            f"{directory}: frames of mixed resolutions: {len(names)} are {common[1]}×{common[0]} px, but {odd}; "
-            "a fit needs one sensor mode — move the others out"
+        sizes_px = {(w, h): names for (h, w), names in shapes.items()}
+        raise mixed_sizes_error(
+            directory, "frames of mixed resolutions", sizes_px, "a fit needs one sensor mode — move the others out"
         )
     if len(cfas) > 1:
         detail = "; ".join(f"{c}: {listing(ns)}" for c, ns in cfas.items())

@@ -39,7 +39,7 @@ import cv2
 import numpy as np
 
 from camgen.errors import ConfigError
-from camgen.fit.frames import FrameReadError, image_files, listing, read_gray8
+from camgen.fit.frames import FrameReadError, image_files, listing, mixed_sizes_error, read_gray8
 
 BOARD_EXAMPLES = (
     "'checkerboard:9x6:25mm' (9×6 inner corners, 25 mm squares) or "
@@ -451,12 +451,7 @@ def detect_in_folder(
         reasons = listing([f"{name} {reason}" for name, reason in unusable])
         raise ConfigError(f"{directory}: none of its images could be read ({reasons})")
     if len(sizes) > 1:
-        ((width, height), common), *others = sorted(sizes.items(), key=lambda item: -len(item[1]))
-        odd = listing([f"{name} ({w}×{h} px)" for (w, h), names in others for name in names])
-        raise ConfigError(
-            f"{directory}: images of mixed sizes: {len(common)} are {width}×{height} px, but {odd}; "
-            "calibrate one camera mode at a time"
-        )
+        raise mixed_sizes_error(directory, "images of mixed sizes", sizes, "calibrate one camera mode at a time")
     return BoardImages(tuple(detections), tuple(unusable), next(iter(sizes)))
 
 
