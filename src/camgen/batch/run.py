@@ -27,7 +27,7 @@ from camgen.batch.expand import BatchJob
 from camgen.errors import ConfigError
 from camgen.io.files import write_text_atomic
 from camgen.io.manifest import JOB_NAME, read_manifest, verify
-from camgen.plan.execute import job_directory_name
+from camgen.plan.execute import job_directory_name, rendered_record
 from camgen.plan.job import Job
 
 BATCH_MANIFEST_NAME = "dataset.json"
@@ -76,11 +76,9 @@ class BatchSummary:
         return not self.interrupted and all(o.status in ("done", "skipped") for o in self.outcomes)
 
 
-def rendered_record(job: Job, frame_count: int | None) -> dict:
-    """What `execute` records as `rendered` in the manifest for all cameras and the first `frame_count`
-    frames (None: all of them)."""
-    frames = "all" if frame_count is None or frame_count >= job.frame_count else list(range(frame_count))
-    return {"cameras": [camera.name for camera in job.cameras], "frames": frames}
+def first_frames(job: Job, frame_count: int | None) -> range | None:
+    """The frames a render of the first `frame_count` frames of `job` draws (None: all of them)."""
+    return None if frame_count is None or frame_count >= job.frame_count else range(frame_count)
 
 
 def frames_of(job: Job, frame_count: int | None) -> int:
@@ -91,7 +89,8 @@ def frames_of(job: Job, frame_count: int | None) -> int:
 def is_complete(job: Job, job_dir: Path, frame_count: int | None) -> bool:
     """Whether `job_dir` holds a finished, unmodified render of `job` and of these frames."""
     manifest, _ = read_manifest(job_dir)
-    if manifest is None or manifest.get("rendered") != rendered_record(job, frame_count):
+    expected = rendered_record([camera.name for camera in job.cameras], first_frames(job, frame_count))
+    if manifest is None or manifest.get("rendered") != expected:
         return False
     try:
         recorded = json.loads((job_dir / JOB_NAME).read_text(encoding="utf-8")).get("job_id")
@@ -308,12 +307,11 @@ def _render_job(job_json: str, out_dir: str, frames: int | None, scene_path: str
         if _worker_renderer is None:
             _worker_renderer = Renderer()
         job = Job.from_json(job_json)
-        count = None if frames is None or frames >= job.frame_count else frames
         results = execute(
             job,
             out_dir,
             renderer=_worker_renderer,
-            frames=None if count is None else range(count),
+            frames=first_frames(job, frames),
             resolve_path=Path(scene_path).resolve().parent.joinpath,
         )
     except Exception as exc:  # reported to the parent as this job's error, with the traceback's last frame

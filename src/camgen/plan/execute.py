@@ -87,6 +87,11 @@ def unimplemented_stages(camera: CameraJob) -> list[str]:
     return [stage.name for stage in camera.stages if stage.name not in IMPLEMENTED_STAGES]
 
 
+def rendered_record(cameras: Iterable[str], frames: Iterable[int] | None) -> dict:
+    """What a manifest records as `rendered`: the cameras, and the frame indices ("all" for None)."""
+    return {"cameras": list(cameras), "frames": "all" if frames is None else list(frames)}
+
+
 def execute(
     job: Job,
     out_dir: str | Path,
@@ -127,7 +132,7 @@ def execute(
     # Written last: a job directory with job.json in it holds a finished render, of the cameras and
     # frames the manifest's `rendered` names (all of them unless --camera/--frames chose fewer).
     write_text_atomic(job_dir / "job.json", job.to_json())
-    rendered = {"cameras": [r.name for r in results], "frames": indices if frames is not None else "all"}
+    rendered = rendered_record([r.name for r in results], indices if frames is not None else None)
     write_manifest(job, job_dir, rendered=rendered)  # after everything, job.json included
     return results
 
