@@ -17,6 +17,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
+from camgen.config.profile import Profile
 from camgen.errors import ConfigError
 
 CFA_CHOICES = ("RGGB", "BGGR", "GRBG", "GBRG", "mono")
@@ -156,18 +157,21 @@ def _check_positive(value: float | None, option: str) -> None:
         raise ConfigError(f"{option} must be > 0, got {value:g}")
 
 
-def _check_outputs(args: argparse.Namespace) -> None:
-    """Before any frame is read: the base profile loads, and the output names can be files."""
+def _check_outputs(args: argparse.Namespace) -> Profile | None:
+    """Before any frame is read: the base profile loads (returned; None without --profile), and the
+    output names can be files."""
+    base = None
     if args.profile is not None:
         from camgen.config.loader import load_profile
 
-        load_profile(args.profile)
+        base = load_profile(args.profile).profile
     report = _report_path(args)
     if report.suffix.lower() != ".png":
         raise ConfigError(f"--report {report}: the report is a PNG image; give a name ending in .png")
     for option, path in (("-o", args.output), ("--report", report)):
         if path.is_dir():
             raise ConfigError(f"{option} {path} is a folder; give a file name")
+    return base
 
 
 def _write_outputs(args, out: Console, fragment: dict, header: list[str], write_report) -> None:
@@ -269,12 +273,9 @@ def run_lens(args: argparse.Namespace, out: Console, err: Console) -> int:
 
     _check_positive(args.pixel_pitch_um, "--pixel-pitch-um")
     board = parse_board(args.board)
-    _check_outputs(args)
+    base = _check_outputs(args)
     pixel_pitch_um = args.pixel_pitch_um
-    if args.profile is not None:
-        from camgen.config.loader import load_profile
-
-        base = load_profile(args.profile).profile
+    if base is not None:
         if base.lens.focal_length_range_mm is not None or base.lens.zoom_table:
             raise ConfigError(
                 f"--profile {args.profile} is a zoom lens (focal_length_range_mm / zoom_table), but board images "
@@ -308,7 +309,6 @@ def run_lens(args: argparse.Namespace, out: Console, err: Console) -> int:
 
 
 def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from camgen.config.loader import load_profile
     from camgen.fit.frames import VIDEO_SUFFIXES, read_rgb8_frames, reference_files, video_frame_rate
     from camgen.fit.match import fit_match
     from camgen.fit.match_report import write_match_report
@@ -321,8 +321,7 @@ def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
         raise ConfigError(f"--bins must be 2–256 (8-bit codes), got {args.bins}")
     if args.gain_db is not None and not 0 <= args.gain_db <= 72:
         raise ConfigError(f"--gain-db must be 0–72 dB (the profile's range), got {args.gain_db:g}")
-    _check_outputs(args)
-    base = load_profile(args.profile).profile
+    base = _check_outputs(args)  # --profile is required here
     videos = [path for path in reference_files(args.reference) if path.suffix.lower() in VIDEO_SUFFIXES]
     codec = base.codec if videos and not args.no_codec else None
     codec_fps = video_frame_rate(videos[0]) if codec is not None else None
