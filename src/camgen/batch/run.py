@@ -159,6 +159,18 @@ class PoolExecutor:
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
+def check_options(*, workers: int, retries: int, executor: str, address: str | None) -> None:
+    """ConfigError for run options `run_batch` cannot take (the CLI checks them before expanding)."""
+    if workers < 1:
+        raise ConfigError(f"--workers must be ≥ 1, got {workers}")
+    if retries < 0:
+        raise ConfigError(f"--retries must be ≥ 0, got {retries}")
+    if executor not in ("local", "ray"):
+        raise ConfigError(f"--executor must be local or ray, got {executor!r}")
+    if address is not None and executor != "ray":
+        raise ConfigError(f"--address {address} is for --executor ray; add --executor ray or leave it out")
+
+
 def run_batch(
     jobs: Sequence[tuple[BatchJob, Job | str]],
     out_dir: str | Path,
@@ -185,14 +197,7 @@ def run_batch(
     not yet started, waits for the running ones, and returns what completed (`interrupted` set). The
     dataset record and DATASET.md are written at the end, atomically, in every case.
     """
-    if workers < 1:
-        raise ConfigError(f"--workers must be ≥ 1, got {workers}")
-    if retries < 0:
-        raise ConfigError(f"--retries must be ≥ 0, got {retries}")
-    if executor not in ("local", "ray"):
-        raise ConfigError(f"--executor must be local or ray, got {executor!r}")
-    if address is not None and executor != "ray":
-        raise ConfigError(f"--address {address} is for --executor ray; leave it out for the local pool")
+    check_options(workers=workers, retries=retries, executor=executor, address=address)
     out_dir = Path(out_dir)
     started = time.perf_counter()
     outcomes: dict[int, JobOutcome] = {}

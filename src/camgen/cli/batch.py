@@ -45,18 +45,13 @@ def add_parser(subparsers) -> None:
 
 def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     from camgen.batch.expand import compile_batch_job, expand
-    from camgen.batch.run import frames_of, run_batch
+    from camgen.batch.run import check_options, frames_of, run_batch
     from camgen.config.loader import load_dataset
     from camgen.plan.execute import job_directory_name
 
     if args.frames is not None and args.frames < 1:
         raise ConfigError(f"--frames must be ≥ 1, got {args.frames}")
-    if args.workers < 1:
-        raise ConfigError(f"--workers must be ≥ 1, got {args.workers}")
-    if args.retries < 0:
-        raise ConfigError(f"--retries must be ≥ 0, got {args.retries}")
-    if args.address is not None and args.executor != "ray":
-        raise ConfigError(f"--address {args.address} is for --executor ray; add --executor ray or leave it out")
+    check_options(workers=args.workers, retries=args.retries, executor=args.executor, address=args.address)
     if args.out.exists() and not args.out.is_dir():
         raise ConfigError(f"-o {args.out}: is a file; give a directory to write the dataset into")
     batch_jobs = expand(args.dataset)
