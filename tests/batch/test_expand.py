@@ -85,3 +85,19 @@ def test_cli_plan_lists_the_jobs_without_rendering(dataset, capsys):
     text = capsys.readouterr().out
     assert all(f"walk-{p}-seed{s}" in text for p in ("small", "wide") for s in (3, 4))
     assert not (dataset.parent / "out").exists()
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--workers", "0"], "--workers must be ≥ 1, got 0"),
+        (["--retries", "-1"], "--retries must be ≥ 0, got -1"),
+        (["--frames", "0"], "--frames must be ≥ 1, got 0"),
+        (["--address", "127.0.0.1:6379"], "--address 127.0.0.1:6379 is for --executor ray"),
+    ],
+)
+def test_bad_run_options_are_refused_before_anything_is_rendered(dataset, tmp_path, capsys, extra, message):
+    assert main(["batch", str(dataset), "-o", str(tmp_path / "out"), *extra]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+    assert not (tmp_path / "out").exists()

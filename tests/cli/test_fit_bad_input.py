@@ -200,3 +200,28 @@ def test_lens_against_a_zoom_profile_is_refused_before_reading(tmp_path, capsys)
     assert main([*argv, "--profile", str(profile), "-o", str(tmp_path / "l.yaml")]) == 2
     err = capsys.readouterr().err
     assert "is a zoom lens" in err and "zoom_table entry" in err
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (
+            ["lens", "--images", "IMAGES", "--board", "checkerboard:9x6:25mm", "--pixel-pitch-um", "0"],
+            "--pixel-pitch-um must be > 0",
+        ),
+        (["match", "--reference", "IMAGES", "--profile", "PROFILE", "--max-frames", "0"], "--max-frames must be ≥ 1"),
+        (["match", "--reference", "IMAGES", "--profile", "PROFILE", "--bins", "1"], "--bins must be 2–256"),
+        (["match", "--reference", "IMAGES", "--profile", "PROFILE", "--gain-db", "80"], "--gain-db must be 0–72 dB"),
+    ],
+)
+def test_bad_lens_and_match_options(tmp_path, capsys, argv, message):
+    from tests.conftest import FIXED_PROFILE
+
+    (tmp_path / "images").mkdir()
+    (tmp_path / "base.yaml").write_text(FIXED_PROFILE)
+    paths = {"IMAGES": str(tmp_path / "images"), "PROFILE": str(tmp_path / "base.yaml")}
+    argv = [paths.get(arg, arg) for arg in argv]
+    assert main(["fit", *argv, "-o", str(tmp_path / "o.yaml")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+    assert not (tmp_path / "o.yaml").exists()
