@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from camgen.config.ptz_program import (
@@ -34,6 +34,7 @@ from camgen.motion.ptz import (
     step_axis,
     wrap_deg,
 )
+from tests.stress import stress_settings
 
 EPS = 1e-9
 
@@ -99,7 +100,7 @@ def programs(draw):
     return KeyframeProgram(type="keyframes", keys=keys), []
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@stress_settings(60)
 @given(programs(), st.booleans(), positions, st.floats(20.0, 400.0), st.floats(50.0, 1000.0))
 def test_limits_hold_for_random_programs(program_presets, endless, start, pan_speed, pan_accel):
     program, presets = program_presets
@@ -115,7 +116,7 @@ def test_limits_hold_for_random_programs(program_presets, endless, start, pan_sp
         assert np.all((track.pan_deg >= -180.0) & (track.pan_deg < 180.0))
 
 
-@settings(max_examples=20, deadline=None)
+@stress_settings(20)
 @given(programs(), st.integers(2, 8))
 def test_frame_samples_respect_the_limits_too(program_presets, steps):
     """Frame samples average the servo steps: finite differences obey v_max and a_max as well."""
@@ -189,6 +190,7 @@ def test_reported_positions_sit_on_the_step_grid():
     assert abs(track.pan_deg[-1] - 33.35) < 1e-9  # nearest step to 33.333
 
 
+@stress_settings(100)
 @given(st.floats(1e-6, 1e4), st.floats(1.0, 1e4), st.floats(1e-3, 0.05))
 def test_braking_speed_stops_exactly_within_the_distance(distance, accel, dt):
     """The closed form equals the distance covered by braking at a·dt per step from that speed."""

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 from camgen.config.scene import ActorPath, RandomWalk, Scene
@@ -23,10 +23,11 @@ from camgen.motion.trajectory import (
     random_walk_route,
     route_from_path,
 )
+from tests.stress import stress_settings
 
 DT_S = 0.01
 TOL_M = 1e-9
-SETTINGS = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+SETTINGS = stress_settings(60)
 
 coordinate = st.floats(-20, 20, allow_nan=False).map(lambda v: round(v, 3))
 point = st.tuples(coordinate, coordinate)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 from pydantic import ValidationError
 
@@ -26,6 +26,7 @@ from camgen.optics.remap import (
 )
 from camgen.optics.vignetting import relative_illumination
 from tests.conftest import REPO
+from tests.stress import stress_settings
 
 BASE = load_profile(REPO / "profiles/lowlight_2mp_1p2in.yaml").profile.model_dump()
 SIZES = st.sampled_from([(1, 1), (2, 3), (17, 5), (64, 48), (640, 480), (1920, 1080), (3840, 2160), (7680, 4320)])
@@ -72,7 +73,7 @@ def _border_and_interior(width: int, height: int, rng: np.random.Generator) -> n
     return border, interior
 
 
-@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
+@stress_settings(80)
 @given(
     distortion=lens_strategy,
     focal_length_mm=st.floats(1.0, 1000.0),
@@ -119,7 +120,7 @@ def test_accepted_lenses_give_finite_checked_maps_inside_the_render(
         assert np.isfinite(gain).all() and (gain > 0).all()
 
 
-@settings(max_examples=60, deadline=None)
+@stress_settings(60)
 @given(
     focal_length_mm=st.floats(1.0, 1000.0),
     f_number=st.floats(0.5, 64.0),

@@ -21,6 +21,9 @@ import numpy as np
 
 from camgen.sensor.exposure import gain_db, gain_linear
 
+STEP_EV_MAX = 1000.0
+"""Largest exposure step computed, EV: far beyond any exposure range, and 2^1000 is still finite."""
+
 
 @dataclass(frozen=True)
 class ExposureLimits:
@@ -107,7 +110,9 @@ def next_exposure(
     else:
         error_ev = math.inf
     step_ev = min(max(error_ev, -speed_down_ev_per_s * frame_interval_s), speed_up_ev_per_s * frame_interval_s)
-    return split_exposure(current.product_s * 2.0**step_ev, limits)
+    # The split clips the product to the limits; bounding the step keeps 2^step finite for the (valid)
+    # very fast speeds, where 2.0 ** step would overflow, and changes nothing else.
+    return split_exposure(current.product_s * 2.0 ** min(step_ev, STEP_EV_MAX), limits)
 
 
 def frames_to_adapt(light_factor: float, *, speed_ev_per_s: float, frame_interval_s: float) -> int:

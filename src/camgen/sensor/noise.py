@@ -23,6 +23,7 @@ Fast, and statistically the same (each choice is measured in `make bench`):
 from __future__ import annotations
 
 import itertools
+import math
 from concurrent.futures import Executor
 from dataclasses import dataclass
 from functools import lru_cache
@@ -33,6 +34,7 @@ from scipy.special import ndtri
 
 BANDS = 2
 """Row bands of a frame; each draws from its own generator (fixed, so threading changes nothing)."""
+FLOAT32_MAX = float(np.finfo(np.float32).max)
 SATURATION_MARGIN_SIGMA = 6.0
 """Sites whose expected signal is within this many noise σ of full well are redone in full."""
 
@@ -129,8 +131,22 @@ def _expected(band: _Band, rate, per_unit, exposure_time_s, dark_e_per_s) -> Non
         cv2.scaleAdd(dark_e_per_s, t, band.mean, dst=band.mean)
     elif dark_e_per_s:
         band.mean += np.float32(dark_e_per_s * t)
-    # FFT convolutions (large blur discs) leave round-off such as −3e-12 where the light is zero.
-    np.maximum(band.mean, 0.0, out=band.mean)
+    _clamp_expected(band.mean, band.mean, "the light at the sensor (rate · per_unit · t + dark · t)")
+
+
+def _clamp_expected(mean: np.ndarray, out: np.ndarray, what: str) -> None:
+    """Expected electrons clamped to [0, float32 max] into `out`; ValueError on NaN.
+
+    FFT convolutions (large blur discs) leave round-off such as −3e-12 where the light is zero, taken
+    as 0. Light beyond float32 (an infinite rate, or rate · t overflowing) is held at the largest
+    float32, which every full well clips: inf would turn into NaN in the noise (inf − inf) and read as
+    0 DN. NaN is no light level at all; one pass (a sum, NaN iff any site is NaN) finds it.
+    """
+    np.clip(mean, 0.0, FLOAT32_MAX, out=out)
+    with np.errstate(over="ignore"):  # a sum past float32 is inf, still not NaN
+        total = float(np.sum(out))
+    if math.isnan(total):
+        raise ValueError(f"{what} contains NaN; fix the render (or the radiance passed in) before the sensor")
 
 
 def _temporal(band: _Band, offset_e, scale, noise: TemporalNoise, rng: np.random.Generator) -> None:
@@ -166,14 +182,18 @@ def _run_bands(height: int, width: int, work, rng: np.random.Generator, executor
     mean = np.empty((height, width), np.float32)
     electrons = np.empty((height, width), np.float32)
     dn = None if adc is None else np.empty((height, width), np.uint16)
+    # A sensor of one row has an empty band: it is skipped (OpenCV refuses empty arrays), and each
+    # band keeps its own stream, so the draws of the other do not change.
     bands = [
-        _Band(rows, mean[rows], electrons[rows], None if dn is None else dn[rows]) for rows in _band_slices(height)
+        (_Band(rows, mean[rows], electrons[rows], None if dn is None else dn[rows]), stream)
+        for rows, stream in zip(_band_slices(height), streams, strict=False)
+        if rows.stop > rows.start
     ]
     if executor is None:
-        for band, stream in zip(bands, streams, strict=False):
+        for band, stream in bands:
             work(band, stream)
     else:
-        for future in [executor.submit(work, band, stream) for band, stream in zip(bands, streams, strict=False)]:
+        for future in [executor.submit(work, band, stream) for band, stream in bands]:
             future.result()
     return _Band(slice(0, height), mean, electrons, dn), streams[-1]
 
@@ -198,7 +218,7 @@ def sample_electrons(
     ----------
     mean_e : (H, W) float32
         Expected collected electrons μ (photo-electrons plus dark-current electrons); round-off below
-        0 is taken as 0.
+        0 is taken as 0, values beyond float32 (inf) as the largest float32. NaN raises ValueError.
     read_noise_e : float
         Temporal read noise σ_read, electrons rms.
     offset_e : (H, W) float32, optional
@@ -240,7 +260,7 @@ def sample_electrons(
     )
 
     def work(band: _Band, stream: np.random.Generator) -> None:
-        np.maximum(mean_e[band.rows], 0.0, out=band.mean)
+        _clamp_expected(mean_e[band.rows], band.mean, "mean_e")
         _temporal(band, _part(offset_e, band.rows), _part(noise.noise_scale, band.rows), noise, stream)
 
     frame, rest = _run_bands(*mean_e.shape, work, rng, executor, None)
@@ -321,7 +341,8 @@ def _saturate(frame: _Band, offset_e, noise: TemporalNoise, rng: np.random.Gener
             np.array([[0, 0.25, 0], [0.25, 0, 0.25], [0, 0.25, 0]], np.float32),
             borderType=cv2.BORDER_CONSTANT,
         )
-        signal += spill.ravel()[index]
+        with np.errstate(over="ignore"):  # spill from light beyond float32 is inf, clipped next
+            signal += spill.ravel()[index]
     np.minimum(signal, np.float32(full_well_e), out=signal)
     signal += _read_noise(index.size, noise.read_noise_e, noise.read_noise_tail_dof, rng) * s
     if offset_e is not None:
@@ -338,7 +359,8 @@ def digitize(electrons: np.ndarray, *, gain_dn_per_e: float, black_level_dn: flo
     variance (EMVA 1288 eq. 6).
     """
     white = float(2**bit_depth - 1)
-    scaled = electrons * np.float32(gain_dn_per_e)
-    scaled += np.float32(black_level_dn + 0.5)
+    with np.errstate(over="ignore"):  # electrons near float32's largest may give inf DN: clipped to white
+        scaled = electrons * np.float32(gain_dn_per_e)
+        scaled += np.float32(black_level_dn + 0.5)
     np.clip(scaled, 0.0, white, out=scaled)
     return scaled.astype(np.uint16)
