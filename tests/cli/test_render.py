@@ -39,8 +39,12 @@ def test_render_writes_video_passes_and_job(workspace, capsys):
     assert states[0]["metered_level_frac"] == pytest.approx(0.18, rel=0.05)
     assert 20 < frames[0].mean() < 235
     assert not list(workspace.rglob("*.partial*"))
-    assert "annotate" not in capsys.readouterr().err  # annotations are written, not skipped
+    captured = capsys.readouterr()
+    assert "annotate" not in captured.err  # annotations are written, not skipped
     assert (job_dir / "cam" / "gt" / "gt.txt").exists() and (job_dir / "cam" / "coco.json").exists()
+    # Where the time went, per stage, as shares of the camera's total.
+    time_line = next(line for line in captured.out.splitlines() if line.strip().startswith("time:"))
+    assert "render" in time_line and "sensor" in time_line and "%" in time_line
 
 
 def test_render_rejects_an_unknown_camera(workspace, capsys):

@@ -14,6 +14,7 @@ from camgen.cli.common import add_profile_dirs_option, profile_dirs
 from camgen.config import load_scene
 from camgen.errors import ConfigError
 from camgen.plan import PlanSettings, compile_scene
+from camgen.plan.timing import shares_text, stage_sums
 
 
 def add_parser(subparsers) -> None:
@@ -92,6 +93,9 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             f"total {result.total_s:.1f} s → {escape(str(result.directory))}",
             highlight=False,
         )
+        shares = shares_text(stage_sums([*result.stage_frames, result.finish_s]), result.total_s)
+        if shares:
+            out.print(f"    time: {shares}", highlight=False)
         for path in result.files[:3]:
             out.print(f"    {escape(str(path))}", highlight=False)
         if len(result.files) > 3:

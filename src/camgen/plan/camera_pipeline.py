@@ -35,6 +35,7 @@ from camgen.optics.remap import (
 )
 from camgen.plan.job import CameraJob, CameraState, Job
 from camgen.plan.lens_stages import LensStages
+from camgen.plan.timing import StageClock
 from camgen.render.renderer import Passes
 from camgen.render.sequence import crop_to_output
 from camgen.sensor.auto_exposure import (
@@ -90,8 +91,11 @@ class CameraPipeline:
         *,
         maps: LensMapCache | None = None,
         executor: Executor | None = None,
+        clock: StageClock | None = None,
     ):
         self.job, self.camera = job, camera
+        self.clock = clock or StageClock()
+        """Wall time of each stage (`camgen.plan.timing`); the executor closes each frame."""
         self.stages = {stage.name: stage for stage in camera.stages}
         self.lens = LensStages(camera, maps)
         self.executor = executor
@@ -166,7 +170,12 @@ class CameraPipeline:
 
     def light_at_sites(self, state: CameraState, passes: Passes) -> np.ndarray:
         """(H, W) float32 radiance each photosite receives through the lens (mono: QE-weighted)."""
-        radiance = self.lens.blur(state, passes)
+        with self.clock("optics.blur"):
+            radiance = self.lens.blur(state, passes)
+        with self.clock("optics.remap"):
+            return self._resample_onto_sites(state, radiance)
+
+    def _resample_onto_sites(self, state: CameraState, radiance: np.ndarray) -> np.ndarray:
         interpolation = (
             self.stages["optics.remap"].params["interpolation"] if "optics.remap" in self.stages else "linear"
         )
@@ -228,14 +237,26 @@ class CameraPipeline:
     def process(self, state: CameraState, passes: Passes, *, rng: np.random.Generator) -> CapturedFrame:
         """One frame's raw and ISP output, and the exposure set for the next frame."""
         light = self.light_at_sites(state, passes)
-        raw = self.sensor_model.capture(
-            light,
-            exposure_time_s=state.exposure_time_s,
-            gain_db=state.gain_db,
-            rng=rng,
-            electrons_per_photon=self._electrons_per_cd_m2_s(state),
-            executor=self.executor,
+        with self.clock("sensor"):
+            raw = self.sensor_model.capture(
+                light,
+                exposure_time_s=state.exposure_time_s,
+                gain_db=state.gain_db,
+                rng=rng,
+                electrons_per_photon=self._electrons_per_cd_m2_s(state),
+                executor=self.executor,
+            )
+        with self.clock("sensor.auto_exposure"):
+            level = self._meter_and_adapt(state, raw)
+        with self.clock("isp"):
+            rgb8 = None if self.isp is None else self.isp.process(raw, state.gain_db)
+        white_balance = None if self.isp is None or self.mono else tuple(self.isp.white_balance_gains.tolist())
+        return CapturedFrame(
+            raw_dn=raw, rgb8=rgb8, state=state, metered_level_frac=level, white_balance_rgb=white_balance
         )
+
+    def _meter_and_adapt(self, state: CameraState, raw: np.ndarray) -> float:
+        """Meter the raw frame; with auto-exposure, set the next frame's exposure. Returns the level."""
         sensor, exposure = self.camera.profile.sensor, self.camera.profile.exposure
         auto = exposure.auto
         level = metered_level_frac(
@@ -254,8 +275,4 @@ class CameraPipeline:
                 frame_interval_s=1.0 / self.job.fps,
                 limits=self.limits,
             )
-        rgb8 = None if self.isp is None else self.isp.process(raw, state.gain_db)
-        white_balance = None if self.isp is None or self.mono else tuple(self.isp.white_balance_gains.tolist())
-        return CapturedFrame(
-            raw_dn=raw, rgb8=rgb8, state=state, metered_level_frac=level, white_balance_rgb=white_balance
-        )
+        return level

@@ -30,6 +30,7 @@ from camgen.plan.annotations import Annotator
 from camgen.plan.camera_pipeline import CameraPipeline, frame_rng
 from camgen.plan.job import CameraJob, Job
 from camgen.plan.lens_stages import LensStages
+from camgen.plan.timing import StageClock, stage_sums
 from camgen.render.renderer import Passes, Renderer
 from camgen.render.scene_graph import build_scene_graph, instance_table
 from camgen.render.sequence import CameraRenderer
@@ -73,9 +74,19 @@ class CameraResult:
     directory: Path
     frames: int = 0
     files: list[Path] = field(default_factory=list)
-    render_s: float = 0.0
-    """Time spent drawing and reading back passes, s."""
     total_s: float = 0.0
+    stage_frames: list[dict[str, float]] = field(default_factory=list)
+    """Wall time per stage of each frame rendered, s (`camgen.plan.timing.StageClock`). The first
+    frame carries the one-off costs: the scene upload, lens maps, auto-exposure's convergence."""
+    frame_wall_s: list[float] = field(default_factory=list)
+    """Wall time of each frame, s (the first from the camera's setup on)."""
+    finish_s: dict[str, float] = field(default_factory=dict)
+    """Wall time per stage after the last frame: flushing the video encoder, writing annotations."""
+
+    @property
+    def render_s(self) -> float:
+        """Time spent drawing and reading back passes (motion-blur sub-frames included), s."""
+        return stage_sums(self.stage_frames).get("render", 0.0)
 
 
 def job_directory_name(job: Job) -> str:
@@ -154,9 +165,10 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
     camera = job.cameras[context.camera_index]
     result = CameraResult(camera.name, directory)
     started = time.perf_counter()
+    clock = StageClock()
     stages = {stage.name: stage for stage in camera.stages}
     pipeline = (
-        CameraPipeline(job, camera, maps=context.maps, executor=context.executor)
+        CameraPipeline(job, camera, maps=context.maps, executor=context.executor, clock=clock)
         if "radiance" in camera.render.passes
         else None
     )
@@ -182,9 +194,9 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
     )
     try:
         for index in indices:
-            tick = time.perf_counter()
             state = camera.states[index] if pipeline is None else pipeline.state_for(index)
-            frame = camera_renderer.frame(index, state)
+            with clock("render"):
+                frame = camera_renderer.frame(index, state)
             if converge:
                 # Start as a camera that has watched this view for a while, not from the profile's guess.
                 converge = False
@@ -192,30 +204,34 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                 settled = pipeline.state_for(index)
                 blurred = camera_renderer.motion_samples(state) > 1 or camera_renderer.motion_samples(settled) > 1
                 if settled.exposure_time_s != state.exposure_time_s and blurred:
-                    frame = camera_renderer.frame(index, settled)  # the blur spans the settled exposure
+                    with clock("render"):
+                        frame = camera_renderer.frame(index, settled)  # the blur spans the settled exposure
                 state = settled
-            result.render_s += time.perf_counter() - tick
             captured = None
             if pipeline is not None:
                 rng = frame_rng(job.seed, context.camera_index, frame.index)
                 captured = pipeline.process(state, frame.passes, rng=rng)
             rgb8 = None if captured is None else captured.rgb8
             if rgb8 is not None and state.window_px is not None:
-                rgb8 = crop_and_scale(rgb8, state.window_px, camera.output_size_px)
+                with clock("isp.eptz"):
+                    rgb8 = crop_and_scale(rgb8, state.window_px, camera.output_size_px)
             if rgb8 is not None and "io.video" in stages:
-                if video is None:
-                    width_px, height_px = camera.output_size_px or (camera.width_px, camera.height_px)
-                    video = VideoWriter(
-                        directory / "video.mp4",
-                        width_px=width_px,
-                        height_px=height_px,
-                        fps=job.fps,
-                        codec=camera.profile.codec,
-                        preset=camera.profile.codec.preset,
-                    )
-                video.write(rgb8)
-            stream = _stream_passes(camera, stages, state, frame.passes, lens, save_passes)
-            _write_files(context, stages, state, frame, captured, rgb8, stream, result)
+                with clock("io.video"):
+                    if video is None:
+                        width_px, height_px = camera.output_size_px or (camera.width_px, camera.height_px)
+                        video = VideoWriter(
+                            directory / "video.mp4",
+                            width_px=width_px,
+                            height_px=height_px,
+                            fps=job.fps,
+                            codec=camera.profile.codec,
+                            preset=camera.profile.codec.preset,
+                        )
+                    video.write(rgb8)
+            with clock("optics.passes"):
+                stream = _stream_passes(camera, stages, state, frame.passes, lens, save_passes)
+            with clock("io.files"):
+                _write_files(context, stages, state, frame, captured, rgb8, stream, result)
             if annotator is not None:
                 window = state.window_px
 
@@ -224,7 +240,8 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                         image if window is None else crop_and_scale(image, window, camera.output_size_px, nearest=True)
                     )
 
-                sequence.add(annotator.annotate(state, stream, post=to_stream))
+                with clock("annotate"):
+                    sequence.add(annotator.annotate(state, stream, post=to_stream))
             if "io.camera_metadata" in stages:
                 record = state.model_dump(mode="json")
                 output_K = record.pop("output_K_px")
@@ -241,22 +258,29 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                     table = [vars(instance) for instance in instance_table(job.scene)]
                     write_text_atomic(directory / "passes" / "instances.json", json.dumps(table, indent=1))
                 raw = None if captured is None else captured.raw_dn
-                _save_passes(directory / "passes" / f"{frame.index:06d}.npz", stream, raw, result)
+                with clock("io.passes"):
+                    _save_passes(directory / "passes" / f"{frame.index:06d}.npz", stream, raw, result)
             result.frames += 1
+            clock.end_frame()
             if on_frame is not None:
                 on_frame(camera.name, frame.index)
         if video is not None:
-            video.close()
+            with clock("io.video"):
+                video.close()
             result.files.append(directory / "video.mp4")
         if metadata:
             write_text_atomic(directory / "camera.jsonl", "\n".join(metadata) + "\n")
             result.files.append(directory / "camera.jsonl")
         if sequence is not None:
             formats = stages["annotate"].params["formats"]
-            if "mot" in formats:
-                result.files += sequence.write_mot(directory)
-            if "coco" in formats:
-                result.files.append(sequence.write_coco(directory / "coco.json"))
+            with clock("annotate"):
+                if "mot" in formats:
+                    result.files += sequence.write_mot(directory)
+                if "coco" in formats:
+                    result.files.append(sequence.write_coco(directory / "coco.json"))
+        clock.end_frame()
+        result.stage_frames, result.finish_s = clock.frames[:-1], clock.frames[-1]
+        result.frame_wall_s = clock.frame_wall_s[:-1]
     except BaseException:
         if video is not None:
             video.abort()
