@@ -73,3 +73,47 @@ def test_moving_edge_is_smeared_by_the_image_motion_during_the_exposure(workspac
     measured_px = np.sqrt(12 * (variance - variance_0))
     assert measured_px == pytest.approx(expected_px, rel=0.05)
     assert centre == pytest.approx(centre_0, abs=0.25)  # the exposure is centred on the frame time
+
+
+POLE = """\
+    - {type: box, name: pole, size_m: [0.31, 0.2, 0.8], position_m: [2.2, 8.5, 2.9], rotation_deg: [0, 20, 0],
+       material: {color_rgb: [0.8, 0.7, 0.2]}}
+"""
+
+
+def test_sub_frames_carry_the_supersampling_so_static_edges_equal_the_box_average(workspace, renderer):
+    """With supersampling 2, each motion sub-frame is drawn at 1× through one of the 2×2 sub-pixel
+    positions (`jittered_samples`): a static edge (a slanted pole above the mover's path) comes out as
+    the 2×2 box average of a sharp 2× render, not as the aliased 1× render, and the moving edge still
+    smears by the image motion."""
+    write(
+        workspace, "profiles/fixed.yaml", FIXED_PROFILE + f"exposure: {{mode: manual, exposure_time_s: {EXPOSURE_S}}}\n"
+    )
+    scene = SCENE.replace("lights:\n", POLE + "lights:\n", 1)
+    job = compile_scene(load_scene(write(workspace, "scenes/s.yaml", scene)), PlanSettings(supersampling=2))
+    camera = job.cameras[0]
+    (stage,) = [s for s in camera.stages if s.name == "optics.motion_blur"]
+    sharp_camera = camera.model_copy(update={"stages": tuple(s for s in camera.stages if s is not stage)})
+    one_x = sharp_camera.model_copy(update={"render": camera.render.model_copy(update={"supersampling": 1})})
+    index = 40
+    state = camera.states[index]
+    samples = CameraRenderer(renderer, build_scene_graph(job.scene), camera).motion_samples(state)
+    assert samples > 4 and samples % 4 != 0  # rounded up to a multiple of 4 sub-frames
+    blurred = next(render_camera(renderer, job, camera, frames=[index])).passes.radiance
+    box = next(render_camera(renderer, job, sharp_camera, frames=[index])).passes.radiance
+    aliased = next(render_camera(renderer, job, one_x, frames=[index])).passes.radiance
+    yellow = (box[..., 0] > 2 * box[..., 2] + 1) & (box[..., 1] > 2 * box[..., 2] + 1)  # the pole, not the grey box
+    rows, columns = np.nonzero(yellow)
+    assert len(rows) > 500
+    pole = (slice(max(rows.min() - 3, 0), rows.max() + 4), slice(max(columns.min() - 3, 0), columns.max() + 4))
+    edge = np.abs(box[pole] - aliased[pole]).max()
+    assert edge > 0.05 * box[pole].max()  # the window holds anti-aliased edges
+    assert np.abs(blurred[pole] - box[pole]).max() < 1e-3 * box[pole].max()
+
+    K = np.array(state.K_px)
+    x_edge_m = -20 + SPEED_M_S * state.time_s + 0.5
+    u_edge = K[0, 2] + K[0, 0] * x_edge_m / DISTANCE_M
+    variance, _ = _variance(_edge_profile(blurred, u_edge))
+    variance_0, _ = _variance(_edge_profile(box, u_edge))
+    expected_px = SPEED_M_S * EXPOSURE_S * K[0, 0] / DISTANCE_M
+    assert np.sqrt(12 * (variance - variance_0)) == pytest.approx(expected_px, rel=0.05)

@@ -9,7 +9,11 @@
 - Static background: the environment is drawn once per camera and kept on the GPU; each frame starts
   from a copy of it and draws only the actors, depth-tested against it.
 - Motion blur (when planned): radiance integrates the exposure as the mean of sub-frames at evenly
-  spread times, so each sub-frame only redraws the actors over the kept background.
+  spread times, so each sub-frame only redraws the actors over the kept background. With
+  supersampling s > 1, the sub-frames carry the spatial samples too (`jittered_samples`): each is
+  drawn at 1× through one of the s×s sub-pixel positions, in turn, and their number is rounded up to
+  a multiple of s², so a static pixel gets exactly the s×s box average at 1/s² of the cost per
+  sub-frame (time and area sampled together, as a distribution ray tracer does).
 """
 
 from __future__ import annotations
@@ -60,6 +64,28 @@ def view_at(state: CameraState, spec: RenderSpec, offset_s: float) -> View:
     K[1, 1] *= scale
     K[0, 1] *= scale
     return View(K, T, view.width_px, view.height_px)
+
+
+def jittered_samples(samples: int, supersampling: int) -> list[tuple[float, float, float]]:
+    """(time offset as a fraction of the exposure, dx px, dy px) of each sub-frame when `samples`
+    time samples and `supersampling`² area samples per pixel are drawn together at 1×.
+
+    The count is rounded up to a multiple of s²; sub-frame i takes sub-pixel position i mod s² (the
+    s×s grid's centres, row by row), so every run of s² consecutive times covers the whole grid and
+    each position is used equally often.
+    """
+    s = supersampling
+    count = math.ceil(samples / s**2) * s**2
+    times = sub_frame_offsets(count)
+    return [(float(t), ((i % s) + 0.5) / s - 0.5, ((i // s) % s + 0.5) / s - 0.5) for i, t in enumerate(times)]
+
+
+def shifted(view: View, dx_px: float, dy_px: float) -> View:
+    """The view whose pixel (u, v) sees what `view` sees at (u + dx, v + dy)."""
+    K = view.K_px.copy()
+    K[0, 2] -= dx_px
+    K[1, 2] -= dy_px
+    return View(K, view.T_world_from_cam, view.width_px, view.height_px)
 
 
 def box_downsample(image: np.ndarray, factor: int) -> np.ndarray:
@@ -152,7 +178,15 @@ class CameraRenderer:
             self.graph.place_actors(state.time_s)
             return Frame(index, state.time_s, self._draw(view, passes, "shared"))
         result = Passes()
-        if "radiance" in passes:
+        if "radiance" in passes and s > 1 and samples > 1:
+            jittered = jittered_samples(samples, s)
+            for i, (offset, dx_px, dy_px) in enumerate(jittered):
+                self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
+                sub_view = shifted(view_at(state, spec, offset * state.exposure_time_s), dx_px, dy_px)
+                radiance = self._draw(sub_view, ("radiance",), f"radiance jitter {i % s**2}").radiance
+                result.radiance = radiance if result.radiance is None else result.radiance + radiance
+            result.radiance /= len(jittered)
+        elif "radiance" in passes:
             offsets = sub_frame_offsets(samples)
             for offset in offsets:
                 self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
