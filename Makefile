@@ -25,8 +25,12 @@ demo: setup
 test: setup
 	$(BIN)/python -m pytest -q
 
+# The numerical stress suite with 20× the examples, random (not derandomized) inputs each run.
+stress: setup
+	CAMGEN_STRESS=1 $(BIN)/python -m pytest -q tests/stress tests/optics/test_stress.py tests/motion
+
 bench: setup
-	$(BIN)/python -m camgen.bench --write BENCHMARKS.md
+	$(BIN)/camgen bench --write BENCHMARKS.md
 
 lint: setup
 	$(BIN)/ruff check src tests

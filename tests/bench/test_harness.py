@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 
+import numpy as np
 import pytest
 
 from camgen.bench.harness import Case, markdown_table, run_case
@@ -48,3 +49,19 @@ def test_case_repeats_override_and_baseline_ratio():
     )
     table = markdown_table([result, fast])
     assert "| 0.25 |" in table.splitlines()[-1]
+
+
+def test_power_law_fit_recovers_a_known_exponent_and_its_uncertainty():
+    from camgen.bench.harness import power_law_fit
+
+    x = np.array([1.0, 2, 4, 8, 16, 32])
+    exact = power_law_fit(x, 3.0 * x**1.5)
+    assert exact.exponent == pytest.approx(1.5, abs=1e-12) and exact.prefactor == pytest.approx(3.0)
+    assert exact.exponent_stderr == pytest.approx(0.0, abs=1e-12)
+    # Scatter of ±10 % about t = 2 x^0.8: the exponent within a few standard errors, which are > 0.
+    rng = np.random.default_rng(1)
+    noisy = power_law_fit(x, 2.0 * x**0.8 * np.exp(rng.normal(0, 0.1, x.size)))
+    assert noisy.exponent_stderr > 0
+    assert abs(noisy.exponent - 0.8) < 4 * noisy.exponent_stderr
+    with pytest.raises(ValueError, match="≥ 2 positive points"):
+        power_law_fit([1.0, 0.0], [1.0, 2.0])

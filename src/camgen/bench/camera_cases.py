@@ -26,14 +26,19 @@ SHOT_LEVELS_E = (1.0, 3.0, 10.0, 20.0, 50.0, 200.0)
 OPTIONAL_STAGES = ("optics.diffraction", "optics.motion_blur", "isp.denoise", "isp.sharpen")
 
 
+def _setup(repo: Path, size: tuple[int, int] = (1920, 1080)):
+    """The pipelines and inputs of the cases, for the parking lot's camera with a `size` sensor."""
+    return _setup_at(repo, tuple(size))
+
+
 @cache
-def _setup(repo: Path):
+def _setup_at(repo: Path, size: tuple[int, int]):
     from camgen.bench.render_cases import _parking_lot, _renderer
     from camgen.plan.camera_pipeline import CameraPipeline
     from camgen.render.scene_graph import build_scene_graph
     from camgen.render.sequence import CameraRenderer
 
-    job, camera, _ = _parking_lot(repo, shadows=True)
+    job, camera, _ = _parking_lot(repo, shadows=True, size=size)
     camera = camera.model_copy(update={"render": camera.render.model_copy(update={"supersampling": 1})})
     core = camera.model_copy(update={"stages": tuple(s for s in camera.stages if s.name not in OPTIONAL_STAGES)})
     executor = ThreadPoolExecutor(2)
@@ -59,26 +64,21 @@ def camera_cases(repo: Path) -> list[Case]:
         pipeline, _, _, state, passes = _setup(repo)
         pipeline.process(state, passes, rng=np.random.default_rng(0))
 
+    def core_checked() -> float:
+        core()
+        return _core_error_pct(repo)
+
     def naive() -> None:
-        _, fast, reference, state, passes = _setup(repo)
-        maps = fast.lens.maps(state)
-        light = reference.light_at_sites(
-            passes.radiance, maps, fast.camera.render.margin_px, fast.lens.vignetting_gain(state)
-        )
-        raw = reference.raw(
-            light,
-            f_number=state.f_number,
-            exposure_time_s=state.exposure_time_s,
-            gain_db=state.gain_db,
-            rng=np.random.default_rng(0),
-        )
-        reference.isp(raw)
+        _, _, reference, *_ = _setup(repo)
+        reference.isp(_naive_raw(repo))
 
     cases = [
         Case(name="camera model 1080p, naive float64 reference", run=naive, repeats=3, setup=lambda: _setup(repo)),
         Case(
             name="camera model 1080p, core (fast path)",
-            run=core,
+            run=core_checked,
+            setup=lambda: _core_error_pct(repo),
+            error_unit="% largest mean raw DN difference per CFA channel",
             repeats=15,
             baseline="camera model 1080p, naive float64 reference",
         ),
@@ -123,6 +123,33 @@ def _stage_cases(repo: Path) -> list[Case]:
         ),
         Case(name="core part: ISP (WB, demosaic, CCM, stretch, tone)", run=isp),
     ]
+
+
+def _naive_raw(repo: Path) -> np.ndarray:
+    """The naive reference's raw frame of the same state and input (not cached: it is timed)."""
+    _, fast, reference, state, passes = _setup(repo)
+    light = reference.light_at_sites(
+        passes.radiance, fast.lens.maps(state), fast.camera.render.margin_px, fast.lens.vignetting_gain(state)
+    )
+    return reference.raw(
+        light,
+        f_number=state.f_number,
+        exposure_time_s=state.exposure_time_s,
+        gain_db=state.gain_db,
+        rng=np.random.default_rng(0),
+    )
+
+
+@cache
+def _core_error_pct(repo: Path) -> float:
+    """The fast path's raw frame against the naive reference's (independent draws): the largest
+    relative difference of the mean black-subtracted DN over a CFA channel, in %."""
+    _, fast, _, _, _ = _setup(repo)
+    sensor = fast.camera.profile.sensor
+    ours = _raw(repo).astype(np.float64) - sensor.black_level_dn
+    reference = _naive_raw(repo).astype(np.float64) - sensor.black_level_dn
+    index = fast.channel_index if fast.channel_index is not None else np.zeros(ours.shape, np.int8)
+    return max(float(100 * abs(ours[index == c].mean() / reference[index == c].mean() - 1)) for c in np.unique(index))
 
 
 @cache

@@ -1,4 +1,4 @@
-"""The benchmark cases: configuration, planning, rendering, the lens stages, the camera model and batch throughput."""
+"""Planning cases: loading and compiling each example scene, and the lens model's inverse."""
 
 from __future__ import annotations
 
@@ -6,30 +6,19 @@ from pathlib import Path
 
 import numpy as np
 
-from camgen.bench.batch_cases import batch_cases
-from camgen.bench.camera_cases import camera_cases
-from camgen.bench.dof_cases import dof_cases
 from camgen.bench.harness import Case
-from camgen.bench.optics_cases import optics_cases
-from camgen.bench.render_cases import render_cases
 from camgen.config import load_scene
 from camgen.optics.distortion import distort_normalized, undistort_normalized
 from camgen.plan import compile_scene
 
 
-def default_cases(repo: Path) -> list[Case]:
-    scenes = sorted((repo / "scenes").glob("*.yaml"))
+def planning_cases(repo: Path) -> list[Case]:
     cases = []
-    for path in scenes:
-        cases.append(Case(name=f"load + validate {path.stem}", run=lambda p=path: _load(p)))
+    for path in sorted((repo / "scenes").glob("*.yaml")):
+        cases.append(Case(name=f"load + validate {path.stem}", run=lambda p=path: _load(p), repeats=5))
         loaded = load_scene(path)
-        cases.append(Case(name=f"compile plan {path.stem}", run=lambda s=loaded: _compile(s)))
+        cases.append(Case(name=f"compile plan {path.stem}", run=lambda s=loaded: _compile(s), repeats=3))
     cases.append(_undistort_case())
-    cases += render_cases(repo)
-    cases += optics_cases(repo)
-    cases += dof_cases()
-    cases += camera_cases(repo)
-    cases += batch_cases()
     return cases
 
 
@@ -52,4 +41,4 @@ def _undistort_case() -> Case:
         result = undistort_normalized(distorted, coeffs)
         return float(np.max(np.abs(distort_normalized(result.points, coeffs) - distorted))) * fx
 
-    return Case(name="undistort 1920×1080 grid (Newton, float64)", run=run, error_unit="px")
+    return Case(name="undistort 1920×1080 grid (Newton, float64)", run=run, error_unit="px", repeats=3)

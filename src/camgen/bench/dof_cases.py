@@ -146,5 +146,18 @@ def dof_cases() -> list[Case]:
     """Accuracy against time for each step setting, then the cost of a 1080p frame for each lens."""
     get_inputs = _lazy(_accuracy_inputs)
     cases = [_accuracy_case(get_inputs, step_px, step_rel) for step_px, step_rel in STEP_SETTINGS]
+    width_px, height_px = ACCURACY_SIZE_PX
+    cases.append(
+        Case(
+            name=f"DoF brute-force reference {width_px}×{height_px} (one layer per depth)",
+            run=lambda: _discard(reference_blur(*get_inputs()[:2])),
+            setup=get_inputs,
+            repeats=3,
+        )
+    )
     cases += [_frame_case(name, lens) for name, lens in LENSES.items()]
     return cases
+
+
+def _discard(_result) -> None:
+    """Cases time the work, not its result."""

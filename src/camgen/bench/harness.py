@@ -90,3 +90,29 @@ def markdown_table(results: list[Result]) -> str:
             f"| {ratio} |"
         )
     return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class PowerLaw:
+    """t = prefactor · x^exponent, fitted in log-log by least squares."""
+
+    exponent: float
+    prefactor: float
+    exponent_stderr: float
+    """Standard error of the exponent from the fit's residuals (nan with two points)."""
+
+
+def power_law_fit(x, t) -> PowerLaw:
+    """Fit t = a·x^b through (x, t) > 0 by linear least squares on (ln x, ln t)."""
+    x, t = np.asarray(x, np.float64), np.asarray(t, np.float64)
+    if x.size < 2 or np.any(x <= 0) or np.any(t <= 0):
+        raise ValueError(f"a power law needs ≥ 2 positive points, got x={x.tolist()}, t={t.tolist()}")
+    lx, lt = np.log(x), np.log(t)
+    (b, ln_a), residuals, *_ = np.polyfit(lx, lt, 1, full=True)
+    n = x.size
+    if n > 2:
+        sigma2 = float(residuals[0]) / (n - 2) if residuals.size else 0.0
+        stderr = float(np.sqrt(sigma2 / np.sum((lx - lx.mean()) ** 2)))
+    else:
+        stderr = float("nan")
+    return PowerLaw(exponent=float(b), prefactor=float(np.exp(ln_a)), exponent_stderr=stderr)

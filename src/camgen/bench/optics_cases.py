@@ -41,11 +41,7 @@ K_HD = ((1400.0, 0.0, (HD[0] - 1) / 2), (0.0, 1400.0, (HD[1] - 1) / 2), (0.0, 0.
 """The camera matrix of the 1080p stage cases, px."""
 
 
-def optics_cases(repo: Path) -> list[Case]:
-    return _interpolation_cases(repo) + lens_map_cases() + _stage_cases()
-
-
-def _interpolation_cases(repo: Path) -> list[Case]:
+def interpolation_cases(repo: Path) -> list[Case]:
     from camgen.bench.render_cases import _parking_lot, _renderer, _view
     from camgen.plan import PlanSettings
     from camgen.render.renderer import View
@@ -144,7 +140,7 @@ def lens_map_cases() -> list[Case]:
     return cases
 
 
-def _stage_cases() -> list[Case]:
+def stage_cases() -> list[Case]:
     W, H = HD
     rng = np.random.default_rng(0)
     image = rng.random((H + 2 * 80, W + 2 * 80, 3), dtype=np.float32) * 100

@@ -1,4 +1,4 @@
-"""Rendering cases: each pass alone and the shared draw, static background, supersampling.
+"""Rendering cases: each pass alone and the shared draw, static background, supersampling, motion sub-frames.
 
 All draw the parking-lot example as its PTZ camera sees it, at the camera's own intrinsics scaled to
 720p or 1080p. A case's time is one frame: draw plus read-back of the asked passes.
@@ -33,10 +33,15 @@ def _renderer():
     return Renderer()
 
 
-def _parking_lot(repo: Path, shadows: bool):
+def _parking_lot(repo: Path, shadows: bool, size: tuple[int, int] | None = None):
+    """The parking lot's compiled job, its PTZ camera and scene graph; `size`: the sensor resized
+    (`variants.resized_profile`, same field of view)."""
+    from camgen.bench.variants import at_output_size
     from camgen.render.scene_graph import build_scene_graph
 
     loaded = load_scene(repo / "scenes/parking_lot.yaml")
+    if size is not None:
+        loaded = at_output_size(loaded, *size)
     scene = loaded.scene
     if not shadows:
         environment = scene.environment.model_copy(update={"shadows": False})
@@ -59,7 +64,8 @@ def _view(camera, size, time_index: int = 0):
     return View(K, np.array(state.T_world_from_cam), width, height)
 
 
-def render_cases(repo: Path) -> list[Case]:
+def pass_cases(repo: Path) -> list[Case]:
+    """Each pass alone and the three in one shared draw, at 720p and 1080p (1×)."""
     cases = []
     job, camera, graph = _parking_lot(repo, shadows=True)
     frames = iter(range(10**9))
@@ -78,14 +84,20 @@ def render_cases(repo: Path) -> list[Case]:
                     baseline=f"render radiance, parking lot {size_name}",
                 )
             )
-    cases.append(_planned_frame_case(camera, graph, job))
-    cases += _static_background_cases(repo)
-    cases += _supersampling_cases(camera, graph)
-    cases += _calibration_cases(repo)
     return cases
 
 
-def _static_background_cases(repo: Path) -> list[Case]:
+def planned_frame_cases(repo: Path) -> list[Case]:
+    job, camera, graph = _parking_lot(repo, shadows=True)
+    return [_planned_frame_case(camera, graph, job)]
+
+
+def supersampling_cases(repo: Path, camera, graph) -> list[Case]:
+    """Radiance supersampling against 8×8, and the checkerboard calibration at each s."""
+    return _supersampling_cases(camera, graph) + _calibration_cases(repo)
+
+
+def static_background_cases(repo: Path) -> list[Case]:
     """Full draw vs the kept environment plus actors, 1080p, radiance + ids, shadows off."""
     from camgen.render.sequence import CameraRenderer
 
@@ -107,6 +119,7 @@ def _static_background_cases(repo: Path) -> list[Case]:
                 baseline=None
                 if not static
                 else f"render frame, full draw, parking lot {spec.width_px}×{spec.height_px} no shadows",
+                repeats=3,
             )
         )
     return cases
@@ -200,5 +213,69 @@ def _planned_frame_case(camera, graph, job) -> Case:
     return Case(
         name=f"render frame as planned: radiance {s}×{s} + depth_m + instance_id, parking lot 1080p",
         run=run,
-        baseline="render shared draw: radiance + depth_m + instance_id, parking lot 1080p",
+        repeats=3,
     )
+
+
+MOTION_SIZE_PX = (640, 360)
+MOTION_EXPOSURE_S = 0.25
+"""A long exposure, so the walkers and the car smear over many pixels at this size."""
+MOTION_SUB_FRAMES = 8
+MOTION_REFERENCE = (32, 4)
+"""Reference: 32 sub-frames, each 4×4 supersampled."""
+
+
+def motion_sampling_cases(camera, graph) -> list[Case]:
+    """Motion blur with supersampling 2: each sub-frame drawn 2×2 finer and averaged (grid) against
+    each drawn at 1× through one of the 2×2 sub-pixel positions in turn (jittered, the default), and
+    1× without the jitter; the error is the RMS against 32 sub-frames each 4×4 supersampled."""
+    from camgen.optics.motion_blur import sub_frame_offsets
+    from camgen.render.sequence import box_downsample, jittered_samples, shifted
+
+    view = _view(camera, MOTION_SIZE_PX)
+    t0 = 2.0
+
+    def draw(offset: float, v) -> np.ndarray:
+        graph.place_actors(t0 + offset * MOTION_EXPOSURE_S)
+        return _renderer().draw(graph, v, ("radiance",)).radiance
+
+    def grid(count: int, s: int) -> np.ndarray:
+        frames = [box_downsample(draw(t, view.scaled(s)), s) for t in sub_frame_offsets(count)]
+        return np.mean(frames, axis=0, dtype=np.float64)
+
+    @cache
+    def reference() -> np.ndarray:
+        return grid(*MOTION_REFERENCE)
+
+    def jittered() -> float:
+        samples = jittered_samples(MOTION_SUB_FRAMES, 2)
+        frames = [draw(t, shifted(view, dx, dy)) for t, dx, dy in samples]
+        return relative_rms_pct(np.mean(frames, axis=0, dtype=np.float64), reference())
+
+    label = (
+        f"{MOTION_SIZE_PX[0]}×{MOTION_SIZE_PX[1]}, {MOTION_SUB_FRAMES} sub-frames, supersampling 2 (error vs 32 × 4×4)"
+    )
+    grid_name = f"motion sub-frames each 2×2 (grid), {label}"
+    return [
+        Case(
+            name=grid_name,
+            run=lambda: relative_rms_pct(grid(MOTION_SUB_FRAMES, 2), reference()),
+            setup=reference,
+            error_unit="% RMS",
+            repeats=5,
+        ),
+        Case(
+            name=f"motion sub-frames 1× jittered over 2×2 (default), {label}",
+            run=jittered,
+            error_unit="% RMS",
+            repeats=5,
+            baseline=grid_name,
+        ),
+        Case(
+            name=f"motion sub-frames 1× without jitter, {label}",
+            run=lambda: relative_rms_pct(grid(MOTION_SUB_FRAMES, 1), reference()),
+            error_unit="% RMS",
+            repeats=5,
+            baseline=grid_name,
+        ),
+    ]

@@ -9,10 +9,10 @@ from rich.console import Console
 from rich.markup import escape
 
 import camgen
-from camgen.cli import batch, fit, info, plan, render, schema, validate, verify
+from camgen.cli import batch, bench, fit, info, plan, render, schema, validate, verify
 from camgen.errors import ConfigError
 
-SUBCOMMANDS = (validate, schema, plan, info, render, verify, fit, batch)
+SUBCOMMANDS = (validate, schema, plan, info, render, verify, fit, batch, bench)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,122 @@
+"""End to end: frames/s of `camgen render` per example scene and profile at 720p and 1080p, with the
+share of each stage.
+
+Each case renders one camera of an example scene (each distinct profile once) through `execute`, as
+`camgen render` does, with every output the scene plans (video, frames, depth, raw, annotations),
+into a temporary directory. The stream is resized to the size named (`variants.at_output_size`:
+the sensor keeps its width in mm, a virtual PTZ keeps its sensor and changes its stream). Frames are
+spread over the sequence; the first is a warm-up (scene upload, lens maps, auto-exposure's
+convergence) and is not counted. A frame's time is its wall time; the encoder's flush and the
+annotation files written at the end are shared out over the timed frames.
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from camgen.bench.harness import Case
+from camgen.bench.variants import at_output_size, one_camera
+from camgen.config import load_scene
+from camgen.plan import PlanSettings, compile_scene
+from camgen.plan.timing import stage_sums
+
+STREAM_SIZES_PX = {"720p": (1280, 720), "1080p": (1920, 1080)}
+FRAMES = 3
+"""Frames rendered per case: one warm-up and two timed."""
+
+
+@dataclass(frozen=True)
+class EndToEnd:
+    """What one end-to-end case measured."""
+
+    scene: str
+    camera: str
+    profile: str
+    size: str
+    stages: tuple[str, ...]
+    """The camera's planned stages."""
+    stage_ms: dict[str, float]
+    """Mean ms per timed frame in each instrumented stage (the finish shared out)."""
+    frame_ms: float
+    """Mean wall ms per timed frame."""
+    warm: bool = True
+    """False for a one-frame sequence: its only frame, warm-up included, is what is timed."""
+
+    @property
+    def frames_per_s(self) -> float:
+        return 1e3 / self.frame_ms
+
+    @property
+    def other_ms(self) -> float:
+        return max(self.frame_ms - sum(self.stage_ms.values()), 0.0)
+
+
+def scene_cameras(repo: Path) -> list[tuple[Path, str, str]]:
+    """(scene file, camera, profile name): each scene's first camera of each distinct profile."""
+    chosen = []
+    for path in sorted((repo / "scenes").glob("*.yaml")):
+        loaded, seen = load_scene(path), set()
+        for camera in loaded.scene.cameras:
+            profile = loaded.profiles[camera.name].name
+            if profile not in seen:
+                seen.add(profile)
+                chosen.append((path, camera.name, profile))
+    return chosen
+
+
+def spread_frames(frame_count: int, count: int) -> list[int]:
+    """`count` frame indices spread evenly over the sequence, the first one first (fewer if short)."""
+    return sorted({int(i) for i in np.linspace(0, frame_count - 1, count).round()})
+
+
+def measure(path: Path, camera: str, size: tuple[int, int], frames: int = FRAMES, settings=None) -> EndToEnd:
+    """Render `frames` spread frames of `camera` in the scene at `path` at `size` and time them."""
+    from camgen.bench.render_cases import _renderer
+    from camgen.plan.execute import execute
+
+    loaded = load_scene(path)
+    variant = at_output_size(one_camera(loaded, camera), *size)
+    job = compile_scene(variant, settings or PlanSettings())
+    indices = spread_frames(job.frame_count, frames)
+    out = Path(tempfile.mkdtemp(prefix="camgen-bench-e2e-"))
+    try:
+        (result,) = execute(job, out, renderer=_renderer(), frames=indices, resolve_path=path.parent.joinpath)
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+    timed = max(len(result.frame_wall_s) - 1, 1)
+    frame_records = result.stage_frames[1:] if len(result.stage_frames) > 1 else result.stage_frames
+    # The encoder's flush holds frames buffered from every frame, the warm-up's too: the timed
+    # frames take their share of it.
+    share = timed / len(result.frame_wall_s)
+    finish = {stage: s * share for stage, s in result.finish_s.items()}
+    totals = stage_sums([*frame_records, finish])
+    wall_s = sum(result.frame_wall_s[1:] or result.frame_wall_s) + sum(finish.values())
+    return EndToEnd(
+        scene=path.stem,
+        camera=camera,
+        profile=loaded.profiles[camera].name,
+        size=f"{size[0]}×{size[1]}",
+        stages=tuple(stage.name for stage in job.cameras[0].stages),
+        stage_ms={stage: 1e3 * s / timed for stage, s in totals.items()},
+        frame_ms=1e3 * wall_s / timed,
+        warm=len(result.frame_wall_s) > 1,
+    )
+
+
+def e2e_cases(repo: Path, records: dict[str, EndToEnd]) -> list[Case]:
+    """One case per (scene, profile, size); each stores its `EndToEnd` in `records` by case name."""
+    cases = []
+    for path, camera, profile in scene_cameras(repo):
+        for size_name, size in STREAM_SIZES_PX.items():
+            name = f"end to end {path.stem} / {profile} {size_name}"
+
+            def run(path=path, camera=camera, size=size, name=name) -> None:
+                records[name] = measure(path, camera, size)
+
+            cases.append(Case(name=name, run=run, repeats=1, warmup=0))
+    return cases
