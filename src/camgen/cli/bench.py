@@ -77,10 +77,11 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         plots = Plots(directory=args.plots or scratch, document=scratch / "BENCHMARKS.md")
     chosen = [s for s in available if s.key in wanted]
     failures: list[tuple[str, str]] = []
+    top = header(args.quick)  # before anything is written: the commit is the code's, not "dirty" by our own output
 
     def on_block(key: str, text: str) -> None:
         if args.write is not None:  # each section as it finishes: a later failure or Ctrl-C loses nothing
-            write_report(args.write, header(args.quick), {key: text}, keys)
+            write_report(args.write, top, {key: text}, keys)
 
     repeats = QUICK_REPEATS if args.quick else FULL_REPEATS
     with Progress(
@@ -105,7 +106,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         out.print(blocks[section.key], markup=False, highlight=False, soft_wrap=True)
     err.print("time per section: " + ", ".join(f"{key} {s:.0f} s" for key, s in durations_s.items()))
     if args.write is not None:
-        write_report(args.write, header(args.quick), blocks, keys)
+        write_report(args.write, top, blocks, keys)
         out.print(f"wrote {escape(str(args.write))} and plots in {escape(str(plots.directory))}")
     for key, error in failures:
         err.print(f"[red]error[/red] section {key} failed: {escape(error)}")
