@@ -178,28 +178,26 @@ class CameraRenderer:
             self.graph.place_actors(state.time_s)
             return Frame(index, state.time_s, self._draw(view, passes, "shared"))
         result = Passes()
-        if "radiance" in passes and s > 1 and samples > 1:
-            jittered = jittered_samples(samples, s)
-            for i, (offset, dx_px, dy_px) in enumerate(jittered):
+        if "radiance" in passes:
+            # (time offset, sub-pixel shift, draw factor, kept-background key) of each sub-frame.
+            if s > 1 and samples > 1:  # the sub-frames carry the area samples too (module docstring)
+                draws = [
+                    (t, dx_px, dy_px, 1, f"radiance jitter {i % s**2}")
+                    for i, (t, dx_px, dy_px) in enumerate(jittered_samples(samples, s))
+                ]
+            else:
+                key = "radiance" if s == 1 else f"radiance {s}x"
+                draws = [(float(t), 0.0, 0.0, s, key) for t in sub_frame_offsets(samples)]
+            for offset, dx_px, dy_px, factor, key in draws:
                 self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
+                # The head moves during the exposure too.
                 sub_view = shifted(view_at(state, spec, offset * state.exposure_time_s), dx_px, dy_px)
-                radiance = self._draw(sub_view, ("radiance",), f"radiance jitter {i % s**2}").radiance
+                if factor > 1:
+                    sub_view = sub_view.scaled(factor)
+                radiance = box_downsample(self._draw(sub_view, ("radiance",), key).radiance, factor)
                 result.radiance = radiance if result.radiance is None else result.radiance + radiance
-            result.radiance /= len(jittered)
-        elif "radiance" in passes:
-            offsets = sub_frame_offsets(samples)
-            for offset in offsets:
-                self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
-                sub_view = view_at(state, spec, offset * state.exposure_time_s)  # the head moves too
-                if s == 1:
-                    radiance = self._draw(sub_view, ("radiance",), "radiance").radiance
-                else:
-                    radiance = box_downsample(
-                        self._draw(sub_view.scaled(s), ("radiance",), f"radiance {s}x").radiance, s
-                    )
-                result.radiance = radiance if result.radiance is None else result.radiance + radiance
-            if len(offsets) > 1:
-                result.radiance /= len(offsets)
+            if len(draws) > 1:
+                result.radiance /= len(draws)
         geometric = tuple(p for p in passes if p != "radiance")
         if geometric:
             self.graph.place_actors(state.time_s)
