@@ -38,11 +38,6 @@ class StageClock:
         self.frame_wall_s.append(now - self._frame_start)
         self._current, self._frame_start = {}, now
 
-    @property
-    def total_s(self) -> dict[str, float]:
-        """Seconds per stage over every finished frame."""
-        return stage_sums(self.frames)
-
 
 def stage_sums(frames: list[dict[str, float]]) -> dict[str, float]:
     """Seconds per stage summed over frame records, in the order stages first appear."""
