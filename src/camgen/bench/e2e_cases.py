@@ -76,36 +76,46 @@ def spread_frames(frame_count: int, count: int) -> list[int]:
 
 def measure(path: Path, camera: str, size: tuple[int, int], frames: int = FRAMES, settings=None) -> EndToEnd:
     """Render `frames` spread frames of `camera` in the scene at `path` at `size` and time them."""
-    from camgen.bench.render_cases import _renderer
-    from camgen.plan.execute import execute
-
     loaded = load_scene(path)
     variant = at_output_size(one_camera(loaded, camera), *size)
     job = compile_scene(variant, settings or PlanSettings())
-    indices = spread_frames(job.frame_count, frames)
-    out = Path(tempfile.mkdtemp(prefix="camgen-bench-e2e-"))
-    try:
-        (result,) = execute(job, out, renderer=_renderer(), frames=indices, resolve_path=path.parent.joinpath)
-    finally:
-        shutil.rmtree(out, ignore_errors=True)
-    timed = max(len(result.frame_wall_s) - 1, 1)
-    frame_records = result.stage_frames[1:] if len(result.stage_frames) > 1 else result.stage_frames
-    # The encoder's flush holds frames buffered from every frame, the warm-up's too: the timed
-    # frames take their share of it.
-    share = timed / len(result.frame_wall_s)
-    finish = {stage: s * share for stage, s in result.finish_s.items()}
-    totals = stage_sums([*frame_records, finish])
-    wall_s = sum(result.frame_wall_s[1:] or result.frame_wall_s) + sum(finish.values())
+    (result,) = execute_in_scratch(job, spread_frames(job.frame_count, frames), path.parent.joinpath)
+    frame_ms, stage_ms = timed_per_frame(result)
     return EndToEnd(
         scene=path.stem,
         camera=camera,
         profile=loaded.profiles[camera].name,
         size=f"{size[0]}×{size[1]}",
         stages=tuple(stage.name for stage in job.cameras[0].stages),
-        stage_ms={stage: 1e3 * s / timed for stage, s in totals.items()},
-        frame_ms=1e3 * wall_s / timed,
+        stage_ms=stage_ms,
+        frame_ms=frame_ms,
         warm=len(result.frame_wall_s) > 1,
     )
+
+
+def execute_in_scratch(job, frames: list[int], resolve_path=None) -> list:
+    """`execute` the job's `frames` into a temporary directory, removed afterwards; the results."""
+    from camgen.bench.render_cases import _renderer
+    from camgen.plan.execute import execute
+
+    out = Path(tempfile.mkdtemp(prefix="camgen-bench-execute-"))
+    try:
+        return execute(job, out, renderer=_renderer(), frames=frames, resolve_path=resolve_path)
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+
+
+def timed_per_frame(result) -> tuple[float, dict[str, float]]:
+    """Mean wall ms and ms per stage of a camera's timed frames (all but the first, the warm-up;
+    a one-frame render times its only frame). The encoder's flush holds frames buffered from every
+    frame, the warm-up's too, so the timed frames take their share of the finish."""
+    timed = max(len(result.frame_wall_s) - 1, 1)
+    frame_records = result.stage_frames[1:] if len(result.stage_frames) > 1 else result.stage_frames
+    share = timed / len(result.frame_wall_s)
+    finish = {stage: s * share for stage, s in result.finish_s.items()}
+    totals = stage_sums([*frame_records, finish])
+    wall_s = sum(result.frame_wall_s[1:] or result.frame_wall_s) + sum(finish.values())
+    return 1e3 * wall_s / timed, {stage: 1e3 * s / timed for stage, s in totals.items()}
 
 
 def e2e_cases(repo: Path, records: dict[str, EndToEnd]) -> list[Case]:

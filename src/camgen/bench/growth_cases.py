@@ -154,26 +154,17 @@ def _actors(workspace: Path, n: int, growth: Growth) -> None:
 
 
 def _cameras(workspace: Path, c: int, growth: Growth) -> None:
-    from camgen.bench.e2e_cases import spread_frames
-    from camgen.bench.render_cases import _renderer
+    from camgen.bench.e2e_cases import execute_in_scratch, spread_frames, timed_per_frame
     from camgen.config import load_scene
     from camgen.plan import compile_scene
-    from camgen.plan.execute import execute
 
     path = workspace / f"cameras_{c}.yaml"
     path.write_text(street_scene(4, c), encoding="utf-8")
     start = time.perf_counter()
     job = compile_scene(load_scene(path))
     growth.cameras_compile_ms[c] = 1e3 * (time.perf_counter() - start)
-    out = Path(tempfile.mkdtemp(prefix="camgen-bench-cameras-"))
-    try:
-        results = execute(job, out, renderer=_renderer(), frames=spread_frames(job.frame_count, STREET_FRAMES))
-    finally:
-        shutil.rmtree(out, ignore_errors=True)
-    timed = STREET_FRAMES - 1
-    share = timed / STREET_FRAMES  # the encoder's flush holds the warm-up frame's share too
-    wall_s = sum(sum(r.frame_wall_s[1:]) + share * sum(r.finish_s.values()) for r in results)
-    growth.cameras_frame_ms[c] = 1e3 * wall_s / timed
+    results = execute_in_scratch(job, spread_frames(job.frame_count, STREET_FRAMES))
+    growth.cameras_frame_ms[c] = sum(timed_per_frame(result)[0] for result in results)
 
 
 def _discard(_result) -> None:
