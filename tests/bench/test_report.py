@@ -75,9 +75,11 @@ def test_plots_are_png_files(tmp_path):
     [
         (["--section", "nope"], "--section nope: no such section; choose from end_to_end"),
         (["--write", "{tmp}"], "is a directory; give the markdown file to write"),
+        (["--plots", "{tmp}/file.png"], "is a file; give a directory for the PNG plots"),
     ],
 )
 def test_bad_options_are_refused_before_anything_runs(tmp_path, capsys, args, message):
+    (tmp_path / "file.png").write_bytes(b"")
     args = [a.replace("{tmp}", str(tmp_path)) for a in args]
     assert main(["bench", *args]) == 2
     assert message in capsys.readouterr().err
