@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import os
 import stat
 
 import pytest
 
-from camgen.io.files import FILE_MODE, atomic_path, write_text_atomic
+from camgen.io.files import atomic_path, file_mode, write_text_atomic
 
 
 def test_finished_files_are_not_private(tmp_path):
@@ -14,7 +15,21 @@ def test_finished_files_are_not_private(tmp_path):
     with atomic_path(tmp_path / "b.bin") as tmp:
         tmp.write_bytes(b"x")
     for name in ("a.txt", "b.bin"):
-        assert stat.S_IMODE((tmp_path / name).stat().st_mode) == FILE_MODE
+        assert stat.S_IMODE((tmp_path / name).stat().st_mode) == file_mode()
+
+
+@pytest.mark.parametrize(("umask", "mode"), [(0o022, 0o644), (0o077, 0o600), (0o002, 0o664)])
+def test_finished_files_follow_the_umask(tmp_path, umask, mode):
+    """A finished file has the permissions a file written in place would have under the user's umask."""
+    previous = os.umask(umask)
+    try:
+        write_text_atomic(tmp_path / "a.txt", "x")
+        with atomic_path(tmp_path / "b.bin") as tmp:
+            tmp.write_bytes(b"x")
+    finally:
+        os.umask(previous)
+    for name in ("a.txt", "b.bin"):
+        assert stat.S_IMODE((tmp_path / name).stat().st_mode) == mode
 
 
 def test_a_failed_write_leaves_nothing(tmp_path):

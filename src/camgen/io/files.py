@@ -1,7 +1,8 @@
 """File writing that never leaves a partial file under the final name.
 
-The temporary file `tempfile.mkstemp` makes is private (0600); a finished file gets `FILE_MODE`, as a
-file written in place would under the usual umask, so datasets can be shared.
+The temporary file `tempfile.mkstemp` makes is private (0600); a finished file gets `file_mode()`,
+what a file written in place would get under the user's umask (rw-r--r-- under the usual 022), so
+datasets can be shared as the user's other files are.
 """
 
 from __future__ import annotations
@@ -12,8 +13,12 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-FILE_MODE = 0o644
-"""Permissions of a finished file: rw-r--r--."""
+def file_mode() -> int:
+    """Permissions of a finished file: 0666 less the process's umask (read without changing it for
+    longer than the two calls)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return 0o666 & ~mask
 
 
 def write_text_atomic(path: str | Path, text: str) -> None:
@@ -24,7 +29,7 @@ def write_text_atomic(path: str | Path, text: str) -> None:
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as handle:
             handle.write(text)
-        os.chmod(tmp, FILE_MODE)
+        os.chmod(tmp, file_mode())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -43,7 +48,7 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     os.close(fd)
     try:
         yield Path(tmp)
-        os.chmod(tmp, FILE_MODE)
+        os.chmod(tmp, file_mode())
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

@@ -13,6 +13,9 @@ Conventions
   ``1 / fps``), with ``fps`` held as a fraction so that NTSC rates such as 30000/1001 stay exact.
 * Frames: I and P frames only, no B-frames, as IP cameras stream for low latency; key frames fall
   exactly every `Codec.gop_frames` frames (closed GOPs, no scene-cut key frames).
+* Reproducibility: the file's bytes are a function of the frames, the `Codec` profile, the preset and the
+  versions of PyAV/FFmpeg/x264/x265, not of the machine's core count, CPU features or thread timing (see
+  `_reproducible`). The price is single-threaded x264 and MJPEG encoding; `camgen bench` measures it.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ from av.video.reformatter import ColorRange, Colorspace
 
 from camgen.config.profile import Codec
 from camgen.errors import ConfigError
+from camgen.io.files import file_mode
 
 ENCODERS = MappingProxyType({"h264": "libx264", "h265": "libx265", "mjpeg": "mjpeg"})
 """FFmpeg encoder behind each `Codec.name`."""
@@ -45,6 +49,22 @@ H273_BT709 = 1
 
 VBV_BUFFER_S = 1.0
 """Decoder buffer of the bitrate mode, seconds of the target bitrate (see `VideoWriter`)."""
+
+ENCODER_THREADS = 1
+"""Threads of the libx264 and MJPEG encoders. Under VBV rate control, x264's slice threads and frame threads
+each plan a frame's size from the other threads' running estimates, so the bits depend on thread timing;
+and the thread count FFmpeg picks by default follows the core count, which sets x264's slices and MJPEG's
+restart intervals. One thread removes both."""
+
+X264_REPRODUCIBLE = "cpu-independent=1"
+"""x264 parameters that make its output the same on every CPU: canonical algorithms instead of the
+CPU-specific ones (with AVX2 and newer, those change the bits)."""
+
+X265_REPRODUCIBLE = "frame-threads=1:info=0"
+"""x265 parameters that make its output independent of timing and machine: one frame at a time (frame
+threads plan VBV sizes from one another's running estimates, and their auto count follows the cores), and
+no encoder-info SEI (it records the CPU's feature mask and the thread-pool size). The thread pool is set
+by `_reproducible`."""
 
 CHROMA_SUBSAMPLING = MappingProxyType({"yuv420p": (2, 2), "yuv422p": (2, 1), "yuv444p": (1, 1)})
 """Chroma subsampling (horizontal, vertical) of each pixel format; the frame size must be a multiple."""
@@ -84,6 +104,11 @@ class VideoWriter:
         * ``pixel_format``: chroma subsampling of the stream (``yuv420p``, ``yuv422p``, ``yuv444p``).
     preset : str
         libx264/libx265 speed preset, ``ultrafast`` … ``veryslow``; ignored by MJPEG.
+    reproducible : bool
+        True (the default): the file's bytes depend only on the frames, the codec settings and the library
+        versions (`ENCODER_THREADS`, `X264_REPRODUCIBLE`, `X265_REPRODUCIBLE`). False lets FFmpeg thread the
+        encoder as it likes: somewhat faster on a multi-core machine, but two runs of the same frames give
+        different bytes (a bitrate-mode stream's sizes drift by a few per cent). For speed comparisons.
 
     Raises
     ------
@@ -107,6 +132,7 @@ class VideoWriter:
         fps: float,
         codec: Codec = Codec(),  # noqa: B008 - frozen pydantic model, safe to share
         preset: str = "medium",
+        reproducible: bool = True,
     ) -> None:
         self._path = Path(path)
         self._width_px = width_px
@@ -135,7 +161,7 @@ class VideoWriter:
                     "use .mp4, .mkv, .mov or .avi"
                 ) from error
             self._stream = self._container.add_stream(encoder, rate=rate)
-            _configure(self._stream.codec_context, codec, rate, width_px, height_px, preset, self._colour)
+            _configure(self._stream.codec_context, codec, rate, width_px, height_px, preset, self._colour, reproducible)
             self._stream.codec_context.open()
         except BaseException:
             self._discard()
@@ -193,6 +219,7 @@ class VideoWriter:
         try:
             self._container.mux(self._stream.encode(None))
             self._container.close()
+            os.chmod(self._tmp_path, file_mode())  # mkstemp made it private (0600)
             os.replace(self._tmp_path, self._path)
         except BaseException:
             self._discard()
@@ -328,8 +355,9 @@ def _configure(
     height_px: int,
     preset: str,
     colour: tuple[Colorspace, ColorRange],
+    reproducible: bool,
 ) -> None:
-    """Set size, timing, pixel format, colour tags, GOP and rate control on an unopened encoder."""
+    """Set size, timing, pixel format, colour tags, GOP, rate control and threading on an unopened encoder."""
     context.width = width_px
     context.height = height_px
     context.pix_fmt = codec.pixel_format
@@ -358,12 +386,35 @@ def _configure(
         context.bit_rate = 0
         options["crf"] = str(codec.crf)
 
+    if reproducible:
+        context.thread_count = ENCODER_THREADS  # libx265 ignores it; its threads are set by _reproducible
     if codec.name != "mjpeg":
         # min-keyint only bounds scene-cut key frames, which are off; keyint alone fixes the interval.
-        gop = f"keyint={codec.gop_frames}:scenecut=0:bframes=0"
-        if codec.name == "h264":
-            options["x264-params"] = gop
-        else:
-            options["x265-params"] = f"{gop}:open-gop=0:log-level=error"
+        params = [f"keyint={codec.gop_frames}:scenecut=0:bframes=0"]
+        if codec.name == "h265":
+            params.append("open-gop=0:log-level=error")
+        if reproducible:
+            params.append(_reproducible(codec))
+        options["x264-params" if codec.name == "h264" else "x265-params"] = ":".join(params)
         options["preset"] = preset
     context.options = options
+
+
+def _reproducible(codec: Codec) -> str:
+    """x264/x265 parameters (``key=value:…``) that make the stream a function of its input and settings.
+
+    With `ENCODER_THREADS` on the codec context, the bytes no longer depend on thread timing, core count or
+    CPU features (two processes agree byte for byte: tests/io/test_video_determinism.py).
+
+    x265's thread pool runs the wavefront rows of a frame in parallel. Under VBV (``bitrate_kbps`` set) the
+    row-level rate control reads the rows other threads have finished, so a tight bitrate gives different
+    bytes run to run: no pool (``pools=none``) then. On 2 cores this cost 0.9–1.6× the pooled encode time
+    at 1080p over repeated runs (noisy); ``camgen bench`` reports it beside the threaded encoder.
+    In constant quality the rows do not interact and the pool stays, one thread per CPU, named explicitly
+    because what changes the bits is whether a pool exists (the lookahead slices its cost estimates only
+    with one), not its size.
+    """
+    if codec.name == "h264":
+        return X264_REPRODUCIBLE
+    pools = "none" if codec.bitrate_kbps is not None else str(os.cpu_count() or 1)
+    return f"{X265_REPRODUCIBLE}:pools={pools}"
