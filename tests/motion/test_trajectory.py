@@ -382,3 +382,42 @@ def test_loop_whose_last_waypoint_is_its_first_pauses_there_once_per_waypoint():
     xy, heading = route.at(np.array([2.2, 4.5, 4.7, 5.6, 5.75]))
     np.testing.assert_allclose(xy, [[2, 0], [0, 0], [0, 0], [0, 0], [0, 0]], atol=1e-12)
     np.testing.assert_allclose(heading, [0, np.pi, np.pi, np.pi, 0])
+
+
+@SETTINGS
+@given(routes())
+def test_distance_walked_is_where_the_route_puts_the_actor(route):
+    """`at_distance(distance_at(t))` is `at(t)`: the walked distance locates the actor; it never falls
+    and grows at most at the speed (the gait's phase is locked to it)."""
+    times = sample_times(route)
+    distance = np.array([route.distance_at(float(t)) for t in times])
+    assert np.all(np.diff(distance) >= -1e-9)
+    assert np.all(np.diff(distance) <= route.speed_m_s * np.diff(times) * (1 + 1e-9) + 1e-9)
+    xy, _ = route.at(times)
+    np.testing.assert_allclose(route.at_distance(distance), xy, atol=1e-6)
+
+
+@SETTINGS
+@given(routes())
+def test_standing_reports_the_pauses(route):
+    """While the actor moves, `standing` is None; while it stands, since + until span the pause."""
+    for t in sample_times(route):
+        state = route.standing(float(t))
+        xy0, _ = route.at(float(t))
+        xy1, _ = route.at(float(t) + 1e-4)
+        if state is None:
+            assert np.hypot(*(xy1 - xy0)) > 0
+            continue
+        since, until = state
+        assert since >= 0 and until >= 0
+        if math.isfinite(until) and until > 2e-4:
+            assert np.hypot(*(xy1 - xy0)) == 0
+
+
+def test_standing_on_a_known_path():
+    route = Route(np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 3.0]]), np.array([0.0, 1.5, 0.0]), 1.0, 0.5)
+    assert route.standing(0.2) == (math.inf, pytest.approx(0.3))
+    assert route.standing(1.0) is None
+    assert route.standing(3.0) == (pytest.approx(0.5), pytest.approx(1.0))
+    assert route.standing(10.0)[1] == math.inf
+    assert route.distance_at(3.0) == pytest.approx(2.0) and route.distance_at(5.0) == pytest.approx(3.0)

@@ -158,6 +158,60 @@ class Route:
         heading = np.where(before, first_heading, headings[phase])
         return position, heading
 
+    @cached_property
+    def _walk(self) -> tuple[np.ndarray, np.ndarray, float]:
+        """Distance walked at each knot (M+1,) m, the walked polyline's corners (P, 2) m, and the
+        length of one lap (or of the whole route), m."""
+        _, starts, ends, _, _ = self._phases
+        lengths = np.hypot(*(ends - starts).T) if len(starts) else np.zeros(0)
+        distance = np.concatenate([[0.0], np.cumsum(lengths)])
+        walking = lengths > 0
+        corners = np.concatenate([starts[walking][:1], ends[walking]]) if walking.any() else self.waypoints_m[:1]
+        return distance, corners, float(distance[-1])
+
+    def distance_at(self, time_s: float) -> float:
+        """Distance the actor has walked by `time_s` since the beginning, m (continuous, never falls)."""
+        knots, _, _, _, _ = self._phases
+        distance, _, lap = self._walk
+        if len(knots) < 2 or lap == 0:
+            return 0.0
+        since = max(time_s - self.start_s, 0.0)
+        laps = 0.0
+        if self.loop:
+            laps, since = divmod(since, knots[-1])
+        else:
+            since = min(since, knots[-1])
+        return float(laps * lap + np.interp(since, knots, distance))
+
+    def at_distance(self, distance_m: float | np.ndarray) -> np.ndarray:
+        """Ground point (…, 2) m at a distance walked along the route (its corners in order; a loop
+        repeats; an open route stays at its ends)."""
+        _, corners, lap = self._walk
+        d = np.asarray(distance_m, dtype=np.float64)
+        if lap == 0 or len(corners) < 2:
+            return np.broadcast_to(corners[0], (*d.shape, 2)).copy()
+        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(corners, axis=0).T))])
+        d = np.mod(d, lap) if self.loop else np.clip(d, 0.0, lap)
+        return np.stack([np.interp(d, along, corners[:, 0]), np.interp(d, along, corners[:, 1])], axis=-1)
+
+    def standing(self, time_s: float) -> tuple[float, float] | None:
+        """(seconds since the actor stopped, seconds until it walks on) while it stands at `time_s`
+        (inf where it never started or never leaves); None while it walks."""
+        knots, starts, ends, _, _ = self._phases
+        if len(knots) < 2 or not self.moves:
+            return math.inf, math.inf
+        since = time_s - self.start_s
+        if since < 0:
+            return math.inf, -since
+        total = knots[-1]
+        if not self.loop and since >= total:
+            return since - total, math.inf
+        local = since % total if self.loop else since
+        phase = int(np.clip(np.searchsorted(knots, local, side="right") - 1, 0, len(starts) - 1))
+        if np.any(starts[phase] != ends[phase]):
+            return None
+        return local - knots[phase], knots[phase + 1] - local
+
     def legs_until(self, time_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The straight pieces the actor covers from the beginning of time to `time_s`.
 
