@@ -18,11 +18,11 @@ from camgen.cli.main import main
 from tests.conftest import SCENE, write
 
 
-def render(workspace, frames: int = 6):
+def render(workspace, frames: int = 6, scene_text: str = SCENE):
     scene = write(
         workspace,
         "scenes/walk.yaml",
-        SCENE.replace(
+        scene_text.replace(
             "duration_s: 1", "duration_s: 1\noutputs: {video: false, raw_dng: false, annotations: [mot, coco]}"
         ),
     )
@@ -139,3 +139,42 @@ def test_a_second_render_into_the_same_directory_leaves_nothing_stale(workspace)
     assert [image["file_name"] for image in coco["images"]] == ["frames/000000.png", "frames/000001.png"]
     assert all((job_dir / "cam" / image["file_name"]).exists() for image in coco["images"])
     assert main(["verify", str(job_dir)]) == 0
+
+
+def test_person_keypoints_score_perfectly_in_cocoeval_and_boxes_are_tight(workspace):
+    """COCO keypoints load in pycocotools and score AP = 1 against themselves (OKS); the amodal box of an
+    unoccluded person inside the image is the tight box of its mask (≤ 1 px), and its visible keypoints
+    fall inside that box."""
+    from pycocotools.cocoeval import COCOeval
+
+    # The walker seen whole: the camera farther back, the walk across the middle of the view.
+    whole_view = (
+        SCENE.replace("position_m: [0, -5, 3]", "position_m: [0, -9, 2.5]")
+        .replace("pitch_deg: -20", "pitch_deg: -8")
+        .replace("waypoints_m: [[-3, 5], [3, 5]]", "waypoints_m: [[-1, 5], [1, 5]]")
+    )
+    directory = render(workspace, scene_text=whole_view)
+    document = json.loads((directory / "coco.json").read_text())
+    person = next(c for c in document["categories"] if c["name"] == "person")
+    assert len(person["keypoints"]) == 17 and len(person["skeleton"]) == 19
+    track = next(t for t in document["tracks"] if t["name"] == "walker")
+    assert {"female", "upper_colour", "lower", "backpack"} <= set(track["attributes"])
+    annotations = [a for a in document["annotations"] if a["category_id"] == person["id"]]
+    assert annotations and all(len(a["keypoints"]) == 51 for a in annotations)
+    whole = [a for a in annotations if a["truncation"] == 0 and a["visibility"] == 1]
+    assert whole
+    for a in whole:
+        np.testing.assert_allclose(a["amodal_bbox"], a["bbox"], atol=1.0)
+        keypoints = np.array(a["keypoints"]).reshape(17, 3)
+        x, y, w, h = a["bbox"]
+        shown = keypoints[keypoints[:, 2] == 2]
+        assert len(shown) >= 8 and a["num_keypoints"] == np.count_nonzero(keypoints[:, 2])
+        assert np.all((shown[:, 0] >= x) & (shown[:, 0] <= x + w) & (shown[:, 1] >= y) & (shown[:, 1] <= y + h))
+    coco = COCO(str(directory / "coco.json"))
+    results = [{**a, "score": 1.0} for a in annotations if a["num_keypoints"] > 0]
+    evaluation = COCOeval(coco, coco.loadRes(results), "keypoints")
+    evaluation.params.catIds = [person["id"]]
+    evaluation.evaluate()
+    evaluation.accumulate()
+    evaluation.summarize()
+    assert evaluation.stats[0] == 1.0

@@ -117,9 +117,14 @@ def test_box_downsample_is_the_block_mean():
 
 
 def test_supersampling_antialiases_radiance_but_not_ids(workspace, renderer):
-    job = _job(
-        workspace, SUNNY.replace("  - {type: sun, illuminance_lux: 20000, azimuth_deg: 250}\n", ""), supersampling=1
+    # People drawn as cylinders: one grey material everywhere (a procedural person has coloured clothes).
+    cylinder = "shape: {type: cylinder, name: body, radius_m: 0.25, height_m: 1.75, position_m: [0, 0, 0.875]}, "
+    text = (
+        SUNNY.replace("  - {type: sun, illuminance_lux: 20000, azimuth_deg: 250}\n", "")
+        .replace("{name: inside, class: person, ", "{name: inside, class: person, " + cylinder)
+        .replace("    class: person\n", "    class: person\n    " + cylinder.removesuffix(", ") + "\n")
     )
+    job = _job(workspace, text, supersampling=1)
     camera = _without_motion_blur(job.cameras[0])
     sharp = next(render_camera(renderer, job, camera, frames=[0])).passes
     smooth = next(render_camera(renderer, job, _with_render(camera, supersampling=4), frames=[0])).passes

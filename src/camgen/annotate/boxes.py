@@ -91,6 +91,17 @@ def amodal_box(
     return float(low[0]), float(low[1]), float(high[0]), float(high[1])
 
 
+def points_box(points_world_m: np.ndarray, T_world_from_cam: np.ndarray, K_px: np.ndarray, distortion) -> Box | None:
+    """Unclipped box (pixel edges) of the projections of points, or None if none is imaged: the
+    amodal box of a mesh whose edges are short enough that its vertices bound its silhouette."""
+    points_px, _ = project_points(points_world_m, T_world_from_cam, K_px, distortion)
+    points_px = points_px[np.all(np.isfinite(points_px), axis=1)]
+    if len(points_px) == 0:
+        return None
+    low, high = points_px.min(axis=0) + 0.5, points_px.max(axis=0) + 0.5
+    return float(low[0]), float(low[1]), float(high[0]), float(high[1])
+
+
 def clip_box(box: Box, width_px: int, height_px: int) -> Box | None:
     """The part of a box inside the image [0, W] × [0, H], or None when nothing is inside."""
     x0, y0 = max(box[0], 0.0), max(box[1], 0.0)

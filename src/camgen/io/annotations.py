@@ -14,7 +14,9 @@ YouTube-VIS-style datasets): ``videos``, ``images`` (one per frame, with ``video
 ``frame_index``), ``annotations`` (one per visible object and frame: ``bbox`` [x, y, w, h] of the
 visible pixels, ``segmentation`` as compressed RLE of the visible mask, ``area`` in pixels,
 ``track_id``, ``amodal_bbox``, ``visibility``, ``truncation``, ``bbox_3d_world_m`` and
-``bbox_3d_cam_m`` (8 corners each)) and ``categories`` (camgen's actor classes).
+``bbox_3d_cam_m`` (8 corners each); for people also COCO ``keypoints``, ``num_keypoints`` and
+``keypoints_world_m``), ``categories`` (camgen's actor classes; ``person`` with COCO's 17 keypoint
+names and skeleton) and ``tracks`` (one per actor, TAO-style, with a person's attribute labels).
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from pathlib import Path
 import numpy as np
 from pycocotools import mask as mask_utils
 
+from camgen.actors.person import COCO_KEYPOINTS, COCO_SKELETON
 from camgen.io.files import write_text_atomic
 
 MOT_CLASSES = {"person": 1, "car": 3, "truck": 3, "bus": 3, "bicycle": 4, "motorcycle": 5, "other": 6}
@@ -47,6 +50,15 @@ class SequenceAnnotations:
         self.mot: list[str] = []
         self.images: list[dict] = []
         self.annotations: list[dict] = []
+        self.tracks: dict[int, dict] = {}
+        """Track id → the TAO-style track record, with the identity's attribute labels for people."""
+
+    def describe(self, track_id: int, *, name: str, cls: str, attributes: dict | None = None) -> None:
+        """Record a track (once per actor): its class and, for a person, its attributes."""
+        record = {"id": track_id, "video_id": 1, "category_id": COCO_CATEGORIES.index(cls) + 1, "name": name}
+        if attributes is not None:
+            record["attributes"] = attributes
+        self.tracks[track_id] = record
 
     def add(self, frame) -> None:
         """One `camgen.plan.annotations.FrameAnnotations`."""
@@ -88,6 +100,7 @@ class SequenceAnnotations:
                     "truncation": round(obj.truncation, 6),
                     "bbox_3d_world_m": np.round(obj.box_3d_world_m, 6).tolist(),
                     "bbox_3d_cam_m": np.round(obj.box_3d_cam_m, 6).tolist(),
+                    **_keypoint_fields(obj),
                 }
             )
 
@@ -97,7 +110,8 @@ class SequenceAnnotations:
             "videos": [{"id": 1, "name": self.name, "width": self.width_px, "height": self.height_px}],
             "images": self.images,
             "annotations": self.annotations,
-            "categories": [{"id": i + 1, "name": name} for i, name in enumerate(COCO_CATEGORIES)],
+            "categories": [_category(i + 1, name) for i, name in enumerate(COCO_CATEGORIES)],
+            "tracks": [self.tracks[key] for key in sorted(self.tracks)],
         }
 
     def write_mot(self, directory: Path) -> list[Path]:
@@ -116,6 +130,28 @@ class SequenceAnnotations:
     def write_coco(self, path: Path) -> Path:
         write_text_atomic(path, json.dumps(self.coco_document(), separators=(",", ":")))
         return path
+
+
+def _category(category_id: int, name: str) -> dict:
+    category = {"id": category_id, "name": name}
+    if name == "person":  # COCO's person keypoints and skeleton
+        category["keypoints"] = list(COCO_KEYPOINTS)
+        category["skeleton"] = [list(pair) for pair in COCO_SKELETON]
+    return category
+
+
+def _keypoint_fields(obj) -> dict:
+    """COCO `keypoints` (x, y, v triplets, x and y 0 where v = 0), `num_keypoints` (labelled ones,
+    v > 0) and the 3-D keypoints in the world, for an annotated person."""
+    if obj.keypoints is None:
+        return {}
+    keypoints = np.array(obj.keypoints, dtype=np.float64)
+    keypoints[keypoints[:, 2] == 0, :2] = 0.0
+    return {
+        "keypoints": [round(float(v), 3) if i % 3 != 2 else int(v) for i, v in enumerate(keypoints.ravel())],
+        "num_keypoints": int(np.count_nonzero(keypoints[:, 2] > 0)),
+        "keypoints_world_m": np.round(obj.keypoints_world_m, 5).tolist(),
+    }
 
 
 def rle(mask: np.ndarray) -> dict:

@@ -20,7 +20,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from camgen.annotate.boxes import Box, amodal_box, clip_box, mask_boxes, truncation, unique_edges
+from camgen.annotate.boxes import Box, amodal_box, clip_box, mask_boxes, points_box, truncation, unique_edges
+from camgen.annotate.keypoints import keypoint_visibility
 from camgen.plan.job import CameraState
 from camgen.plan.lens_stages import LensStages
 from camgen.plan.visibility import box_corners
@@ -44,6 +45,12 @@ class ObjectAnnotation:
     box_3d_world_m: np.ndarray
     """(8, 3) corners of the actor's local bounding box in the world."""
     box_3d_cam_m: np.ndarray
+    keypoints: np.ndarray | None = None
+    """(17, 3) COCO keypoints of a person: x, y in COCO's pixel-edge coordinates (an OpenCV position
+    p at p + ½) and visibility v (0 outside the image or behind the camera, 1 hidden, 2 visible);
+    None for an actor without a skeleton."""
+    keypoints_world_m: np.ndarray | None = None
+    """(17, 3) the same keypoints in the world, m."""
 
 
 @dataclass
@@ -55,7 +62,8 @@ class FrameAnnotations:
 
 
 def _mesh_geometry(node) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (V, 3) in the node's frame and unique edges (E, 2) of a pyrender mesh."""
+    """Vertices (V, 3) in the node's frame and unique edges (E, 2) of a pyrender mesh (for a posed
+    person, the vertices as placed when this is called)."""
     vertices, faces, offset = [], [], 0
     for primitive in node.mesh.primitives:
         positions = np.asarray(primitive.positions, dtype=np.float64)
@@ -63,7 +71,7 @@ def _mesh_geometry(node) -> tuple[np.ndarray, np.ndarray]:
         indices = (
             np.arange(len(positions)).reshape(-1, 3)
             if primitive.indices is None
-            else np.asarray(primitive.indices).reshape(-1, 3)
+            else np.asarray(primitive.indices).astype(np.int64).reshape(-1, 3)
         )
         vertices.append(positions)
         faces.append(indices + offset)
@@ -100,9 +108,14 @@ class Annotator:
         clip = None
         for index, (actor, node) in enumerate(zip(graph.actors, graph.actor_nodes, strict=True)):
             pose = graph.scene.get_pose(node)
-            vertices, edges = self._geometry[index]
-            world = vertices @ pose[:3, :3].T + pose[:3, 3]
-            box = amodal_box(world, edges, T, K, distortion)
+            rig = graph.people[index]
+            if rig is None:
+                vertices, edges = self._geometry[index]
+                world = vertices @ pose[:3, :3].T + pose[:3, 3]
+                box = amodal_box(world, edges, T, K, distortion)
+            else:  # a dense posed mesh (edges of a few cm): its vertices bound its projection
+                vertices = world = rig.vertices_m.astype(np.float64)
+                box = points_box(world, T, K, distortion)
             clipped = None if box is None else clip_box(box, W, H)
             if clipped is None:
                 continue
@@ -115,6 +128,10 @@ class Annotator:
             seen = visible.get(track_id)
             pixels = 0 if seen is None else seen.pixels
             corners_world = box_corners(vertices.min(axis=0), vertices.max(axis=0), pose)
+            keypoints = keypoints_world = None
+            if rig is not None:
+                keypoints_world = rig.keypoints_m
+                keypoints = keypoint_visibility(keypoints_world, T, K, distortion, instance, track_id, W, H)
             result.objects.append(
                 ObjectAnnotation(
                     track_id=track_id,
@@ -128,6 +145,8 @@ class Annotator:
                     truncation=truncation(box, W, H),
                     box_3d_world_m=corners_world,
                     box_3d_cam_m=corners_world @ T_cam_from_world[:3, :3].T + T_cam_from_world[:3, 3],
+                    keypoints=keypoints,
+                    keypoints_world_m=keypoints_world,
                 )
             )
         return result

@@ -411,6 +411,7 @@ class Renderer:
         pose_gl = gl_camera_pose(view.T_world_from_cam)
         scene.set_pose(scene.main_camera_node, pose_gl)
         renderer.check_light_counts(scene, flags)
+        _upload_deformed(graph)
         renderer._update_context(scene, flags)
         if flags != RenderFlags.NONE:
             renderer.render_shadow_maps(scene, flags)
@@ -434,6 +435,23 @@ class Renderer:
         renderer.forward(scene, nodes, graph.instance_ids, V, P, pose_gl[:3, 3], flags, lit)
         GL.glFlush()
         return target.read() if read else Passes()
+
+
+def _upload_deformed(graph) -> None:
+    """Copy the vertices of primitives that moved since their last upload into their vertex buffer
+    (pyrender uploads a primitive once; its layout is positions, normals, then COLOR_0)."""
+    deformed = getattr(graph, "deformed", set())
+    for primitive in deformed:
+        if primitive._vaid is None:  # not in the context yet: its first upload takes the new vertices
+            continue
+        columns = [primitive.positions, primitive.normals]
+        if primitive.color_0 is not None:
+            columns.append(primitive.color_0)
+        data = np.ascontiguousarray(np.hstack(columns), dtype=np.float32)
+        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, primitive._buffers[0])
+        GL.glBufferSubData(GL.GL_ARRAY_BUFFER, 0, data.nbytes, data)
+    GL.glBindBuffer(GL.GL_ARRAY_BUFFER, 0)
+    deformed.clear()
 
 
 def _destroy_context(display, context) -> None:

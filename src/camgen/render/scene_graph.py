@@ -26,6 +26,7 @@ from typing import Literal
 import numpy as np
 import trimesh
 
+from camgen.actors import PersonRig, person_rig
 from camgen.config.scene import (
     Actor,
     AmbientLight,
@@ -41,6 +42,7 @@ from camgen.config.scene import (
     SpotLight,
     SunLight,
     actor_shape,
+    is_procedural_person,
 )
 from camgen.errors import ConfigError
 from camgen.motion.pose import T_world_from_cam, rot_z, rotation_xyz_deg
@@ -74,11 +76,26 @@ class SceneGraph:
     actor_local_poses: list[np.ndarray] = field(default_factory=list)
     actor_routes: list[Route] = field(default_factory=list)
     """Each actor's route (its path, or its random walk resolved once), in the order of `actors`."""
+    people: list[PersonRig | None] = field(default_factory=list)
+    """Each actor's procedural person (its mesh is skinned in world coordinates), or None."""
+    deformed: set = field(default_factory=set)
+    """Primitives whose vertices changed since the renderer last uploaded them."""
 
     def place_actors(self, time_s: float) -> None:
-        """Move every actor to where its route puts it at `time_s`."""
-        for route, node, local in zip(self.actor_routes, self.actor_nodes, self.actor_local_poses, strict=True):
-            self.scene.set_pose(node, actor_pose(route, time_s) @ local)
+        """Move every actor to where its route puts it at `time_s` (and pose every person)."""
+        for route, node, local, rig in zip(
+            self.actor_routes, self.actor_nodes, self.actor_local_poses, self.people, strict=True
+        ):
+            if rig is None:
+                self.scene.set_pose(node, actor_pose(route, time_s) @ local)
+                continue
+            rig.place(time_s)
+            primitive = node.mesh.primitives[0]
+            primitive.positions = rig.vertices_m
+            primitive.normals = rig.normals
+            node.mesh._bounds = None  # pyrender caches a mesh's bounds
+            self.scene.set_pose(node, np.eye(4))
+            self.deformed.add(primitive)
 
 
 def instance_table(scene: Scene) -> tuple[Instance, ...]:
@@ -182,6 +199,29 @@ def build_mesh(shape, resolve_path: Callable[[str], Path] | None = None) -> pyre
     raise TypeError(f"unknown shape {type(shape).__name__}")
 
 
+PERSON_ROUGHNESS = 0.75
+"""Skin, hair and most fabric are rough dielectrics (glTF roughness 0.6–0.9)."""
+
+
+def person_mesh(rig: PersonRig) -> pyrender.Mesh:
+    """A procedural person as one primitive with per-vertex albedo (COLOR_0), its vertices posed in
+    world coordinates (the node's pose stays the identity); `SceneGraph.place_actors` updates them."""
+    model = rig.model
+    primitive = pyrender.Primitive(
+        positions=rig.vertices_m,
+        normals=rig.normals,
+        color_0=model.colours,
+        indices=model.faces,
+        material=pyrender.MetallicRoughnessMaterial(
+            baseColorFactor=(1.0, 1.0, 1.0, 1.0),
+            metallicFactor=0.0,
+            roughnessFactor=PERSON_ROUGHNESS,
+            doubleSided=True,
+        ),
+    )
+    return pyrender.Mesh(primitives=[primitive])
+
+
 def _look_along(direction: np.ndarray, position=(0.0, 0.0, 0.0)) -> np.ndarray:
     """A node pose whose −z axis points along `direction` (how pyrender aims lights)."""
     z = -np.asarray(direction, dtype=np.float64)
@@ -225,11 +265,18 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
     graph.add(pyrender.IntrinsicsCamera(1.0, 1.0, 0.0, 0.0), name="camera")
     instances = instance_table(scene)
     routes = actor_routes(scene)
-    actor_nodes, local_poses, environment_nodes = [], [], []
-    for actor in scene.actors:
+    actor_nodes, local_poses, environment_nodes, people = [], [], [], []
+    for index, actor in enumerate(scene.actors):
+        if is_procedural_person(actor):
+            rig = person_rig(actor, routes[actor.name], scene_seed=scene.seed, actor_index=index)
+            actor_nodes.append(graph.add(person_mesh(rig), name=f"actor:{actor.name}"))
+            local_poses.append(np.eye(4))
+            people.append(rig)
+            continue
         shape = actor_shape(actor)
         actor_nodes.append(graph.add(build_mesh(shape, resolve_path), name=f"actor:{actor.name}"))
         local_poses.append(placement(shape))
+        people.append(None)
     for mesh in scene.environment.meshes:
         node = graph.add(build_mesh(mesh, resolve_path), pose=placement(mesh), name=f"environment:{mesh.name}")
         environment_nodes.append(node)
@@ -246,6 +293,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         shadows=scene.environment.shadows,
         actor_local_poses=local_poses,
         actor_routes=[routes[actor.name] for actor in scene.actors],
+        people=people,
     )
     result.place_actors(0.0)
     return result

@@ -26,13 +26,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from camgen.config.scene import actor_shape
 from camgen.errors import ConfigError
 from camgen.motion.pose import R_HEAD_FROM_CV, R_mount_from_head
 from camgen.optics.motion_blur import sub_frame_count, sub_frame_offsets
 from camgen.plan.job import CameraJob, CameraState, Job, RenderSpec
-from camgen.plan.visibility import box_corners
+from camgen.plan.visibility import box_corners, local_bounds
 from camgen.render.renderer import Passes, Renderer, View, clip_planes_m
-from camgen.render.scene_graph import SceneGraph, build_scene_graph
+from camgen.render.scene_graph import SceneGraph, build_scene_graph, placement
 
 
 def render_view(state: CameraState, spec: RenderSpec) -> View:
@@ -215,8 +216,14 @@ def _reach(graph: SceneGraph) -> tuple[np.ndarray, np.ndarray]:
     for node in graph.environment_nodes:
         points.append(box_corners(*node.mesh.bounds, graph.scene.get_pose(node)))
         radii.append(np.zeros(8))
-    for route, node, local in zip(graph.actor_routes, graph.actor_nodes, graph.actor_local_poses, strict=True):
-        radius = float(np.max(np.linalg.norm(box_corners(*node.mesh.bounds, local), axis=1)))
+    for actor, route, node, local, rig in zip(
+        graph.actors, graph.actor_routes, graph.actor_nodes, graph.actor_local_poses, graph.people, strict=True
+    ):
+        if rig is not None:  # a person's mesh is posed in the world: its envelope bounds it
+            shape = actor_shape(actor)
+            radius = float(np.max(np.linalg.norm(box_corners(*local_bounds(shape), placement(shape)), axis=1)))
+        else:
+            radius = float(np.max(np.linalg.norm(box_corners(*node.mesh.bounds, local), axis=1)))
         visited = route.points_m
         points.append(np.column_stack([visited, np.zeros(len(visited))]))
         radii.append(np.full(len(visited), radius))

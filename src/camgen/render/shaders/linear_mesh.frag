@@ -337,6 +337,9 @@ void main()
 #ifdef HAS_BASE_COLOR_TEX
     base_color = base_color * srgb_to_linear(texture(material.base_color_texture, uv_0));
 #endif
+#ifdef COLOR_0_LOC
+    base_color *= color_multiplier;  // glTF 2.0: COLOR_0 multiplies the base colour (albedo), not the light
+#endif
 
     // Compute specular and diffuse colors
     vec3 dialectric_spec = vec3(min_roughness);
@@ -437,10 +440,6 @@ void main()
     emissive *= srgb_to_linear(texture(material.emissive_texture, uv_0)).rgb;
 #endif
     color.xyz += emissive;
-
-#ifdef COLOR_0_LOC
-    color *= color_multiplier;
-#endif
 
     out_radiance = vec4(color.xyz, color.a * base_color.a);
     out_depth_m = vec4(frag_depth_m, 0.0, 0.0, 1.0);
