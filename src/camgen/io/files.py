@@ -13,6 +13,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+
 def file_mode() -> int:
     """Permissions of a finished file: 0666 less the process's umask (read without changing it for
     longer than the two calls)."""
