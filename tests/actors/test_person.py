@@ -9,11 +9,11 @@ import cv2
 import numpy as np
 import pytest
 
-from camgen.actors import PersonRig, person_rig
+from camgen.actors import Crowd, PersonRig, person_rig
 from camgen.actors.appearance import CLOTH_RGB, STATURE_CM, draw_appearance
 from camgen.actors.gait import Walker, gait_parameters
-from camgen.actors.person import build_person
-from camgen.actors.skeleton import INDEX, global_transforms, rot_axis, skin, skinning_matrices
+from camgen.actors.person import SOLE_LIFT_M, build_person
+from camgen.actors.skeleton import INDEX, global_transforms, rot_axis, skin, skinning_matrices, weight_matrix
 from camgen.config.scene import Actor, ClothColour
 from camgen.motion.trajectory import Route
 
@@ -48,7 +48,7 @@ def test_stature_distribution_follows_nhanes():
 
 def test_model_stands_at_its_stature(model):
     """Soles on the ground; the top of the head at the drawn stature plus hair and shoe sole."""
-    assert model.vertices_m[:, 2].min() == pytest.approx(0.0, abs=1e-6)
+    assert model.vertices_m[:, 2].min() == pytest.approx(SOLE_LIFT_M, abs=1e-6)
     top = model.vertices_m[:, 2].max()
     assert 1.78 < top < 1.78 + 0.05
     # Anthropometry (Drillis & Contini 1966): hip joint ≈ 0.53 H, shoulder ≈ 0.82 H.
@@ -65,12 +65,13 @@ def test_rest_pose_skins_to_the_rest_mesh(model):
     T[:3, 3] = model.joints_m[INDEX["pelvis"]]
     pose = Pose(T, np.tile(np.eye(3), (len(model.joints_m), 1, 1)))
     M = skinning_matrices(model.joints_m, global_transforms(model.joints_m, pose))
-    vertices, _normals = skin(model.vertices_m, model.normals, model.joint_index, model.joint_weight, M)
+    weights = weight_matrix(model.joint_index, model.joint_weight, len(model.joints_m))
+    vertices, _normals = skin(model.vertices_m, model.normals, weights, M)
     assert np.abs(vertices - model.vertices_m).max() < 1e-5
     # A rigid turn of the whole body turns every vertex with it.
     T[:3, :3] = rot_axis("z", 0.7)
     M = skinning_matrices(model.joints_m, global_transforms(model.joints_m, Pose(T, pose.local_rotations)))
-    turned, _ = skin(model.vertices_m, model.normals, model.joint_index, model.joint_weight, M)
+    turned, _ = skin(model.vertices_m, model.normals, weights, M)
     expected = (model.vertices_m - model.joints_m[INDEX["pelvis"]]) @ rot_axis("z", 0.7).T + T[:3, 3]
     assert np.abs(turned - expected).max() < 1e-4
 
@@ -147,3 +148,16 @@ def test_person_rig_from_scene_actor_is_reproducible():
     b.place(0.8)
     assert np.array_equal(a.vertices_m, b.vertices_m)
     assert a.model.appearance != c.model.appearance
+
+
+def test_a_crowd_skins_each_person_as_alone(model):
+    """Skinning many people in one product gives each the vertices it gets skinned alone."""
+    other = build_person(draw_appearance(12))
+    routes = [Route(np.array([[0.0, 0.0], [6.0, 0.0]]), np.zeros(2), v, 0.0) for v in (1.1, 2.8)]
+    alone = [PersonRig(m, Walker(m, r)) for m, r in zip((model, other), routes, strict=True)]
+    crowd = Crowd([PersonRig(m, Walker(m, r)) for m, r in zip((model, other), routes, strict=True)])
+    crowd.place(1.7)
+    for rig, single in zip(crowd.rigs, alone, strict=True):
+        single.place(1.7)
+        np.testing.assert_allclose(rig.vertices_m, single.vertices_m, atol=1e-5)
+        np.testing.assert_allclose(rig.keypoints_m, single.keypoints_m, atol=1e-9)

@@ -15,7 +15,7 @@ import numpy as np
 from camgen.actors.appearance import Appearance, draw_appearance
 from camgen.actors.gait import Walker
 from camgen.actors.person import COCO_KEYPOINTS, PersonModel, build_person
-from camgen.actors.skeleton import INDEX, global_transforms, skin, skinning_matrices
+from camgen.actors.skeleton import INDEX, JOINTS, global_transforms, skin, skinning_matrices, weight_matrix
 from camgen.config.scene import Actor
 from camgen.motion.trajectory import Route
 
@@ -68,19 +68,48 @@ class PersonRig:
     """(17, 3) COCO keypoints in the world."""
 
     def __post_init__(self) -> None:
+        self.weights = weight_matrix(self.model.joint_index, self.model.joint_weight, len(JOINTS))
         self.place(0.0)
 
-    def place(self, time_s: float) -> None:
+    def pose_skeleton(self, time_s: float) -> np.ndarray:
+        """Pose the skeleton at `time_s` (joints and keypoints); its (J, 3, 4) skinning matrices."""
         model = self.model
-        pose = self.walker.pose(time_s)
-        G = global_transforms(model.joints_m, pose)
-        M = skinning_matrices(model.joints_m, G)
-        self.vertices_m, self.normals = skin(model.vertices_m, model.normals, model.joint_index, model.joint_weight, M)
+        G = global_transforms(model.joints_m, self.walker.pose(time_s))
         self.joints_m = G[:, :3, 3].copy()
         head = G[INDEX["head"]]
-        rest_head = model.joints_m[INDEX["head"]]
-        markers = (model.head_markers_m - rest_head) @ head[:3, :3].T + head[:3, 3]
+        markers = (model.head_markers_m - model.joints_m[INDEX["head"]]) @ head[:3, :3].T + head[:3, 3]
         self.keypoints_m = np.concatenate([markers, self.joints_m[_KEYPOINT_JOINT_ROWS]])
+        return skinning_matrices(model.joints_m, G)
+
+    def place(self, time_s: float) -> None:
+        """Pose and skin this person alone (`Crowd.place` skins many at once)."""
+        M = self.pose_skeleton(time_s)
+        self.vertices_m, self.normals = skin(self.model.vertices_m, self.model.normals, self.weights, M)
+
+
+class Crowd:
+    """Many people skinned together: one sparse product for every vertex of every person per frame
+    (the per-call overhead of numpy, not arithmetic, dominates a person's few thousand vertices)."""
+
+    def __init__(self, rigs: list[PersonRig]):
+        self.rigs = rigs
+        J = len(JOINTS)
+        self._rest_vertices = np.concatenate([r.model.vertices_m for r in rigs]) if rigs else np.zeros((0, 3))
+        self._rest_normals = np.concatenate([r.model.normals for r in rigs]) if rigs else np.zeros((0, 3))
+        index = [r.model.joint_index + k * J for k, r in enumerate(rigs)]
+        weight = [r.model.joint_weight for r in rigs]
+        self._weights = weight_matrix(np.concatenate(index), np.concatenate(weight), J * len(rigs)) if rigs else None
+        ends = np.cumsum([len(r.model.vertices_m) for r in rigs])
+        self._slices = [slice(int(e - len(r.model.vertices_m)), int(e)) for r, e in zip(rigs, ends, strict=True)]
+
+    def place(self, time_s: float) -> None:
+        """Pose every person at `time_s` and skin them all; each rig's vertices and normals are set."""
+        if not self.rigs:
+            return
+        M = np.concatenate([rig.pose_skeleton(time_s) for rig in self.rigs])
+        vertices, normals = skin(self._rest_vertices, self._rest_normals, self._weights, M)
+        for rig, part in zip(self.rigs, self._slices, strict=True):
+            rig.vertices_m, rig.normals = vertices[part], normals[part]
 
 
 def person_rig(actor: Actor, route: Route, *, scene_seed: int, actor_index: int) -> PersonRig:
@@ -90,4 +119,4 @@ def person_rig(actor: Actor, route: Route, *, scene_seed: int, actor_index: int)
     return PersonRig(_model(appearance), Walker(_model(appearance), route, phase_seed=phase))
 
 
-__all__ = ["COCO_KEYPOINTS", "PersonRig", "identity_seed", "person_appearance", "person_rig"]
+__all__ = ["COCO_KEYPOINTS", "Crowd", "PersonRig", "identity_seed", "person_appearance", "person_rig"]

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from camgen.actors.person import PersonModel
-from camgen.actors.skeleton import INDEX, JOINTS, Pose, global_transforms, rot_axis, rotation_between
+from camgen.actors.skeleton import INDEX, JOINTS, Pose, cross, global_transforms, rot_axis, rotation_between
 from camgen.motion.trajectory import Route
 
 G_M_S2 = 9.81
@@ -49,6 +49,8 @@ HEADING_LOOKAHEAD_M = 0.4
 """The body faces along the route between this distance behind and ahead: turns are rounded."""
 LEG_REACH_FRACTION = 0.99
 """A stance leg never straightens beyond this fraction of its length (a knee kept soft)."""
+FOOTPRINT_CACHE = 64
+"""Footprints a walker remembers (each is reused by every frame of its stance and swing)."""
 HEIGHT_SAMPLES = 96
 PELVIS_ACCELERATION_M_S2 = 3.0
 """Largest upward acceleration of the pelvis in walking and running, m/s² (the centre of mass's
@@ -113,6 +115,7 @@ class Walker:
         self.ball_height_m = float(J[INDEX["ball_l"], 2])
         self.stand_height_m = float(J[INDEX["pelvis"], 2]) - 0.005
         self.phase_seed = phase_seed
+        self._footprints: dict = {}
         self._phases, self._heights = self._height_table()
 
     # Where the route takes the body ------------------------------------------------------------
@@ -128,8 +131,15 @@ class Walker:
         return math.atan2(delta[1], delta[0])
 
     def _footprint(self, distance_m: float, side: int, route: Route | None = None) -> tuple[np.ndarray, float]:
-        """Ball position and yaw of a planted foot whose mid-stance is at `distance_m`."""
-        route = route or self.route
+        """Ball position and yaw of a foot planted when the pelvis has walked `distance_m`."""
+        key = (distance_m, side, route)
+        if key not in self._footprints:
+            if len(self._footprints) > FOOTPRINT_CACHE:
+                self._footprints.clear()
+            self._footprints[key] = self._place_foot(distance_m, side, route or self.route)
+        return self._footprints[key]
+
+    def _place_foot(self, distance_m: float, side: int, route: Route) -> tuple[np.ndarray, float]:
         yaw = self._yaw_at_distance(distance_m, route)
         centre = route.at_distance(distance_m)
         left = np.array([-math.sin(yaw), math.cos(yaw)])
@@ -309,15 +319,15 @@ class Walker:
 def _aim(rest_direction: np.ndarray, direction: np.ndarray, pole: np.ndarray) -> np.ndarray:
     """The rotation taking a rest bone (whose rest forward is +x) onto `direction`, turned about it so
     that its forward points as near `pole` as it can."""
-    a0 = rest_direction / np.linalg.norm(rest_direction)
+    a0 = rest_direction / math.sqrt(rest_direction @ rest_direction)
     b0 = np.array([1.0, 0.0, 0.0]) - a0[0] * a0
-    b0 /= np.linalg.norm(b0)
-    a1 = direction / np.linalg.norm(direction)
-    b1 = pole - np.dot(pole, a1) * a1
-    norm = np.linalg.norm(b1)
+    b0 /= math.sqrt(b0 @ b0)
+    a1 = direction / math.sqrt(direction @ direction)
+    b1 = pole - (pole @ a1) * a1
+    norm = math.sqrt(b1 @ b1)
     b1 = b1 / norm if norm > 1e-9 else b0
-    F0 = np.column_stack([a0, b0, np.cross(a0, b0)])
-    F1 = np.column_stack([a1, b1, np.cross(a1, b1)])
+    F0 = np.column_stack([a0, b0, cross(a0, b0)])
+    F1 = np.column_stack([a1, b1, cross(a1, b1)])
     return F1 @ F0.T
 
 

@@ -81,6 +81,9 @@ SHOE_OFFSET_M = 0.012
 SHORT_HAIR_OFFSET_M = 0.008
 HAT_OFFSET_M = 0.015
 INFLUENCES = 4
+SOLE_LIFT_M = 0.002
+LONG_HAIR_BELOW_NECK_FRACTION = 0.12
+"""Long hair ends this fraction of the stature below the neck joint (at the shoulder blades)."""
 VERTEX_FRACTION = 0.3
 """The dressed mesh is decimated to this fraction of its vertices (quadric error metrics; Garland &
 Heckbert 1997): about 4 000 vertices, whose edges stay under 3 cm, a pixel or two on a person filling
@@ -93,7 +96,7 @@ class PersonModel:
 
     appearance: Appearance
     vertices_m: np.ndarray
-    """(V, 3) float32 rest vertices; the shoe soles stand on z = 0."""
+    """(V, 3) float32 rest vertices; the shoe soles stand on the ground (`SOLE_LIFT_M` above z = 0)."""
     normals: np.ndarray
     """(V, 3) float32 rest normals."""
     faces: np.ndarray
@@ -273,28 +276,25 @@ def _rigid_box(extents_m, centre_m, colour, joint: str) -> _Piece:
 
 def _decimate(points, faces, colours, joint_index, joint_weight, fraction: float):
     """The mesh reduced to `fraction` of its vertices by quadric edge collapses; each kept vertex takes
-    the mean colour and the summed skinning weights (top four, renormalised) of the vertices merged
-    into it."""
+    the colour and skinning of the nearest of the vertices merged into it (a chain of collapses can
+    merge vertices far apart, so their mean would be wrong)."""
+    points64, faces64 = points.astype(np.float64), faces.astype(np.int64)
     _, _, collapses = fast_simplification.simplify(
-        points.astype(np.float64), faces.astype(np.int64), target_reduction=1.0 - fraction, return_collapses=True
+        points64, faces64, target_reduction=1.0 - fraction, return_collapses=True
     )
-    new_points, new_faces, mapping = fast_simplification.replay_simplification(
-        points.astype(np.float64), faces.astype(np.int64), collapses
-    )
-    count = len(new_points)
-    merged = np.bincount(mapping, minlength=count).astype(np.float64)[:, None]
-    rgb = np.zeros((count, 3))
-    np.add.at(rgb, mapping, colours)
-    dense = np.zeros((count, len(JOINTS)))
-    np.add.at(dense, (np.repeat(mapping, joint_index.shape[1]), joint_index.ravel()), joint_weight.ravel())
-    order = np.argsort(-dense, axis=1, kind="stable")[:, :INFLUENCES]
-    top = np.take_along_axis(dense, order, axis=1)
+    new_points, new_faces, mapping = fast_simplification.replay_simplification(points64, faces64, collapses)
+    distance = np.linalg.norm(points64 - new_points[mapping], axis=1)
+    order = np.lexsort((distance, mapping))  # by group, nearest first
+    first = np.ones(len(order), dtype=bool)
+    first[1:] = mapping[order][1:] != mapping[order][:-1]
+    source = np.empty(len(new_points), dtype=np.int64)
+    source[mapping[order][first]] = order[first]
     return (
         np.asarray(new_points, dtype=np.float64),
         np.asarray(new_faces, dtype=np.int32),
-        rgb / np.maximum(merged, 1.0),
-        order.astype(np.int64),
-        (top / top.sum(axis=1, keepdims=True)).astype(np.float32),
+        np.asarray(colours, dtype=np.float64)[source],
+        joint_index[source].astype(np.int64),
+        joint_weight[source].astype(np.float32),
     )
 
 
@@ -351,9 +351,12 @@ def _skin_and_garments(look: Appearance, vertices_m, joints_m, markers_m) -> lis
         colour = top_rgb if look.top == "coat" else CLOTH_RGB[look.bottom_colour]
         pieces.append(_surface(skirt, base.faces_by_group["helper-skirt"], everything, colour, 0.01))
     if look.hair_style == "long":
-        # The helper drapes strands over the chest too; keep the hair that falls behind the shoulders.
-        behind = (vertices_m[:, 0] < head_x + 0.02) | (vertices_m[:, 2] > joints_m[INDEX["neck_01"], 2] + 0.05)
-        pieces.append(_surface(vertices_m, base.faces_by_group["helper-hair"], behind, hair, 0.002))
+        # The helper drapes strands over the chest too, and it is not shaped by the macro targets for
+        # small bodies: keep the hair behind the shoulders, down to the shoulder blades.
+        neck_z = joints_m[INDEX["neck_01"], 2]
+        behind = (vertices_m[:, 0] < head_x + 0.02) | (vertices_m[:, 2] > neck_z + 0.05)
+        long_hair = behind & (vertices_m[:, 2] > neck_z - LONG_HAIR_BELOW_NECK_FRACTION * look.stature_m)
+        pieces.append(_surface(vertices_m, base.faces_by_group["helper-hair"], long_hair, hair, 0.002))
     if look.hat:
         hat_rgb = CLOTH_RGB["black" if look.top_colour != "black" else "gray"]
         pieces.append(_surface(vertices_m, body_faces, on_head & (z > eye_z + 0.035), hat_rgb, HAT_OFFSET_M))
@@ -395,7 +398,9 @@ def build_person(appearance: Appearance) -> PersonModel:
         np.concatenate([p.joint_weight for p in pieces]),
         VERTEX_FRACTION,
     )
-    ground = np.array([0.0, 0.0, points_m[:, 2].min()])  # the shoe soles stand on z = 0
+    # The shoe soles stand SOLE_LIFT_M above z = 0: flush with the ground they would tie with it in
+    # depth and flicker in and out of the instance pass.
+    ground = np.array([0.0, 0.0, points_m[:, 2].min() - SOLE_LIFT_M])
     points_m -= ground
     normals = trimesh.Trimesh(points_m, faces, process=False).vertex_normals
     return PersonModel(

@@ -9,9 +9,11 @@ skinning; Magnenat-Thalmann et al. 1988, the glTF 2.0 skin definition).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import sparse
 
 JOINTS = (
     "pelvis",
@@ -69,6 +71,13 @@ PARENT_INDEX = np.array([-1 if PARENTS[n] is None else INDEX[PARENTS[n]] for n i
 
 def rot_axis(axis: str, angle_rad: float | np.ndarray) -> np.ndarray:
     """Rotation matrix (…, 3, 3) by `angle_rad` about the x, y or z axis (right-handed)."""
+    if isinstance(angle_rad, float | int):  # one angle: no array machinery (the gait calls this a lot)
+        c, s = math.cos(angle_rad), math.sin(angle_rad)
+        if axis == "x":
+            return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+        if axis == "y":
+            return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
     a = np.asarray(angle_rad, dtype=np.float64)
     c, s = np.cos(a), np.sin(a)
     R = np.zeros((*a.shape, 3, 3))
@@ -82,14 +91,21 @@ def rot_axis(axis: str, angle_rad: float | np.ndarray) -> np.ndarray:
     return R
 
 
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a × b of two 3-vectors (numpy's cross costs ten times more on single vectors)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The smallest rotation (3, 3) taking direction `a` onto direction `b` (Rodrigues)."""
-    a = np.asarray(a, dtype=np.float64) / np.linalg.norm(a)
-    b = np.asarray(b, dtype=np.float64) / np.linalg.norm(b)
-    v = np.cross(a, b)
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    a = a / math.sqrt(a @ a)
+    b = b / math.sqrt(b @ b)
+    v = cross(a, b)
     c = float(np.dot(a, b))
     if c < -1 + 1e-12:  # opposite: turn half-way round any perpendicular axis
-        axis = np.cross(a, [1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 1.0, 0.0])
+        axis = cross(a, np.array([1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 1.0, 0.0]))
         axis /= np.linalg.norm(axis)
         return 2.0 * np.outer(axis, axis) - np.eye(3)
     vx = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
@@ -126,33 +142,43 @@ def skinning_matrices(rest_joints_m: np.ndarray, G: np.ndarray) -> np.ndarray:
     return M
 
 
+def weight_matrix(joint_index: np.ndarray, joint_weight: np.ndarray, joint_count: int) -> sparse.csr_matrix:
+    """The (V, joint_count) sparse matrix of skinning weights (`joint_index` may address joints of
+    several skeletons stacked: skeleton k's joint j is column k·J + j)."""
+    rows = np.repeat(np.arange(len(joint_index)), joint_index.shape[1])
+    return sparse.csr_matrix(
+        (joint_weight.ravel().astype(np.float32), (rows, joint_index.ravel())), shape=(len(joint_index), joint_count)
+    )
+
+
 def skin(
-    rest_vertices_m: np.ndarray,
-    rest_normals: np.ndarray,
-    joint_index: np.ndarray,
-    joint_weight: np.ndarray,
-    M: np.ndarray,
+    rest_vertices_m: np.ndarray, rest_normals: np.ndarray, weights: sparse.csr_matrix, M: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Linear blend skinning of vertices and normals.
 
     Parameters
     ----------
     rest_vertices_m, rest_normals : ndarray, shape (V, 3), float32
-    joint_index : ndarray, shape (V, K)
-        The K joints each vertex follows.
-    joint_weight : ndarray, shape (V, K), float32
-        Their weights, summing to 1 per vertex.
+    weights : scipy.sparse matrix, shape (V, J)
+        `weight_matrix`: each vertex's weights over the joints (rows sum to 1).
     M : ndarray, shape (J, 3, 4)
-        `skinning_matrices`.
+        `skinning_matrices` (of one skeleton, or of several stacked).
 
     Returns
     -------
     vertices_m, normals : ndarray, shape (V, 3), float32
         Posed vertices; normals turned by the blended rotation (renormalised).
+
+    The blended matrices are one sparse product, W·M (V × 12), and applying them is twelve
+    multiply-adds per vertex on whole columns: no per-vertex 3×4 matrices are gathered.
     """
-    Mf = M.astype(np.float32)
-    blended = np.einsum("vk,vkab->vab", joint_weight, Mf[joint_index], optimize=True)
-    vertices = np.einsum("vab,vb->va", blended[:, :, :3], rest_vertices_m, optimize=True) + blended[:, :, 3]
-    normals = np.einsum("vab,vb->va", blended[:, :, :3], rest_normals, optimize=True)
-    normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+    B = weights @ M.reshape(len(M), 12).astype(np.float32)
+    v, n = rest_vertices_m, rest_normals
+    vertices = np.empty((len(v), 3), dtype=np.float32)
+    normals = np.empty((len(v), 3), dtype=np.float32)
+    for row in range(3):
+        r = 4 * row
+        vertices[:, row] = B[:, r] * v[:, 0] + B[:, r + 1] * v[:, 1] + B[:, r + 2] * v[:, 2] + B[:, r + 3]
+        normals[:, row] = B[:, r] * n[:, 0] + B[:, r + 1] * n[:, 1] + B[:, r + 2] * n[:, 2]
+    normals /= np.maximum(np.sqrt(np.einsum("ij,ij->i", normals, normals))[:, None], 1e-12)
     return vertices, normals

@@ -159,20 +159,21 @@ class Route:
         return position, heading
 
     @cached_property
-    def _walk(self) -> tuple[np.ndarray, np.ndarray, float]:
-        """Distance walked at each knot (M+1,) m, the walked polyline's corners (P, 2) m, and the
-        length of one lap (or of the whole route), m."""
+    def _walk(self) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+        """Distance walked at each knot (M+1,) m, the walked polyline's corners (P, 2) m, the length
+        of one lap (or of the whole route), m, and the distance walked at each corner (P,) m."""
         _, starts, ends, _, _ = self._phases
         lengths = np.hypot(*(ends - starts).T) if len(starts) else np.zeros(0)
         distance = np.concatenate([[0.0], np.cumsum(lengths)])
         walking = lengths > 0
         corners = np.concatenate([starts[walking][:1], ends[walking]]) if walking.any() else self.waypoints_m[:1]
-        return distance, corners, float(distance[-1])
+        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(corners, axis=0).T))])
+        return distance, corners, float(distance[-1]), along
 
     def distance_at(self, time_s: float) -> float:
         """Distance the actor has walked by `time_s` since the beginning, m (continuous, never falls)."""
         knots, _, _, _, _ = self._phases
-        distance, _, lap = self._walk
+        distance, _, lap, _ = self._walk
         if len(knots) < 2 or lap == 0:
             return 0.0
         since = max(time_s - self.start_s, 0.0)
@@ -186,11 +187,10 @@ class Route:
     def at_distance(self, distance_m: float | np.ndarray) -> np.ndarray:
         """Ground point (…, 2) m at a distance walked along the route (its corners in order; a loop
         repeats; an open route stays at its ends)."""
-        _, corners, lap = self._walk
+        _, corners, lap, along = self._walk
         d = np.asarray(distance_m, dtype=np.float64)
         if lap == 0 or len(corners) < 2:
             return np.broadcast_to(corners[0], (*d.shape, 2)).copy()
-        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(corners, axis=0).T))])
         d = np.mod(d, lap) if self.loop else np.clip(d, 0.0, lap)
         return np.stack([np.interp(d, along, corners[:, 0]), np.interp(d, along, corners[:, 1])], axis=-1)
 

@@ -26,7 +26,7 @@ from typing import Literal
 import numpy as np
 import trimesh
 
-from camgen.actors import PersonRig, person_rig
+from camgen.actors import Crowd, PersonRig, person_rig
 from camgen.config.scene import (
     Actor,
     AmbientLight,
@@ -80,6 +80,8 @@ class SceneGraph:
     """Each actor's procedural person (its mesh is skinned in world coordinates), or None."""
     deformed: set = field(default_factory=set)
     """Primitives whose vertices changed since the renderer last uploaded them."""
+    crowd: Crowd = field(default_factory=lambda: Crowd([]))
+    """The people, skinned together."""
 
     def place_actors(self, time_s: float) -> None:
         """Move every actor to where its route puts it at `time_s` (and pose every person)."""
@@ -88,8 +90,10 @@ class SceneGraph:
         ):
             if rig is None:
                 self.scene.set_pose(node, actor_pose(route, time_s) @ local)
+        self.crowd.place(time_s)
+        for node, rig in zip(self.actor_nodes, self.people, strict=True):
+            if rig is None:
                 continue
-            rig.place(time_s)
             primitive = node.mesh.primitives[0]
             primitive.positions = rig.vertices_m
             primitive.normals = rig.normals
@@ -294,6 +298,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         actor_local_poses=local_poses,
         actor_routes=[routes[actor.name] for actor in scene.actors],
         people=people,
+        crowd=Crowd([rig for rig in people if rig is not None]),
     )
     result.place_actors(0.0)
     return result
