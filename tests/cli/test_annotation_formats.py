@@ -18,12 +18,13 @@ from camgen.cli.main import main
 from tests.conftest import SCENE, write
 
 
-def render(workspace, frames: int = 6, scene_text: str = SCENE):
+def render(workspace, frames: int = 6, scene_text: str = SCENE, annotations: str = "mot, coco"):
     scene = write(
         workspace,
         "scenes/walk.yaml",
         scene_text.replace(
-            "duration_s: 1", "duration_s: 1\noutputs: {video: false, raw_dng: false, annotations: [mot, coco]}"
+            "duration_s: 1",
+            f"duration_s: 1\noutputs: {{video: false, raw_dng: false, annotations: [{annotations}]}}",
         ),
     )
     out = workspace / "out"
@@ -153,7 +154,7 @@ def test_person_keypoints_score_perfectly_in_cocoeval_and_boxes_are_tight(worksp
         .replace("pitch_deg: -20", "pitch_deg: -8")
         .replace("waypoints_m: [[-3, 5], [3, 5]]", "waypoints_m: [[-1, 5], [1, 5]]")
     )
-    directory = render(workspace, scene_text=whole_view)
+    directory = render(workspace, scene_text=whole_view, annotations="mot, coco, reid")
     document = json.loads((directory / "coco.json").read_text())
     person = next(c for c in document["categories"] if c["name"] == "person")
     assert len(person["keypoints"]) == 17 and len(person["skeleton"]) == 19
@@ -178,3 +179,14 @@ def test_person_keypoints_score_perfectly_in_cocoeval_and_boxes_are_tight(worksp
     evaluation.accumulate()
     evaluation.summarize()
     assert evaluation.stats[0] == 1.0
+
+    # The same keypoints beside MOT's gt.txt, frames counted from 1; re-ID crops named as Market-1501's.
+    lines = [json.loads(line) for line in (directory / "gt" / "keypoints.jsonl").read_text().splitlines()]
+    assert [line["frame"] for line in lines] == [image["id"] for image in document["images"]]
+    first = next(a for a in annotations if a["image_id"] == 1)
+    np.testing.assert_allclose(np.ravel(lines[0]["people"][0]["keypoints"]), first["keypoints"], atol=1e-3)
+    crops = sorted(p.name for p in (directory / "reid").iterdir())
+    assert crops == [f"{track['id']:04d}_c1s1_{frame:06d}_00.jpg" for frame in range(1, 7)]
+    import cv2
+
+    assert cv2.imread(str(directory / "reid" / crops[0])).shape == (128, 64, 3)

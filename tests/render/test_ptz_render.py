@@ -97,9 +97,14 @@ def test_an_actor_has_one_global_id_in_both_cameras(renderer, tmp_path):
         instance = crop_to_output(passes.instance_id, camera.render)
         for actor in job.scene.actors:
             centre_at, _ = actor_centre(actor, routes[actor.name])
+            # A person's box centre is at the crotch, between the legs: look at the chest instead.
+            chest_m = np.array([0.0, 0.0, 0.35 if actor.cls == "person" else 0.0])
             # the pinhole render (no lens stage has run yet): project without distortion
             uv, depth = project_points(
-                centre_at(state.time_s)[None], np.array(state.T_world_from_cam), np.array(state.K_px), np.zeros(8)
+                (centre_at(state.time_s) + chest_m)[None],
+                np.array(state.T_world_from_cam),
+                np.array(state.K_px),
+                np.zeros(8),
             )
             u, v = np.round(uv[0]).astype(int) if np.all(np.isfinite(uv[0])) else (-1, -1)
             if depth[0] > 0 and 0 <= u < camera.width_px and 0 <= v < camera.height_px:

@@ -469,7 +469,9 @@ class Outputs(Model):
     frames: Literal["png", "tiff", "exr"] | None = None
     raw_dng: bool = False
     depth: Literal["png16", "exr"] | None = None
-    annotations: list[Literal["mot", "coco"]] = ["mot", "coco"]
+    annotations: list[Literal["mot", "coco", "reid"]] = ["mot", "coco"]
+    """mot: gt/gt.txt and seqinfo.ini (with gt/keypoints.jsonl when people are filmed); coco: coco.json;
+    reid: crops of each person from the delivered frames, named as Market-1501's (reid/)."""
     camera_metadata: bool = True
 
 
@@ -546,6 +548,24 @@ _DEFAULT_BOX_SIZE_M: dict[str, tuple[float, float, float]] = {
 
 PERSON_ENVELOPE_RADIUS_M = 0.6
 PERSON_ENVELOPE_HEIGHT_M = 2.15
+
+
+PERSON_NOMINAL_HEIGHT_M = 1.75
+PERSON_NOMINAL_RADIUS_M = 0.25
+
+
+def nominal_shape(actor: Actor) -> BoxMesh | CylinderMesh | SphereMesh | FileMesh:
+    """What a controller aims at: for a procedural person a standing adult's cylinder (1.75 m tall,
+    0.5 m wide; a PTZ head's tracker knows no stature), otherwise the actor's shape."""
+    if is_procedural_person(actor):
+        return CylinderMesh(
+            type="cylinder",
+            name=actor.name,
+            radius_m=PERSON_NOMINAL_RADIUS_M,
+            height_m=PERSON_NOMINAL_HEIGHT_M,
+            position_m=(0.0, 0.0, PERSON_NOMINAL_HEIGHT_M / 2),
+        )
+    return actor_shape(actor)
 
 
 def is_procedural_person(actor: Actor) -> bool:

@@ -51,6 +51,8 @@ class SequenceAnnotations:
         self.images: list[dict] = []
         self.annotations: list[dict] = []
         self.tracks: dict[int, dict] = {}
+        self.keypoint_lines: list[str] = []
+        """One JSON line per frame with people: their keypoints in the image and in the world."""
         """Track id → the TAO-style track record, with the identity's attribute labels for people."""
 
     def describe(self, track_id: int, *, name: str, cls: str, attributes: dict | None = None) -> None:
@@ -73,6 +75,17 @@ class SequenceAnnotations:
         if self.frame_suffix is not None:  # relative to coco.json
             image["file_name"] = f"frames/{frame.frame:06d}{self.frame_suffix}"
         self.images.append(image)
+        people = [
+            {
+                "track_id": obj.track_id,
+                "keypoints": np.round(obj.keypoints, 3).tolist(),
+                "keypoints_world_m": np.round(obj.keypoints_world_m, 5).tolist(),
+            }
+            for obj in frame.objects
+            if obj.keypoints is not None
+        ]
+        if people:
+            self.keypoint_lines.append(json.dumps({"frame": frame.frame + 1, "people": people}, separators=(",", ":")))
         for obj in frame.objects:
             x0, y0, x1, y1 = (round(v, 4) for v in obj.amodal_box)  # the same digits on every machine
             self.mot.append(
@@ -115,7 +128,9 @@ class SequenceAnnotations:
         }
 
     def write_mot(self, directory: Path) -> list[Path]:
-        """`gt/gt.txt` and `seqinfo.ini` under `directory`."""
+        """`gt/gt.txt` and `seqinfo.ini` under `directory`, and `gt/keypoints.jsonl` when people were
+        annotated: per frame (counted from 1, as gt.txt) each person's track id, its COCO keypoints
+        (x, y, v) and its 3-D keypoints in the world, m."""
         gt = directory / "gt" / "gt.txt"
         write_text_atomic(gt, "\n".join(self.mot) + ("\n" if self.mot else ""))
         seqinfo = directory / "seqinfo.ini"
@@ -125,11 +140,53 @@ class SequenceAnnotations:
             f"name={self.name}\nimDir=frames\nframeRate={self.fps:g}\nseqLength={self.frame_count}\n"
             f"imWidth={self.width_px}\nimHeight={self.height_px}\nimExt={self.frame_suffix or '.png'}\n",
         )
-        return [gt, seqinfo]
+        written = [gt, seqinfo]
+        if self.keypoint_lines:
+            keypoints = directory / "gt" / "keypoints.jsonl"
+            write_text_atomic(keypoints, "\n".join(self.keypoint_lines) + "\n")
+            written.append(keypoints)
+        return written
 
     def write_coco(self, path: Path) -> Path:
         write_text_atomic(path, json.dumps(self.coco_document(), separators=(",", ":")))
         return path
+
+
+REID_SIZE_PX = (64, 128)
+"""Width and height of a re-identification crop: Market-1501's."""
+REID_MIN_HEIGHT_PX = 32
+REID_MIN_VISIBILITY = 0.5
+REID_JPEG_QUALITY = 95
+
+
+def write_reid_crops(directory: Path, frame, rgb8: np.ndarray, *, camera_number: int) -> list[Path]:
+    """Crops of the people in one delivered frame, as Market-1501 ships them (Zheng et al. 2015): the
+    person's amodal box, clipped to the image, resized to 64×128 and saved as JPEG under
+    ``{track id:04d}_c{camera number}s1_{frame number:06d}_00.jpg`` (camera numbers and frames counted
+    from 1). People under `REID_MIN_HEIGHT_PX` tall or less than `REID_MIN_VISIBILITY` visible are left
+    out, as a detector-cropped data set would lack them. Returns the files written."""
+    import cv2
+
+    from camgen.io.files import atomic_path
+
+    written = []
+    for obj in frame.objects:
+        if obj.keypoints is None or obj.visibility < REID_MIN_VISIBILITY or obj.visible_box is None:
+            continue
+        x0, y0, x1, y1 = obj.amodal_box
+        c0, r0, c1, r1 = int(np.floor(x0)), int(np.floor(y0)), int(np.ceil(x1)), int(np.ceil(y1))
+        if r1 - r0 < REID_MIN_HEIGHT_PX or c1 <= c0:
+            continue
+        crop = cv2.resize(rgb8[r0:r1, c0:c1], REID_SIZE_PX, interpolation=cv2.INTER_AREA)
+        ok, data = cv2.imencode(".jpg", crop[..., ::-1], [cv2.IMWRITE_JPEG_QUALITY, REID_JPEG_QUALITY])
+        if not ok:
+            raise OSError(f"could not encode the re-identification crop of track {obj.track_id}")
+        path = directory / "reid" / f"{obj.track_id:04d}_c{camera_number}s1_{frame.frame + 1:06d}_00.jpg"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(path) as tmp:
+            tmp.write_bytes(data.tobytes())
+        written.append(path)
+    return written
 
 
 def _category(category_id: int, name: str) -> dict:

@@ -275,8 +275,9 @@ def _compile_camera(
         exposure.exposure_time_s if exposure.mode == "manual" else min(exposure.exposure_time_max_s, frame_period_s)
     )
 
-    needs_image = outputs.video or outputs.frames is not None or outputs.raw_dng
-    needs_isp = outputs.video or outputs.frames is not None
+    reid = "reid" in outputs.annotations  # crops of the delivered frames
+    needs_image = outputs.video or outputs.frames is not None or outputs.raw_dng or reid
+    needs_isp = outputs.video or outputs.frames is not None or reid
     annotations = bool(outputs.annotations)
     mono = sensor.cfa == "mono"
     decisions: list[Decision] = []

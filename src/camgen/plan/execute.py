@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from camgen.io.annotations import SequenceAnnotations
+from camgen.io.annotations import SequenceAnnotations, write_reid_crops
 from camgen.io.dng import SRGB_FROM_XYZ, write_dng
 from camgen.io.files import atomic_path, write_text_atomic
 from camgen.io.frames import write_depth, write_frame
@@ -245,7 +245,12 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                     )
 
                 with clock("annotate"):
-                    sequence.add(annotator.annotate(state, stream, post=to_stream))
+                    annotated = annotator.annotate(state, stream, post=to_stream)
+                    sequence.add(annotated)
+                    if "reid" in stages["annotate"].params["formats"] and rgb8 is not None:
+                        result.files += write_reid_crops(
+                            directory, annotated, rgb8, camera_number=context.camera_index + 1
+                        )
             if "io.camera_metadata" in stages:
                 record = state.model_dump(mode="json")
                 output_K = record.pop("output_K_px")

@@ -13,7 +13,7 @@ import numpy as np
 
 from camgen.config.loader import head_ranges
 from camgen.config.profile import Profile
-from camgen.config.scene import Camera, Scene, actor_shape
+from camgen.config.scene import Camera, Scene, nominal_shape
 from camgen.isp.eptz import eptz_window_px, full_window_size_px, window_centre_px
 from camgen.motion.pose import R_world_from_cam, R_world_from_mount, T_world_from_cam, rot_z
 from camgen.motion.programs import Follow, FollowView, Position, build_controller
@@ -58,7 +58,7 @@ def head_limits(camera: Camera, profile: Profile) -> HeadLimits:
 
 def actor_centre(actor, route: Route, file_bounds=None):
     """(time_s → world centre (3,) of the actor's bounding box, the box height in m)."""
-    shape = actor_shape(actor)
+    shape = nominal_shape(actor)
     corners = box_corners(*local_bounds(shape, file_bounds), placement(shape))
     low, high = corners.min(axis=0), corners.max(axis=0)
     centre_local = (low + high) / 2
