@@ -14,19 +14,30 @@ from pathlib import Path
 import pytest
 
 from camgen.cli.main import main
-from tests.batch.conftest import make_dataset
+from tests.batch.conftest import make_dataset as make_short_dataset
 from tests.batch.test_run import job_files, statuses
 
 pytestmark = pytest.mark.opengl
 
 DATASET = """\
-description: eight jobs of ten frames, long enough to be interrupted
+description: eight jobs of thirty frames, long enough to be interrupted
 scenes: [scenes/walk.yaml]
 profiles: [small, wide]
 seeds: {start: 0, count: 4}
 combine: product
 """
 WORKERS = ["--workers", "2"]
+
+
+def make_dataset(directory: Path, text: str) -> Path:
+    """The tiny dataset with 3 s (30-frame) jobs: a worker's first job also builds its people, so the
+    later jobs run faster than the first, and shorter ones can all finish before the signal lands."""
+    dataset = make_short_dataset(directory, text)
+    scene = directory / "scenes" / "walk.yaml"
+    scene.write_text(scene.read_text(encoding="utf-8").replace("duration_s: 1\n", "duration_s: 3\n"), encoding="utf-8")
+    return dataset
+
+
 TIMEOUT_S = 120
 
 
