@@ -36,7 +36,7 @@ import numpy as np
 # Linear sRGB albedos of named clothing colours: typical dyed fabric, less saturated than a pure
 # display primary (denim blue ≈ sRGB (70, 90, 130), decoded).
 CLOTH_RGB: dict[str, tuple[float, float, float]] = {
-    "black": (0.025, 0.025, 0.028),
+    "black": (0.04, 0.04, 0.045),
     "white": (0.70, 0.70, 0.68),
     "gray": (0.20, 0.20, 0.21),
     "red": (0.36, 0.05, 0.05),
@@ -144,6 +144,8 @@ class Appearance:
     shoe_colour: str
     bag: Bag
     hat: bool
+    identity_seed: int = 0
+    """The seed everything above was drawn from (it also seeds the fabric's shading variation)."""
 
     @property
     def skin_rgb(self) -> tuple[float, float, float]:
@@ -254,5 +256,6 @@ def draw_appearance(seed: int, *, season: Season = "mixed", pinned: dict[str, ob
         shoe_colour=shoe_colour,
         bag=bag,
         hat=hat,
+        identity_seed=int(seed),
     )
     return replace(appearance, **{k: v for k, v in pinned.items() if k not in ("sex", "age_group")})

@@ -15,7 +15,7 @@ points of the head.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import fast_simplification
@@ -82,6 +82,9 @@ SHORT_HAIR_OFFSET_M = 0.008
 HAT_OFFSET_M = 0.015
 INFLUENCES = 4
 SOLE_LIFT_M = 0.002
+FABRIC_SPAWN_KEY = 0x6661_6272  # "fabr"
+FABRIC_WAVES = 6
+FABRIC_VARIATION = 0.12
 LONG_HAIR_BELOW_NECK_FRACTION = 0.12
 """Long hair ends this fraction of the stature below the neck joint (at the shoulder blades)."""
 VERTEX_FRACTION = 0.3
@@ -298,6 +301,19 @@ def _decimate(points, faces, colours, joint_index, joint_weight, fraction: float
     )
 
 
+def _fabric_variation(points_m: np.ndarray, *, rng: np.random.Generator) -> np.ndarray:
+    """(V,) albedo factors around 1: a smooth random field over the body (a few random plane waves of
+    10–30 cm wavelength, ±`FABRIC_VARIATION` together), the uneven shade that folds, wear and
+    fading give real cloth and skin, so that no surface is one flat colour."""
+    field = np.zeros(len(points_m))
+    for _ in range(FABRIC_WAVES):
+        direction = rng.normal(size=3)
+        direction /= np.linalg.norm(direction)
+        wavelength_m = rng.uniform(0.10, 0.30)
+        field += np.sin(2 * np.pi * points_m @ direction / wavelength_m + rng.uniform(0, 2 * np.pi))
+    return 1.0 + FABRIC_VARIATION * field / np.sqrt(FABRIC_WAVES / 2)
+
+
 def _hairline(vertices_m, joints_m, markers_m, on_head) -> np.ndarray:
     """Head vertices under the hair: above the brow in front, down to the nape behind."""
     eye_z = markers_m[1, 2]
@@ -389,6 +405,8 @@ def build_person(appearance: Appearance) -> PersonModel:
     markers_m = _head_markers(vertices_m, joints_m)
     pieces = [p for p in _skin_and_garments(appearance, vertices_m, joints_m, markers_m) if p is not None]
     pieces += _carried(appearance, vertices_m, joints_m)
+    rng = np.random.default_rng(np.random.SeedSequence(appearance.identity_seed, spawn_key=(FABRIC_SPAWN_KEY,)))
+    pieces = [replace(p, colours=p.colours * _fabric_variation(p.points_m, rng=rng)[:, None]) for p in pieces]
     offsets = np.cumsum([0] + [len(p.points_m) for p in pieces[:-1]])
     points_m, faces, colours, joint_index, joint_weight = _decimate(
         np.concatenate([p.points_m for p in pieces]),
