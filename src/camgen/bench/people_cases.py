@@ -1,0 +1,145 @@
+"""People: what a real-photo detector finds on camgen's frames, and what posing people costs.
+
+- Detection (`camgen.bench.realism`): OpenCV's HOG people detector (INRIA Person: real photographs)
+  on frames spread over every example scene with people, every camera; recall and precision of people
+  ≥ 96 px tall and ≥ 70 % visible.
+- Cost: the plaza with 50 procedural people drawn at 1080p (radiance, shadows on) with every person
+  posed and skinned before each draw, against the same draw of people standing as they were; and
+  each part alone: posing (gait, forward kinematics, keypoints), skinning (one sparse product for
+  all), and uploading the vertex buffers.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+
+from camgen.bench.harness import Case
+from camgen.bench.realism import DetectionScore
+
+PEOPLE = 50
+FRAME_S = 1 / 25
+
+
+def _crowd_graph(repo: Path):
+    """The plaza with extra wanderers up to `PEOPLE` people, as a scene graph, and a 1080p view."""
+    from camgen.config import load_scene
+    from camgen.config.scene import Actor
+    from camgen.motion.pose import T_world_from_cam
+    from camgen.render.renderer import View
+    from camgen.render.scene_graph import build_scene_graph
+
+    loaded = load_scene(repo / "scenes/plaza.yaml")
+    actors = list(loaded.scene.actors)
+    for i in range(PEOPLE - sum(a.cls == "person" for a in actors)):
+        actors.append(
+            Actor.model_validate(
+                {"name": f"extra_{i}", "class": "person",
+                 "random_walk": {"region_m": [[-12, -8], [12, 8]], "speed_m_s": 1.3, "seed": i}}
+            )
+        )  # fmt: skip
+    scene = loaded.scene.model_copy(update={"actors": actors})
+    graph = build_scene_graph(scene)
+    # A 1080p camera on the station's facade looking down over the plaza.
+    eye = np.array([0.0, 15.5, 6.0])
+    forward = np.array([0.0, -1.0, -0.35])
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    down = np.cross(forward, right)
+    T = T_world_from_cam(tuple(eye), np.column_stack([right, down, forward]))
+    K = np.array([[1100.0, 0.0, 959.5], [0.0, 1100.0, 539.5], [0.0, 0.0, 1.0]])
+    return graph, View(K, T, 1920, 1080)
+
+
+def people_cases(repo: Path, scores: list[DetectionScore], counts: dict[str, int]) -> list[Case]:
+    from camgen.bench.realism import person_detection_scores
+    from camgen.bench.render_cases import _renderer
+
+    state: dict = {}
+
+    def setup() -> None:
+        if "graph" not in state:
+            state["graph"], state["view"] = _crowd_graph(repo)
+            state["renderer"] = _renderer()
+            state["time_s"] = 1.0
+            counts["people"] = sum(rig is not None for rig in state["graph"].people)
+            counts["vertices"] = int(sum(len(rig.model.vertices_m) for rig in state["graph"].people if rig))
+
+    def draw(moving: bool):
+        def run() -> None:
+            graph = state["graph"]
+            if moving:
+                state["time_s"] += FRAME_S
+                graph.place_actors(state["time_s"])
+            state["renderer"].draw(graph, state["view"], ("radiance",))
+
+        return run
+
+    def pose() -> None:
+        state["time_s"] += FRAME_S
+        state["M"] = np.concatenate([rig.pose_skeleton(state["time_s"]) for rig in state["graph"].crowd.rigs])
+
+    def skin_all() -> None:
+        from camgen.actors.skeleton import skin
+
+        crowd = state["graph"].crowd
+        if "M" not in state:
+            pose()
+        skin(crowd._rest_vertices, crowd._rest_normals, crowd._weights, state["M"])
+
+    def upload() -> None:
+        from camgen.render.renderer import _upload_deformed
+
+        graph = state["graph"]
+        people = zip(graph.actor_nodes, graph.people, strict=True)
+        graph.deformed.update(node.mesh.primitives[0] for node, rig in people if rig is not None)
+        state["renderer"]._make_current()
+        _upload_deformed(graph)
+
+    def detect() -> None:
+        scores.clear()
+        scores.extend(person_detection_scores(repo))
+
+    name = f"{PEOPLE} people"
+    return [
+        Case(f"draw 1080p, {name} standing still", draw(False), setup=setup, repeats=7),
+        Case(
+            f"draw 1080p, {name} posed each frame",
+            draw(True),
+            setup=setup,
+            repeats=7,
+            baseline=f"draw 1080p, {name} standing still",
+        ),
+        Case(f"pose {name} (gait, kinematics, keypoints)", pose, setup=setup, repeats=7),
+        Case(f"skin {name}", skin_all, setup=setup, repeats=7),
+        Case(f"upload {name} to the GPU", upload, setup=setup, repeats=7),
+        Case("HOG person detection over the example scenes", detect, repeats=1, warmup=0),
+    ]
+
+
+def detection_table(scores: list[DetectionScore]) -> str:
+    rows = []
+    for s in scores:
+        recall = "—" if math.isnan(s.recall) else f"{s.recall:.2f}"
+        precision = "—" if math.isnan(s.precision) else f"{s.precision:.2f}"
+        rows.append(f"| {s.scene} | {s.camera} | {s.people} | {s.hits} | {recall} | {s.false_alarms} | {precision} |")
+    return (
+        "| scene | camera | people ≥ 96 px, ≥ 70 % visible | found | recall | false alarms | precision |\n"
+        "|---|---|---:|---:|---:|---:|---:|\n" + "\n".join(rows)
+    )
+
+
+def total(scores: list[DetectionScore]) -> DetectionScore:
+    return dataclasses.replace(
+        scores[0],
+        scene="all",
+        camera="all",
+        people=sum(s.people for s in scores),
+        hits=sum(s.hits for s in scores),
+        detections=sum(s.detections for s in scores),
+        false_alarms=sum(s.false_alarms for s in scores),
+    )
