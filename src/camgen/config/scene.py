@@ -558,14 +558,15 @@ def nominal_shape(actor: Actor) -> BoxMesh | CylinderMesh | SphereMesh | FileMes
     """What a controller aims at: for a procedural person a standing adult's cylinder (1.75 m tall,
     0.5 m wide; a PTZ head's tracker knows no stature), otherwise the actor's shape."""
     if is_procedural_person(actor):
-        return CylinderMesh(
-            type="cylinder",
-            name=actor.name,
-            radius_m=PERSON_NOMINAL_RADIUS_M,
-            height_m=PERSON_NOMINAL_HEIGHT_M,
-            position_m=(0.0, 0.0, PERSON_NOMINAL_HEIGHT_M / 2),
-        )
+        return _standing_cylinder(actor.name, PERSON_NOMINAL_RADIUS_M, PERSON_NOMINAL_HEIGHT_M)
     return actor_shape(actor)
+
+
+def _standing_cylinder(name: str, radius_m: float, height_m: float) -> CylinderMesh:
+    """An upright cylinder standing on the actor's ground point."""
+    return CylinderMesh(
+        type="cylinder", name=name, radius_m=radius_m, height_m=height_m, position_m=(0.0, 0.0, height_m / 2)
+    )
 
 
 def is_procedural_person(actor: Actor) -> bool:
@@ -580,12 +581,6 @@ def actor_shape(actor: Actor) -> BoxMesh | CylinderMesh | SphereMesh | FileMesh:
     if actor.cls == "person":
         # The procedural person's envelope (`is_procedural_person`): the tallest stature with hair and
         # shoes, and the reach of a running stride and swinging arms.
-        return CylinderMesh(
-            type="cylinder",
-            name=actor.name,
-            radius_m=PERSON_ENVELOPE_RADIUS_M,
-            height_m=PERSON_ENVELOPE_HEIGHT_M,
-            position_m=(0.0, 0.0, PERSON_ENVELOPE_HEIGHT_M / 2),
-        )
+        return _standing_cylinder(actor.name, PERSON_ENVELOPE_RADIUS_M, PERSON_ENVELOPE_HEIGHT_M)
     size = _DEFAULT_BOX_SIZE_M[actor.cls]
     return BoxMesh(type="box", name=actor.name, size_m=size, position_m=(0.0, 0.0, size[2] / 2))
