@@ -171,6 +171,13 @@ def test_person_keypoints_score_perfectly_in_cocoeval_and_boxes_are_tight(worksp
         shown = keypoints[keypoints[:, 2] == 2]
         assert len(shown) >= 8 and a["num_keypoints"] == np.count_nonzero(keypoints[:, 2])
         assert np.all((shown[:, 0] >= x) & (shown[:, 0] <= x + w) & (shown[:, 1] >= y) & (shown[:, 1] <= y + h))
+    # Seen from its right side (walking along +x, the camera at −y), a person's far-side (left) shoulder
+    # and hip are hidden by its own trunk (COCO's v = 1), the near-side ones visible (v = 2).
+    names = person["keypoints"]
+    for a in whole:
+        v = np.array(a["keypoints"]).reshape(17, 3)[:, 2]
+        assert v[names.index("right_shoulder")] == 2 and v[names.index("right_hip")] == 2
+        assert v[names.index("left_shoulder")] == 1 or v[names.index("left_hip")] == 1
     coco = COCO(str(directory / "coco.json"))
     results = [{**a, "score": 1.0} for a in annotations if a["num_keypoints"] > 0]
     evaluation = COCOeval(coco, coco.loadRes(results), "keypoints")

@@ -7,6 +7,7 @@ along its route). Nothing here touches OpenGL or files other than the MakeHuman 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -14,21 +15,22 @@ import numpy as np
 
 from camgen.actors.appearance import Appearance, draw_appearance
 from camgen.actors.gait import Walker
-from camgen.actors.person import COCO_KEYPOINTS, PersonModel, build_person
-from camgen.actors.skeleton import INDEX, JOINTS, global_transforms, skin, skinning_matrices, weight_matrix
+from camgen.actors.person import KEYPOINT_JOINT_ROWS, PersonModel, build_person
+from camgen.actors.skeleton import (
+    INDEX,
+    JOINTS,
+    global_transforms,
+    rot_axis,
+    skin,
+    skinning_matrices,
+    weight_matrix,
+)
+from camgen.annotate.keypoints import COCO_KEYPOINTS
 from camgen.config.scene import Actor
 from camgen.motion.trajectory import Route
 
 PERSON_SPAWN_KEY = 0x7065_7273
 """First spawn key of an identity seed derived from the scene's seed (ASCII "pers")."""
-
-_KEYPOINT_JOINT_ROWS = [
-    INDEX[j]
-    for j in (
-        "upperarm_l", "upperarm_r", "lowerarm_l", "lowerarm_r", "hand_l", "hand_r",
-        "thigh_l", "thigh_r", "calf_l", "calf_r", "foot_l", "foot_r",
-    )
-]  # fmt: skip
 
 
 def identity_seed(actor: Actor, *, scene_seed: int, actor_index: int) -> int:
@@ -78,8 +80,20 @@ class PersonRig:
         self.joints_m = G[:, :3, 3].copy()
         head = G[INDEX["head"]]
         markers = (model.head_markers_m - model.joints_m[INDEX["head"]]) @ head[:3, :3].T + head[:3, 3]
-        self.keypoints_m = np.concatenate([markers, self.joints_m[_KEYPOINT_JOINT_ROWS]])
+        self.keypoints_m = np.concatenate([markers, self.joints_m[KEYPOINT_JOINT_ROWS]])
+        self.T_world_from_pelvis = G[INDEX["pelvis"]]
         return skinning_matrices(model.joints_m, G)
+
+    def heading_box(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(low (3,), high (3,), T_world_from_box (4, 4)): the box around the posed mesh in a frame that
+        turns with the person's heading (the pelvis's forward axis laid flat), on the ground under
+        the pelvis."""
+        forward = self.T_world_from_pelvis[:3, 0]
+        T = np.eye(4)
+        T[:3, :3] = rot_axis("z", math.atan2(forward[1], forward[0]))
+        T[:2, 3] = self.T_world_from_pelvis[:2, 3]
+        local = (self.vertices_m - T[:3, 3]) @ T[:3, :3]
+        return local.min(axis=0), local.max(axis=0), T
 
     def place(self, time_s: float) -> None:
         """Pose and skin this person alone (`Crowd.place` skins many at once)."""

@@ -20,10 +20,13 @@ Distributions and their sources:
   "dark skin" patch's luminance (colour-science's ColorChecker data, D65).
 - Hair colour by region-free frequencies (black/dark brown 65 %, brown 20 %, blond 8 %, red 2 %,
   with grey rising with age: Panhard et al. 2012); long hair for 78.5 % of women and 0.6 % of men,
-  hat 2.9 %, backpack 25.7 %, handbag 10.8 %, skirt or dress 29.7 % of women, short sleeves 94.4 %
-  in summer (Market-1501 attributes, Lin et al. 2019, Pattern Recognition 95). Clothing colours by
-  the Market-1501 (summer) and DukeMTMC-attribute (winter) identity-level frequencies, mixed by the
-  scene's season (`season`: summer, winter or mixed, the default).
+  backpack 25.7 %, handbag 10.8 %, skirt or dress 29.7 % of women (Market-1501 attributes, Lin et
+  al. 2019, Pattern Recognition 95); hats 3 % in summer (Market-1501: 2.9 %) and 15 % in winter
+  (DukeMTMC-attribute: 17 %). Tops: in summer 65 % T-shirts (short sleeves), 25 % shirts (60 % of them
+  long-sleeved), 10 % jackets, so about 75 % short sleeves (Market-1501 counts 94 % on a campus of
+  students); in winter mostly jackets and coats. Clothing colours by the Market-1501 (summer) and
+  DukeMTMC-attribute (winter) identity-level frequencies; a scene's `season` picks the table, and
+  `mixed` (the default) draws each person's season at even odds.
 """
 
 from __future__ import annotations
@@ -103,6 +106,9 @@ HAIR_RGB: dict[str, tuple[float, float, float]] = {
     "white": (0.65, 0.65, 0.63),
 }
 
+APPEARANCE_SPAWN_KEY = 0x6C6F_6F6B
+"""Spawn key of the generator an identity's attributes are drawn from (ASCII "look")."""
+
 Sex = Literal["female", "male"]
 AgeGroup = Literal["child", "adult", "senior"]
 Top = Literal["tshirt", "shirt", "jacket", "coat"]
@@ -179,20 +185,13 @@ def _choice(rng: np.random.Generator, table: dict[str, float]) -> str:
     return names[int(rng.choice(len(names), p=p / p.sum()))]
 
 
-def _colours(table: dict[str, dict[str, float]], season: Season) -> dict[str, float]:
-    if season != "mixed":
-        return table[season]
-    names = set(table["summer"]) | set(table["winter"])
-    return {n: table["summer"].get(n, 0.0) + table["winter"].get(n, 0.0) for n in sorted(names)}
-
-
 def draw_appearance(seed: int, *, season: Season = "mixed", pinned: dict[str, object] | None = None) -> Appearance:
     """The appearance of identity `seed`; `pinned` attributes (Appearance field → value) replace draws.
 
     Every draw is made whether or not it is pinned, so pinning one attribute leaves the others as
     they were.
     """
-    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(0x7065_7273,)))  # "pers"
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(APPEARANCE_SPAWN_KEY,)))
     pinned = dict(pinned or {})
     u = rng.uniform(size=16)
     sex: Sex = "female" if u[0] < 0.5 else "male"
@@ -214,11 +213,8 @@ def draw_appearance(seed: int, *, season: Season = "mixed", pinned: dict[str, ob
     skin_tone = int(rng.integers(1, 11))
     # Hair: grey rises with age (Panhard et al. 2012); long hair mostly for women.
     grey_p = 0.0 if age_years < 35 else min(0.8, (age_years - 35) / 40)
-    hair_colour = (
-        ("white" if u[4] < 0.3 else "grey")
-        if u[3] < grey_p
-        else _choice(rng, {"black": 40, "dark_brown": 25, "brown": 20, "blond": 8, "red": 2})
-    )
+    natural = _choice(rng, {"black": 40, "dark_brown": 25, "brown": 20, "blond": 8, "red": 2})  # drawn always
+    hair_colour = ("white" if u[4] < 0.3 else "grey") if u[3] < grey_p else natural
     long_p = 0.785 if sex == "female" else 0.006
     hair_style = "long" if u[5] < long_p else ("bald" if sex == "male" and age_years > 40 and u[6] < 0.15 else "short")
     season_now: Season = season if season != "mixed" else ("summer" if u[7] < 0.5 else "winter")
@@ -233,8 +229,8 @@ def draw_appearance(seed: int, *, season: Season = "mixed", pinned: dict[str, ob
     skirt_p = 0.297 if sex == "female" and age_group != "child" else (0.15 if sex == "female" else 0.0)
     shorts_p = 0.0 if winter else (0.45 if age_group == "child" else 0.35)
     bottom: Bottom = "skirt" if u[9] < skirt_p else ("shorts" if u[10] < shorts_p else "trousers")
-    top_colour = _choice(rng, _colours(UPPER_COLOURS, season_now))
-    bottom_colour = _choice(rng, _colours(LOWER_COLOURS, season_now))
+    top_colour = _choice(rng, UPPER_COLOURS[season_now])
+    bottom_colour = _choice(rng, LOWER_COLOURS[season_now])
     shoe_colour = _choice(rng, {"black": 55, "white": 20, "gray": 10, "brown": 15})
     bag: Bag = "backpack" if u[11] < 0.257 else ("handbag" if u[11] < 0.257 + 0.108 else "none")
     hat = bool(u[12] < (0.15 if winter else 0.03))

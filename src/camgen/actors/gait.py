@@ -24,7 +24,7 @@ Parameters and sources:
   arm swing ±15–25° walking with 15–30° elbow flexion, ±35° running with the elbow at 90°; pelvic
   rotation ±4°; trunk lean 7° running (Winter 1991, Perry 1992). The pelvis rises and falls by about
   5 cm at 1.4 m/s (4–5 cm measured in adults: Saunders, Inman & Eberhart 1953).
-- Standing: feet a shoulder's width apart, weight shifting from foot to foot with a 5 s period;
+- Standing: feet a hip's width apart, weight shifting from foot to foot with a 5 s period;
   arriving and leaving blend between the gait and the stance over 0.5 s.
 """
 
@@ -142,11 +142,15 @@ class Walker:
             self._footprints[key] = self._place_foot(distance_m, side, route or self.route)
         return self._footprints[key]
 
-    def _place_foot(self, distance_m: float, side: int, route: Route) -> tuple[np.ndarray, float]:
+    def _place_foot(
+        self, distance_m: float, side: int, route: Route, lateral_m: float = STEP_WIDTH_M / 2
+    ) -> tuple[np.ndarray, float]:
+        """Ball position and yaw of a flat foot whose ankle stands `lateral_m` beside the route's point
+        at `distance_m`, facing along the route there."""
         yaw = self._yaw_at_distance(distance_m, route)
         centre = route.at_distance(distance_m)
         left = np.array([-math.sin(yaw), math.cos(yaw)])
-        lateral = (STEP_WIDTH_M / 2) * (1 if side == 0 else -1)
+        lateral = lateral_m * (1 if side == 0 else -1)
         offset = self.ankle_from_ball["l" if side == 0 else "r"]
         # The ankle's ground point lies on the footprint line; the ball is ahead of it.
         forward = np.array([math.cos(yaw), math.sin(yaw)])
@@ -177,15 +181,10 @@ class Walker:
         return FootState(ball, yaw, pitch, swing=u)
 
     def _standing_foot(self, distance_m: float, side: int) -> FootState:
-        yaw = self._yaw_at_distance(distance_m)
-        centre = self.route.at_distance(distance_m)
-        left = np.array([-math.sin(yaw), math.cos(yaw)])
-        forward = np.array([math.cos(yaw), math.sin(yaw)])
-        hips = abs(self.model.joints_m[INDEX["thigh_l"], 1])
-        lateral = hips * (1 if side == 0 else -1)
-        offset = self.ankle_from_ball["l" if side == 0 else "r"]
-        ball_xy = centre + lateral * left - offset[0] * forward
-        return FootState(np.array([ball_xy[0], ball_xy[1], self.ball_height_m]), yaw, 0.0)
+        """A foot of someone standing at `distance_m`: the feet a hip's width apart."""
+        hips_m = abs(self.model.joints_m[INDEX["thigh_l"], 1])
+        ball, yaw = self._place_foot(distance_m, side, self.route, lateral_m=hips_m)
+        return FootState(ball, yaw, 0.0)
 
     # The pose -----------------------------------------------------------------------------------
     def pose(self, time_s: float) -> Pose:
@@ -230,7 +229,7 @@ class Walker:
         for side, sign, foot, ankle in zip(("l", "r"), (1, -1), feet, ankles, strict=True):
             self._solve_leg(local, G, side, ankle, foot)
             # Arms: the left arm swings forward with the right leg.
-            swing = -gait.arm_swing_rad * math.cos(cycle) * sign * amp - math.radians(4)
+            swing = gait.arm_swing_rad * math.sin(cycle) * sign * amp - math.radians(4)
             elbow = gait.elbow_rad * (0.75 + 0.25 * math.sin(cycle) * sign) * amp + math.radians(12) * (1 - amp)
             self._pose_arm(local, side, sign, swing, elbow)
         return Pose(T_pelvis, local)

@@ -26,31 +26,8 @@ from scipy.spatial import cKDTree
 from camgen.actors import makehuman as mh
 from camgen.actors.appearance import CLOTH_RGB, HAIR_RGB, Appearance
 from camgen.actors.skeleton import INDEX, JOINTS
+from camgen.annotate.keypoints import COCO_KEYPOINTS
 
-COCO_KEYPOINTS = (
-    "nose",
-    "left_eye",
-    "right_eye",
-    "left_ear",
-    "right_ear",
-    "left_shoulder",
-    "right_shoulder",
-    "left_elbow",
-    "right_elbow",
-    "left_wrist",
-    "right_wrist",
-    "left_hip",
-    "right_hip",
-    "left_knee",
-    "right_knee",
-    "left_ankle",
-    "right_ankle",
-)
-COCO_SKELETON = (
-    (16, 14), (14, 12), (17, 15), (15, 13), (12, 13), (6, 12), (7, 13), (6, 7), (6, 8), (7, 9), (8, 10),
-    (9, 11), (2, 3), (1, 2), (1, 3), (2, 4), (3, 5), (4, 6), (5, 7),
-)  # fmt: skip
-"""COCO's keypoint skeleton, 1-based as in its annotation files."""
 _KEYPOINT_JOINTS = {
     "left_shoulder": "upperarm_l",
     "right_shoulder": "upperarm_r",
@@ -65,7 +42,8 @@ _KEYPOINT_JOINTS = {
     "left_ankle": "foot_l",
     "right_ankle": "foot_r",
 }
-_HEAD_MARKERS = ("nose", "left_eye", "right_eye", "left_ear", "right_ear")
+KEYPOINT_JOINT_ROWS = [INDEX[_KEYPOINT_JOINTS[name]] for name in COCO_KEYPOINTS[5:]]
+"""Rows of the skeleton's joints that are the other twelve COCO keypoints, in COCO's order."""
 
 # Which game-engine bones our joints absorb (fingers move with the hand).
 _BONE_TO_JOINT = {"Root": "pelvis"} | {
@@ -164,7 +142,7 @@ def _skin_weights() -> tuple[np.ndarray, np.ndarray]:
             continue
         pairs = np.array(weights.get(bone.name, []), dtype=np.float64).reshape(-1, 2)
         np.add.at(dense[:, INDEX[joint]], pairs[:, 0].astype(np.int64), pairs[:, 1])
-    order = np.argsort(-dense, axis=1)[:, :INFLUENCES]
+    order = np.argsort(-dense, axis=1, kind="stable")[:, :INFLUENCES]
     top = np.take_along_axis(dense, order, axis=1)
     unweighted = top.sum(axis=1) <= 0
     order[unweighted, 0], top[unweighted, 0] = INDEX["pelvis"], 1.0

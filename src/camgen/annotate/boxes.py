@@ -84,17 +84,17 @@ def amodal_box(
     length = np.where(np.isfinite(length), length, max_per_edge * step_px)
     per_edge = np.clip(np.ceil(length / step_px), 1, max_per_edge).astype(np.int64)
     points_px, _ = project_points(edge_samples(vertices_world_m, edges, per_edge), T_world_from_cam, K_px, distortion)
-    points_px = points_px[np.all(np.isfinite(points_px), axis=1)]
-    if len(points_px) == 0:
-        return None
-    low, high = points_px.min(axis=0) + 0.5, points_px.max(axis=0) + 0.5
-    return float(low[0]), float(low[1]), float(high[0]), float(high[1])
+    return _box_of_pixels(points_px)
 
 
 def points_box(points_world_m: np.ndarray, T_world_from_cam: np.ndarray, K_px: np.ndarray, distortion) -> Box | None:
     """Unclipped box (pixel edges) of the projections of points, or None if none is imaged: the
     amodal box of a mesh whose edges are short enough that its vertices bound its silhouette."""
-    points_px, _ = project_points(points_world_m, T_world_from_cam, K_px, distortion)
+    return _box_of_pixels(project_points(points_world_m, T_world_from_cam, K_px, distortion)[0])
+
+
+def _box_of_pixels(points_px: np.ndarray) -> Box | None:
+    """The box (pixel edges) of the imaged (finite) OpenCV pixel positions among `points_px`."""
     points_px = points_px[np.all(np.isfinite(points_px), axis=1)]
     if len(points_px) == 0:
         return None

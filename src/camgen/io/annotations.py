@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 from pycocotools import mask as mask_utils
 
-from camgen.actors.person import COCO_KEYPOINTS, COCO_SKELETON
+from camgen.annotate.keypoints import COCO_KEYPOINTS, COCO_SKELETON
 from camgen.io.files import write_text_atomic
 
 MOT_CLASSES = {"person": 1, "car": 3, "truck": 3, "bus": 3, "bicycle": 4, "motorcycle": 5, "other": 6}
@@ -51,9 +51,9 @@ class SequenceAnnotations:
         self.images: list[dict] = []
         self.annotations: list[dict] = []
         self.tracks: dict[int, dict] = {}
+        """Track id → the TAO-style track record, with the identity's attribute labels for people."""
         self.keypoint_lines: list[str] = []
         """One JSON line per frame with people: their keypoints in the image and in the world."""
-        """Track id → the TAO-style track record, with the identity's attribute labels for people."""
 
     def describe(self, track_id: int, *, name: str, cls: str, attributes: dict | None = None) -> None:
         """Record a track (once per actor): its class and, for a person, its attributes."""

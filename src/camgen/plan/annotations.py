@@ -43,7 +43,8 @@ class ObjectAnnotation:
     visibility: float
     truncation: float
     box_3d_world_m: np.ndarray
-    """(8, 3) corners of the actor's local bounding box in the world."""
+    """(8, 3) corners of the actor's local bounding box in the world (a person's: in its heading's
+    frame, around its posed mesh)."""
     box_3d_cam_m: np.ndarray
     keypoints: np.ndarray | None = None
     """(17, 3) COCO keypoints of a person: x, y in COCO's pixel-edge coordinates (an OpenCV position
@@ -86,7 +87,9 @@ class Annotator:
         self.drawer, self.lens = drawer, lens
         self.camera, self.graph, self.renderer = drawer.camera, drawer.graph, drawer.renderer
         graph = self.graph
-        self._geometry = [_mesh_geometry(node) for node in graph.actor_nodes]
+        self._geometry = [
+            None if rig else _mesh_geometry(node) for node, rig in zip(graph.actor_nodes, graph.people, strict=True)
+        ]
         self._ids = [graph.instance_ids[node] for node in graph.actor_nodes]
 
     def annotate(self, state: CameraState, passes: Passes, *, post=None) -> FrameAnnotations:
@@ -122,16 +125,25 @@ class Annotator:
             track_id = self._ids[index]
             if clip is None:
                 clip = self.drawer.clip_range_m(view)
-            alone = self.renderer.draw(graph, view, ("instance_id",), nodes=[node], clip_range_m=clip)
-            unoccluded = post(self.lens.apply(state, Passes(instance_id=alone.instance_id)).instance_id)
+            # Drawn alone through the same lens: how much of it shows unoccluded (and, for a person,
+            # how near its own surface is at each pixel, which hides keypoints on its far side).
+            alone_passes = ("depth_m", "instance_id") if rig is not None else ("instance_id",)
+            alone = self.renderer.draw(graph, view, alone_passes, nodes=[node], clip_range_m=clip)
+            lensed = self.lens.apply(state, Passes(depth_m=alone.depth_m, instance_id=alone.instance_id))
+            unoccluded = post(lensed.instance_id)
             unoccluded_pixels = int(np.count_nonzero(unoccluded == track_id))
             seen = visible.get(track_id)
             pixels = 0 if seen is None else seen.pixels
-            corners_world = box_corners(vertices.min(axis=0), vertices.max(axis=0), pose)
             keypoints = keypoints_world = None
-            if rig is not None:
+            if rig is None:
+                corners_world = box_corners(vertices.min(axis=0), vertices.max(axis=0), pose)
+            else:
+                corners_world = box_corners(*rig.heading_box())
                 keypoints_world = rig.keypoints_m
-                keypoints = keypoint_visibility(keypoints_world, T, K, distortion, instance, track_id, W, H)
+                own_depth = post(np.where(lensed.depth_m > 0, lensed.depth_m, np.inf))
+                keypoints = keypoint_visibility(
+                    keypoints_world, T, K, distortion, instance, track_id, W, H, own_depth_m=own_depth
+                )
             result.objects.append(
                 ObjectAnnotation(
                     track_id=track_id,
