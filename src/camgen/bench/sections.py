@@ -538,10 +538,11 @@ def _people(repo: Path) -> Section:
                 f"**Cost of people** ({counts.get('people', PEOPLE)} people, {counts.get('vertices', 0):,} vertices in "
                 f"all): skinning them takes {skin_ms:.1f} ms and uploading their vertex buffers {upload_ms:.1f} ms, "
                 f"{skin_ms + upload_ms:.1f} ms per frame together; posing them (gait, forward kinematics, "
-                f"keypoints; Python per person) {pose_ms:.1f} ms more. A 1080p draw of the plaza with shadows "
-                f"takes {still.median_ms:.0f} ms with them standing "
-                f"and {moving.median_ms:.0f} ms posed and skinned before each draw (the two draws' spread on this "
-                "shared machine is of the same order as the difference)."
+                f"keypoints; Python per person) {pose_ms:.1f} ms more, {pose_ms + skin_ms + upload_ms:.1f} ms in "
+                f"all. A 1080p draw of the plaza with shadows took {still.median_ms:.0f} ms with them standing and "
+                f"{moving.median_ms:.0f} ms with them posed, skinned and uploaded before each draw, "
+                f"{moving.median_ms - still.median_ms:.0f} ms apart in this run on this shared machine (the spreads "
+                "of both are below)."
             )
         text.append(_table({k: v for k, v in results.items() if not k.startswith("HOG")}))
         return "\n\n".join(text)
