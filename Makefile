@@ -32,7 +32,7 @@ demo: setup
 	$(BIN)/camgen render scenes/parking_lot.yaml -o $(OUT) --frames 50
 
 test: setup
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q --durations=15
 
 # The numerical stress suite with 20× the examples, random (not derandomized) inputs each run.
 stress: setup

@@ -14,31 +14,19 @@ from pathlib import Path
 import pytest
 
 from camgen.cli.main import main
-from tests.batch.conftest import make_dataset as make_short_dataset
+from tests.batch.conftest import make_dataset
 from tests.batch.test_run import job_files, statuses
 
 pytestmark = pytest.mark.opengl
 
 DATASET = """\
-description: eight jobs of sixty frames, long enough to be interrupted
+description: eight jobs of ten frames, long enough to be interrupted
 scenes: [scenes/walk.yaml]
 profiles: [small, wide]
 seeds: {start: 0, count: 4}
 combine: product
 """
 WORKERS = ["--workers", "2"]
-
-
-def make_dataset(directory: Path, text: str) -> Path:
-    """The tiny dataset with 6 s (60-frame) jobs: a worker's first job also builds its people, so the
-    later jobs run several times faster than the first, and shorter ones can all finish between the
-    first job's manifest and the signal."""
-    dataset = make_short_dataset(directory, text)
-    scene = directory / "scenes" / "walk.yaml"
-    scene.write_text(scene.read_text(encoding="utf-8").replace("duration_s: 1\n", "duration_s: 6\n"), encoding="utf-8")
-    return dataset
-
-
 TIMEOUT_S = 120
 
 
@@ -56,7 +44,14 @@ def start_batch(dataset: Path, out: Path) -> subprocess.Popen:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         start_new_session=True,  # its own process group, to signal as a terminal would
+        # A test run started in the background (`make test &`) has SIGINT ignored, and a child
+        # inherits that: Python then installs no KeyboardInterrupt handler and Ctrl-C would be lost.
+        preexec_fn=_default_sigint,
     )
+
+
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def wait_for(condition, what: str) -> None:

@@ -12,6 +12,7 @@ from camgen.config import load_scene
 from camgen.errors import ConfigError
 from camgen.optics.intrinsics import blur_circle_diameter_mm
 from camgen.plan import Job, PlanSettings, compile, compile_scene
+from camgen.plan.compile import LIMB_SPEED_FACTOR
 from camgen.plan.visibility import box_corners, visible_depth_range_m
 from tests.conftest import FIXED_PROFILE, SCENE, write
 
@@ -142,8 +143,9 @@ def test_motion_blur_follows_actor_speed_and_exposure(workspace):
     assert not decision(slow, "optics.motion_blur").included
     fast = plan(workspace, SCENE.replace("speed_m_s: 1.4", "speed_m_s: 30"), name="fast.yaml", profile_edit=manual_1ms)
     d = decision(fast, "optics.motion_blur")
-    # 30 m/s for 1 ms at ≈ 10 m depth with f = 1333 px moves ≈ 4 px.
-    assert d.included and 2.0 < d.effect < 8.0
+    # 30 m/s for 1 ms at ≈ 10 m depth with f = 1333 px moves the body ≈ 4 px, a walker's fastest limb
+    # LIMB_SPEED_FACTOR times that.
+    assert d.included and 2.0 * LIMB_SPEED_FACTOR < d.effect < 8.0 * LIMB_SPEED_FACTOR
 
 
 def test_raw_only_output_plans_no_isp(workspace):
