@@ -55,6 +55,8 @@ _BONE_TO_JOINT = {"Root": "pelvis"} | {
 # Garment thickness: how far each garment stands off the tights helper, m.
 TOP_OFFSET_M = {"tshirt": 0.004, "shirt": 0.008, "jacket": 0.022, "coat": 0.028}
 TROUSERS_OFFSET_M = 0.010
+SKIRT_OFFSET_M = 0.02
+SKIRT_LEG_FOLLOW = 0.5
 SHOE_OFFSET_M = 0.012
 SHORT_HAIR_OFFSET_M = 0.008
 HAT_OFFSET_M = 0.015
@@ -243,6 +245,21 @@ def _surface(vertices_m, faces, keep_vertex, colour, offset_m=0.0) -> _Piece | N
     return _Piece(points, local_faces, rgb, joint_index[used], joint_weight[used])
 
 
+def _swinging_hem(piece: _Piece, joints_m: np.ndarray, hem_z: float) -> _Piece:
+    """A skirt or coat tail skinned to hang from the pelvis and swing partly with the thighs: rigid at
+    the waist, following its side's thigh by up to `SKIRT_LEG_FOLLOW` at the hem. (The helper's own
+    weights follow the legs wholly, which tears the cloth open between them at every stride.)"""
+    hip_z = joints_m[INDEX["thigh_l"], 2]
+    points = piece.points_m
+    follow = SKIRT_LEG_FOLLOW * np.clip((hip_z - points[:, 2]) / max(hip_z - hem_z, 1e-3), 0.0, 1.0)
+    left = 0.5 + 0.5 * np.tanh(points[:, 1] / 0.05)
+    index = np.zeros((len(points), INFLUENCES), dtype=np.int64)
+    weight = np.zeros((len(points), INFLUENCES))
+    index[:, :3] = (INDEX["pelvis"], INDEX["thigh_l"], INDEX["thigh_r"])
+    weight[:, 0], weight[:, 1], weight[:, 2] = 1.0 - follow, follow * left, follow * (1.0 - left)
+    return replace(piece, joint_index=index, joint_weight=weight)
+
+
 def _rigid_box(extents_m, centre_m, colour, joint: str) -> _Piece:
     """A box (a bag) that moves rigidly with one joint."""
     box = trimesh.creation.box(extents=extents_m).subdivide()
@@ -343,7 +360,8 @@ def _skin_and_garments(look: Appearance, vertices_m, joints_m, markers_m) -> lis
         hem_z = knee_z + (0.02 if look.top == "coat" else 0.10) * look.stature_m
         skirt[ids, 2] = top_z - (top_z - skirt[ids, 2]) * (top_z - hem_z) / (top_z - bottom_z)
         colour = top_rgb if look.top == "coat" else CLOTH_RGB[look.bottom_colour]
-        pieces.append(_surface(skirt, base.faces_by_group["helper-skirt"], everything, colour, 0.01))
+        piece = _surface(skirt, base.faces_by_group["helper-skirt"], everything, colour, SKIRT_OFFSET_M)
+        pieces.append(_swinging_hem(piece, joints_m, hem_z))
     if look.hair_style == "long":
         # The helper drapes strands over the chest too, and it is not shaped by the macro targets for
         # small bodies: keep the hair behind the shoulders, down to the shoulder blades.
