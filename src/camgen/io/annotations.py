@@ -24,11 +24,12 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import cv2
 import numpy as np
 from pycocotools import mask as mask_utils
 
 from camgen.annotate.keypoints import COCO_KEYPOINTS, COCO_SKELETON
-from camgen.io.files import write_text_atomic
+from camgen.io.files import atomic_path, write_text_atomic
 
 MOT_CLASSES = {"person": 1, "car": 3, "truck": 3, "bus": 3, "bicycle": 4, "motorcycle": 5, "other": 6}
 """MOT17 class ids: 1 pedestrian, 3 car (all motor vehicles of four or more wheels), 4 bicycle,
@@ -165,10 +166,6 @@ def write_reid_crops(directory: Path, frame, rgb8: np.ndarray, *, camera_number:
     ``{track id:04d}_c{camera number}s1_{frame number:06d}_00.jpg`` (camera numbers and frames counted
     from 1). People under `REID_MIN_HEIGHT_PX` tall or less than `REID_MIN_VISIBILITY` visible are left
     out, as a detector-cropped data set would lack them. Returns the files written."""
-    import cv2
-
-    from camgen.io.files import atomic_path
-
     written = []
     for obj in frame.objects:
         if obj.keypoints is None or obj.visibility < REID_MIN_VISIBILITY or obj.visible_box is None:

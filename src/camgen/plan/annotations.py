@@ -63,8 +63,7 @@ class FrameAnnotations:
 
 
 def _mesh_geometry(node) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (V, 3) in the node's frame and unique edges (E, 2) of a pyrender mesh (for a posed
-    person, the vertices as placed when this is called)."""
+    """Vertices (V, 3) in the node's frame and unique edges (E, 2) of a pyrender mesh."""
     vertices, faces, offset = [], [], 0
     for primitive in node.mesh.primitives:
         positions = np.asarray(primitive.positions, dtype=np.float64)
@@ -72,7 +71,7 @@ def _mesh_geometry(node) -> tuple[np.ndarray, np.ndarray]:
         indices = (
             np.arange(len(positions)).reshape(-1, 3)
             if primitive.indices is None
-            else np.asarray(primitive.indices).astype(np.int64).reshape(-1, 3)
+            else np.asarray(primitive.indices).reshape(-1, 3)
         )
         vertices.append(positions)
         faces.append(indices + offset)
@@ -117,8 +116,7 @@ class Annotator:
                 world = vertices @ pose[:3, :3].T + pose[:3, 3]
                 box = amodal_box(world, edges, T, K, distortion)
             else:  # a dense posed mesh (edges of a few cm): its vertices bound its projection
-                vertices = world = rig.vertices_m.astype(np.float64)
-                box = points_box(world, T, K, distortion)
+                box = points_box(rig.vertices_m, T, K, distortion)
             clipped = None if box is None else clip_box(box, W, H)
             if clipped is None:
                 continue

@@ -120,7 +120,7 @@ class CameraPipeline:
         isp_steps = {name for name in self.stages if name.startswith("isp.")}
         self.isp = (
             CameraIsp(profile.isp, sensor, frame_interval_s=1.0 / job.fps, steps=isp_steps, executor=executor)
-            if "io.video" in self.stages or "io.frames" in self.stages or _crops_frames(self.stages)
+            if "io.video" in self.stages or "io.frames" in self.stages or cuts_reid_crops(self.stages)
             else None
         )
         self._mosaic_maps: dict = {}
@@ -278,7 +278,7 @@ class CameraPipeline:
         return level
 
 
-def _crops_frames(stages) -> bool:
+def cuts_reid_crops(stages) -> bool:
     """Whether the annotations cut re-identification crops out of the delivered frames."""
     annotate = stages.get("annotate")
     return annotate is not None and "reid" in annotate.params.get("formats", ())

@@ -27,7 +27,7 @@ from camgen.io.manifest import write_manifest
 from camgen.isp.eptz import crop_and_scale
 from camgen.optics.remap import LensMapCache
 from camgen.plan.annotations import Annotator
-from camgen.plan.camera_pipeline import CameraPipeline, frame_rng
+from camgen.plan.camera_pipeline import CameraPipeline, cuts_reid_crops, frame_rng
 from camgen.plan.job import CameraJob, Job
 from camgen.plan.lens_stages import LensStages
 from camgen.plan.timing import StageClock, stage_sums
@@ -247,7 +247,7 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                 with clock("annotate"):
                     annotated = annotator.annotate(state, stream, post=to_stream)
                     sequence.add(annotated)
-                    if "reid" in stages["annotate"].params["formats"] and rgb8 is not None:
+                    if cuts_reid_crops(stages) and rgb8 is not None:
                         result.files += write_reid_crops(
                             directory, annotated, rgb8, camera_number=context.camera_index + 1
                         )

@@ -97,8 +97,8 @@ class SceneGraph:
             primitive = node.mesh.primitives[0]
             primitive.positions = rig.vertices_m
             primitive.normals = rig.normals
-            node.mesh._bounds = None  # pyrender caches a mesh's bounds
-            self.scene.set_pose(node, np.eye(4))
+            node.mesh._bounds = None  # pyrender caches a mesh's bounds, and the scene's bounds until
+            self.scene.set_pose(node, np.eye(4))  # a node moves: the identity pose stands for "moved"
             self.deformed.add(primitive)
 
 
