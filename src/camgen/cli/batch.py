@@ -78,6 +78,10 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
                 *([f"{light:.3g}" if light is not None else "–"] if randomized else []),
             )
         out.print(table)
+        broken = sum(isinstance(job, str) for _, job in jobs)
+        if broken:
+            err.print(f"{broken} of {len(jobs)} jobs do not compile; fix them before rendering", markup=False)
+            return 1
         return 0
     columns = (
         TextColumn("jobs"),

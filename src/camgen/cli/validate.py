@@ -9,7 +9,7 @@ from rich.console import Console
 from rich.markup import escape
 
 from camgen.cli.common import add_profile_dirs_option, detect_kind, profile_dirs
-from camgen.config import load_dataset, load_profile, load_scene
+from camgen.config import load_profile, load_scene
 from camgen.errors import ConfigError
 
 
@@ -36,7 +36,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             elif kind == "scene":
                 load_scene(path, profile_dirs(args))
             else:
-                load_dataset(path)
+                kind = f"dataset, {_check_dataset(path)} jobs compile"
             out.print(f"[green]ok[/green]  {escape(str(path))} ({kind})")
         except ConfigError as exc:
             failed += 1
@@ -45,3 +45,23 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     if failed:
         err.print(f"{failed} of {len(args.files)} file(s) invalid", markup=False)
     return 1 if failed else 0
+
+
+def _check_dataset(path: Path) -> int:
+    """The number of jobs of a dataset; raises ConfigError with every job that does not compile.
+
+    A dataset is valid only if every job compiles: a scene that is invalid alone, a profile that does not fit
+    a scene's PTZ program, or randomized values that break a scene all show here, not hours into a batch.
+    """
+    from camgen.batch.expand import compile_batch_job, expand
+
+    problems = []
+    jobs = expand(path)
+    for job in jobs:
+        try:
+            compile_batch_job(job)
+        except ConfigError as exc:
+            problems.extend(exc.problems)
+    if problems:
+        raise ConfigError(problems)
+    return len(jobs)
