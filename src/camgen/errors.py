@@ -61,3 +61,11 @@ class ConfigError(ValueError):
             problems = [Problem(path=(), message=problems)]
         self.problems: tuple[Problem, ...] = tuple(problems)
         super().__init__("\n".join(str(p) for p in self.problems))
+
+
+class ConfigWarning(UserWarning):
+    """User input camgen accepts but that is probably not what was meant; `problem` says where and why."""
+
+    def __init__(self, problem: Problem):
+        self.problem = problem
+        super().__init__(str(problem))

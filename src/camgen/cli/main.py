@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 
 from rich.console import Console
 from rich.markup import escape
 
 import camgen
 from camgen.cli import batch, bench, fit, info, plan, render, schema, validate, verify
-from camgen.errors import ConfigError
+from camgen.errors import ConfigError, ConfigWarning
 
 SUBCOMMANDS = (validate, schema, plan, info, render, verify, fit, batch, bench)
 
@@ -34,7 +35,9 @@ def main(argv: list[str] | None = None) -> int:
     out = Console(highlight=False, width=width)
     err = Console(stderr=True, highlight=False, width=width)
     try:
-        return args.run(args, out, err)
+        with warnings.catch_warnings():
+            warnings.showwarning = _printer(err, warnings.showwarning)
+            return args.run(args, out, err)
     except ConfigError as exc:
         for problem in exc.problems:
             err.print(f"[red]error[/red] {escape(str(problem))}", soft_wrap=True)
@@ -42,6 +45,18 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         err.print("interrupted")
         return 130
+
+
+def _printer(err: Console, fallback):
+    """`warnings.showwarning` that prints a `ConfigWarning` like an error, marked as a warning."""
+
+    def show(message, category, filename, lineno, file=None, line=None) -> None:
+        if issubclass(category, ConfigWarning):
+            err.print(f"[yellow]warning[/yellow] {escape(str(message))}", soft_wrap=True)
+        else:
+            fallback(message, category, filename, lineno, file, line)
+
+    return show
 
 
 if __name__ == "__main__":
