@@ -147,7 +147,7 @@ def test_match_reference_of_16_bit_images(tmp_path, capsys, request):
     [
         (["--profile", "missing.yaml"], "no such file"),
         (["--report", "report.pdf"], "give a name ending in .png"),
-        (["-o", "."], "is a folder"),
+        (["-o", "."], "is a directory"),
     ],
 )
 def test_output_problems_are_found_before_reading_frames(tmp_path, capsys, extra, message):

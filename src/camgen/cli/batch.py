@@ -11,6 +11,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
+from camgen.cli.common import check_output_directory
 from camgen.errors import ConfigError
 
 
@@ -52,8 +53,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     if args.frames is not None and args.frames < 1:
         raise ConfigError(f"--frames must be ≥ 1, got {args.frames}")
     check_options(workers=args.workers, retries=args.retries, executor=args.executor, address=args.address)
-    if args.out.exists() and not args.out.is_dir():
-        raise ConfigError(f"-o {args.out}: is a file; give a directory to write the dataset into")
+    check_output_directory(args.out, "-o", "give a directory to write the dataset into")
     batch_jobs = expand(args.dataset)
     jobs = []
     for batch in batch_jobs:

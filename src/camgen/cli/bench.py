@@ -15,6 +15,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 import camgen
+from camgen.cli.common import check_output_directory, check_output_file
 from camgen.errors import ConfigError
 
 QUICK_REPEATS, FULL_REPEATS = 3, 7
@@ -66,10 +67,10 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     unknown = [k for k in wanted if k not in keys]
     if unknown:
         raise ConfigError(f"--section {', '.join(unknown)}: no such section; choose from {', '.join(keys)}")
-    if args.write is not None and args.write.is_dir():
-        raise ConfigError(f"--write {args.write}: is a directory; give the markdown file to write (BENCHMARKS.md)")
-    if args.plots is not None and args.plots.exists() and not args.plots.is_dir():
-        raise ConfigError(f"--plots {args.plots}: is a file; give a directory for the PNG plots")
+    if args.write is not None:
+        check_output_file(args.write, "--write", "give the markdown file to write (BENCHMARKS.md)")
+    if args.plots is not None:
+        check_output_directory(args.plots, "--plots", "give a directory for the PNG plots")
     if args.write is not None:
         plots = Plots(directory=args.plots or args.write.resolve().parent / "docs" / "bench", document=args.write)
     else:  # printing only: the committed plots are left alone

@@ -17,6 +17,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
+from camgen.cli.common import check_output_file
 from camgen.config.profile import Profile
 from camgen.errors import ConfigError
 
@@ -169,8 +170,7 @@ def _check_outputs(args: argparse.Namespace) -> Profile | None:
     if report.suffix.lower() != ".png":
         raise ConfigError(f"--report {report}: the report is a PNG image; give a name ending in .png")
     for option, path in (("-o", args.output), ("--report", report)):
-        if path.is_dir():
-            raise ConfigError(f"{option} {path} is a folder; give a file name")
+        check_output_file(path, option)
     return base
 
 

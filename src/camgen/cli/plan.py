@@ -5,11 +5,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import numpy as np
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from camgen.cli.common import add_profile_dirs_option, profile_dirs
+from camgen.cli.common import add_profile_dirs_option, check_output_file, profile_dirs
 from camgen.config import load_scene
 from camgen.io.files import write_text_atomic
 from camgen.plan import PlanSettings, compile_scene
@@ -25,6 +26,8 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace, out: Console, err: Console) -> int:
+    if args.json:
+        check_output_file(args.json, "--json", "give a file name for the job's JSON")
     loaded = load_scene(args.scene, profile_dirs(args))
     job = compile_scene(loaded, PlanSettings(force_all_stages=args.force_all))
     out.print(
@@ -71,9 +74,24 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     return 0
 
 
+LISTED_VALUES = 8
+"""Longer lists of numbers (one per frame, say) are printed as a summary."""
+
+
 def _short(value) -> str:
-    if isinstance(value, float):
+    if isinstance(value, float | np.floating):
         return f"{value:.3g}"
-    if isinstance(value, list):
-        return "[" + ", ".join(map(str, value)) + "]"
+    if isinstance(value, list | tuple):
+        numbers = all(isinstance(v, int | float | np.number) and not isinstance(v, bool) for v in value)
+        if numbers and len(value) > LISTED_VALUES:
+            return _summary(np.asarray(value, dtype=float))
+        return "[" + ", ".join(map(_short, value)) + "]"
     return str(value)
+
+
+def _summary(values: np.ndarray) -> str:
+    """``[200 values, all 0]`` or ``[300 values: min 0, median 36.3, max 62.6]``."""
+    low, high = np.min(values), np.max(values)
+    if low == high:
+        return f"[{values.size} values, all {low:.3g}]"
+    return f"[{values.size} values: min {low:.3g}, median {np.median(values):.3g}, max {high:.3g}]"

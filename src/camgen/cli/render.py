@@ -10,7 +10,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-from camgen.cli.common import add_profile_dirs_option, profile_dirs
+from camgen.cli.common import add_profile_dirs_option, check_output_directory, profile_dirs
 from camgen.config import load_scene
 from camgen.errors import ConfigError
 from camgen.plan import PlanSettings, compile_scene
@@ -47,8 +47,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         if not 1 <= args.supersampling <= 8:
             raise ConfigError(f"--supersampling must be 1…8, got {args.supersampling}")
         settings = PlanSettings(supersampling=args.supersampling)
-    if args.out.exists() and not args.out.is_dir():
-        raise ConfigError(f"-o {args.out}: is a file; give a directory to write the job into")
+    check_output_directory(args.out, "-o", "give a directory to write the job into")
     loaded = load_scene(args.scene, profile_dirs(args))
     job = compile_scene(loaded, settings)
     names = {camera.name for camera in job.cameras}

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from rich.console import Console
 
+from camgen.cli.common import check_output_directory
 from camgen.config import Dataset, Profile, Scene
 from camgen.io.files import write_text_atomic
 
@@ -36,6 +37,7 @@ def schema_of(kind: str) -> dict:
 def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     kinds = list(MODELS) if args.kind == "all" else [args.kind]
     if args.output:
+        check_output_directory(args.output, "-o", "give a directory for the <kind>.schema.json files")
         for kind in kinds:
             target = args.output / f"{kind}.schema.json"
             write_text_atomic(target, json.dumps(schema_of(kind), indent=2, ensure_ascii=False) + "\n")

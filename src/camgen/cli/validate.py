@@ -22,6 +22,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace, out: Console, err: Console) -> int:
+    dirs = profile_dirs(args)
     failed = 0
     for path in args.files:
         try:
@@ -32,9 +33,9 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
                     "'cameras', a dataset 'scenes'; or pass --kind"
                 )
             if kind == "profile":
-                load_profile(path, profile_dirs(args))
+                load_profile(path, dirs)
             elif kind == "scene":
-                load_scene(path, profile_dirs(args))
+                load_scene(path, dirs)
             else:
                 kind = f"dataset, {_check_dataset(path)} jobs compile"
             out.print(f"[green]ok[/green]  {escape(str(path))} ({kind})")
