@@ -11,18 +11,28 @@ from rich.table import Table
 
 from camgen.cli.common import add_profile_dirs_option, profile_dirs
 from camgen.config import load_profile
+from camgen.config.loader import find_profile, is_profile_name
 from camgen.plan.info import profile_info
 
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser("info", help="derived figures of a camera profile")
-    parser.add_argument("profile", type=Path, metavar="PROFILE")
+    parser.add_argument(
+        "profile",
+        type=Path,
+        metavar="PROFILE",
+        help="a profile file, or a profile name looked up in --profiles, $CAMGEN_PROFILE_PATH, then ./profiles",
+    )
     add_profile_dirs_option(parser)
     parser.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace, out: Console, err: Console) -> int:
-    loaded = load_profile(args.profile, profile_dirs(args))
+    dirs = profile_dirs(args)
+    path = args.profile
+    if not path.exists() and is_profile_name(str(path)):
+        path = find_profile(str(path), None, dirs, key_path=("PROFILE",))
+    loaded = load_profile(path, dirs)
     profile, info = loaded.profile, profile_info(loaded.profile)
     s = profile.sensor
     out.print(f"[bold]{escape(loaded.name)}[/bold] — {escape(profile.description)}")

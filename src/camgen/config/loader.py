@@ -19,6 +19,7 @@ from camgen.config.scene import Camera, FileMesh, Scene
 from camgen.config.validation import show_value, validate
 from camgen.config.yaml_source import YamlDocument, load_yaml, merge_documents
 from camgen.errors import ConfigError, Location, Problem
+from camgen.io.files import input_file_problem
 
 PROFILE_NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
 
@@ -50,23 +51,32 @@ class LoadedScene:
         return {camera: loaded.name for camera, loaded in self.profiles.items()}
 
 
-def default_profile_dirs(referencing_file: Path) -> list[Path]:
-    """Where a profile *name* is looked up: next to the file, its ``profiles/`` sibling, ``./profiles``."""
+def default_profile_dirs(referencing_file: Path | None) -> list[Path]:
+    """Where a profile *name* is looked up: next to the file, its ``profiles/`` sibling, ``./profiles``;
+    only ``./profiles`` for a name given on the command line (`referencing_file` None)."""
+    if referencing_file is None:
+        return [Path.cwd() / "profiles"]
     here = referencing_file.resolve().parent
     return [here, here / "profiles", here.parent / "profiles", Path.cwd() / "profiles"]
 
 
+def is_profile_name(reference: str) -> bool:
+    """A bare name such as ``ptz_2mp_30x`` (looked up in the profile directories), not a path."""
+    return bool(PROFILE_NAME.match(reference)) and not reference.endswith((".yaml", ".yml"))
+
+
 def find_profile(
     reference: str,
-    referencing_file: Path,
+    referencing_file: Path | None,
     profile_dirs: Sequence[Path] = (),
     location: Location | None = None,
     key_path: tuple = (),
 ) -> Path:
-    """Resolve a profile reference: a path (relative to the referencing file) or a bare name."""
-    is_name = PROFILE_NAME.match(reference) and not reference.endswith((".yaml", ".yml"))
-    if not is_name:
-        candidate = (referencing_file.parent / reference).resolve()
+    """Resolve a profile reference: a path (relative to the referencing file; to the working
+    directory for None, the command line) or a bare name."""
+    if not is_profile_name(reference):
+        base = Path.cwd() if referencing_file is None else referencing_file.parent
+        candidate = (base / reference).resolve()
         if candidate.is_file():
             return candidate
         state = "is not a file" if candidate.exists() else "does not exist"
@@ -80,8 +90,14 @@ def find_profile(
     known = sorted({p.stem for d in dirs if d.is_dir() for p in d.glob("*.y*ml")})
     close = difflib.get_close_matches(reference, known, n=1, cutoff=0.6)
     hint = f"; did you mean {close[0]!r}?" if close else ""
-    searched = ", ".join(str(d) for d in dict.fromkeys(dirs) if d.is_dir()) or "no existing directory"
-    raise ConfigError([Problem(key_path, f"names profile {reference!r}, which is not in {searched}{hint}", location)])
+    searched = ", ".join(str(d) for d in dict.fromkeys(dirs) if d.is_dir())
+    where = (
+        f"which is not in {searched}{hint}"
+        if searched
+        else f"but none of the directories it is looked up in exists ({', '.join(map(str, dict.fromkeys(dirs)))}); "
+        f"give the profile's path, or its directory with --profiles or $CAMGEN_PROFILE_PATH"
+    )
+    raise ConfigError([Problem(key_path, f"names profile {reference!r}, {where}", location)])
 
 
 def _profile_document(path: Path, profile_dirs: Sequence[Path], chain: tuple[Path, ...]) -> YamlDocument:
@@ -163,12 +179,22 @@ def _mesh_file_bounds(directory: Path, reference: str) -> tuple[tuple[float, flo
     import trimesh  # heavy import, only for scenes that use mesh files
 
     path = directory / reference
-    if not path.is_file():
+    if not path.exists():
         raise ConfigError(f"refers to {reference!r}, but {path.resolve()} does not exist")
+    problem = input_file_problem(path)
+    if problem:
+        raise ConfigError(f"refers to {reference!r}, but {path.resolve()} {problem}; give a mesh file")
     try:
         loaded = trimesh.load(path, force="scene")
-    except Exception as exc:  # trimesh raises many types for unreadable files
-        raise ConfigError(f"cannot be read as a mesh ({path}): {exc}") from None
+    except NotImplementedError as exc:  # trimesh's "file_type 'x' not supported"
+        raise ConfigError(f"cannot be read as a mesh ({path}): {exc}; formats read: glTF, OBJ, PLY, STL, OFF") from None
+    except OSError as exc:
+        raise ConfigError(f"cannot be read as a mesh ({path}): {exc.strerror or exc}") from None
+    except Exception as exc:  # a parser's internal error (an index out of bounds, a bad reshape): bad content
+        detail = f"{type(exc).__name__}: {exc}"
+        raise ConfigError(
+            f"cannot be read as a mesh ({path}): the file is truncated or corrupt ({detail}); export it again"
+        ) from None
     if loaded.bounds is None or not len(loaded.geometry):
         raise ConfigError(f"holds no geometry ({path}); give a mesh file with triangles")
     low, high = loaded.bounds

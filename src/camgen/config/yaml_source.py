@@ -14,6 +14,7 @@ from typing import Any
 import yaml
 
 from camgen.errors import ConfigError, Location, Problem
+from camgen.io.files import input_file_problem
 
 KeyPath = tuple[str | int, ...]
 
@@ -130,8 +131,17 @@ def parse_yaml(text: str, file: str) -> YamlDocument:
     return YamlDocument(data=data, locations=walker.locations)
 
 
+MAX_YAML_BYTES = 16 * 2**20
+"""Largest YAML file read: far above any real profile, scene or dataset (a scene of thousands of
+actors is a few MiB), far below what would exhaust memory (a device or a video given by mistake)."""
+
+
 def load_yaml(path: Path) -> YamlDocument:
-    """Read and parse a YAML file; a missing or unreadable file is a `ConfigError`."""
+    """Read and parse a YAML file; a missing or unreadable file, a directory, a device or FIFO, and a file
+    over `MAX_YAML_BYTES` are each a `ConfigError` (found with `os.stat`, before the file is opened)."""
+    problem = input_file_problem(path, max_bytes=MAX_YAML_BYTES, what="YAML config")
+    if problem:
+        raise ConfigError(f"{path}: {problem}")
     try:
         text = Path(path).read_text(encoding="utf-8")
     except FileNotFoundError:
