@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from camgen.errors import ConfigError
+from camgen.io.files import input_file_problem
 
 RAW_SUFFIXES = frozenset(
     ".dng .nef .nrw .cr2 .cr3 .crw .arw .srf .sr2 .raf .orf .rw2 .pef .srw .3fr .fff .iiq .erf .kdc .dcr .mos .mrw "
@@ -464,10 +465,61 @@ def read_gray8(path: Path) -> np.ndarray:
         except (rawpy.LibRawError, OSError, ValueError) as exc:
             raise FrameReadError(f"is not a raw file LibRaw can read ({type(exc).__name__}: {exc})") from None
         return cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY)
-    image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE | cv2.IMREAD_IGNORE_ORIENTATION)
+    return _read_image(path, cv2.IMREAD_GRAYSCALE | cv2.IMREAD_IGNORE_ORIENTATION)
+
+
+def _read_image(path: Path, flags: int) -> np.ndarray:
+    """An image decoded by OpenCV with `flags`. Raises `FrameReadError` for a file that is not a regular
+    file, a truncated JPEG or PNG (`truncation`: libjpeg would fill the missing rows with grey and print
+    only its own warning to stderr), or one OpenCV cannot decode."""
+    import cv2
+
+    problem = input_file_problem(path)
+    if problem:
+        raise FrameReadError(problem)
+    data = path.read_bytes()
+    truncated = truncation(data)
+    if truncated:
+        raise FrameReadError(f"{truncated}; copy it from the camera again")
+    image = cv2.imdecode(np.frombuffer(data, np.uint8), flags)
     if image is None:
         raise FrameReadError("is not an image OpenCV can read")
     return image
+
+
+JPEG_STANDALONE_MARKERS = frozenset({0x01, *range(0xD0, 0xD8)})
+"""JPEG markers without a length field: TEM and the restart markers RST0–RST7."""
+
+
+def truncation(data: bytes) -> str | None:
+    """Why the bytes of a JPEG or PNG file end before the image does; None when they do not (or the
+    data is neither format, or its structure is not recognised: the decoder then judges).
+
+    A JPEG's marker segments are walked by their lengths to its first scan (SOS, FF DA), after which its
+    end-of-image marker (EOI, FF D9) must follow (ITU-T T.81, B.1.1.2–B.2.1; entropy-coded data stuffs
+    each FF byte, so FF D9 cannot occur inside it). A PNG must hold its IEND chunk.
+    """
+    if data.startswith(b"\xff\xd8"):
+        offset = 2
+        while offset + 4 <= len(data):
+            if data[offset] != 0xFF:
+                return None
+            marker = data[offset + 1]
+            if marker == 0xFF:  # fill byte before a marker
+                offset += 1
+            elif marker in JPEG_STANDALONE_MARKERS:
+                offset += 2
+            elif marker == 0xDA:
+                scan = offset + 2 + int.from_bytes(data[offset + 2 : offset + 4], "big")
+                if data.find(b"\xff\xd9", scan) >= 0:
+                    return None
+                break
+            else:
+                offset += 2 + int.from_bytes(data[offset + 2 : offset + 4], "big")
+        return f"is truncated: its JPEG data ends after {len(data)} bytes, before the end-of-image marker"
+    if data.startswith(b"\x89PNG\r\n\x1a\n") and data.rfind(b"IEND") < 0:
+        return f"is truncated: its PNG data ends after {len(data)} bytes, before the IEND chunk"
+    return None
 
 
 def image_files(directory: Path) -> list[Path]:
@@ -506,9 +558,10 @@ def read_rgb8_frames(paths: Sequence[Path], *, max_frames: int) -> Iterator[tupl
             except av.FFmpegError as exc:
                 raise ConfigError(f"{path}: cannot decode the video ({exc})") from None
             continue
-        image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED | cv2.IMREAD_IGNORE_ORIENTATION)
-        if image is None:
-            raise ConfigError(f"{path}: not a video or an image OpenCV can read")
+        try:
+            image = _read_image(path, cv2.IMREAD_UNCHANGED | cv2.IMREAD_IGNORE_ORIENTATION)
+        except FrameReadError as error:
+            raise ConfigError(f"{path}: {error} (a reference is videos or 8-bit images)") from None
         if image.dtype != np.uint8:
             raise ConfigError(
                 f"{path}: holds {image.dtype} samples; `fit match` reads a camera's 8-bit output (raw or 16-bit "

@@ -1190,6 +1190,15 @@ def fit_match(
         half_scale=fit_denoise,
     )
     reference = _nlf(statistics, method, edges, min_count)
+    if not np.any(reference.variance[reference.usable] > 0):
+        low, high = int(statistics.first.min()), int(statistics.first.max())
+        flat = f"its first frame is one flat level ({low} in every pixel) and " if low == high else ""
+        raise ConfigError(
+            f"the reference shows no noise: {flat}its {reference.method} variance is 0 in every intensity bin it "
+            "fills, so it holds no noise-level information to fit; give the camera's own output with its noise "
+            "(several frames of a static view, or images with flat but noisy regions), not a synthetic, uniform "
+            "or fully denoised picture"
+        )
     warnings: list[str] = []
     if method == "auto" and reference.method == "spatial" and statistics.frames >= TEMPORAL_FRAMES_MIN:
         if statistics.sizes_differ:
