@@ -57,6 +57,12 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             f"--camera {', '.join(unknown)}: no such camera in {args.scene} (it has {', '.join(sorted(names))})"
         )
     count = job.frame_count if args.frames is None else min(args.frames, job.frame_count)
+    if args.frames is not None and args.frames > job.frame_count:
+        err.print(
+            f"[yellow]warning[/yellow] --frames {args.frames}: {escape(str(args.scene))} has only {job.frame_count} "
+            f"frames (duration_s {job.scene.duration_s:g} × fps {job.fps:g}); rendering those {job.frame_count}",
+            soft_wrap=True,
+        )
     chosen = [c for c in job.cameras if args.camera is None or c.name in args.camera]
     for camera in chosen:
         skipped = unimplemented_stages(camera)
