@@ -41,8 +41,11 @@ def test_a_camera_under_the_ground_beside_it_is_accepted(workspace: Path):
         ("{type: plane, name: wall, size_m: [6, 4], position_m: [0, -4, 2], rotation_deg: [-90, 0, 0]}", True),
         ("{type: plane, name: wall, size_m: [6, 4], position_m: [0, -4, 2], rotation_deg: [90, 0, 0]}", False),
         ("{type: plane, name: wall, size_m: [6, 4], position_m: [0, -6, 2], rotation_deg: [90, 0, 0]}", True),
-        ("{type: checkerboard, name: board, squares: [8, 6], square_size_m: 0.5, position_m: [0, -4, 3], "
-         "rotation_deg: [-90, 0, 0]}", True),
+        (
+            "{type: checkerboard, name: board, squares: [8, 6], square_size_m: 0.5, position_m: [0, -4, 3], "
+            "rotation_deg: [-90, 0, 0]}",
+            True,
+        ),
     ],
 )
 def test_a_turned_plane_is_judged_in_its_own_frame(mesh: str, behind: bool, workspace: Path):

@@ -52,6 +52,7 @@ from camgen.fit.checkerboard import inner_corners
 from camgen.fit.lens import (
     DISTORTION_MODELS,
     BoardImages,
+    BoardSpec,
     Detection,
     LensFit,
     detect_board,
@@ -402,3 +403,36 @@ def test_unreadable_and_missing_images(charuco_folder, tmp_path):
     assert fit.rejected[:4] == images.unusable
     (warning,) = [w for w in fit.warnings if "found in only" in w]
     assert "3 of 7 images" in warning and "blank_a.png (board not found)" in warning and "broken.png" in warning
+
+
+def unrelated_views(board: BoardSpec, size_px: tuple[int, int], count: int, rng: np.random.Generator) -> list:
+    """Board corners through `count` random homographies, each its own: no one camera made them all."""
+    width, height = size_px
+    points = board.object_points_m()[:, :2]
+    (x0, y0), (x1, y1) = points.min(0), points.max(0)
+    outline = np.float32([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    views = []
+    for i in range(count):
+        left, top = rng.uniform(0.05, 0.45) * width, rng.uniform(0.05, 0.4) * height
+        w, h = rng.uniform(0.35, 0.5) * width, rng.uniform(0.35, 0.55) * height
+        quad = np.float32([[left, top], [left + w, top], [left + w, top + h], [left, top + h]])
+        quad += rng.uniform(-0.08, 0.08, (4, 2)).astype(np.float32) * np.float32([w, h])
+        H = cv2.getPerspectiveTransform(outline, quad)
+        corners = cv2.perspectiveTransform(points.reshape(-1, 1, 2).astype(np.float64), H)
+        corners += rng.normal(0.0, 0.05, corners.shape)
+        views.append(Detection(f"warped_{i:02d}.png", corners.astype(np.float32), board.object_points_m()))
+    return views
+
+
+def test_views_from_unrelated_homographies_are_refused(charuco_fit):
+    board = parse_board("checkerboard:9x6:25mm")
+    views = unrelated_views(board, CHARUCO_SIZE_PX, 8, np.random.default_rng(5))
+    with pytest.raises(ConfigError, match="is not trustworthy") as raised:
+        fit_lens(views, CHARUCO_SIZE_PX)
+    message = str(raised.value)
+    assert "px RMS, more than the 1 px" in message and "--accept-poor-fit" in message
+    forced = fit_lens(views, CHARUCO_SIZE_PX, accept_poor_fit=True)
+    assert forced.rms_px > 1.0
+    assert any("px RMS" in warning for warning in forced.warnings)
+    # the consistent synthetic views raise no doubt
+    assert not any("px RMS" in w or "more uncertain" in w or "folds over" in w for w in charuco_fit.warnings)

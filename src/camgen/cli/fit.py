@@ -66,6 +66,12 @@ def add_parser(subparsers) -> None:
         "charuco:SQUARESXxSQUARESY:SQUARE:MARKER:DICT (e.g. charuco:11x8:30mm:22mm:DICT_5X5_100)",
     )
     lens.add_argument("--pixel-pitch-um", type=float, metavar="P", help="sensor pixel pitch, µm (for mm figures)")
+    lens.add_argument(
+        "--accept-poor-fit",
+        action="store_true",
+        help="write the profile even when the fit shows the views disagree (RMS over 1 px, fx or fy more "
+        "uncertain than 2 %%, distortion folding over inside the image); the doubts become warnings",
+    )
     _add_output_options(lens, "lens")
     lens.set_defaults(run=run_lens)
 
@@ -287,7 +293,13 @@ def run_lens(args: argparse.Namespace, out: Console, err: Console) -> int:
     with _progress(err) as progress:
         task = progress.add_task("finding the board", total=None)
         images = detect_in_folder(args.images, board, on_image=lambda path: progress.advance(task))
-    fit = fit_lens(images.detections, images.size_px, unusable=images.unusable, pixel_pitch_um=pixel_pitch_um)
+    fit = fit_lens(
+        images.detections,
+        images.size_px,
+        unusable=images.unusable,
+        pixel_pitch_um=pixel_pitch_um,
+        accept_poor_fit=args.accept_poor_fit,
+    )
     for name, reason in fit.rejected:
         err.print(f"[yellow]rejected[/yellow] {escape(name)}: {escape(reason)}", soft_wrap=True)
     warnings = list(fit.warnings)

@@ -40,6 +40,8 @@ import numpy as np
 
 from camgen.errors import ConfigError
 from camgen.fit.frames import FrameReadError, image_files, listing, mixed_sizes_error, read_gray8
+from camgen.optics.distortion import radial_reach
+from camgen.optics.intrinsics import corner_radius_normalized
 
 BOARD_EXAMPLES = (
     "'checkerboard:9x6:25mm' (9×6 inner corners, 25 mm squares) or "
@@ -70,6 +72,16 @@ BOARD_NOT_FOUND = "board not found"
 """The reason given for an image without a usable board."""
 DISTORTION_NAMES = ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6")
 """OpenCV order of the distortion coefficients (`camgen.config.profile.Distortion`)."""
+CONSISTENT_RMS_MAX_PX = 1.0
+"""Largest overall RMS reprojection error of a fit that is written without --accept-poor-fit, px. Corners
+of a flat board are located to 0.05–0.3 px (sharp renders 0.04 px; OpenCV's sample boards and real
+wide-angle boards 0.2–0.3 px, BENCHMARKS.md "fit"); an RMS above 1 px after outlier screening means the
+views do not come from one camera and lens (a changed zoom or focus, a cropped or rescaled image), the
+board is not flat, or corners were misdetected."""
+FOCAL_RELATIVE_STD_MAX = 0.02
+"""Largest relative 1σ uncertainty of fx or fy of a fit written without --accept-poor-fit. Fifteen views
+tilted by 20–45° give 0.05–0.3 %; 2 % means the views hardly constrain the focal length (the board
+nearly fronto-parallel in every view, or views that disagree)."""
 
 
 @dataclass(frozen=True)
@@ -575,6 +587,35 @@ def _coverage_warnings(detections: Sequence[Detection], K_px: np.ndarray, size_p
     return warnings
 
 
+def _inconsistency(calibration: _Calibration, size_px: tuple[int, int]) -> list[str]:
+    """What in a calibration shows that its views disagree, or that they do not determine the lens."""
+    doubts = []
+    if calibration.rms_px > CONSISTENT_RMS_MAX_PX:
+        doubts.append(
+            f"the corners miss their fitted positions by {calibration.rms_px:.3g} px RMS, more than the "
+            f"{CONSISTENT_RMS_MAX_PX:g} px views of one flat board through one lens leave"
+        )
+    K = calibration.K_px
+    for name, value, std in (("fx", K[0, 0], calibration.std[0]), ("fy", K[1, 1], calibration.std[1])):
+        if not std <= FOCAL_RELATIVE_STD_MAX * abs(value):
+            doubts.append(
+                f"{name} is {value:.4g} ± {std:.2g} px (±{std / abs(value):.1%}), more uncertain than "
+                f"±{FOCAL_RELATIVE_STD_MAX:.0%}"
+            )
+    corner_radius = corner_radius_normalized(K, *size_px)
+    if np.any(calibration.distortion) and math.isfinite(corner_radius):
+        reach = radial_reach(calibration.distortion, r_undistorted_max=20.0 * max(corner_radius, 1.0))
+        if reach < corner_radius:
+            coefficients = ", ".join(
+                f"{n} {v:.3g}" for n, v in zip(DISTORTION_NAMES, calibration.distortion, strict=False) if v
+            )
+            doubts.append(
+                f"the fitted distortion ({coefficients}) folds over inside the image: its radial mapping turns "
+                f"back at normalised radius {reach:.3f}, the image corner lies at {corner_radius:.3f}"
+            )
+    return doubts
+
+
 def fit_lens(
     detections: Sequence[Detection],
     size_px: tuple[int, int],
@@ -588,6 +629,7 @@ def fit_lens(
     outlier_floor_px: float = 0.2,
     selection_tolerance: float = 0.02,
     selection_tolerance_px: float = 0.002,
+    accept_poor_fit: bool = False,
 ) -> LensFit:
     """Intrinsics and distortion from board detections, with outlier views rejected and the distortion
     model chosen by held-out reprojection error.
@@ -617,12 +659,16 @@ def fit_lens(
     folds : folds of the cross-validation (leave-one-out with fewer views).
     outlier_factor, outlier_mads, outlier_floor_px : the screening threshold's terms (px for the floor).
     selection_tolerance, selection_tolerance_px : the selection tolerance, relative and px.
+    accept_poor_fit : return a fit that `_inconsistency` doubts (its doubts become warnings) instead of
+        raising.
 
     Raises
     ------
     ConfigError
         Fewer than `MIN_VIEWS` views show the board, or remain after rejecting outliers (the message
-        names the files and why each was dropped), or the calibration fails.
+        names the files and why each was dropped), or the calibration fails, or (unless
+        `accept_poor_fit`) the fit shows the views disagree: RMS above `CONSISTENT_RMS_MAX_PX`, fx or fy
+        more uncertain than `FOCAL_RELATIVE_STD_MAX`, or distortion that folds over inside the image.
     """
     total = len(detections) + len(unusable)
     rejected = [(name, reason) for name, reason in unusable]
@@ -661,6 +707,15 @@ def fit_lens(
         if not math.isfinite(score.held_out_rms_px):
             warnings.append(f"model {score.name} could not be calibrated on these views, so it was not a candidate")
     warnings += _coverage_warnings(kept, calibration.K_px, size_px)
+    doubts = _inconsistency(calibration, size_px)
+    if doubts and not accept_poor_fit:
+        raise ConfigError(
+            f"the fit of {listing([d.name for d in kept])} is not trustworthy: {'; '.join(doubts)}; "
+            "a profile from it would be wrong: check that every image comes from one camera at one zoom and "
+            "focus, uncropped and unscaled, that the board is flat and that the board spec matches it, and add "
+            "views with the board tilted 20–45° towards each side (or pass --accept-poor-fit to write it anyway)"
+        )
+    warnings += doubts
     return LensFit(
         model=model.name,
         size_px=(int(size_px[0]), int(size_px[1])),
