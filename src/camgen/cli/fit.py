@@ -154,6 +154,63 @@ def _print_rows(out: Console, title: str, rows: Sequence[tuple[str, float, float
     out.print(table)
 
 
+OPENCV_DEFAULT_MODEL = "k1k2k3p"
+"""The candidate `cv2.calibrateCamera` fits without flags (k1, k2, p1, p2, k3), for comparison."""
+
+
+def _label(fit, name: str) -> str:
+    """A candidate's name, marked when it is the chosen model or OpenCV's default."""
+    tags = [
+        tag for tag, on in (("chosen", name == fit.model), ("OpenCV's default", name == OPENCV_DEFAULT_MODEL)) if on
+    ]
+    return f"{name} ({', '.join(tags)})" if tags else name
+
+
+def _candidate_lines(fit) -> list[str]:
+    """Each candidate model's errors and intrinsics, and how far its fx, fy lie from the chosen one's."""
+    fx0, fy0 = fit.K_px[0, 0], fit.K_px[1, 1]
+    lines = []
+    for c in fit.candidates:
+        fx, fy, cx, cy = c.intrinsics_px
+        lines.append(
+            f"candidate {_label(fit, c.name)}: held-out RMS {c.held_out_rms_px:.4g} px, "
+            f"RMS {c.training_rms_px:.4g} px, fx {fx:.6g} px ({fx / fx0 - 1:+.2%}), fy {fy:.6g} px "
+            f"({fy / fy0 - 1:+.2%}), cx {cx:.5g} px, cy {cy:.5g} px"
+        )
+    return lines
+
+
+def _print_candidates(out: Console, fit) -> None:
+    """The candidate models side by side, OpenCV's default among them, and why the chosen one was chosen."""
+    fx0, fy0, cx0, cy0 = fit.K_px[0, 0], fit.K_px[1, 1], fit.K_px[0, 2], fit.K_px[1, 2]
+    table = Table(title="distortion models", title_justify="left")
+    for column in (
+        "model",
+        "parameters",
+        "held-out RMS px",
+        "RMS px",
+        "fx − chosen",
+        "fy − chosen",
+        "cx − chosen",
+        "cy − chosen",
+    ):
+        table.add_column(column, justify="left" if column == "model" else "right")
+    for c in fit.candidates:
+        fx, fy, cx, cy = c.intrinsics_px
+        table.add_row(
+            escape(_label(fit, c.name)),
+            str(c.parameters),
+            f"{c.held_out_rms_px:.4g}",
+            f"{c.training_rms_px:.4g}",
+            f"{fx / fx0 - 1:+.2%}",
+            f"{fy / fy0 - 1:+.2%}",
+            f"{cx - cx0:+.2f} px",
+            f"{cy - cy0:+.2f} px",
+        )
+    out.print(table)
+    out.print(f"chosen: {escape(fit.selection)}", soft_wrap=True)
+
+
 def _warn(err: Console, messages: Sequence[str]) -> None:
     for message in messages:
         err.print(f"[yellow]warning[/yellow] {escape(message)}", soft_wrap=True)
@@ -308,11 +365,15 @@ def run_lens(args: argparse.Namespace, out: Console, err: Console) -> int:
     _warn(err, warnings)
     views = len(fit.per_view_rms_px)
     _print_rows(out, f"lens ({fit.model}, {views} views, RMS {fit.rms_px:.3f} px)", fit.summary_rows())
+    _print_candidates(out, fit)
     header = [
         f"camgen fit lens --images {args.images} --board {args.board}",
         f"model {fit.model}, RMS {fit.rms_px:.4f} px over {views} views; "
         f"rejected: {listing([name for name, _ in fit.rejected]) or 'none'}",
+        f"chosen: {fit.selection}",
         *(f"{name}: {_significant(value, std)} {unit}" for name, value, std, unit in fit.summary_rows()),
+        "values below at full precision: the coefficients are correlated, so none may be rounded alone",
+        *_candidate_lines(fit),
     ]
     _write_outputs(
         args, out, fit.profile_fragment(), header, lambda path: write_lens_report(fit, images.detections, path)

@@ -188,6 +188,9 @@ class ModelScore:
     (NaN if a fold's calibration failed)."""
     training_rms_px: float
     """RMS reprojection error of the calibration on every kept view, px."""
+    intrinsics_px: tuple[float, float, float, float] = (math.nan,) * 4
+    """(fx, fy, cx, cy) of the calibration on every kept view, px (NaN where it failed): how much the
+    choice of model moves the intrinsics."""
 
 
 @dataclass(frozen=True)
@@ -212,6 +215,8 @@ class LensFit:
     per_view_rms_px: Mapping[str, float]
     """Kept view name → its RMS reprojection error, px."""
     candidates: tuple[ModelScore, ...]
+    selection: str
+    """Why `model` was chosen among the candidates, in words."""
     rejected: tuple[tuple[str, str], ...]
     """(image name, reason) of every image left out: no board found, or an outlier view."""
     outlier_threshold_px: float
@@ -258,9 +263,13 @@ class LensFit:
         ``sensor``: width_px, height_px, principal_point_offset_px, and with a pixel pitch
         pixel_pitch_um plus pixel_pitch_y_um when fx ≠ fy is significant. ``lens``: focal_length_mm
         (with a pixel pitch) and all eight distortion coefficients (0 for those the model leaves out).
-        Values are rounded to two significant digits of their standard deviation.
+
+        Values are written at full float precision, not rounded to their uncertainty: the distortion
+        coefficients are strongly correlated (k1 with k2 and k3, each with fx), so rounding each to its
+        own σ moves the lens far more than σ does (a real wide-angle fit at 0.275 px RMS reprojected at
+        1.27 px after rounding k1 1.743 → 1.7 and k4 2.104 → 2.1). The uncertainties go into the
+        profile's header comments (`summary_rows`).
         """
-        std_fx, std_cx, std_cy = self.std["fx"], self.std["cx"], self.std["cy"]
         offset_x, offset_y = self.principal_point_offset_px
         sensor: dict = {"width_px": int(self.size_px[0]), "height_px": int(self.size_px[1])}
         lens: dict = {}
@@ -269,16 +278,14 @@ class LensFit:
             # null (square pixels) rather than absent, so a base profile's own value is not inherited.
             sensor["pixel_pitch_y_um"] = None
             if self.aspect_is_significant:
-                relative_std = math.hypot(std_fx / self.K_px[0, 0], self.std["fy"] / self.K_px[1, 1])
-                sensor["pixel_pitch_y_um"] = rounded(self.pixel_pitch_y_um, self.pixel_pitch_y_um * relative_std)
-            lens["focal_length_mm"] = rounded(self.focal_length_mm, std_fx * self.pixel_pitch_um * 1e-3)
-        sensor["principal_point_offset_px"] = [rounded(offset_x, std_cx), rounded(offset_y, std_cy)]
+                sensor["pixel_pitch_y_um"] = float(self.pixel_pitch_y_um)
+            lens["focal_length_mm"] = float(self.focal_length_mm)
+        sensor["principal_point_offset_px"] = [float(offset_x), float(offset_y)]
         values = dict(zip(DISTORTION_NAMES, self.distortion, strict=True))
         # Every coefficient, zeros included: a profile that `extends:` a base must not inherit the base's
         # terms that this model leaves out.
         lens["distortion"] = {
-            name: rounded(values[name], self.std[name]) if name in self.coefficients else 0.0
-            for name in DISTORTION_NAMES
+            name: float(values[name]) if name in self.coefficients else 0.0 for name in DISTORTION_NAMES
         }
         return {"sensor": sensor, "lens": lens}
 
@@ -561,13 +568,15 @@ def _score(
         ]
     except ConfigError:
         return ModelScore(model.name, model.parameters, math.nan, math.nan), None
+    K = full.K_px
+    intrinsics_px = (float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2]))
     residuals = [
         reprojection_residuals_px(detection, calibration.K_px, calibration.distortion)
         for fold, calibration in enumerate(fold_calibrations)
         for detection in detections[fold::folds]
     ]
     held_out = math.sqrt(float(np.mean(np.sum(np.concatenate(residuals) ** 2, axis=1))))
-    return ModelScore(model.name, model.parameters, held_out, full.rms_px), full
+    return ModelScore(model.name, model.parameters, held_out, full.rms_px, intrinsics_px), full
 
 
 def _coverage_warnings(detections: Sequence[Detection], K_px: np.ndarray, size_px: tuple[int, int]) -> list[str]:
@@ -703,6 +712,17 @@ def fit_lens(
     order = sorted(range(len(models)), key=lambda i: models[i].parameters)
     chosen = next(i for i in order if candidates[i].held_out_rms_px <= best + tolerance)
     model, calibration = models[chosen], scored[chosen][1]
+    best_name = next(s.name for s in candidates if s.held_out_rms_px == best)
+    selection = (
+        f"{model.name} ({model.parameters} parameters) predicts held-out views to "
+        f"{candidates[chosen].held_out_rms_px:.4g} px RMS"
+        + (
+            " (the best)"
+            if best_name == model.name
+            else f", within {tolerance:.2g} px of the best, {best_name} at {best:.4g} px: more terms would add "
+            "correlation without predicting better"
+        )
+    )
     for score in candidates:
         if not math.isfinite(score.held_out_rms_px):
             warnings.append(f"model {score.name} could not be calibrated on these views, so it was not a candidate")
@@ -726,6 +746,7 @@ def fit_lens(
         rms_px=calibration.rms_px,
         per_view_rms_px={d.name: float(r) for d, r in zip(kept, calibration.per_view_rms_px, strict=True)},
         candidates=candidates,
+        selection=selection,
         rejected=tuple(rejected),
         outlier_threshold_px=threshold_px,
         pixel_pitch_um=pixel_pitch_um,
