@@ -163,3 +163,50 @@ def test_a_side_file_that_is_not_utf8(tmp_path):
     (tmp_path / "frames.csv").write_bytes("file,exposure_time_s,temperature_c\na.dng,0.1,40 \xb0C\n".encode("latin-1"))
     with pytest.raises(ConfigError, match="UTF-8"):
         read_metadata_file(tmp_path / "frames.csv")
+
+
+def retagged_dng(path, raw, *, active_area=None, exposure=None) -> None:
+    """A camgen DNG rewritten with an ActiveArea (a masked border, as real sensors keep) or another
+    ExposureTime, tags write_dng does not offer."""
+    write_dng(path, raw, cfa="RGGB", black_level_dn=64, white_level_dn=4095, bit_depth=12, exposure_time_s=0.01)
+    with tifffile.TiffFile(path) as tif:
+        page = tif.pages.first
+        tags = [(t.code, t.dtype, t.count, t.value, True) for t in page.tags.values() if t.code >= 33000]
+        data = page.asarray()
+    if exposure is not None:
+        tags = [t for t in tags if t[0] != 33434] + [(33434, 5, 1, exposure, True)]
+    if active_area is not None:
+        tags.append((50829, 4, 4, active_area, True))  # ActiveArea: top, left, bottom, right
+    tifffile.imwrite(path, data, photometric=32803, rowsperstrip=raw.shape[0], compression=None, extratags=tags)
+
+
+def test_the_masked_border_is_reported_per_channel(tmp_path):
+    rng = np.random.default_rng(3)
+    raw = np.clip(rng.normal(300, 4, (72, 80)), 0, 4095)
+    levels = {(0, 0): 60.0, (0, 1): 62.0, (1, 0): 66.0, (1, 1): 64.0}  # R, G1, G2, B of an RGGB mosaic
+    border = np.zeros(raw.shape, dtype=bool)
+    border[:8, :], border[:, :8] = True, True
+    for (dy, dx), level in levels.items():
+        site = np.zeros(raw.shape, dtype=bool)
+        site[dy::2, dx::2] = True
+        raw[border & site] = rng.normal(level, 1.0 + dy + dx, np.count_nonzero(border & site))
+    path = tmp_path / "masked.dng"
+    retagged_dng(path, np.round(raw).astype(np.uint16), active_area=(8, 8, 72, 80))
+    frame = read_frame(path)
+    assert frame.raw_dn.shape == (64, 72)
+    mean, std = frame.optical_black.mean_dn(), frame.optical_black.std_dn()
+    assert set(mean) == {"R", "G1", "G2", "B"}
+    # each channel's own level, not one number over all four
+    assert mean == pytest.approx({"R": 60.0, "G1": 62.0, "G2": 66.0, "B": 64.0}, abs=0.25)
+    assert std == pytest.approx({"R": 1.0, "G1": 2.0, "G2": 2.0, "B": 3.0}, rel=0.15)
+
+
+def test_an_exif_exposure_of_zero_asks_for_the_side_file(tmp_path):
+    for i in range(2):
+        retagged_dng(tmp_path / f"d{i}.dng", RAW, exposure=(0, 1))
+    assert read_frame(tmp_path / "d0.dng").metadata.exposure_time_s == 0.0
+    with pytest.raises(ConfigError, match=r"d0.dng, d1.dng state an exposure time of 0 s .* frames\.csv"):
+        scan_stacks(tmp_path, "dark", Count)
+    (tmp_path / "frames.csv").write_text("file,exposure_time_s\nd0.dng,0.02\nd1.dng,0.02\n")
+    scan = scan_stacks(tmp_path, "dark", Count)
+    assert [g.exposure_time_s for g in scan.groups.values()] == [0.02]

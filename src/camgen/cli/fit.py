@@ -312,10 +312,15 @@ def run_noise(args: argparse.Namespace, out: Console, err: Console) -> int:
         warnings.append(
             f"the files state a black level of {dark.black_level_dn:g} DN but the dark frames read {fitted_black:g} DN"
         )
-    if dark.optical_black_dn:
-        ob = sum(dark.optical_black_dn) / len(dark.optical_black_dn)
-        warnings.append(f"the masked optical-black border reads {ob:.2f} DN on average (for comparison with the fit)")
     _warn(err, warnings)
+    if dark.optical_black.count:
+        mean, std = dark.optical_black.mean_dn(), dark.optical_black.std_dn()
+        channels = ", ".join(f"{c} {mean[c]:.2f} ± {std[c]:.2f}" for c in sorted(mean))
+        out.print(
+            f"masked optical-black border, mean ± standard deviation per channel: {escape(channels)} DN "
+            f"(for comparison with the fitted black level)",
+            soft_wrap=True,
+        )
     frames = sum(len(stack.files) for scan in scans.values() for stack in scan.groups.values())
     _print_rows(out, f"sensor noise ({dark.cfa}, {len(groups)} stacks, {frames} frames)", fit.summary_rows())
     sources = [f"--dark {args.dark}"] + ([f"--flat {args.flat}"] if args.flat else [])

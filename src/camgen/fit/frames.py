@@ -3,14 +3,15 @@
 `camgen.fit` is, with `camgen.io`, the only place that reads files (DESIGN.md). Here:
 
 - **Raw frames** through rawpy (LibRaw: DNG, NEF, CR2, CR3, ARW, RAF, ORF, RW2, …): the visible
-  area's DN, the CFA read from the file, its black and white levels, and the mean of the masked
-  optical-black border where the format has one.
+  area's DN, the CFA read from the file, its black and white levels, and per CFA channel the mean and
+  spread of the masked optical-black border where the format has one.
 - **Linear frames** (8–16-bit mono or Bayer TIFF/PNG, as industrial cameras deliver them) through
   OpenImageIO, in their native integer type (never rescaled: nothing infers scale from dtype). Their
   CFA is not in the file; the caller names it.
 - **Exposure time and temperature** of every frame come from a side file when one is given (or
   ``frames.csv`` lies in the folder), else from the file's EXIF (ExposureTime 33434, Temperature
-  37888, as camgen's DNG writer stores them).
+  37888, as camgen's DNG writer stores them). An EXIF exposure time of 0 is not taken for a real
+  0-second exposure: the fit asks for the side file.
 - **Grouping**: frames taken at the same settings form one group (one stack). Sub-folders of the
   folder are groups of their own (flats at several light levels but one exposure time); otherwise
   frames are grouped by exposure time and temperature.
@@ -72,6 +73,63 @@ class FrameMetadata:
     temperature_c: float | None = None
 
 
+@dataclass
+class BorderStatistics:
+    """Per-channel sums over the masked optical-black border of one or more raw frames.
+
+    Sensors keep rows and columns shielded from light around the active area; their per-channel mean is
+    the black level the camera measures itself, and their spread its dark noise plus fixed pattern.
+    Channels are named by the CFA letter of each site (the two greens G1, G2, in LibRaw's order).
+    """
+
+    count: dict[str, int] = field(default_factory=dict)
+    sum_dn: dict[str, float] = field(default_factory=dict)
+    sum_squares_dn2: dict[str, float] = field(default_factory=dict)
+
+    def add(self, channel: str, values_dn: np.ndarray) -> None:
+        values = values_dn.astype(np.float64)
+        self.count[channel] = self.count.get(channel, 0) + values.size
+        self.sum_dn[channel] = self.sum_dn.get(channel, 0.0) + float(values.sum())
+        self.sum_squares_dn2[channel] = self.sum_squares_dn2.get(channel, 0.0) + float(np.sum(values**2))
+
+    def merge(self, other: BorderStatistics) -> None:
+        for channel, n in other.count.items():
+            self.count[channel] = self.count.get(channel, 0) + n
+            self.sum_dn[channel] = self.sum_dn.get(channel, 0.0) + other.sum_dn[channel]
+            self.sum_squares_dn2[channel] = self.sum_squares_dn2.get(channel, 0.0) + other.sum_squares_dn2[channel]
+
+    def mean_dn(self) -> dict[str, float]:
+        return {c: self.sum_dn[c] / n for c, n in self.count.items()}
+
+    def std_dn(self) -> dict[str, float]:
+        """Standard deviation of the border's samples per channel (over sites and frames), DN."""
+        mean = self.mean_dn()
+        return {
+            c: math.sqrt(max(self.sum_squares_dn2[c] / n - mean[c] ** 2, 0.0) * n / max(n - 1, 1))
+            for c, n in self.count.items()
+        }
+
+
+def _border_statistics(raw) -> BorderStatistics | None:
+    """The masked border of a LibRaw image (the rows above and columns left of the visible area)."""
+    sizes = raw.sizes
+    if not (sizes.top_margin or sizes.left_margin):
+        return None
+    masked = np.zeros(raw.raw_image.shape, dtype=bool)
+    masked[: sizes.top_margin, :] = True
+    masked[:, : sizes.left_margin] = True
+    letters = raw.color_desc.decode("ascii")
+    colours = raw.raw_colors
+    names = {index: letters[index] for index in range(len(letters))}
+    if letters.count("G") > 1:
+        greens = [i for i, letter in enumerate(letters) if letter == "G"]
+        names.update({index: f"G{k + 1}" for k, index in enumerate(greens)})
+    statistics = BorderStatistics()
+    for index in np.unique(colours[masked]):
+        statistics.add(names[int(index)], raw.raw_image[masked & (colours == index)])
+    return statistics
+
+
 @dataclass(frozen=True)
 class RawFrame:
     """One raw or linear frame as the sensor delivered it."""
@@ -85,8 +143,8 @@ class RawFrame:
     """Largest DN the file says it can hold (LibRaw's white level; 2^bits − 1 for linear files)."""
     black_level_dn: float | None
     """Black level the file states (mean over the CFA channels); None for linear files."""
-    optical_black_dn: float | None
-    """Mean DN of the masked optical-black border, where the format keeps one."""
+    optical_black: BorderStatistics | None
+    """Per-channel statistics of the masked optical-black border, where the format keeps one."""
     metadata: FrameMetadata
 
     @property
@@ -148,13 +206,7 @@ def _read_rawpy(path: Path) -> RawFrame:
         with rawpy.imread(str(path)) as raw:
             cfa = _cfa_from_rawpy(raw)
             visible = np.array(raw.raw_image_visible, dtype=np.uint16)
-            sizes = raw.sizes
-            optical_black = None
-            if sizes.top_margin or sizes.left_margin:
-                full = raw.raw_image
-                masked = [full[: sizes.top_margin, :], full[:, : sizes.left_margin]]
-                values = np.concatenate([m.ravel() for m in masked if m.size])
-                optical_black = float(values.mean()) if values.size else None
+            optical_black = _border_statistics(raw)
             black = float(np.mean(raw.black_level_per_channel))
             white = int(raw.white_level)
     except (rawpy.LibRawError, OSError, ValueError) as exc:
@@ -304,7 +356,8 @@ class FrameStackScan:
     cfa: str
     white_level_dn: int | None
     black_level_dn: float | None
-    optical_black_dn: list[float] = field(default_factory=list)
+    optical_black: BorderStatistics = field(default_factory=BorderStatistics)
+    """The masked borders of every frame read, pooled per channel (empty where the files keep none)."""
     skipped: list[tuple[str, str]] = field(default_factory=list)
     """(file name, reason) of files that could not be read."""
 
@@ -375,6 +428,7 @@ def scan_stacks(
     shapes: dict[tuple[int, int], list[str]] = defaultdict(list)
     cfas: dict[str, list[str]] = defaultdict(list)
     no_exposure: list[str] = []
+    zero_exposure: list[str] = []
     saturated: list[str] = []
     scan = FrameStackScan(groups, "mono", None, None)
     for done, path in enumerate(files, start=1):
@@ -398,6 +452,9 @@ def scan_stacks(
         if meta.exposure_time_s is None:
             no_exposure.append(path.name)
             continue
+        if not meta.exposure_time_s > 0:  # EXIF ExposureTime 0: the camera did not record it
+            zero_exposure.append(path.name)
+            continue
         if (
             kind == "dark"
             and frame.white_level_dn
@@ -409,16 +466,16 @@ def scan_stacks(
             continue
         scan.cfa, scan.white_level_dn = frame.cfa, frame.white_level_dn
         scan.black_level_dn = frame.black_level_dn
-        if frame.optical_black_dn is not None:
-            scan.optical_black_dn.append(frame.optical_black_dn)
+        if frame.optical_black is not None:
+            scan.optical_black.merge(frame.optical_black)
         group = _stack_for(groups, directory, path, meta, lambda shape=frame.raw_dn.shape: accumulator(shape))
         group.stats.add(frame.raw_dn)
         group.files.append(path.name)
-    _check_scan(directory, kind, scan, shapes, cfas, no_exposure, saturated, metadata_file)
+    _check_scan(directory, kind, scan, shapes, cfas, no_exposure, zero_exposure, saturated, metadata_file)
     return scan
 
 
-def _check_scan(directory, kind, scan, shapes, cfas, no_exposure, saturated, metadata_file) -> None:
+def _check_scan(directory, kind, scan, shapes, cfas, no_exposure, zero_exposure, saturated, metadata_file) -> None:
     if not shapes:
         reasons = listing([f"{name} {reason}" for name, reason in scan.skipped])
         raise ConfigError(f"{directory}: no readable frames: {reasons}")
@@ -441,6 +498,12 @@ def _check_scan(directory, kind, scan, shapes, cfas, no_exposure, saturated, met
         raise ConfigError(
             f"{directory}: no exposure time for {listing(no_exposure)} (not in the file's EXIF, {where}); add "
             f"{METADATA_FILE} to the folder with the columns file,exposure_time_s,temperature_c"
+        )
+    if zero_exposure:
+        raise ConfigError(
+            f"{directory}: {listing(zero_exposure)} state an exposure time of 0 s in their EXIF, which is no "
+            f"real exposure (the camera did not record it); add {METADATA_FILE} to the folder with the columns "
+            "file,exposure_time_s,temperature_c"
         )
     few = {label: group.files for label, group in scan.groups.items() if len(group.files) < 2}
     if few:
