@@ -472,3 +472,19 @@ def test_the_written_profile_reprojects_the_views_as_the_fit_did(charuco_folder,
             assert written_rms_px(fit, kept, tmp_path, fragment) > 1.01 * fit.rms_px
         except pydantic.ValidationError as exc:
             assert "folds over inside the image" in str(exc)
+
+
+def test_a_rendered_output_with_one_camera_per_view_is_read_as_it_is(charuco_folder, charuco_fit, tmp_path):
+    # what `camgen render scenes/checkerboard.yaml -o OUT` writes: OUT/JOB/CAMERA/frames/000000.png
+    views = sorted(charuco_folder.glob("*.png"))
+    for i, view in enumerate(views):
+        frames = tmp_path / "out" / "checkerboard-0123abcd" / f"pose_{i:02d}" / "frames"
+        frames.mkdir(parents=True)
+        shutil.copy(view, frames / "000000.png")
+    (tmp_path / "out" / "checkerboard-0123abcd" / "manifest.json").write_text("{}")
+    for root in (tmp_path / "out", tmp_path / "out" / "checkerboard-0123abcd"):
+        images, fit = fit_folder(root, CHARUCO_SPEC)
+        names = [d.name for d in images.detections]
+        assert len(names) == len(views) and len(set(names)) == len(names)
+        assert names[0].endswith("pose_00/frames/000000.png")
+        np.testing.assert_allclose(fit.K_px, charuco_fit.K_px, rtol=1e-9)

@@ -585,14 +585,28 @@ def truncation(data: bytes) -> str | None:
     return None
 
 
+RENDERED_FRAME_PATTERNS = ("*/frames/*", "*/*/frames/*")
+"""Where a camgen render keeps each camera's frames, below a job directory (CAMERA/frames/) or below
+the -o directory of a render (JOB/CAMERA/frames/): `image_files` looks there when a folder holds no
+images itself, so `fit lens` takes the checkerboard scene's output (one camera per view) as it is."""
+
+
 def image_files(directory: Path) -> list[Path]:
-    """Board images in `directory` (any image or raw file), sorted."""
+    """Board images in `directory` (any image or raw file), sorted; where it holds none, the frames of
+    every camera of a camgen render below it (`RENDERED_FRAME_PATTERNS`)."""
     if not directory.is_dir():
         state = "is not a folder" if directory.exists() else "does not exist"
         raise ConfigError(f"{directory} {state}; give the folder that holds the board images")
-    files = [p for p in sorted(directory.iterdir()) if p.suffix.lower() in IMAGE_SUFFIXES | RAW_SUFFIXES]
+    suffixes = IMAGE_SUFFIXES | RAW_SUFFIXES
+    files = [p for p in sorted(directory.iterdir()) if p.suffix.lower() in suffixes]
+    for pattern in RENDERED_FRAME_PATTERNS:
+        if not files:
+            files = [p for p in sorted(directory.glob(pattern)) if p.suffix.lower() in suffixes and p.is_file()]
     if not files:
-        raise ConfigError(f"{directory} holds no images (.png, .jpg, .tif, raw files)")
+        raise ConfigError(
+            f"{directory} holds no images (.png, .jpg, .tif, raw files), nor a camgen render's CAMERA/frames/ "
+            "folders"
+        )
     return files
 
 

@@ -439,7 +439,8 @@ def detect_in_folder(
     directory: Path, board: BoardSpec, *, on_image: Callable[[Path], None] | None = None
 ) -> BoardImages:
     """Find the board in every image of `directory` (`camgen.fit.frames.image_files`: images and raw
-    files, sorted by name, read by `camgen.fit.frames.read_gray8`).
+    files, sorted by name, or a camgen render's frames of every camera; read by
+    `camgen.fit.frames.read_gray8`). Each detection is named by its path below `directory`.
 
     `on_image` is called with each path before it is read (for progress). A file that cannot be read
     is reported in `BoardImages.unusable` with the reason, like an image without a board.
@@ -455,17 +456,18 @@ def detect_in_folder(
     for path in image_files(directory):
         if on_image is not None:
             on_image(path)
+        name = path.relative_to(directory).as_posix()  # a render's frames share names: keep the camera
         try:
             gray8 = read_gray8(path)
         except FrameReadError as error:
-            unusable.append((path.name, str(error)))
+            unusable.append((name, str(error)))
             continue
-        sizes.setdefault((gray8.shape[1], gray8.shape[0]), []).append(path.name)
+        sizes.setdefault((gray8.shape[1], gray8.shape[0]), []).append(name)
         found = detect_board(gray8, board)
         if found is None:
-            unusable.append((path.name, BOARD_NOT_FOUND))
+            unusable.append((name, BOARD_NOT_FOUND))
         else:
-            detections.append(Detection(path.name, *found))
+            detections.append(Detection(name, *found))
     if not sizes:
         reasons = listing([f"{name} {reason}" for name, reason in unusable])
         raise ConfigError(f"{directory}: none of its images could be read ({reasons})")
