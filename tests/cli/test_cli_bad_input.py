@@ -169,7 +169,8 @@ def test_a_flat_reference_has_no_noise_to_fit(tmp_path, capsys):
     argv = ["fit", "match", "--reference", str(tmp_path / "flat.png"), "--profile", str(tmp_path / "base.yaml")]
     code, _, err = run([*argv, "-o", str(tmp_path / "m.yaml")], capsys)
     assert code == 2
-    assert "the reference shows no noise: its first frame is one flat level (128 in every pixel)" in err
+    assert f"--reference {tmp_path / 'flat.png'}: the reference shows no noise" in err
+    assert "its first frame is one flat level (128 in every pixel)" in err
     assert "give the camera's own output with its noise" in err
     assert not (tmp_path / "m.yaml").exists()
 

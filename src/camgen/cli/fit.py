@@ -422,17 +422,21 @@ def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
             yield frame
 
     with err.status("reading the reference and fitting", spinner="dots") if err.is_terminal else nullcontext():
-        fit = fit_match(
-            frames(),
-            base,
-            seed=args.seed,
-            method=args.method,
-            bins=args.bins,
-            gain_db=args.gain_db,
-            fit_denoise=args.fit_denoise,
-            codec=codec,
-            codec_fps=codec_fps,
-        )
+        try:
+            fit = fit_match(
+                frames(),
+                base,
+                seed=args.seed,
+                method=args.method,
+                bins=args.bins,
+                gain_db=args.gain_db,
+                fit_denoise=args.fit_denoise,
+                codec=codec,
+                codec_fps=codec_fps,
+            )
+        except ConfigError as exc:  # fit_match sees arrays only: say which reference it was
+            where = " ".join(str(path) for path in args.reference)
+            raise ConfigError([f"--reference {where}: {problem}" for problem in exc.problems]) from None
     _warn(err, list(fit.warnings))
     rows = [(key, value, fit.uncertainties.get(key, math.nan), "") for key, value in fit.parameters.items()]
     worst = fit.worst_relative_error
