@@ -19,7 +19,7 @@ from rich.table import Table
 
 from camgen.cli.common import check_output_file
 from camgen.config.profile import Profile
-from camgen.errors import ConfigError
+from camgen.errors import ConfigError, Problem
 
 CFA_CHOICES = ("RGGB", "BGGR", "GRBG", "GBRG", "mono")
 
@@ -436,7 +436,7 @@ def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
             )
         except ConfigError as exc:  # fit_match sees arrays only: say which reference it was
             where = " ".join(str(path) for path in args.reference)
-            raise ConfigError([f"--reference {where}: {problem}" for problem in exc.problems]) from None
+            raise ConfigError([Problem((), f"--reference {where}: {problem}") for problem in exc.problems]) from None
     _warn(err, list(fit.warnings))
     rows = [(key, value, fit.uncertainties.get(key, math.nan), "") for key, value in fit.parameters.items()]
     worst = fit.worst_relative_error
