@@ -1,6 +1,8 @@
-"""A batch killed mid-run and resumed ends byte for byte as an uninterrupted run, with no duplicate or
-partial outputs: Ctrl-C (SIGINT to the whole process group, as a terminal sends it) and SIGKILL of one
-worker process. The interrupted batch runs as its own process (`python -m camgen.cli.main batch …`)."""
+"""A batch stopped mid-run and resumed ends byte for byte as an uninterrupted run, with no duplicate or
+partial outputs. A stop signal (SIGINT to the whole process group, as a terminal's Ctrl-C sends it; SIGINT or
+SIGTERM to the batch process alone, as a service manager's stop does) ends the batch within seconds, its
+workers with it, leaking nothing; SIGKILL of one worker process fails the jobs the broken pool lost. The
+interrupted batch runs as its own process (`python -m camgen.cli.main batch …`)."""
 
 from __future__ import annotations
 
@@ -9,6 +11,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -20,14 +23,17 @@ from tests.batch.test_run import job_files, statuses
 pytestmark = pytest.mark.opengl
 
 DATASET = """\
-description: eight jobs of ten frames, long enough to be interrupted
+description: four jobs of ten frames, long enough to be interrupted
 scenes: [scenes/walk.yaml]
 profiles: [small, wide]
-seeds: {start: 0, count: 4}
+seeds: {start: 0, count: 2}
 combine: product
 """
 WORKERS = ["--workers", "2"]
 TIMEOUT_S = 120
+STOP_BOUND_S = 10.0
+"""A stopped batch, its workers included, must have exited within this. A correctness bound, not a benchmark:
+it takes about 1 s; before the workers were stopped, the batch waited for the renders they had started."""
 
 
 @pytest.fixture(scope="module")
@@ -66,9 +72,9 @@ def finished_jobs(out: Path) -> int:
     return len(list(out.glob("*/manifest.json"))) if out.is_dir() else 0
 
 
-def workers_of(pid: int) -> list[int]:
-    """The pool's worker processes among `pid`'s children (not multiprocessing's resource tracker)."""
-    children = []
+def children_of(pid: int) -> dict[int, bytes]:
+    """`pid`'s child processes and their command lines (the pool's workers, multiprocessing's resource tracker)."""
+    children = {}
     for entry in Path("/proc").iterdir():
         if not entry.name.isdigit():
             continue
@@ -77,9 +83,31 @@ def workers_of(pid: int) -> list[int]:
             cmdline = (entry / "cmdline").read_bytes().replace(b"\0", b" ")
         except (OSError, IndexError, ValueError):
             continue
-        if ppid == pid and b"spawn_main" in cmdline:
-            children.append(int(entry.name))
+        if ppid == pid:
+            children[int(entry.name)] = cmdline
     return children
+
+
+def workers_of(pid: int) -> list[int]:
+    """The pool's worker processes among `pid`'s children (not multiprocessing's resource tracker)."""
+    return [child for child, cmdline in children_of(pid).items() if b"spawn_main" in cmdline]
+
+
+def is_running(pid: int) -> bool:
+    """Whether process `pid` exists and is not a zombie (one that has exited, not yet reaped)."""
+    try:
+        return (Path("/proc") / str(pid) / "stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except (OSError, IndexError):
+        return False
+
+
+def assert_unfinished_jobs_hold_no_files(out: Path) -> None:
+    """A job directory without a manifest holds no file at all: the job's files are written at its end, and a
+    worker stopped mid-job deletes the temporary ones it was writing (``.partial``)."""
+    for job_dir in (path for path in out.iterdir() if path.is_dir()):
+        if not (job_dir / "manifest.json").exists():
+            files = [path.relative_to(out).as_posix() for path in job_dir.rglob("*") if path.is_file()]
+            assert not files, f"an unfinished job left files: {files}"
 
 
 def resume_and_compare(dataset: Path, out: Path, uninterrupted: dict[str, bytes]) -> None:
@@ -91,18 +119,62 @@ def resume_and_compare(dataset: Path, out: Path, uninterrupted: dict[str, bytes]
     assert main(["verify", str(out)]) == 0
 
 
-def test_ctrl_c_then_resume_gives_the_uninterrupted_dataset(tmp_path, uninterrupted):
+def rendering(out: Path) -> bool:
+    """Whether a job is being written: a worker has a temporary (``.partial``) file open."""
+    return out.is_dir() and any(out.rglob("*.partial*"))
+
+
+def stop_batch(tmp_path: Path, signum: int, *, to_group: bool, after: Callable[[Path], bool], what: str) -> Path:
+    """Start the batch, send `signum` to its process group or to it alone once `after(out)` (`what`), and check
+    that it ended within STOP_BOUND_S, workers and all, with the exit code of that signal, leaking nothing and
+    leaving no unfinished job's files; returns the dataset's path."""
     dataset = make_dataset(tmp_path, DATASET)
     out = tmp_path / "out"
     process = start_batch(dataset, out)
-    wait_for(lambda: finished_jobs(out) >= 1, "a first finished job")
-    os.killpg(process.pid, signal.SIGINT)
-    _, stderr = process.communicate(timeout=TIMEOUT_S)
-    assert process.returncode == 130, stderr.decode()
+    wait_for(lambda: after(out) and len(workers_of(process.pid)) == 2, f"{what} and two workers")
+    children = children_of(process.pid)
+    signalled = time.monotonic()
+    (os.killpg if to_group else os.kill)(process.pid, signum)
+    try:
+        # communicate returns at the end of the pipes, which every child inherited: all of them have exited.
+        _, stderr = process.communicate(timeout=STOP_BOUND_S)
+    except subprocess.TimeoutExpired:
+        os.killpg(process.pid, signal.SIGKILL)
+        for child in children:
+            if is_running(child):
+                os.kill(child, signal.SIGKILL)
+        process.communicate()
+        name = signal.Signals(signum).name
+        raise AssertionError(f"the batch was still running {STOP_BOUND_S:g} s after {name}") from None
+    assert time.monotonic() - signalled < STOP_BOUND_S
+    assert process.returncode == 128 + signum, stderr.decode()
+    wait_for(lambda: not any(is_running(child) for child in children), "the batch's child processes to end")
     assert b"Traceback" not in stderr
-    assert finished_jobs(out) < 8, "the batch finished before it was interrupted; make the jobs longer"
+    assert b"leaked" not in stderr, stderr.decode()  # multiprocessing's resource tracker on lost semaphores
+    assert finished_jobs(out) < 4, "the batch finished before it was interrupted; make the jobs longer"
     assert "interrupted" in statuses(out).values()
+    assert_unfinished_jobs_hold_no_files(out)
+    return dataset
+
+
+@pytest.mark.parametrize(
+    ("signum", "to_group"),
+    [(signal.SIGINT, True), (signal.SIGTERM, False)],
+    ids=["ctrl-c-to-the-group", "sigterm-to-the-batch-alone"],
+)
+def test_a_stop_signal_ends_the_batch_in_seconds_and_resume_gives_the_uninterrupted_dataset(
+    tmp_path, uninterrupted, signum, to_group
+):
+    out = tmp_path / "out"
+    dataset = stop_batch(tmp_path, signum, to_group=to_group, after=lambda out: finished_jobs(out) >= 1, what="a job")
     resume_and_compare(dataset, out, uninterrupted)
+    assert "skipped" in statuses(out).values()  # the jobs done before the signal were not rendered again
+
+
+def test_sigint_to_the_batch_alone_mid_render_ends_it_in_seconds(tmp_path):
+    # Resuming after it is the SIGTERM case's: the batch stops the same way after either signal. Here the
+    # signal comes while jobs are being written, whose temporary files the stopped workers then delete.
+    stop_batch(tmp_path, signal.SIGINT, to_group=False, after=rendering, what="a job being written")
 
 
 def test_a_killed_worker_then_resume_gives_the_uninterrupted_dataset(tmp_path, uninterrupted):

@@ -8,10 +8,12 @@ Ray's own task retries are off (``max_retries=0``): `run_batch` retries failed j
 
 from __future__ import annotations
 
+import signal
 import socket
+import threading
 from collections.abc import Collection
 
-from camgen.batch.run import JobResult, _error_text, _render_job
+from camgen.batch.run import STOP_GRACE_S, JobResult, _error_text, _render_job
 from camgen.errors import ConfigError
 
 try:
@@ -22,8 +24,8 @@ except ImportError as exc:
 
 CONNECT_TIMEOUT_S = 5.0
 """How long to try reaching a cluster's address before `ray.init`, which otherwise retries for minutes."""
-CANCEL_SETTLE_S = 30.0
-"""After Ctrl-C, how long to wait for cancelled tasks to stop before giving up on their results."""
+FORCED_SETTLE_S = 5.0
+"""After a stop, how long to wait for force-cancelled tasks (their workers killed) to settle."""
 
 _render_task = ray.remote(num_cpus=1, max_retries=0)(_render_job)
 
@@ -38,6 +40,8 @@ class RayExecutor:
         self._started_ray = not ray.is_initialized()
         if not self._started_ray:
             return
+        # ray.init installs its own SIGTERM handler (it aborts the process); `run_batch`'s stop takes it back.
+        handlers = {signum: signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)}
         try:
             if address is None:
                 ray.init(num_cpus=workers, include_dashboard=False)
@@ -51,6 +55,11 @@ class RayExecutor:
                 f"--address {address}: cannot reach a Ray cluster ({_error_text(exc)}); start one with "
                 "`ray start --head` and pass its address, or leave out --address for a local Ray"
             ) from exc
+        finally:
+            if threading.current_thread() is threading.main_thread():
+                for signum, handler in handlers.items():
+                    if handler is not None:
+                        signal.signal(signum, handler)
 
     def submit(self, job_json: str, out_dir: str, frames: int | None, scene_path: str) -> ray.ObjectRef:
         return _render_task.remote(job_json, out_dir, frames, scene_path)
@@ -74,11 +83,18 @@ class RayExecutor:
             return 0, 0.0, _error_text(exc)
 
     def cancel(self, handles: Collection[ray.ObjectRef]) -> None:
+        # As the pool does: each task is interrupted (KeyboardInterrupt: its job unwinds, deleting its temporary
+        # files); one still running after STOP_GRACE_S has its worker killed.
         refs = list(handles)
         for ref in refs:
             ray.cancel(ref)
-        if refs:
-            ray.wait(refs, num_returns=len(refs), timeout=CANCEL_SETTLE_S)
+        if not refs:
+            return
+        _, unsettled = ray.wait(refs, num_returns=len(refs), timeout=STOP_GRACE_S)
+        for ref in unsettled:
+            ray.cancel(ref, force=True)
+        if unsettled:
+            ray.wait(unsettled, num_returns=len(unsettled), timeout=FORCED_SETTLE_S)
 
     def close(self) -> None:
         if self._started_ray:

@@ -7,12 +7,21 @@ inherits the parent's OpenGL or thread state). A job whose
 directory already holds a manifest that `verify` passes, for the same job hash and the same frames, is
 skipped. Anything else is rendered again: `execute` clears stale files and writes the manifest last,
 so a job that was killed half-way never looks complete.
+
+Stopping: SIGINT (Ctrl-C, to this process or its whole process group) or SIGTERM (a service manager's
+stop) stops the batch within seconds, not after the running renders. The parent alone decides: pool
+workers ignore SIGINT, and the parent sends each worker SIGTERM, on which the worker unwinds its job
+(its temporary ``.partial`` files are deleted, no manifest is written) and exits; one still alive after
+`STOP_GRACE_S` is killed. The interrupted jobs are recorded as such and a rerun renders them again.
 """
 
 from __future__ import annotations
 
 import json
 import multiprocessing
+import os
+import signal
+import threading
 import time
 import traceback
 from collections.abc import Callable, Collection, Hashable, Sequence
@@ -34,6 +43,9 @@ BATCH_MANIFEST_NAME = "dataset.json"
 """The dataset-level record in the output directory. Not manifest.json: `camgen verify OUT` would take a
 directory with a manifest.json in it for a single job directory."""
 README_NAME = "DATASET.md"
+
+STOP_GRACE_S = 5.0
+"""After a stop, how long a worker has to unwind its job (deleting its temporary files) before it is killed."""
 
 Status = Literal["done", "skipped", "failed", "interrupted"]
 JobResult = tuple[int, float, str | None]
@@ -60,9 +72,14 @@ class BatchSummary:
     outcomes: list[JobOutcome]
     """One per job, in the order the jobs were given."""
     wall_s: float
-    interrupted: bool
+    stop_signal: int | None
+    """The signal that stopped the batch (signal.SIGINT or signal.SIGTERM); None when it ran to the end."""
     executor: str = "local"
     """Where the jobs ran: "local" (a process pool) or "ray"."""
+
+    @property
+    def interrupted(self) -> bool:
+        return self.stop_signal is not None
 
     def count(self, status: Status) -> int:
         return sum(outcome.status == status for outcome in self.outcomes)
@@ -122,8 +139,8 @@ class JobExecutor(Protocol):
         ...
 
     def cancel(self, handles: Collection[Hashable]) -> None:
-        """After Ctrl-C: stop `handles` (those not yet started at least) and wait until each has settled, so
-        `result` no longer blocks."""
+        """After a stop: stop `handles`, the running ones included, within about `STOP_GRACE_S`, and wait until
+        each has settled, so `result` no longer blocks."""
         ...
 
     def close(self) -> None: ...
@@ -135,15 +152,23 @@ class PoolExecutor:
     name = "local"
 
     def __init__(self, workers: int) -> None:
-        self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+        self._pool = ProcessPoolExecutor(
+            max_workers=workers, mp_context=multiprocessing.get_context("spawn"), initializer=_init_worker
+        )
 
     def submit(self, job_json: str, out_dir: str, frames: int | None, scene_path: str) -> Future:
+        # The pool starts its workers in submit. A signal mask outlives exec, so with SIGINT blocked here a
+        # worker starts with it blocked, until `_init_worker` ignores it: a Ctrl-C while the worker starts up
+        # does not kill it with a traceback. (Here, the signal waits for the mask to be restored.)
+        unblocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
         try:
             return self._pool.submit(_render_job, job_json, out_dir, frames, scene_path)
         except BrokenProcessPool as exc:  # a worker died hard (out of memory, a crash in the driver)
             failed: Future = Future()
             failed.set_exception(exc)
             return failed
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, unblocked)
 
     def wait(self, handles: Collection[Future]) -> list[Future]:
         return list(wait(handles, return_when=FIRST_COMPLETED).done)
@@ -152,8 +177,23 @@ class PoolExecutor:
         return None if handle.cancelled() else _result(handle)
 
     def cancel(self, handles: Collection[Future]) -> None:
-        # Jobs not yet started are dropped; the running ones finish, and what they wrote counts.
-        self._pool.shutdown(wait=True, cancel_futures=True)
+        # shutdown() would wait for the running renders (minutes each) and for the calls already queued to
+        # the workers, which cancel_futures cannot reach; so the workers are stopped instead. The pool has
+        # no public handle on its processes before Python 3.14 (terminate_workers, without a grace period).
+        workers = list((self._pool._processes or {}).values())
+        self._pool.shutdown(wait=False, cancel_futures=True)
+        for worker in workers:
+            worker.terminate()
+        deadline = time.monotonic() + STOP_GRACE_S
+        for worker in workers:
+            worker.join(max(0.0, deadline - time.monotonic()))
+        for worker in workers:
+            if worker.is_alive():
+                worker.kill()
+                worker.join()
+        # The pool's manager thread has seen its workers end: it fails the running futures and frees the
+        # queues (and their semaphores).
+        self._pool.shutdown(wait=True)
 
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)
@@ -193,99 +233,144 @@ def run_batch(
     cluster at `address` (None: a local Ray with `workers` CPUs); with Ray, `out_dir` and the scenes must be
     on a filesystem every node shares. A job that raises is tried again up
     to `retries` times, then reported as failed with its error; the others go on. on_event(outcome) is
-    called in this process as each job is skipped, done or failed. A KeyboardInterrupt cancels the jobs
-    not yet started, waits for the running ones, and returns what completed (`interrupted` set). The
-    dataset record and DATASET.md are written at the end, atomically, in every case.
+    called in this process as each job is skipped, done or failed. SIGINT or SIGTERM (or a KeyboardInterrupt)
+    stops the batch within about `STOP_GRACE_S`: the running jobs are stopped, their partial files deleted,
+    and what completed is returned (`stop_signal` set). The dataset record and DATASET.md are written at the
+    end, atomically, in every case.
     """
     check_options(workers=workers, retries=retries, executor=executor, address=address)
     out_dir = Path(out_dir)
     started = time.perf_counter()
     outcomes: dict[int, JobOutcome] = {}
     attempts = [0] * len(jobs)
-    pending = []
-    for index, (batch, job) in enumerate(jobs):
-        if isinstance(job, str):
-            outcomes[index] = JobOutcome(batch, "", None, "failed", error=job)
-            if on_event is not None:
-                on_event(outcomes[index])
-            continue
-        job_dir = out_dir / job_directory_name(job)
-        if is_complete(job, job_dir, frames):
-            outcomes[index] = JobOutcome(batch, job.job_id, job_dir, "skipped", frames=frames_of(job, frames))
-            if on_event is not None:
-                on_event(outcomes[index])
-        else:
-            pending.append(index)
-    interrupted = False
-    if pending:
-        if executor == "ray":
-            from camgen.batch.ray_executor import RayExecutor
+    runner: JobExecutor | None = None
+    running: dict[Hashable, int] = {}
+    stop_signal: int | None = None
 
-            runner: JobExecutor = RayExecutor(workers=workers, address=address)
-        else:
-            runner = PoolExecutor(min(workers, len(pending)))
-        running: dict[Hashable, int] = {}
+    def record(index: int, frames_done: int, seconds: float, error: str | None) -> None:
+        batch, job = jobs[index]
+        status: Status = "failed" if error is not None else "done"
+        directory = out_dir / job_directory_name(job)
+        outcomes[index] = JobOutcome(batch, job.job_id, directory, status, frames_done, seconds, attempts[index], error)
+        if on_event is not None:
+            on_event(outcomes[index])
 
-        def record(index: int, frames_done: int, seconds: float, error: str | None) -> None:
-            batch, job = jobs[index]
-            status: Status = "failed" if error is not None else "done"
-            directory = out_dir / job_directory_name(job)
-            outcomes[index] = JobOutcome(
-                batch, job.job_id, directory, status, frames_done, seconds, attempts[index], error
-            )
-            if on_event is not None:
-                on_event(outcomes[index])
+    def submit(index: int) -> None:
+        batch, job = jobs[index]
+        attempts[index] += 1
+        # Absolute paths: a Ray worker's working directory is not ours.
+        handle = runner.submit(job.to_json(), str(out_dir.resolve()), frames, str(batch.scene_path.resolve()))
+        running[handle] = index
 
-        def submit(index: int) -> None:
-            batch, job = jobs[index]
-            attempts[index] += 1
-            # Absolute paths: a Ray worker's working directory is not ours.
-            handle = runner.submit(job.to_json(), str(out_dir.resolve()), frames, str(batch.scene_path.resolve()))
-            running[handle] = index
-
+    with _StopSignals() as signals:
         try:
-            for index in pending:
-                submit(index)
-            while running:
-                for handle in runner.wait(running):
-                    index = running.pop(handle)
-                    result = runner.result(handle)
-                    if result is None:  # the worker was interrupted
-                        raise KeyboardInterrupt
-                    if result[2] is not None and attempts[index] <= retries:
-                        submit(index)
-                    else:
-                        record(index, *result)
+            pending = []
+            for index, (batch, job) in enumerate(jobs):
+                if isinstance(job, str):
+                    outcomes[index] = JobOutcome(batch, "", None, "failed", error=job)
+                    if on_event is not None:
+                        on_event(outcomes[index])
+                    continue
+                job_dir = out_dir / job_directory_name(job)
+                if is_complete(job, job_dir, frames):
+                    outcomes[index] = JobOutcome(batch, job.job_id, job_dir, "skipped", frames=frames_of(job, frames))
+                    if on_event is not None:
+                        on_event(outcomes[index])
+                else:
+                    pending.append(index)
+            if pending:
+                if executor == "ray":
+                    from camgen.batch.ray_executor import RayExecutor
+
+                    runner = RayExecutor(workers=workers, address=address)
+                else:
+                    runner = PoolExecutor(min(workers, len(pending)))
+                for index in pending:
+                    submit(index)
+                while running:
+                    for handle in runner.wait(running):
+                        index = running.pop(handle)
+                        result = runner.result(handle)
+                        if result is None:  # a Ray task stopped by a Ctrl-C that reached its worker
+                            raise KeyboardInterrupt
+                        if result[2] is not None and attempts[index] <= retries:
+                            submit(index)
+                        else:
+                            record(index, *result)
+            signals.disarm()  # the jobs are over: a signal now no longer cuts the shutdown or the record short
         except KeyboardInterrupt:
-            interrupted = True
-            runner.cancel(running)
-            # Jobs that were running may still have finished; what they wrote counts.
-            for handle, index in running.items():
-                result = runner.result(handle)
-                if result is not None and result[2] is None:
-                    record(index, *result)
+            stop_signal = signals.signum or signal.SIGINT
+            if runner is not None:
+                runner.cancel(running)
+                # Jobs that were running may have finished before they were stopped; what they wrote counts.
+                for handle, index in running.items():
+                    result = runner.result(handle)
+                    if result is not None and result[2] is None:
+                        record(index, *result)
         finally:
-            runner.close()
+            if runner is not None:
+                runner.close()
     summary = BatchSummary(
         [
             outcomes.get(index)
-            or JobOutcome(batch, job.job_id, out_dir / job_directory_name(job), "interrupted", attempts=attempts[index])
+            or (
+                JobOutcome(batch, "", None, "failed", error=job)  # stopped before the scan reached it
+                if isinstance(job, str)
+                else JobOutcome(
+                    batch, job.job_id, out_dir / job_directory_name(job), "interrupted", attempts=attempts[index]
+                )
+            )
             for index, (batch, job) in enumerate(jobs)
         ],
         time.perf_counter() - started,
-        interrupted,
+        stop_signal,
         executor,
     )
     write_batch_record(summary, out_dir, frames, description)
     return summary
 
 
-def _result(future: Future) -> JobResult | None:
-    """(frames, seconds, error) of a finished task, or None if the worker was interrupted (Ctrl-C reaches
-    the whole process group); a worker that died otherwise counts as the job's error."""
+class _StopSignals:
+    """While the batch runs (inside ``with``), the first SIGINT or SIGTERM raises KeyboardInterrupt in the main
+    thread and is kept in `signum`; later ones, and any after `disarm`, are ignored, so that stopping (workers
+    stopped, record written) is not cut short. A signal this process ignores (SIGINT in a job started with
+    ``&``) stays ignored; outside the main thread, where Python cannot set handlers, nothing changes.
+
+    The signal is kept here, not in the exception, because a blocking call in a library may turn the
+    exception into a KeyboardInterrupt of its own (Ray's ``ray.wait`` does)."""
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self._armed = True
+        self._previous: dict[int, Callable | int | None] = {}
+
+    def disarm(self) -> None:
+        self._armed = False
+
+    def _stop(self, signum: int, frame) -> None:
+        if self._armed:
+            self._armed = False
+            self.signum = signum
+            raise KeyboardInterrupt
+
+    def __enter__(self) -> _StopSignals:
+        if threading.current_thread() is threading.main_thread():
+            self._previous = {signum: signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)}
+            for signum, handler in self._previous.items():
+                if handler is not signal.SIG_IGN:
+                    signal.signal(signum, self._stop)
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        for signum, handler in self._previous.items():
+            if handler is not None:  # None: a handler set outside Python, which cannot be put back
+                signal.signal(signum, handler)
+
+
+def _result(future: Future) -> JobResult:
+    """(frames, seconds, error) of a finished task; a worker that died (the pool is then broken, after a stop
+    too) counts as the job's error. Workers ignore SIGINT, so no job ends in a KeyboardInterrupt."""
     exc = future.exception()
-    if isinstance(exc, KeyboardInterrupt):
-        return None
     if exc is not None:  # a broken pool or an unpicklable result: the job failed, the batch goes on
         return 0, 0.0, _error_text(exc)
     return future.result()
@@ -299,10 +384,44 @@ def _error_text(exc: BaseException) -> str:
 
 _worker_renderer = None
 """The worker process's one Renderer, opened on its first job and kept until the process ends."""
+_in_job = False
+"""Whether this worker process is rendering a job now."""
+
+
+class _WorkerStop(BaseException):
+    """Raised in a pool worker by SIGTERM while it renders a job: unwinding the job deletes its temporary files.
+    Not an Exception, so that `_render` does not report it as the job's error."""
+
+
+def _init_worker() -> None:
+    """A pool worker's signals: SIGINT is the parent's to act on (Ctrl-C reaches the whole process group, and
+    the parent then stops the workers); SIGTERM stops the worker. SIGINT was blocked until now (see
+    `PoolExecutor.submit`); a SIGTERM before now ended the worker at once, before it had written anything."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _stop_worker)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+def _stop_worker(signum: int, frame) -> None:
+    if _in_job:
+        raise _WorkerStop
+    os._exit(128 + signum)
 
 
 def _render_job(job_json: str, out_dir: str, frames: int | None, scene_path: str) -> JobResult:
-    """Runs in a worker: render one job; returns (frames, seconds, error text or None)."""
+    """Runs in a worker: render one job; returns (frames, seconds, error text or None). A pool worker stopped
+    by SIGTERM exits from here, once the job has unwound (the pool's loop would go on to the next job)."""
+    global _in_job
+    try:
+        _in_job = True
+        return _render(job_json, out_dir, frames, scene_path)
+    except _WorkerStop:
+        os._exit(128 + signal.SIGTERM)
+    finally:
+        _in_job = False
+
+
+def _render(job_json: str, out_dir: str, frames: int | None, scene_path: str) -> JobResult:
     global _worker_renderer
     from camgen.plan.execute import execute
     from camgen.render.renderer import Renderer

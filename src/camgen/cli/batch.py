@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 from pathlib import Path
 
 from rich.console import Console
@@ -130,7 +131,10 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         f"{fps:.2f}",
     )
     out.print(table)
-    if summary.interrupted:
-        err.print(f"interrupted: {summary.count('interrupted')} jobs not rendered; run again to resume")
-        return 130
+    if summary.stop_signal is not None:
+        err.print(
+            f"interrupted ({signal.Signals(summary.stop_signal).name}): {summary.count('interrupted')} jobs not "
+            "rendered; run again to resume"
+        )
+        return 128 + summary.stop_signal  # the shell's code for a command a signal ended: 130, 143
     return 0 if summary.ok else 1
