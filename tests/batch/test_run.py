@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -65,7 +66,7 @@ def test_two_workers_write_the_same_bytes_as_one(reference, tmp_path):
     assert job_files(tmp_path / "out") == job_files(reference / "out")
 
 
-def test_a_complete_run_is_skipped_and_a_broken_job_redone(reference, tmp_path):
+def test_a_complete_run_is_skipped_and_a_broken_job_redone(reference, tmp_path, capsys):
     workspace = copy_of(reference, tmp_path)
     out, dataset = workspace / "out", workspace / "tiny.yaml"
     assert main(["batch", str(dataset), "-o", str(out), "--workers", "2", *FRAMES]) == 0
@@ -82,6 +83,10 @@ def test_a_complete_run_is_skipped_and_a_broken_job_redone(reference, tmp_path):
         "walk-wide-seed4": "skipped",
     }
     assert job_files(out) == job_files(reference / "out")
+    # Into a log (capsys's stderr is not a terminal), progress comes as lines; a frame rate once jobs are done.
+    last = capsys.readouterr().err.splitlines()[-1]
+    assert re.fullmatch(r"batch: 4/4 jobs \(100 %\), \d+\.\d frames/s, elapsed \d:\d\d:\d\d, ETA 0:00:00", last), last
+    assert not last.startswith("batch: 4/4 jobs (100 %), 0.0 frames/s")
 
 
 def test_other_frames_are_not_taken_for_a_complete_job(reference):

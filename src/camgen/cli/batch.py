@@ -5,7 +5,10 @@ from __future__ import annotations
 import argparse
 import os
 import signal
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rich.console import Console
 from rich.markup import escape
@@ -13,7 +16,11 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from camgen.cli.common import check_output_directory
+from camgen.cli.progress import ProgressLines
 from camgen.errors import ConfigError
+
+if TYPE_CHECKING:
+    from camgen.batch.run import JobOutcome
 
 
 def add_parser(subparsers) -> None:
@@ -84,24 +91,12 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             err.print(f"{broken} of {len(jobs)} jobs do not compile; fix them before rendering", markup=False)
             return 1
         return 0
-    columns = (
-        TextColumn("jobs"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TextColumn("{task.fields[fps]:.1f} frames/s"),
-        TimeRemainingColumn(),
-    )
-    with Progress(*columns, console=err) as progress:
-        task = progress.add_task("jobs", total=len(jobs), fps=0.0)
-        frames_done = 0
+    with _job_progress(err, len(jobs)) as count:
 
-        def on_event(outcome) -> None:
-            nonlocal frames_done
-            frames_done += outcome.frames if outcome.status == "done" else 0
-            elapsed_s = progress.tasks[task].elapsed or 0.0
-            progress.update(task, advance=1, fps=frames_done / elapsed_s if elapsed_s > 0 else 0.0)
+        def on_event(outcome: JobOutcome) -> None:
+            count(outcome)
             if outcome.status == "failed":
-                progress.console.print(
+                err.print(
                     f"[red]failed[/red] {escape(outcome.batch.name)} after {outcome.attempts} tries: "
                     f"{escape(outcome.error or '')}",
                     soft_wrap=True,
@@ -138,3 +133,33 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         )
         return 128 + summary.stop_signal  # the shell's code for a command a signal ended: 130, 143
     return 0 if summary.ok else 1
+
+
+@contextmanager
+def _job_progress(err: Console, total: int) -> Iterator[Callable[[JobOutcome], None]]:
+    """Counts each job's outcome: rich's bar on a terminal, periodic lines (`ProgressLines`) in a log. Skipped
+    jobs and jobs that did not compile took no time, so they are left out of the ETA's rate."""
+    if not err.is_terminal:
+        with ProgressLines(err, "batch", total, "jobs") as lines:
+            yield lambda outcome: lines.advance(
+                frames=outcome.frames if outcome.status == "done" else 0, timed=outcome.attempts > 0
+            )
+        return
+    columns = (
+        TextColumn("jobs"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[fps]:.1f} frames/s"),
+        TimeRemainingColumn(),
+    )
+    with Progress(*columns, console=err) as progress:
+        task = progress.add_task("jobs", total=total, fps=0.0)
+        frames_done = 0
+
+        def count(outcome: JobOutcome) -> None:
+            nonlocal frames_done
+            frames_done += outcome.frames if outcome.status == "done" else 0
+            elapsed_s = progress.tasks[task].elapsed or 0.0
+            progress.update(task, advance=1, fps=frames_done / elapsed_s if elapsed_s > 0 else 0.0)
+
+        yield count

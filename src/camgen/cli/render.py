@@ -4,6 +4,8 @@ codec), with per-frame camera states."""
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from rich.console import Console
@@ -11,6 +13,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
 from camgen.cli.common import add_profile_dirs_option, check_output_directory, profile_dirs
+from camgen.cli.progress import ProgressLines
 from camgen.config import load_scene
 from camgen.errors import ConfigError
 from camgen.plan import PlanSettings, compile_scene
@@ -75,11 +78,8 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     resolve = loaded.path.parent.joinpath
     with (
         Renderer() as renderer,
-        Progress(
-            TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(), console=err
-        ) as progress,
+        _frame_progress(err, f"render {job.scene_name}", [c.name for c in chosen], count) as on_frame,
     ):
-        tasks = {c.name: progress.add_task(escape(c.name), total=count) for c in chosen}
         results = execute(
             job,
             args.out,
@@ -88,7 +88,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             cameras=args.camera,
             resolve_path=resolve,
             save_passes=args.save_passes,
-            on_frame=lambda name, _: progress.advance(tasks[name]),
+            on_frame=on_frame,
         )
     out.print(f"{escape(job.scene_name)}: job {job.job_id[:16]} on {escape(renderer.gl_renderer)}", highlight=False)
     for result in results:
@@ -107,3 +107,17 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             out.print(f"    … and {len(result.files) - 3} more files", highlight=False)
     out.print(f"job directory: {escape(str(Path(args.out) / job_directory_name(job)))}", highlight=False)
     return 0
+
+
+@contextmanager
+def _frame_progress(err: Console, label: str, cameras: list[str], count: int) -> Iterator[Callable[[str, int], None]]:
+    """`execute`'s on_frame for `count` frames of each of `cameras`: a bar per camera on a terminal, periodic
+    lines (`ProgressLines`) in a log."""
+    if not err.is_terminal:
+        with ProgressLines(err, label, count * len(cameras), "frames") as lines:
+            yield lambda name, index: lines.advance()
+        return
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
+    with Progress(*columns, console=err) as progress:
+        tasks = {name: progress.add_task(escape(name), total=count) for name in cameras}
+        yield lambda name, index: progress.advance(tasks[name])
