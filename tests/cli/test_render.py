@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import av
 import numpy as np
@@ -44,7 +45,11 @@ def test_render_writes_video_passes_and_job(workspace, capsys):
     assert (job_dir / "cam" / "gt" / "gt.txt").exists() and (job_dir / "cam" / "coco.json").exists()
     # Where the time went, per stage, as shares of the camera's total.
     time_line = next(line for line in captured.out.splitlines() if line.strip().startswith("time:"))
-    assert "render" in time_line and "sensor" in time_line and "%" in time_line
+    # (which stages pass the 1 % cut depends on the machine's load: only the shape and the sum are fixed)
+    shares = dict(
+        re.fullmatch(r"([\w.]+) (\d+) %", part).groups() for part in time_line.split(":", 1)[1].strip().split(", ")
+    )
+    assert "render" in shares and abs(sum(map(int, shares.values())) - 100) <= len(shares)
 
 
 def test_render_rejects_an_unknown_camera(workspace, capsys):
