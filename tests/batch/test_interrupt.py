@@ -188,3 +188,21 @@ def test_a_killed_worker_then_resume_gives_the_uninterrupted_dataset(tmp_path, u
     assert b"Traceback" not in stderr
     assert "failed" in statuses(out).values()
     resume_and_compare(dataset, out, uninterrupted)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the parent-death signal is Linux's prctl")
+def test_workers_of_a_batch_killed_outright_stop_with_it(tmp_path):
+    # SIGKILL runs no handler in the batch: the kernel's parent-death signal (SIGTERM) stops its workers, which
+    # delete the temporary files of the jobs they were writing, instead of rendering on as orphans.
+    dataset = make_dataset(tmp_path, DATASET)
+    out = tmp_path / "out"
+    process = start_batch(dataset, out)
+    wait_for(lambda: rendering(out) and len(workers_of(process.pid)) == 2, "a job being written and two workers")
+    workers = workers_of(process.pid)
+    os.kill(process.pid, signal.SIGKILL)
+    process.communicate(timeout=STOP_BOUND_S)  # the pipes close when every child has exited too
+    deadline = time.monotonic() + STOP_BOUND_S
+    while any(is_running(worker) for worker in workers) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not any(is_running(worker) for worker in workers), "a worker went on rendering as an orphan"
+    assert_unfinished_jobs_hold_no_files(out)
