@@ -50,3 +50,10 @@ def test_batch_plan_of_a_mistyped_scene_exits_non_zero(tmp_path: Path, capsys):
     dataset = make_dataset(tmp_path, TWO_SCENES.replace("scenes/broken.yaml", "scenes/wlak.yaml"))
     assert main(["batch", str(dataset), "-o", str(tmp_path / "out"), "--plan"]) != 0
     assert "wlak.yaml" in capsys.readouterr().err
+
+
+def test_batch_frames_beyond_the_jobs_is_a_warning(tmp_path: Path, capsys):
+    dataset = make_dataset(tmp_path)
+    assert main(["batch", str(dataset), "-o", str(tmp_path / "out"), "--plan", "--frames", "1000000"]) == 0
+    err = capsys.readouterr().err
+    assert "warning --frames 1000000: 4 of 4 jobs have fewer frames" in err and "walk-small-seed3 10" in err

@@ -69,6 +69,15 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             jobs.append((batch, compile_batch_job(batch)))
         except ConfigError as exc:  # this job fails (reported, no render); the others go on
             jobs.append((batch, "; ".join(str(problem) for problem in exc.problems)))
+    shorter = [(batch.name, job.frame_count) for batch, job in jobs if not isinstance(job, str)]
+    shorter = [(name, count) for name, count in shorter if args.frames is not None and count < args.frames]
+    if shorter:
+        counts = ", ".join(f"{name} {count}" for name, count in shorter[:4]) + (" …" if len(shorter) > 4 else "")
+        err.print(
+            f"[yellow]warning[/yellow] --frames {args.frames}: {len(shorter)} of {len(jobs)} jobs have fewer frames "
+            f"(duration_s × fps: {escape(counts)}); those render all of theirs",
+            soft_wrap=True,
+        )
     if args.plan:
         table = Table(title=f"{escape(str(args.dataset))}: {len(jobs)} jobs")
         randomized = any(batch.randomized for batch, _ in jobs)
