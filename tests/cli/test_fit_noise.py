@@ -4,6 +4,9 @@ time and temperature) or as 16-bit linear TIFF (with a frames.csv side file), fi
 The acceptance criterion: read noise, DSNU, PRNU, system gain K, dark current and its doubling within
 3 % of the profile the frames were simulated from, hot-pixel density within 10 %, and the fitted
 profile loads (it `extends:` the base profile). Bad input gives one clear error naming the files.
+The flats' light, given as an irradiance and a wavelength (flags) or as photons per pixel (a
+frames.csv column), gives the quantum efficiency; the output says where DSNU and PRNU come from and
+whether illumination shading was corrected.
 """
 
 from __future__ import annotations
@@ -16,9 +19,11 @@ import pytest
 import tifffile
 import yaml
 
+from camgen.cli.fit import SHADING_CHOICES
 from camgen.cli.main import main
 from camgen.config import load_profile
 from camgen.config.profile import Noise, Sensor
+from camgen.fit.noise import PLANCK_J_S, SHADING_CORRECTIONS, SPEED_OF_LIGHT_M_PER_S
 from camgen.io.dng import write_dng
 from camgen.sensor.capture import SensorModel
 from camgen.sensor.characteristics import dark_current_e_per_s
@@ -209,3 +214,75 @@ def test_hot_pixel_density_within_10_percent(fitted):
 def test_dng_and_tiff_give_the_same_figures(dng_fit, tiff_fit):
     """The same DN through two readers (rawpy, OpenImageIO) and two metadata routes (EXIF, frames.csv)."""
     assert dng_fit[0]["sensor"] == tiff_fit[0]["sensor"]
+
+
+def test_an_irradiance_and_a_wavelength_give_the_quantum_efficiency(tiff_fit, base_profile, capsys):
+    """The TIFF set again, with the flats' irradiance: the simulated flat gives every site 25 000 e⁻/s,
+    so at the irradiance whose photon rate is 25 000/η_G every channel's η is η_G (as the light were
+    filtered to match). The base profile gives the pixel area; the output names the stacks DSNU and PRNU
+    come from and the shading correction asked for."""
+    directory = tiff_fit[1].parent
+    wavelength_nm, area_m2 = 550.0, (3e-6) ** 2  # the base profile's pitch, 3.0 µm
+    photons_per_s = FLAT_ELECTRONS_PER_S / SENSOR.quantum_efficiency.g
+    irradiance = photons_per_s * PLANCK_J_S * SPEED_OF_LIGHT_M_PER_S / (wavelength_nm * 1e-9 * area_m2)
+    capsys.readouterr()
+    output = directory / "lit.yaml"
+    argv = ["fit", "noise", "--dark", str(directory / "dark"), "--flat", str(directory / "flat")]
+    argv += ["--cfa", "RGGB", "--bit-depth", "12", "--shading-correction", "highpass"]
+    argv += ["--irradiance-w-per-m2", f"{irradiance:.6g}", "--wavelength-nm", "550", "--profile", str(base_profile)]
+    assert main([*argv, "-o", str(output)]) == 0
+    printed = capsys.readouterr().out
+    for channel in ("R", "Gr", "Gb", "B"):
+        row = next(line for line in printed.splitlines() if f"quantum efficiency η ({channel})" in line)
+        assert float(row.split("│")[2].split("±")[0]) == pytest.approx(100 * SENSOR.quantum_efficiency.g, rel=0.02)
+    assert "DSNU1288 from dark t=0.001 s" in printed
+    assert "PRNU1288 from flat t=0.2 s T=40.0 °C (16 frames" in printed
+    assert "EMVA 1288 4.0's high-pass filter" in printed and "at 550 nm" in printed
+    header = output.read_text()
+    assert "--shading-correction highpass" in header and "quantum efficiency η (Gr)" in header
+
+
+def test_photons_per_pixel_from_frames_csv_split_the_stacks(tmp_path, capsys):
+    """Flats at one exposure time under two lights, told apart only by frames.csv's photons_per_pixel
+    column: two stacks, and η from them. A negative count names the line."""
+    sensor = SENSOR.model_copy(update={"width_px": 48, "height_px": 48, "cfa": "mono"})
+    model = SensorModel.build(sensor, SERIAL)
+    rng = np.random.default_rng(7)
+    shape = (48, 48)
+    efficiency, exposure_s = 0.5, 0.1
+    rows = {"dark": [], "flat": []}
+    for kind, t, photons in [("dark", 0.05, 0.0), ("dark", exposure_s, 0.0)] + [
+        ("flat", exposure_s, p) for p in (2000.0, 4000.0, 8000.0)
+    ]:
+        folder = tmp_path / kind
+        folder.mkdir(exist_ok=True)
+        for i in range(2):
+            raw = model.capture(np.full(shape, efficiency * photons / t, np.float32), exposure_time_s=t, rng=rng)
+            name = f"{kind}_{t:g}_{photons:g}_{i}.tif"
+            tifffile.imwrite(folder / name, raw)
+            rows[kind].append((name, t, 40.0, photons))
+    for kind, entries in rows.items():
+        with (tmp_path / kind / "frames.csv").open("w", newline="") as handle:
+            writer = csv.writer(handle)
+            writer.writerow(["file", "exposure_time_s", "temperature_c", "photons_per_pixel"])
+            writer.writerows(entries)
+    output = tmp_path / "fit.yaml"
+    argv = ["fit", "noise", "--dark", str(tmp_path / "dark"), "--flat", str(tmp_path / "flat"), "--bit-depth", "12"]
+    assert main([*argv, "-o", str(output)]) == 0
+    printed = capsys.readouterr().out
+    assert "3 of 3 flat stacks" in printed
+    row = next(line for line in printed.splitlines() if "quantum efficiency η" in line)
+    assert float(row.split("│")[2].split("±")[0]) == pytest.approx(100 * efficiency, rel=0.03)
+    with (tmp_path / "flat" / "frames.csv").open("a", newline="") as handle:
+        csv.writer(handle).writerow(["extra.tif", exposure_s, 40.0, -5])
+    assert main([*argv, "-o", str(tmp_path / "bad.yaml")]) == 2
+    assert "frames.csv:8: photons_per_pixel must be ≥ 0, got -5" in capsys.readouterr().err
+
+
+def test_an_irradiance_needs_a_wavelength_and_the_choices_match_the_library(tmp_path, capsys):
+    argv = ["fit", "noise", "--dark", str(tmp_path / "dark"), "--irradiance-w-per-m2", "0.5"]
+    assert main([*argv, "-o", str(tmp_path / "out.yaml")]) == 2
+    assert "give --wavelength-nm" in capsys.readouterr().err
+    assert main([*argv, "--wavelength-nm", "550", "-o", str(tmp_path / "out.yaml")]) == 2
+    assert "give --pixel-pitch-um or --profile" in capsys.readouterr().err
+    assert SHADING_CHOICES == SHADING_CORRECTIONS

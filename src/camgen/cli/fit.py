@@ -22,6 +22,8 @@ from camgen.config.profile import Profile
 from camgen.errors import ConfigError, Problem
 
 CFA_CHOICES = ("RGGB", "BGGR", "GRBG", "GBRG", "mono")
+SHADING_CHOICES = ("none", "highpass", "polynomial")
+"""`camgen.fit.noise.SHADING_CORRECTIONS` (not imported: the parser is built without the fit's dependencies)."""
 
 
 def add_parser(subparsers) -> None:
@@ -35,10 +37,14 @@ def add_parser(subparsers) -> None:
     noise = kinds.add_parser(
         "noise",
         help="sensor noise after EMVA 1288 from raw dark (and flat) frames",
-        description="Sensor noise after EMVA 1288 from stacks of raw dark and flat frames. Frames taken at "
-        "the same exposure time and temperature form one stack (a sub-folder is a stack of its own); "
-        "exposure time and temperature come from frames.csv in the folder (columns "
-        "file,exposure_time_s,temperature_c), else from the files' EXIF.",
+        description="Sensor noise after EMVA 1288 release 4.0 from stacks of raw dark and flat frames. Frames "
+        "taken at the same exposure time, temperature and light form one stack (a sub-folder is a stack of its "
+        "own); exposure time and temperature come from frames.csv in the folder (columns "
+        "file,exposure_time_s,temperature_c, and for flats optionally photons_per_pixel or irradiance_w_per_m2), "
+        "else from the files' EXIF. DSNU and PRNU come from the largest stacks (PRNU from the one nearest half "
+        "saturation); illumination shading is not corrected unless --shading-correction says so. With the "
+        "flats' light (photons, or irradiance and wavelength) the quantum efficiency and the dynamic range "
+        "are measured too.",
     )
     noise.add_argument("--dark", type=Path, required=True, metavar="DIR", help="folder of dark frames (lens capped)")
     noise.add_argument("--flat", type=Path, metavar="DIR", help="folder of flat-field frames at several light levels")
@@ -47,6 +53,35 @@ def add_parser(subparsers) -> None:
     noise.add_argument("--bit-depth", type=int, metavar="BITS", help="ADC bits of linear frames (default: container)")
     noise.add_argument(
         "--gain-dn-per-e", type=float, metavar="K", help="system gain when no flats are given (datasheet), DN/e⁻"
+    )
+    noise.add_argument(
+        "--shading-correction",
+        choices=SHADING_CHOICES,
+        default="none",
+        help="correct the PRNU flat for uneven illumination: none (default: EMVA's PRNU1288, as the emva1288 "
+        "reference implementation; a non-uniform light adds to it), highpass (EMVA 1288 4.0's high-pass filter) "
+        "or polynomial (a quadratic illumination surface divided out)",
+    )
+    light = noise.add_mutually_exclusive_group()
+    light.add_argument(
+        "--irradiance-w-per-m2",
+        type=float,
+        metavar="E",
+        help="irradiance on the sensor during every flat (unless frames.csv gives it), W/m²; with --wavelength-nm "
+        "it gives the photons per pixel, hence the quantum efficiency and the dynamic range",
+    )
+    light.add_argument(
+        "--photons-per-pixel-per-s",
+        type=float,
+        metavar="RATE",
+        help="photons reaching a pixel per second during every flat (unless frames.csv gives photons_per_pixel)",
+    )
+    noise.add_argument("--wavelength-nm", type=float, metavar="NM", help="wavelength of the flats' light, nm")
+    noise.add_argument(
+        "--pixel-pitch-um",
+        type=float,
+        metavar="P",
+        help="pixel pitch, µm, for the pixel area an irradiance falls on (default: --profile's)",
     )
     _add_output_options(noise, "noise")
     noise.set_defaults(run=run_noise)
@@ -255,15 +290,67 @@ def _write_outputs(args, out: Console, fragment: dict, header: list[str], write_
     out.print(f"wrote {kind} {escape(str(args.output))} and report {escape(str(report))}")
 
 
+def _pixel_area_um2(args: argparse.Namespace, base: Profile | None) -> float | None:
+    """The pixel's area, µm², from --pixel-pitch-um or the base profile (None without either)."""
+    if args.pixel_pitch_um is not None:
+        return args.pixel_pitch_um**2
+    if base is not None:
+        return base.sensor.pixel_pitch_um * base.sensor.pitch_y_um
+    return None
+
+
+def _flat_photons(stack, args: argparse.Namespace, pixel_area_um2: float | None) -> float | None:
+    """μ_p of a flat stack: frames.csv's photons_per_pixel, else its (or --irradiance-w-per-m2's) irradiance
+    turned into photons, else --photons-per-pixel-per-s × t; None when nothing gives the light."""
+    from camgen.fit.noise import photons_per_pixel
+
+    if stack.photons_per_pixel is not None:
+        return stack.photons_per_pixel
+    irradiance = stack.irradiance_w_per_m2 if stack.irradiance_w_per_m2 is not None else args.irradiance_w_per_m2
+    if irradiance is not None:
+        where = "frames.csv" if stack.irradiance_w_per_m2 is not None else "--irradiance-w-per-m2"
+        if args.wavelength_nm is None:
+            raise ConfigError(
+                f"{stack.label}: an irradiance ({where}) becomes photons only with the light's wavelength; "
+                "give --wavelength-nm"
+            )
+        if pixel_area_um2 is None:
+            raise ConfigError(
+                f"{stack.label}: an irradiance ({where}) becomes photons per pixel only with the pixel's area; "
+                "give --pixel-pitch-um or --profile"
+            )
+        return photons_per_pixel(irradiance, stack.exposure_time_s, args.wavelength_nm, pixel_area_um2)
+    if args.photons_per_pixel_per_s is not None:
+        return args.photons_per_pixel_per_s * stack.exposure_time_s
+    return None
+
+
 def run_noise(args: argparse.Namespace, out: Console, err: Console) -> int:
     from camgen.fit.frames import listing, scan_stacks
     from camgen.fit.noise import FrameGroup, StackStatistics, fit_noise
     from camgen.fit.noise_report import write_noise_report
 
     _check_positive(args.gain_dn_per_e, "--gain-dn-per-e")
+    for value, option in (
+        (args.irradiance_w_per_m2, "--irradiance-w-per-m2"),
+        (args.photons_per_pixel_per_s, "--photons-per-pixel-per-s"),
+        (args.wavelength_nm, "--wavelength-nm"),
+        (args.pixel_pitch_um, "--pixel-pitch-um"),
+    ):
+        _check_positive(value, option)
     if args.bit_depth is not None and not 8 <= args.bit_depth <= 16:
         raise ConfigError(f"--bit-depth must be 8–16 (the profile's range), got {args.bit_depth}")
-    _check_outputs(args)
+    if args.irradiance_w_per_m2 is not None and args.wavelength_nm is None:
+        raise ConfigError(
+            "--irradiance-w-per-m2 becomes photons only with the light's wavelength; give --wavelength-nm"
+        )
+    base = _check_outputs(args)
+    pixel_area_um2 = _pixel_area_um2(args, base)
+    if args.irradiance_w_per_m2 is not None and pixel_area_um2 is None:
+        raise ConfigError(
+            "--irradiance-w-per-m2 becomes photons per pixel only with the pixel's area; give --pixel-pitch-um or "
+            "--profile"
+        )
     scans = {}
     with _progress(err) as progress:
         for kind, directory in (("dark", args.dark), ("flat", args.flat)):
@@ -294,14 +381,30 @@ def run_noise(args: argparse.Namespace, out: Console, err: Console) -> int:
     raw_file = dark.black_level_dn is not None
     bit_depth = args.bit_depth or (dark.white_level_dn.bit_length() if dark.white_level_dn else 16)
     groups = [
-        FrameGroup(kind, stack.exposure_time_s, stack.temperature_c, stack.stats, stack.label)
+        FrameGroup(
+            kind,
+            stack.exposure_time_s,
+            stack.temperature_c,
+            stack.stats,
+            stack.label,
+            _flat_photons(stack, args, pixel_area_um2) if kind == "flat" else None,
+        )
         for kind, scan in scans.items()
         for stack in scan.groups.values()
     ]
-    fit = fit_noise(groups, cfa=dark.cfa, bit_depth=bit_depth, gain_dn_per_e=args.gain_dn_per_e)
+    fit = fit_noise(
+        groups,
+        cfa=dark.cfa,
+        bit_depth=bit_depth,
+        gain_dn_per_e=args.gain_dn_per_e,
+        shading_correction=args.shading_correction,
+    )
 
     warnings = [f"skipped {name}: it {reason}" for scan in scans.values() for name, reason in scan.skipped]
     warnings += list(fit.warnings)
+    lit = [g for g in groups if g.photons_per_pixel is not None]
+    if args.wavelength_nm is not None and not lit:
+        warnings.append("--wavelength-nm is used only to turn an irradiance into photons, and no flat has one")
     fragment = fit.profile_fragment()
     if args.bit_depth is None and not raw_file:
         # A linear file's container (16 bits) says nothing of the ADC: keep the base profile's.
@@ -323,12 +426,29 @@ def run_noise(args: argparse.Namespace, out: Console, err: Console) -> int:
         )
     frames = sum(len(stack.files) for scan in scans.values() for stack in scan.groups.values())
     _print_rows(out, f"sensor noise ({dark.cfa}, {len(groups)} stacks, {frames} frames)", fit.summary_rows())
+    notes = list(fit.notes)
+    flats = [g for g in groups if g.kind == "flat"]
+    if lit:
+        wavelength = f" at {args.wavelength_nm:g} nm" if args.wavelength_nm is not None else ""
+        notes.append(
+            f"photon counts for {len(lit)} of {len(flats)} flat stacks{wavelength}: quantum efficiency and dynamic "
+            "range in photons (η is not written to the profile, whose quantum_efficiency is per colour at its peak)"
+        )
+    elif flats:
+        notes.append(
+            "no photon counts for the flats: no quantum efficiency, and the dynamic range is μ_e.sat/μ_e.min; give "
+            "--irradiance-w-per-m2 with --wavelength-nm, --photons-per-pixel-per-s, or a photons_per_pixel or "
+            "irradiance_w_per_m2 column in frames.csv"
+        )
+    for note in notes:
+        out.print(escape(note), soft_wrap=True)
     sources = [f"--dark {args.dark}"] + ([f"--flat {args.flat}"] if args.flat else [])
     header = [
-        f"camgen fit noise {' '.join(sources)}",
+        f"camgen fit noise {' '.join(sources)} --shading-correction {args.shading_correction}",
         f"{len(groups)} stacks: "
         + listing([f"{g.label} ({len(g.files)})" for s in scans.values() for g in s.groups.values()]),
         *(f"{name}: {_significant(value, unc)} {unit}" for name, value, unc, unit in fit.summary_rows()),
+        *notes,
     ]
     _write_outputs(args, out, fragment, header, lambda path: write_noise_report(fit, path))
     return 0

@@ -11,10 +11,12 @@
 - **Exposure time and temperature** of every frame come from a side file when one is given (or
   ``frames.csv`` lies in the folder), else from the file's EXIF (ExposureTime 33434, Temperature
   37888, as camgen's DNG writer stores them). An EXIF exposure time of 0 is not taken for a real
-  0-second exposure: the fit asks for the side file.
+  0-second exposure: the fit asks for the side file. The side file may also give a flat's light: the
+  photons per pixel of its exposure (``photons_per_pixel``, EMVA 1288's μ_p) or the irradiance on the
+  sensor (``irradiance_w_per_m2``), for the quantum efficiency.
 - **Grouping**: frames taken at the same settings form one group (one stack). Sub-folders of the
   folder are groups of their own (flats at several light levels but one exposure time); otherwise
-  frames are grouped by exposure time and temperature.
+  frames are grouped by exposure time, temperature and light (photon count or irradiance).
 
 Every problem with the input is a `ConfigError` or a warning that names the files, never a traceback.
 """
@@ -43,7 +45,10 @@ LINEAR_SUFFIXES = frozenset({".tif", ".tiff", ".png", ".pgm", ".pnm"})
 VIDEO_SUFFIXES = frozenset({".mp4", ".mkv", ".mov", ".avi", ".ts", ".m4v", ".webm", ".h264", ".h265", ".hevc"})
 IMAGE_SUFFIXES = frozenset({".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".pgm", ".ppm", ".webp"})
 METADATA_FILE = "frames.csv"
-"""Side file looked for in a frame folder: columns ``file,exposure_time_s[,temperature_c]``."""
+"""Side file looked for in a frame folder: columns ``file,exposure_time_s[,temperature_c]`` and, for
+flats, optionally ``photons_per_pixel`` or ``irradiance_w_per_m2``."""
+LIGHT_COLUMNS = ("photons_per_pixel", "irradiance_w_per_m2")
+"""Side-file columns that give a flat frame's light: μ_p of its exposure, or the irradiance E, W/m²."""
 BAYER_NAMES = ("RGGB", "BGGR", "GRBG", "GBRG")
 EXIF_EXPOSURE_TIME = 33434
 EXIF_TEMPERATURE = 37888
@@ -71,6 +76,10 @@ def mixed_sizes_error(directory: Path, what: str, sizes_px: dict[tuple[int, int]
 class FrameMetadata:
     exposure_time_s: float | None = None
     temperature_c: float | None = None
+    photons_per_pixel: float | None = None
+    """μ_p: mean photons reaching a pixel during the exposure (side file only)."""
+    irradiance_w_per_m2: float | None = None
+    """E on the sensor during the exposure, W/m² (side file only)."""
 
 
 @dataclass
@@ -280,8 +289,10 @@ def frame_files(directory: Path) -> list[Path]:
 
 
 def read_metadata_file(path: Path) -> dict[str, FrameMetadata]:
-    """Per-file exposure time and temperature from a CSV side file (``file,exposure_time_s[,temperature_c]``),
-    keyed by the file's path as written (relative to the folder scanned, e.g. ``low/0001.tif``)."""
+    """Per-file exposure time, temperature and light from a CSV side file
+    (``file,exposure_time_s[,temperature_c][,photons_per_pixel][,irradiance_w_per_m2]``), keyed by the
+    file's path as written (relative to the folder scanned, e.g. ``low/0001.tif``). An empty cell is
+    not known; a photon count or irradiance must be ≥ 0 (0 for a dark frame)."""
 
     def number(row: dict, key: str, line: int) -> float | None:
         text = (row.get(key) or "").strip()
@@ -295,6 +306,8 @@ def read_metadata_file(path: Path) -> dict[str, FrameMetadata]:
             raise ConfigError(
                 f"{path}:{line}: {key} must be a finite number{' > 0' if key == 'exposure_time_s' else ''}, got {text}"
             )
+        if key in LIGHT_COLUMNS and value < 0:
+            raise ConfigError(f"{path}:{line}: {key} must be ≥ 0, got {text}")
         return value
 
     try:
@@ -304,9 +317,10 @@ def read_metadata_file(path: Path) -> dict[str, FrameMetadata]:
             columns = set(rows[0]) if rows else set()
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError(f"{path}: cannot read as UTF-8 CSV: {exc}") from None
-    if "file" not in columns or not columns & {"exposure_time_s", "temperature_c"}:
+    if "file" not in columns or not columns & {"exposure_time_s", "temperature_c", *LIGHT_COLUMNS}:
         raise ConfigError(
-            f"{path}: needs a header line with the columns file,exposure_time_s[,temperature_c], got "
+            f"{path}: needs a header line with the columns file,exposure_time_s[,temperature_c]"
+            f"[,photons_per_pixel][,irradiance_w_per_m2], got "
             f"{', '.join(sorted(c for c in columns if c)) or 'no columns'}"
         )
     entries: dict[str, FrameMetadata] = {}
@@ -317,7 +331,9 @@ def read_metadata_file(path: Path) -> dict[str, FrameMetadata]:
         key = Path(name).as_posix()
         if key in entries:
             raise ConfigError(f"{path}:{line}: {name} is listed twice")
-        entries[key] = FrameMetadata(number(row, "exposure_time_s", line), number(row, "temperature_c", line))
+        entries[key] = FrameMetadata(
+            *(number(row, column, line) for column in ("exposure_time_s", "temperature_c", *LIGHT_COLUMNS))
+        )
     return entries
 
 
@@ -345,6 +361,10 @@ class FrameStack:
     """The accumulator the frames were added to."""
     files: list[str]
     folder: str
+    photons_per_pixel: float | None = None
+    """μ_p of every frame of the stack (side file), or None."""
+    irradiance_w_per_m2: float | None = None
+    """Irradiance of every frame of the stack, W/m² (side file), or None."""
 
 
 @dataclass
@@ -368,11 +388,17 @@ a sensor drifts by tenths of a degree over a stack."""
 
 
 def _stack_for(groups: dict[str, FrameStack], directory: Path, path: Path, meta: FrameMetadata, make) -> FrameStack:
-    """The stack a frame joins: same folder, same exposure time, temperature within the tolerance of the
-    stack's running mean; a new stack otherwise."""
+    """The stack a frame joins: same folder, exposure time and light (photon count and irradiance),
+    temperature within the tolerance of the stack's running mean; a new stack otherwise."""
     folder = directory.name if path.parent == directory else f"{directory.name}/{path.parent.name}"
+    light = (meta.photons_per_pixel, meta.irradiance_w_per_m2)
     for stack in groups.values():
         if stack.folder != folder or not math.isclose(stack.exposure_time_s, meta.exposure_time_s, rel_tol=1e-6):
+            continue
+        if not all(
+            (a is None and b is None) or (a is not None and b is not None and math.isclose(a, b, rel_tol=1e-6))
+            for a, b in zip((stack.photons_per_pixel, stack.irradiance_w_per_m2), light, strict=True)
+        ):
             continue
         if (stack.temperature_c is None) != (meta.temperature_c is None):
             continue
@@ -384,9 +410,13 @@ def _stack_for(groups: dict[str, FrameStack], directory: Path, path: Path, meta:
     label = f"{folder} t={meta.exposure_time_s:.6g} s"
     if meta.temperature_c is not None:
         label += f" T={meta.temperature_c:.1f} °C"
+    if meta.photons_per_pixel is not None:
+        label += f" μ_p={meta.photons_per_pixel:.6g}"
+    if meta.irradiance_w_per_m2 is not None:
+        label += f" E={meta.irradiance_w_per_m2:.6g} W/m²"
     while label in groups:
         label += "′"
-    groups[label] = FrameStack(label, meta.exposure_time_s, meta.temperature_c, make(), [], folder)
+    groups[label] = FrameStack(label, meta.exposure_time_s, meta.temperature_c, make(), [], folder, *light)
     return groups[label]
 
 
@@ -443,9 +473,11 @@ def scan_stacks(
         if white_level_dn is not None:
             frame = replace(frame, white_level_dn=white_level_dn)
         meta = _side_entry(side, directory, path)
-        meta = FrameMetadata(
-            meta.exposure_time_s if meta.exposure_time_s is not None else frame.metadata.exposure_time_s,
-            meta.temperature_c if meta.temperature_c is not None else frame.metadata.temperature_c,
+        from_file = frame.metadata
+        meta = replace(
+            meta,
+            exposure_time_s=from_file.exposure_time_s if meta.exposure_time_s is None else meta.exposure_time_s,
+            temperature_c=from_file.temperature_c if meta.temperature_c is None else meta.temperature_c,
         )
         shapes[frame.raw_dn.shape].append(path.name)
         cfas[frame.cfa].append(path.name)
@@ -604,8 +636,7 @@ def image_files(directory: Path) -> list[Path]:
             files = [p for p in sorted(directory.glob(pattern)) if p.suffix.lower() in suffixes and p.is_file()]
     if not files:
         raise ConfigError(
-            f"{directory} holds no images (.png, .jpg, .tif, raw files), nor a camgen render's CAMERA/frames/ "
-            "folders"
+            f"{directory} holds no images (.png, .jpg, .tif, raw files), nor a camgen render's CAMERA/frames/ folders"
         )
     return files
 

@@ -1,9 +1,9 @@
 """Sensor noise from stacks of raw dark and flat frames, after EMVA 1288 release 4.0 [1]_.
 
-Frames taken at one setting (kind, exposure time, temperature) form a group; `StackStatistics`
+Frames taken at one setting (kind, exposure time, temperature, light) form a group; `StackStatistics`
 reduces each group to a per-pixel mean and temporal variance while the frames stream past (a 4K stack
-is never held in memory). `fit_noise` turns the groups into the figures of camgen's sensor model
-(DESIGN.md "Sensor model"; `camgen.config.profile.Noise`):
+is never held in memory). `fit_noise` turns the groups into the figures of EMVA 1288 4.0 and of
+camgen's sensor model (DESIGN.md "Sensor model"; `camgen.config.profile.Noise`):
 
     e  = Poisson(η·Φ·(1 + PRNU)) + Poisson(D(T)·t) + DSNU + row FPN + column FPN + N(0, σ_read²)
     DN = clip(round(K·min(e, full_well) + black), 0, 2^bits − 1)
@@ -13,14 +13,29 @@ Every mean and variance image is split by CFA phase (site (y, x) has the colour 
 
 - **Dark groups** give the black level (the averaged dark signal extrapolated to t = 0), the temporal
   dark noise σ²_y.dark(t → 0) and from it the read noise (EMVA eq. 6, quantisation 1/12 DN² removed),
-  the spatial non-uniformity split into pixel, row and column parts (EMVA 4.0 §8.2), the dark current
-  (slope of the dark mean against exposure time) and its doubling temperature (ln I against T, when
-  the temperatures resolve a rise), and the hot pixels.
+  the dark current (slope of the dark mean against exposure time; EMVA's second estimate, the slope of
+  the dark variance, as well) and its doubling temperature (ln I against T, when the temperatures
+  resolve a rise), and the hot pixels.
+- **Spatial non-uniformity** (EMVA 4.0 §8) comes from the *largest* stacks: DSNU1288 from the dark
+  group with the most frames, PRNU1288 from the flat with the most frames near half saturation (and
+  the largest dark stack at its exposure time). The spatial variance of an L-frame mean is corrected
+  for the temporal noise left in it, s²_y = s²_y.measured − σ²_y.stack/L, and split into column, row
+  and pixel parts by the standard's equations (`_spatial_variances`): the pixel part is the white
+  non-uniformity, the row and column parts the non-white one. The horizontal and vertical
+  spectrograms (EMVA 4.0 §8.6) of both images are kept for the report.
+- **Illumination shading** is not corrected by default, as EMVA's PRNU1288 and the `emva1288`
+  reference implementation do not: PRNU1288 then includes any non-uniformity of the light. On request
+  (`shading_correction`) either the standard's high-pass filter for uneven illumination (7 × 7 and
+  11 × 11 box filters and a 3 × 3 binomial filter, subtracted) or a quadratic illumination surface
+  divided out of the flat removes it.
 - **Flat groups** give the photon transfer curve (σ²_y − σ²_y.dark against μ_y − μ_y.dark), whose
   slope through the origin up to 70 % of saturation is the system gain K; the saturation point (the
   variance peak, when brighter flats show the variance falling beyond it) and the clip level (the
-  plateau beyond it); PRNU from the flat nearest half saturation; the linearity error
-  LE = (max δ − min δ)/2; and the dead pixels.
+  plateau beyond it); the linearity error LE = (max δ − min δ)/2; and the dead pixels.
+- **Photon counts** μ_p of the flats, when given (`FrameGroup.photons_per_pixel`; `photons_per_pixel`
+  converts an irradiance), give the responsivity R (slope of μ_y − μ_y.dark against μ_p), the quantum
+  efficiency η = R/K, μ_p.sat, the absolute sensitivity threshold μ_p.min and the dynamic range
+  DR = μ_p.sat/μ_p.min.
 
 Uncertainties are 1σ standard uncertainties. Figures computed from images are computed again on
 independent parts of each channel image (4 × 4 tiles; horizontal bands for row noise, vertical bands
@@ -28,7 +43,7 @@ for column noise) and take the standard error of those part estimates, std/√n.
 scatter of a figure about the *population* value a profile holds (the sensor model's σ), including
 the sampling of the realised fixed pattern. Fitted figures (intercepts, slopes, the system gain) are
 fitted on each part as well. Products and ratios are propagated to first order assuming independent
-factors.
+factors; a photon count's own calibration uncertainty is not known here and not included.
 
 The system gain's uncertainty is not taken from the residuals of its fit: the scatter of a photon
 transfer point grows with its variance (σ(σ²_y) ≈ σ²_y·sqrt(2/(P(L − 1))) for P pixels, L frames),
@@ -44,6 +59,8 @@ References
    pp. 1273–1283, 1993 (MAD, scaled by 1.4826 to estimate a normal σ).
 .. [3] B. P. Welford, "Note on a method for calculating corrected sums of squares and products",
    Technometrics 4(3), pp. 419–420, 1962 (shifted sums for a stable one-pass variance).
+.. [4] EMVA 1288 reference implementation, `emva1288` 1.0.2 (release 4.0), https://github.com/EMVA1288/emva1288
+   (``process/results.py``: the same spatial variances, responsivity, η, μ_p.min and DR).
 """
 
 from __future__ import annotations
@@ -97,11 +114,27 @@ HOT_PIXEL_MIN_EXCESS_SIGMA = 1.0
 σ of one frame: a smaller excess never shows above one frame's noise, so modelling it changes nothing."""
 SHADING_GRID_BLOCKS = 64
 """The illumination surface is fitted to block means of at most this many blocks along a side."""
+SHADING_CORRECTIONS = ("none", "highpass", "polynomial")
+"""How the PRNU flat is corrected for uneven illumination (see `fit_noise`): not at all (EMVA's PRNU1288),
+the standard's high-pass filter, or a quadratic illumination surface divided out."""
+SHADING_POLYNOMIAL_ORDER = 2
+"""Total degree of the illumination surface of ``shading_correction="polynomial"``."""
+HIGHPASS_BOX_PX = (7, 11)
+"""Box filters of the low-pass image that EMVA 1288 4.0's correction for uneven illumination subtracts
+(followed by a 3 × 3 binomial filter; mirrored edges)."""
+PLANCK_J_S = 6.62607015e-34
+SPEED_OF_LIGHT_M_PER_S = 299_792_458.0
 CHANNEL_ORDER = ("R", "Gr", "Gb", "B")
-SHARED_ROW_COLUMN_FIELDS = frozenset({"black_level_dn", "row_fpn_dn", "row_fpn_e", "column_fpn_dn", "column_fpn_e"})
+SHARED_ROW_COLUMN_FIELDS = frozenset(
+    {"black_level_dn", "row_fpn_dn", "row_fpn_e", "column_fpn_dn", "column_fpn_e", "prnu_row_pct", "prnu_column_pct"}
+)
 """Figures whose error comes largely from the realised row and column offsets, which Bayer phases share."""
-SATURATION_FIELDS = frozenset({"saturation_dn", "saturation_capacity_e", "full_well_e"})
+SATURATION_FIELDS = frozenset({"saturation_dn", "saturation_capacity_e", "full_well_e", "snr_max", "dynamic_range"})
 """Figures a channel lacks when the flats do not reach its saturation; combined over the channels that have them."""
+COLOUR_FIELDS = frozenset(
+    {"responsivity_dn_per_photon", "quantum_efficiency_pct", "saturation_photons", "sensitivity_threshold_photons"}
+)
+"""Figures that differ by colour filter: a colour sensor has them per channel only (none combined)."""
 
 
 @dataclass(frozen=True)
@@ -239,6 +272,9 @@ class FrameGroup:
     stats: StackStatistics
     label: str
     """Names the group in messages and the report (folder, sub-folder or file range)."""
+    photons_per_pixel: float | None = None
+    """μ_p: mean number of photons reaching a pixel during one exposure of a flat (`photons_per_pixel`
+    converts an irradiance); None when not known. Flats with it give the quantum efficiency."""
 
 
 @dataclass(frozen=True)
@@ -272,10 +308,22 @@ class ChannelNoise:
     dark_current_dn_per_s: Estimate | None
     """Mean dark signal rate at the reference temperature, DN/s."""
     dark_current_e_per_s: Estimate | None
+    dark_current_from_variance_e_per_s: Estimate | None
+    """EMVA's second dark current estimate: the slope of σ²_y.dark against t divided by K², e⁻/s (it
+    counts the dark electrons by their shot noise; the two agree for a sensor without dark-signal drift)."""
     dark_current_doubling_c: Estimate | None
     gain_dn_per_e: Estimate | None
     """System gain K, DN/e⁻."""
     prnu_pct: Estimate | None
+    """EMVA's PRNU1288: sqrt(s²_y.50 − s²_y.dark)/(μ_y.50 − μ_y.dark), %, every spatial part together."""
+    prnu_pixel_pct: Estimate | None
+    """The pixel (white) part of PRNU1288, %: what the profile's ``prnu_pct`` means."""
+    prnu_row_pct: Estimate | None
+    prnu_column_pct: Estimate | None
+    prnu_stack: str | None
+    """Label and frame count of the flat PRNU comes from."""
+    prnu_level: str | None
+    """Its signal, as a fraction of saturation (or of the largest mean without saturation)."""
     saturation_dn: Estimate | None
     """μ_y.sat: mean raw signal at the variance peak, DN (dark level included); None when the flats do not
     reach saturation (`_saturation_index`)."""
@@ -293,6 +341,20 @@ class ChannelNoise:
     median (see `fit_noise`, *Hot pixels*)."""
     dead_pixel_fraction: Estimate | None
     linearity_error_pct: Estimate | None
+    sensitivity_threshold_e: Estimate | None
+    """μ_e.min = sqrt(σ²_y.dark/K² + 1/4) + 1/2: the signal, e⁻, at which the SNR is 1."""
+    snr_max: Estimate | None
+    """SNR_max = sqrt(μ_e.sat) (ratio)."""
+    dynamic_range: Estimate | None
+    """DR = μ_p.sat/μ_p.min (ratio); without photon counts μ_e.sat/μ_e.min, the same ratio with η cancelled."""
+    responsivity_dn_per_photon: Estimate | None
+    """R: slope of μ_y − μ_y.dark against μ_p through the origin, DN per photon (needs photon counts)."""
+    quantum_efficiency_pct: Estimate | None
+    """η = R/K, % (needs photon counts; at the wavelength of the light)."""
+    saturation_photons: Estimate | None
+    """μ_p.sat: photons per pixel at the saturation point."""
+    sensitivity_threshold_photons: Estimate | None
+    """μ_p.min = μ_e.min/η: the absolute sensitivity threshold, photons per pixel."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -332,6 +394,32 @@ class DarkHistogram:
 
 
 @dataclass(frozen=True, eq=False)
+class Spectrogram:
+    """Horizontal and vertical spectrograms of one channel (EMVA 1288 4.0 §8.6), as `emva1288` draws them.
+
+    Each row (column) of the mean-free image is Fourier transformed, |FFT|²/N averaged over the rows
+    (columns); the mean over all N frequencies is then the image's spatial variance (Parseval), so a flat
+    spectrogram is white non-uniformity and peaks or a rise towards low frequencies the non-white part.
+    Values are the square root of that power, at 0 … 0.5 cycles per pixel.
+    """
+
+    channel: str
+    kind: Literal["DSNU", "PRNU"]
+    """"DSNU": the averaged dark image, DN; "PRNU": flat minus dark, % of its mean."""
+    unit: str
+    horizontal_frequency_per_px: np.ndarray
+    """(N//2 + 1,) float64, cycles per pixel along a row."""
+    horizontal: np.ndarray
+    """(N//2 + 1,) float64: sqrt of the mean power of the rows' spectra, `unit`."""
+    vertical_frequency_per_px: np.ndarray
+    vertical: np.ndarray
+    nonuniformity: float
+    """DSNU1288 (DN) or PRNU1288 (%): the level a white non-uniformity of that σ would have."""
+    temporal: float
+    """σ_y.stack of the stack (DN, or % of the signal): the white level of one frame's temporal noise."""
+
+
+@dataclass(frozen=True, eq=False)
 class NoiseFit:
     """What `fit_noise` found: per-channel and combined figures, defect maps, curves and warnings."""
 
@@ -355,7 +443,39 @@ class NoiseFit:
     linearity_error_pct: Estimate | None
     photon_transfer: tuple[PhotonTransferCurve, ...]
     dark_histograms: tuple[DarkHistogram, ...]
+    spectrograms: tuple[Spectrogram, ...]
+    """DSNU then PRNU spectrograms of each channel (PRNU only with flats)."""
+    shading_correction: str
+    """One of `SHADING_CORRECTIONS`: how the PRNU flat was corrected for uneven illumination."""
+    dsnu_stack: str
+    """Label and frame count of the dark group DSNU1288 comes from."""
     warnings: tuple[str, ...]
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """Where the spatial figures come from and whether illumination shading was corrected, as lines."""
+        notes = [f"DSNU1288 from {self.dsnu_stack}"]
+        levels: dict[str, list[str]] = {}
+        for c in self.channels:
+            if c.prnu_stack is not None:
+                suffix = f" ({c.channel})" if len(self.channels) > 1 else ""
+                levels.setdefault(c.prnu_stack, []).append(f"{c.prnu_level}{suffix}")
+        if levels:
+            sources = [f"{stack} at {', '.join(where)}" for stack, where in levels.items()]
+            notes.append(f"PRNU1288 from {'; '.join(sources)}")
+            notes.append(
+                {
+                    "none": "illumination shading not corrected (EMVA 1288 PRNU1288, as the emva1288 reference "
+                    "implementation): a non-uniform light adds to PRNU1288; shading_correction "
+                    "(--shading-correction) highpass or polynomial removes it",
+                    "highpass": "illumination shading removed by EMVA 1288 4.0's high-pass filter (7×7, 11×11 box "
+                    f"and 3×3 binomial low-pass subtracted): it keeps {HIGHPASS_PIXEL_VARIANCE_GAIN:.1%} of a white "
+                    f"non-uniformity's variance and {HIGHPASS_LINE_VARIANCE_GAIN:.1%} of a row or column pattern's",
+                    "polynomial": f"illumination shading removed by dividing a degree-{SHADING_POLYNOMIAL_ORDER} "
+                    "illumination surface out of the flat",
+                }[self.shading_correction]
+            )
+        return tuple(notes)
 
     def profile_fragment(self) -> dict:
         """The measured figures as a partial camera profile: nested dicts of plain Python numbers.
@@ -366,9 +486,12 @@ class NoiseFit:
         depth of 8–16, ...), a black level below the white level, and a hot-pixel fraction only with a
         dark current > 0 (the profile needs both; the fraction is left out when that current is not
         known). A figure outside them is left out, so the profile keeps its own value, and `fit_noise`
-        says so in `warnings`. ``sensor.temperature_c`` is the reference temperature, so the profile's
-        dark current at its operating temperature is the one measured. The system gain is written
-        whenever one was used (measured, or given), since the figures in electrons depend on it.
+        says so in `warnings`. ``noise.prnu_pct`` is PRNU1288's pixel part, the white per-pixel gain
+        spread the sensor model draws (row and column patterns, which it does not model, and a smooth
+        illumination shading fall mostly into the other parts). ``sensor.temperature_c`` is the reference
+        temperature, so the profile's dark current at its operating temperature is the one measured. The
+        system gain is written whenever one was used (measured, or given), since the figures in electrons
+        depend on it.
         """
         return self._fragment()[0]
 
@@ -411,7 +534,7 @@ class NoiseFit:
         put(sensor, Sensor, "temperature_c", reference_c)
         noise: dict = {}
         put(noise, Noise, "read_noise_e", measured(c.read_noise_e))
-        put(noise, Noise, "prnu_pct", measured(c.prnu_pct))
+        put(noise, Noise, "prnu_pct", measured(c.prnu_pixel_pct))
         put(noise, Noise, "dsnu_e", measured(c.dsnu_e))
         put(noise, Noise, "row_fpn_e", measured(c.row_fpn_e))
         put(noise, Noise, "column_fpn_e", measured(c.column_fpn_e))
@@ -433,30 +556,57 @@ class NoiseFit:
         return {"sensor": sensor}, refused
 
     def summary_rows(self) -> list[tuple[str, float, float, str]]:
-        """(name, value, 1σ uncertainty, unit) of the combined figures, for a table; NaN: no uncertainty."""
+        """(name, value, 1σ uncertainty, unit) of the combined figures, for a table; NaN: no uncertainty.
+
+        The figures that depend on the colour (responsivity, η, μ_p.sat, μ_p.min) are listed per channel
+        for a colour sensor."""
         c = self.combined
         at = f" at {self.dark_current_reference_c:g} °C" if self.dark_current_reference_c is not None else ""
+
+        def decibels(ratio: Estimate | None) -> Estimate | None:
+            if ratio is None or not ratio.value > 0:
+                return None
+            return Estimate(20 * math.log10(ratio.value), 20 / math.log(10) * ratio.uncertainty / ratio.value)
+
         rows = [
             ("black level", c.black_level_dn, "DN"),
             ("temporal dark noise σ_y.dark (t → 0)", c.temporal_dark_noise_dn, "DN"),
             ("read noise", c.read_noise_dn, "DN"),
             ("read noise", c.read_noise_e, "e⁻"),
             ("system gain K", c.gain_dn_per_e, "DN/e⁻"),
-            ("DSNU (pixel)", c.dsnu_e, "e⁻"),
-            ("row FPN", c.row_fpn_e, "e⁻"),
-            ("column FPN", c.column_fpn_e, "e⁻"),
             ("DSNU1288 (total)", c.dsnu1288_e, "e⁻"),
-            ("DSNU (pixel)", c.dsnu_dn if c.dsnu_e is None else None, "DN"),
-            ("row FPN", c.row_fpn_dn if c.row_fpn_e is None else None, "DN"),
-            ("column FPN", c.column_fpn_dn if c.column_fpn_e is None else None, "DN"),
+            ("DSNU1288 pixel", c.dsnu_e, "e⁻"),
+            ("DSNU1288 row", c.row_fpn_e, "e⁻"),
+            ("DSNU1288 column", c.column_fpn_e, "e⁻"),
             ("DSNU1288 (total)", c.dsnu1288_dn if c.dsnu1288_e is None else None, "DN"),
-            ("PRNU", c.prnu_pct, "%"),
+            ("DSNU1288 pixel", c.dsnu_dn if c.dsnu_e is None else None, "DN"),
+            ("DSNU1288 row", c.row_fpn_dn if c.row_fpn_e is None else None, "DN"),
+            ("DSNU1288 column", c.column_fpn_dn if c.column_fpn_e is None else None, "DN"),
+            ("PRNU1288 (total)", c.prnu_pct, "%"),
+            ("PRNU1288 pixel", c.prnu_pixel_pct, "%"),
+            ("PRNU1288 row", c.prnu_row_pct, "%"),
+            ("PRNU1288 column", c.prnu_column_pct, "%"),
             ("dark current" + at, c.dark_current_e_per_s, "e⁻/s"),
             ("dark current" + at, c.dark_current_dn_per_s if c.dark_current_e_per_s is None else None, "DN/s"),
+            ("dark current from variance" + at, c.dark_current_from_variance_e_per_s, "e⁻/s"),
             ("dark current doubling", self.dark_current_doubling_c, "°C"),
             ("saturation μ_y.sat", c.saturation_dn, "DN"),
             ("saturation capacity μ_e.sat", c.saturation_capacity_e, "e⁻"),
             (f"full well ({c.full_well_source})", c.full_well_e, "e⁻"),
+            ("sensitivity threshold μ_e.min", c.sensitivity_threshold_e, "e⁻"),
+            ("maximum SNR", decibels(c.snr_max), "dB"),
+            ("dynamic range DR", c.dynamic_range, "ratio"),
+            ("dynamic range DR", decibels(c.dynamic_range), "dB"),
+        ]
+        colour = [(f" ({r.channel})", r) for r in self.channels] if len(self.channels) > 1 else [("", c)]
+        for suffix, r in colour:
+            rows += [
+                ("responsivity R" + suffix, r.responsivity_dn_per_photon, "DN/p"),
+                ("quantum efficiency η" + suffix, r.quantum_efficiency_pct, "%"),
+                ("saturation capacity μ_p.sat" + suffix, r.saturation_photons, "p"),
+                ("sensitivity threshold μ_p.min" + suffix, r.sensitivity_threshold_photons, "p"),
+            ]
+        rows += [
             ("linearity error", self.linearity_error_pct, "%"),
             ("hot pixels", self.hot_pixel_fraction, "fraction"),
             ("hot-pixel dark current" + at, self.hot_pixel_dark_current_e_per_s, "e⁻/s"),
@@ -522,7 +672,7 @@ def _grid_regions(height: int, width: int, rows: int, columns: int) -> list[Regi
 
 
 def _regions(shape: tuple[int, int], tiles: int) -> list[Region]:
-    """The whole image, then its tiles × tiles tiles (at least 2 px a side: `_check_input`)."""
+    """The whole image, then its tiles × tiles tiles (at least 3 px a side: `_check_input`)."""
     height, width = shape
     return [(slice(0, height), slice(0, width)), *_grid_regions(height, width, tiles, tiles)]
 
@@ -641,11 +791,21 @@ def _weighted_mean(estimates: Sequence[Estimate]) -> Estimate:
 
 
 def _check_input(
-    groups: Sequence[FrameGroup], cfa: str, bit_depth: int, gain_dn_per_e: float | None, tiles: int
+    groups: Sequence[FrameGroup],
+    cfa: str,
+    bit_depth: int,
+    gain_dn_per_e: float | None,
+    tiles: int,
+    shading_correction: str,
 ) -> tuple[list, list]:
     """Dark and flat groups after checking what the fit relies on (ConfigError naming the group)."""
     if cfa not in CFA_NAMES:
         raise ConfigError(f"cfa must be one of {', '.join(CFA_NAMES)}, got {cfa!r}")
+    if shading_correction not in SHADING_CORRECTIONS:
+        raise ConfigError(
+            f"shading_correction (--shading-correction) must be one of {', '.join(SHADING_CORRECTIONS)}, "
+            f"got {shading_correction!r}"
+        )
     if not 1 <= int(bit_depth) <= 32:
         raise ConfigError(f"bit_depth must be 1–32 bits, got {bit_depth}")
     if gain_dn_per_e is not None and not (math.isfinite(gain_dn_per_e) and gain_dn_per_e > 0):
@@ -660,6 +820,9 @@ def _check_input(
             raise ConfigError(
                 f"{group.label}: exposure_time_s must be a finite time ≥ 0 s, got {group.exposure_time_s}"
             )
+        photons = group.photons_per_pixel
+        if photons is not None and not (math.isfinite(photons) and photons >= 0):
+            raise ConfigError(f"{group.label}: photons_per_pixel must be a finite count ≥ 0, got {photons}")
     darks = [g for g in groups if g.kind == "dark"]
     flats = [g for g in groups if g.kind == "flat"]
     if not darks:
@@ -686,15 +849,15 @@ def _check_input(
                 f"{bit_depth}-bit ADC; give the right bit depth (--bit-depth)"
             )
     # The smallest channel plane (a Bayer phase has ⌊H/2⌋ × ⌊W/2⌋ sites or one more) must hold tiles × tiles
-    # tiles of ≥ 2 × 2 px: a spatial variance, a row and a column variance need 2 rows and 2 columns.
+    # tiles of ≥ 3 × 3 px: EMVA's split into pixel, row and column variances needs 3 rows and 3 columns.
     step = 1 if cfa == "mono" else 2
     plane = (shape[0] // step, shape[1] // step)
-    minimum = 2 * tiles
+    minimum = 3 * tiles
     if min(plane) < minimum:
         raise ConfigError(
             f"{darks[0].label}: frames of {shape[1]}×{shape[0]} px give {cfa} channel planes of "
             f"{plane[1]}×{plane[0]} px; the fit needs at least {minimum}×{minimum} px per channel plane "
-            f"({tiles}×{tiles} tiles of 2×2 px for the uncertainties), frames of at least "
+            f"({tiles}×{tiles} tiles of 3×3 px for the uncertainties), frames of at least "
             f"{step * minimum}×{step * minimum} px"
         )
     for group in darks:
@@ -839,34 +1002,190 @@ def _shading_surface(signal: np.ndarray, valid: np.ndarray, order: int) -> np.nd
     return surface / level
 
 
-def _dark_decomposition(image: np.ndarray, temporal_dn2: float) -> np.ndarray:
-    """Spatial variances of an averaged dark image: [total, pixel, row, column], DN².
+def _lowpass_kernel_1d() -> np.ndarray:
+    """The standard's low-pass filter for uneven illumination along one axis: a 3-tap binomial
+    [1, 2, 1]/4 convolved with boxes of `HIGHPASS_BOX_PX` (19 taps; the 2-D filter is its outer product)."""
+    kernel = np.array([0.25, 0.5, 0.25])
+    for size in HIGHPASS_BOX_PX:
+        kernel = np.convolve(kernel, np.full(size, 1.0 / size))
+    return kernel
 
-    EMVA 4.0 §8.2 with M rows and N columns: S_tot, S_row and S_col are the variances (ddof = 0) of the
-    image, of its row means and of its column means; the pixel, row and column parts follow as
 
-        s²_p' = (S_tot − S_row − S_col)/((1 − 1/M)(1 − 1/N))
-        s²_row = S_row/(1 − 1/M) − s²_p'/N        s²_col = S_col/(1 − 1/N) − s²_p'/M
-        s²_pixel = s²_p' − σ²_temporal/L          s²_total = var(image, ddof = 1) − σ²_temporal/L
+def _highpass_variance_gains() -> tuple[float, float]:
+    """Fractions of a white non-uniformity's variance, and of a white row (or column) pattern's, that
+    the high-pass filter y − R⊛y keeps: Σ(δ − R)² for the 2-D and the 1-D kernel (away from the edges)."""
+    low = _lowpass_kernel_1d()
+    unit = np.zeros_like(low)
+    unit[low.size // 2] = 1.0
+    pixel = float(np.sum((np.outer(unit, unit) - np.outer(low, low)) ** 2))
+    return pixel, float(np.sum((unit - low) ** 2))
 
-    (EMVA's (1 − 1/M − 1/N) written with the finite-sample factors that make each part unbiased for
-    independent row, column and pixel offsets). s²_total is EMVA's s²_y.dark behind DSNU1288.
+
+HIGHPASS_PIXEL_VARIANCE_GAIN, HIGHPASS_LINE_VARIANCE_GAIN = _highpass_variance_gains()
+"""0.988 and 0.889: what the standard's high-pass filter keeps of a white pixel, and of a row or column,
+non-uniformity's variance. The temporal noise, white too, keeps the pixel fraction."""
+
+
+def highpass_filtered(image: np.ndarray) -> np.ndarray:
+    """EMVA 1288 4.0's correction for uneven illumination: the image less its low-pass version, which
+    is the image smoothed by 7 × 7 and 11 × 11 box filters and a 3 × 3 binomial filter (edges mirrored).
+
+    Parameters
+    ----------
+    image : (M, N) float array
+        One channel's averaged image, DN.
+
+    Returns
+    -------
+    (M, N) float64
+        y − R⊛y, DN (mean ≈ 0): variations slower than about 20 px are gone, white non-uniformity keeps
+        `HIGHPASS_PIXEL_VARIANCE_GAIN` of its variance.
+    """
+    from scipy.ndimage import convolve, uniform_filter
+
+    image = np.asarray(image, np.float64)
+    low = image
+    for size in HIGHPASS_BOX_PX:
+        low = uniform_filter(low, size=size, mode="reflect")
+    binomial = np.outer([0.25, 0.5, 0.25], [0.25, 0.5, 0.25])
+    return image - convolve(low, binomial, mode="reflect")
+
+
+def photons_per_pixel(
+    irradiance_w_per_m2: float, exposure_time_s: float, wavelength_nm: float, pixel_area_um2: float
+) -> float:
+    """Mean photons reaching one pixel in one exposure (EMVA 1288 4.0):
+
+        μ_p = A·E·t_exp·λ/(h·c)
+
+    Parameters
+    ----------
+    irradiance_w_per_m2 : float
+        E on the sensor surface, W/m².
+    exposure_time_s : float
+        t_exp, s.
+    wavelength_nm : float
+        λ of the (monochromatic) light, nm.
+    pixel_area_um2 : float
+        A, the pixel's area (pitch_x · pitch_y), µm².
+
+    Returns
+    -------
+    float
+        μ_p, photons per pixel.
+    """
+    energy_j = irradiance_w_per_m2 * pixel_area_um2 * 1e-12 * exposure_time_s
+    return energy_j * wavelength_nm * 1e-9 / (PLANCK_J_S * SPEED_OF_LIGHT_M_PER_S)
+
+
+def _variance_parts(image: np.ndarray, residual_dn2: float) -> np.ndarray:
+    """Spatial variances of an averaged image, [total, pixel, row, column], DN² (EMVA 1288 4.0 §8).
+
+    With M rows, N columns and σ²_y.stack/L the temporal variance left in an L-frame mean
+    (`residual_dn2`), as the standard and `emva1288` compute them:
+
+        s²_y     = var(image, ddof = 1) − σ²_y.stack/L
+        s²_y.cav = var(column means) − σ²_y.stack/(L·M)       s²_y.rav = var(row means) − σ²_y.stack/(L·N)
+        s²_y.pixel = M·N/(M·N − M − N)·(s²_y − s²_y.cav − s²_y.rav)
+        s²_y.col = s²_y.cav − s²_y.pixel/M                      s²_y.row = s²_y.rav − s²_y.pixel/N
+
+    (the variances of the row and column means with ddof = 0). s²_y is EMVA's s²_y.dark (DSNU1288) or
+    s²_y.50 (PRNU1288); the pixel part is the white non-uniformity, the row and column parts the
+    non-white one. NaN for fewer than 3 rows or columns (M·N − M − N ≤ 0 has no split).
     """
     rows, columns = image.shape
-    if rows < 2 or columns < 2:
+    if rows < 3 or columns < 3:
         return np.full(4, math.nan)
-    total = float(np.var(image))
-    row = float(np.var(image.mean(axis=1)))
-    column = float(np.var(image.mean(axis=0)))
-    pixel = (total - row - column) / ((1 - 1 / rows) * (1 - 1 / columns))
-    return np.array(
-        [
-            float(np.var(image, ddof=1)) - temporal_dn2,
-            pixel - temporal_dn2,
-            row / (1 - 1 / rows) - pixel / columns,
-            column / (1 - 1 / columns) - pixel / rows,
-        ]
+    total = float(np.var(image, ddof=1)) - residual_dn2
+    column_average = float(np.var(image.mean(axis=0))) - residual_dn2 / rows
+    row_average = float(np.var(image.mean(axis=1))) - residual_dn2 / columns
+    pixel = rows * columns / (rows * columns - rows - columns) * (total - column_average - row_average)
+    return np.array([total, pixel, row_average - pixel / columns, column_average - pixel / rows])
+
+
+@dataclass(frozen=True)
+class _SpatialVariances:
+    """`_variance_parts` of a channel image: of the whole image and each tile, and the row (column) part
+    of each horizontal (vertical) band, where the tiles would share their row and column offsets."""
+
+    tiles: np.ndarray
+    """(R, 4) [total, pixel, row, column] of the whole channel (row 0) and of each tile."""
+    row_bands: np.ndarray
+    """(B,) the row part of each horizontal band."""
+    column_bands: np.ndarray
+    """(B,) the column part of each vertical band."""
+
+    def __sub__(self, other: _SpatialVariances) -> _SpatialVariances:
+        return _SpatialVariances(
+            self.tiles - other.tiles, self.row_bands - other.row_bands, self.column_bands - other.column_bands
+        )
+
+    def scaled(self, per_region: np.ndarray) -> _SpatialVariances:
+        """Each tile multiplied by its factor (R,), the bands by the whole image's (entry 0)."""
+        return _SpatialVariances(
+            self.tiles * per_region[:, None], self.row_bands * per_region[0], self.column_bands * per_region[0]
+        )
+
+    def estimates(self) -> tuple[Estimate, Estimate, Estimate, Estimate]:
+        """Total, pixel, row and column variances with their uncertainties: the pixel part's from the
+        tiles, the row (column) part's from the horizontal (vertical) bands. Tiles in one band share its
+        row offsets, so their scatter misses most of the row and column parts' sampling error in the
+        total: its uncertainty adds the three."""
+        pixel = _estimate(self.tiles[:, 1])
+        row = _estimate(np.concatenate([[self.tiles[0, 2]], self.row_bands]))
+        column = _estimate(np.concatenate([[self.tiles[0, 3]], self.column_bands]))
+        total = Estimate(self.tiles[0, 0], math.sqrt(pixel.uncertainty**2 + row.uncertainty**2 + column.uncertainty**2))
+        return total, pixel, row, column
+
+
+def _spatial_variances(image: np.ndarray, residual_dn2: np.ndarray, regions: list[Region]) -> _SpatialVariances:
+    """`_SpatialVariances` of a channel image; `residual_dn2` (R,) is σ²_y.stack/L over each region."""
+    height, width = image.shape
+    tiles = np.array([_variance_parts(image[ys, xs], residual_dn2[r]) for r, (ys, xs) in enumerate(regions)])
+    row_bands = _grid_regions(height, width, max(2, min(16, height // 8)), 1)
+    column_bands = _grid_regions(height, width, 1, max(2, min(16, width // 8)))
+    return _SpatialVariances(
+        tiles,
+        np.array([_variance_parts(image[band], residual_dn2[0])[2] for band in row_bands]),
+        np.array([_variance_parts(image[band], residual_dn2[0])[3] for band in column_bands]),
     )
+
+
+def _spectrum(image: np.ndarray, axis: int) -> tuple[np.ndarray, np.ndarray]:
+    """Frequencies (cycles per pixel) and sqrt of the mean power of the mean-free image's spectra along
+    `axis` (1: each row, horizontal; 0: each column, vertical), normalised by the length (Parseval)."""
+    length = image.shape[axis]
+    spectra = np.fft.rfft(image - image.mean(), axis=axis)
+    power = np.mean(np.abs(spectra) ** 2, axis=1 - axis) / length
+    return np.fft.rfftfreq(length), np.sqrt(power)
+
+
+def _spectrogram(channel: str, kind: str, image: np.ndarray, scale: float, nonuniformity: float, temporal: float):
+    """A `Spectrogram` of `image` multiplied by `scale` (1 for DN, 100/signal for %)."""
+    horizontal_frequency, horizontal = _spectrum(image, 1)
+    vertical_frequency, vertical = _spectrum(image, 0)
+    return Spectrogram(
+        channel=channel,
+        kind=kind,
+        unit="DN" if kind == "DSNU" else "%",
+        horizontal_frequency_per_px=horizontal_frequency,
+        horizontal=horizontal * scale,
+        vertical_frequency_per_px=vertical_frequency,
+        vertical=vertical * scale,
+        nonuniformity=nonuniformity,
+        temporal=temporal,
+    )
+
+
+def _filled(image: np.ndarray, valid: np.ndarray) -> np.ndarray:
+    """A copy of a channel image with its invalid (hot, dead) pixels set to the median of the valid ones
+    of their `DEAD_MEDIAN_BLOCK_PX` block (the local level, which a shaded flat needs), so that they add
+    next to nothing to the spatial variances."""
+    out = np.array(image, np.float64)
+    if not valid.all():
+        local = _block_median(np.where(valid, out, np.nan), DEAD_MEDIAN_BLOCK_PX)
+        out[~valid] = np.where(np.isfinite(local), local, np.median(out[valid]))[~valid]
+    return out
 
 
 def _group_statistics(
@@ -1038,11 +1357,16 @@ class _Context:
     dsnu_group: FrameGroup
     longest_dark: FrameGroup
     gain_given: Estimate | None
-    shading_order: int | None
+    shading_correction: str
 
     @property
     def frames(self) -> np.ndarray:
         return np.array([f.stats.count for f in self.flats])
+
+    @property
+    def photons(self) -> np.ndarray:
+        """(F,) μ_p of each flat, NaN where not known."""
+        return np.array([math.nan if f.photons_per_pixel is None else f.photons_per_pixel for f in self.flats])
 
     def photon_transfer(self, c: int) -> _PhotonTransfer:
         return _photon_transfer(self.flats, self.flat_mean, self.flat_variance, self.darks, self.flat_sets, c)
@@ -1056,7 +1380,7 @@ def fit_noise(
     gain_dn_per_e: float | None = None,
     hot_pixel_threshold_sigma: float = 8.0,
     temperature_tolerance_c: float = 0.5,
-    shading_polynomial_order: int | None = 2,
+    shading_correction: str = "none",
     dsnu_exposure_time_s: float | None = None,
     tiles: int = 4,
 ) -> NoiseFit:
@@ -1080,12 +1404,15 @@ def fit_noise(
         tails of real read noise (RTS); 5σ would already flag ~2 normal pixels of an 8 MP sensor.
     temperature_tolerance_c : float
         Dark groups whose sorted temperatures step by no more than this, °C, form one temperature set.
-    shading_polynomial_order : int or None
-        Degree of the 2-D polynomial illumination surface divided out of the PRNU flat; None keeps the
-        flat as it is (EMVA's definition, and that of the `emva1288` reference implementation).
+    shading_correction : {"none", "highpass", "polynomial"}
+        Correction of the PRNU flat for uneven illumination. "none" (default) keeps it as it is: EMVA's
+        PRNU1288, as the `emva1288` reference implementation computes it, which includes any non-uniformity
+        of the light. "highpass": EMVA 1288 4.0's correction for uneven illumination (`highpass_filtered`)
+        on the flat and on its dark image. "polynomial": a degree-2 illumination surface fitted to the
+        flat and divided out (removes only the light's smooth shape).
     dsnu_exposure_time_s : float, optional
         Exposure time, s, of the dark group the spatial dark non-uniformity is measured on; default the
-        shortest of the reference temperature (the most frames among equals).
+        group with the most frames at the reference temperature (the shortest exposure among equals).
     tiles : int
         Each channel image is cut into tiles × tiles parts (≥ 2) for the uncertainties.
 
@@ -1097,9 +1424,9 @@ def fit_noise(
     ------
     ConfigError
         No dark group; a group of < 2 frames; a saturated dark group; groups of different shapes;
-        frames whose channel planes (a Bayer phase: half the frame a side) are under 2·tiles px a side;
-        values above the white level; mixed known and unknown temperatures. Each names the group.
-        Also a gain_dn_per_e ≤ 0 or tiles < 2.
+        frames whose channel planes (a Bayer phase: half the frame a side) are under 3·tiles px a side;
+        values above the white level; mixed known and unknown temperatures; a photon count < 0. Each
+        names the group. Also a gain_dn_per_e ≤ 0, tiles < 2, or an unknown shading_correction.
 
     Notes
     -----
@@ -1119,11 +1446,14 @@ def fit_noise(
       intercepts are the black level and σ²_y.dark(0), so dark-current shot noise (∝ t) drops out.
       σ_read = sqrt(σ²_y.dark(0) − 1/12)/K; below 0.24 DN² EMVA's floor applies (an upper limit, with
       a warning).
-    - *Dark non-uniformity* (EMVA 4.0 §8.2): `_dark_decomposition` on the averaged dark image of the
-      shortest exposure; DSNU1288 = sqrt(s²_y.dark)/K. The row and column parts take their uncertainty
-      from horizontal and vertical bands; DSNU1288's and the black level's add those of the row and
-      column offsets (tiles in one band share them).
-    - *Dark current*: slope of μ_y.dark(t) ÷ K, from the hot-pixel-free mean. With ≥ 2
+    - *Dark non-uniformity* (EMVA 4.0 §8): `_variance_parts` on the averaged dark image of the largest
+      dark stack (the most frames; L = 50 leaves 1/50 of the temporal variance to subtract, a 2-frame
+      pair half of it, and with it half of any temporal row noise, which the correction σ²/(L·N) does
+      not cover); DSNU1288 = sqrt(s²_y.dark)/K, and its pixel, row and column parts likewise. The row
+      and column parts take their uncertainty from horizontal and vertical bands; DSNU1288's and the
+      black level's add those of the row and column offsets (tiles in one band share them).
+    - *Dark current*: slope of μ_y.dark(t) ÷ K, from the hot-pixel-free mean; EMVA's estimate from
+      the variance, the slope of σ²_y.dark(t) ÷ K², beside it. With ≥ 2
       temperatures each with ≥ 2 exposure times: ln I(T) = a + b·T by least squares, doubling = ln 2/b,
       I at the reference temperature (the median measured temperature) = exp(a + b·T_ref) — provided
       b > 0 by 2 u(b) (`DOUBLING_MIN_SIGNIFICANCE`); otherwise no doubling (a warning; the profile
@@ -1141,17 +1471,25 @@ def fit_noise(
       every point, and the ranges below are fractions of the largest measured μ_y − μ_y.dark instead.
     - *Dead pixels*: in the mid-signal flat (30–70 % of saturation), response = mean − per-pixel dark
       line at its exposure time; dead where below 50 % of the median of its 16 × 16 block.
-    - *PRNU*: in the mid-signal flat (most frames), the illumination surface is divided out
-      of the signal, then s²_y.light = var(flat) − σ²_y/L over good pixels, s²_y.dark likewise from the
-      dark group at its exposure time (else the DSNU group), PRNU = sqrt(s²_light − s²_dark)/(μ_y −
-      μ_y.dark)·100 %.
+    - *PRNU* (EMVA 4.0 §8): the mid-signal flat (30–70 % of saturation; the largest stack there,
+      nearest 50 % among equals) and the largest dark group at its exposure time (else the DSNU group),
+      hot and dead pixels set to the median, corrected for uneven illumination if asked
+      (`shading_correction`); `_variance_parts` of each, PRNU1288 = sqrt(s²_y.50 − s²_y.dark)/(μ_y.50 −
+      μ_y.dark)·100 %, and its pixel, row and column parts from the parts' differences.
+    - *Sensitivity* (EMVA 4.0): μ_e.min = sqrt(σ²_y.dark/K² + 1/4) + 1/2, the signal at which
+      SNR = η·μ_p/sqrt(σ²_y.dark/K² + η·μ_p) is 1 (`emva1288` uses the approximation σ_y.dark/K + 1/2,
+      smaller by 1.5 % for σ_y.dark/K = 2.6 e⁻, by 0.45 % for 5 e⁻); SNR_max = sqrt(μ_e.sat). With photon
+      counts on the flats, the responsivity R is the slope through the origin of μ_y − μ_y.dark against
+      μ_p over the points K is fitted to, η = R/K, μ_p.sat the photon count of the saturation point,
+      μ_p.min = μ_e.min/η and DR = μ_p.sat/μ_p.min; without, DR = μ_e.sat/μ_e.min (the same ratio for a
+      linear sensor; η cancels).
     - *Linearity* (EMVA 1288 4.0): with flats at ≥ 3 exposure times within 5–95 % of μ_sat (5–100 %
       of the largest mean without saturation) and constant irradiance, μ_y − μ_y.dark = a·t + b is
       fitted minimising relative deviations (weights 1/y, as `emva1288`); from the relative deviations
       δ = (y − fit)/fit·100 %, LE = (max δ − min δ)/2, i.e. (LE_max − LE_min)/2 of `emva1288`
       (`_linearity`); its uncertainty from the temporal noise of the two extreme points' means.
     """
-    darks, flats = _check_input(groups, cfa, bit_depth, gain_dn_per_e, tiles)
+    darks, flats = _check_input(groups, cfa, bit_depth, gain_dn_per_e, tiles, shading_correction)
     shape = darks[0].stats.shape_px
     channels = channel_phases(cfa)
     warnings: list[str] = []
@@ -1202,7 +1540,7 @@ def fit_noise(
         dsnu_group=_dsnu_group(primary, dsnu_exposure_time_s),
         longest_dark=primary.groups[int(np.argmax(times))],
         gain_given=None if gain_dn_per_e is None else Estimate(gain_dn_per_e, 0.0),
-        shading_order=shading_polynomial_order,
+        shading_correction=shading_correction,
     )
     fits = [_fit_channel(context, c, warnings) for c in range(len(channels))]
     results = [f.noise for f in fits]
@@ -1224,6 +1562,9 @@ def fit_noise(
         linearity_error_pct=combined.linearity_error_pct,
         photon_transfer=tuple(f.curve for f in fits if f.curve is not None),
         dark_histograms=tuple(f.histogram for f in fits),
+        spectrograms=tuple(spectrogram for f in fits for spectrogram in f.spectrograms),
+        shading_correction=shading_correction,
+        dsnu_stack=f"{context.dsnu_group.label} ({context.dsnu_group.stats.count} frames)",
         warnings=(),
     )
     return replace(fit, warnings=tuple(dict.fromkeys(warnings + fit._fragment()[1])))
@@ -1290,10 +1631,10 @@ def _dead_pixels(response_dn: np.ndarray, hot: np.ndarray) -> np.ndarray:
 
 
 def _dsnu_group(primary: _DarkSet, exposure_time_s: float | None) -> FrameGroup:
-    """The dark group for the spatial non-uniformity: the shortest exposure of the reference set (the
-    most frames among equals), or the one at `exposure_time_s`."""
+    """The dark group for the spatial non-uniformity: the largest stack of the reference set (the
+    shortest exposure among equals), or the largest at `exposure_time_s`."""
     if exposure_time_s is None:
-        return min(primary.groups, key=lambda g: (g.exposure_time_s, -g.stats.count))
+        return min(primary.groups, key=lambda g: (-g.stats.count, g.exposure_time_s))
     matching = [g for g in primary.groups if math.isclose(g.exposure_time_s, exposure_time_s, rel_tol=1e-6)]
     if not matching:
         available = ", ".join(f"{t:g}" for t in sorted(set(primary.exposure_times_s)))
@@ -1309,6 +1650,7 @@ class _ChannelFit:
     noise: ChannelNoise
     curve: PhotonTransferCurve | None
     histogram: DarkHistogram
+    spectrograms: tuple[Spectrogram, ...]
     hot_rates_e: tuple[np.ndarray, float] | None
     """The hot pixels' dark currents at the reference temperature, e⁻/s, and their relative scale
     uncertainty (gain and temperature scaling)."""
@@ -1327,13 +1669,18 @@ class _DarkFigures:
     """s²_y.dark of the DSNU group (whole channel), DN²."""
     black_dn: np.ndarray
     """(R,) black level of the whole channel and of each tile, DN."""
+    variance_0_dn2: np.ndarray
+    """(R,) σ²_y.dark(t → 0) of the whole channel and of each tile (EMVA's floor applied), DN²."""
+    variance_slope_dn2_per_s: Estimate | None
+    """Slope of σ²_y.dark against t at the reference set's temperature, DN²/s; None with one exposure time."""
+    spectrogram: Spectrogram
 
 
 def _dark_figures(ctx: _Context, c: int, name: str, warnings: list[str]) -> _DarkFigures:
     """Black level, temporal dark noise and the spatial dark non-uniformity of channel `c`, DN."""
     times, mean, variance = ctx.darks.of(ctx.primary)
     _, black = _line_fit(times, mean[:, c])
-    _, variance_0 = _line_fit(times, variance[:, c])
+    variance_slope, variance_0 = _line_fit(times, variance[:, c])
     if variance_0[0] < DARK_VARIANCE_FLOOR_DN2:
         warnings.append(
             f"{name}: σ²_y.dark = {variance_0[0]:.3g} DN² is below the {DARK_VARIANCE_FLOOR_DN2} DN² at which "
@@ -1341,26 +1688,18 @@ def _dark_figures(ctx: _Context, c: int, name: str, warnings: list[str]) -> _Dar
         )
         variance_0 = np.maximum(variance_0, DARK_VARIANCE_FLOOR_DN2)
 
-    # Spatial non-uniformity: hot pixels replaced by the channel median.
+    # Spatial non-uniformity of the largest stack: hot pixels replaced by the channel median.
     phase = ctx.channels[c][1]
     group = ctx.dsnu_group
-    image = _plane(group.stats.mean_dn, phase).copy()
-    hot = _plane(ctx.hot_map, phase)
-    image[hot] = np.median(image[~hot])
-    temporal = ctx.darks.variance_dn2[ctx.darks.index[id(group)], c] / group.stats.count
+    image = _filled(_plane(group.stats.mean_dn, phase), ~_plane(ctx.hot_map, phase))
+    temporal = ctx.darks.variance_dn2[ctx.darks.index[id(group)], c]
+    parts = _spatial_variances(image, temporal / group.stats.count, ctx.regions[c])
+    total, pixel, row, column = parts.estimates()
     height, width = image.shape
-    parts = np.array([_dark_decomposition(image[ys, xs], temporal[r]) for r, (ys, xs) in enumerate(ctx.regions[c])])
-    row_bands = _grid_regions(height, width, max(2, min(16, height // 8)), 1)
-    column_bands = _grid_regions(height, width, 1, max(2, min(16, width // 8)))
-    row = _estimate([parts[0, 2]] + [_dark_decomposition(image[r], temporal[0])[2] for r in row_bands])
-    column = _estimate([parts[0, 3]] + [_dark_decomposition(image[r], temporal[0])[3] for r in column_bands])
-    pixel = _estimate(parts[:, 1])
-    # Tiles in one band share its row offsets, so their scatter misses most of the row and column parts'
-    # sampling error in a total or a mean: those come from the bands (and from s²/M, s²/N for a mean).
-    total = Estimate(parts[0, 0], math.sqrt(pixel.uncertainty**2 + row.uncertainty**2 + column.uncertainty**2))
     black_u = math.sqrt(
         _estimate(black).uncertainty ** 2 + max(row.value, 0.0) / height + max(column.value, 0.0) / width
     )
+    dsnu1288 = _sigma_estimate(total)
     return _DarkFigures(
         black_level_dn=Estimate(black[0], black_u),
         temporal_dark_noise_dn=_sigma_estimate(_estimate(variance_0)),
@@ -1368,9 +1707,12 @@ def _dark_figures(ctx: _Context, c: int, name: str, warnings: list[str]) -> _Dar
         dsnu_dn=_sigma_estimate(pixel),
         row_fpn_dn=_sigma_estimate(row),
         column_fpn_dn=_sigma_estimate(column),
-        dsnu1288_dn=_sigma_estimate(total),
-        spatial_variance_dn2=float(parts[0, 0]),
+        dsnu1288_dn=dsnu1288,
+        spatial_variance_dn2=float(parts.tiles[0, 0]),
         black_dn=black,
+        variance_0_dn2=variance_0,
+        variance_slope_dn2_per_s=_estimate(variance_slope) if ctx.primary.has_slope else None,
+        spectrogram=_spectrogram(name, "DSNU", image, 1.0, dsnu1288.value, math.sqrt(max(float(temporal[0]), 0.0))),
     )
 
 
@@ -1424,21 +1766,40 @@ def _dark_current(ctx: _Context, c: int, warnings: list[str]) -> tuple[Estimate 
 
 
 @dataclass(frozen=True)
+class _Prnu:
+    total_pct: Estimate
+    pixel_pct: Estimate
+    row_pct: Estimate
+    column_pct: Estimate
+    stack: str
+    level: str
+    spectrogram: Spectrogram
+
+
+@dataclass(frozen=True, eq=False)
 class _FlatFigures:
     gain_dn_per_e: Estimate | None
+    gain_dn_per_e_regions: np.ndarray | None
+    """(R,) K of the whole channel and of each tile."""
     saturation_dn: Estimate | None
-    """None (as the next three) when the flats do not reach saturation."""
+    """None (as the next four) when the flats do not reach saturation."""
     saturation_above_dark_dn: Estimate | None
+    saturation_above_dark_dn_regions: np.ndarray | None
+    """(R,) μ_y.sat − μ_y.dark of the whole channel and of each tile, DN."""
     full_well_dn: Estimate | None
     """Clip level above black, DN."""
     full_well_source: str | None
-    prnu_pct: Estimate | None
+    responsivity_dn_per_photon_regions: np.ndarray | None
+    """(R,) R of the whole channel and each tile; None without photon counts."""
+    saturation_photons: float | None
+    """μ_p of the saturation point; None without saturation or its photon count."""
+    prnu: _Prnu
     linearity_error_pct: Estimate | None
     curve: PhotonTransferCurve
 
 
 def _flat_figures(ctx: _Context, c: int, black_dn: np.ndarray, warnings: list[str]) -> _FlatFigures:
-    """Photon transfer, system gain, saturation and clip level, PRNU and linearity of channel `c`."""
+    """Photon transfer, system gain, saturation and clip level, responsivity, PRNU and linearity of channel `c`."""
     name = ctx.channels[c][0]
     transfer = ctx.photon_transfer(c)
     sat = transfer.saturation
@@ -1446,15 +1807,28 @@ def _flat_figures(ctx: _Context, c: int, black_dn: np.ndarray, warnings: list[st
     fit_points = x[:, 0] > 0
     if sat is not None:
         fit_points &= (x[:, 0] <= GAIN_FIT_LIMIT * x[sat, 0]) & (np.arange(len(x)) <= sat)
-    gain = None
+    gain = gain_regions = None
     if fit_points.any():
         xs, ys = x[fit_points], y[fit_points]
-        gain = _estimate(np.sum(xs * ys, axis=0) / np.sum(xs * xs, axis=0))
+        gain_regions = np.sum(xs * ys, axis=0) / np.sum(xs * xs, axis=0)
+        gain = _estimate(gain_regions)
         if fit_points.sum() < 3:
             warnings.append(f"{name}: the system gain rests on {int(fit_points.sum())} photon transfer point(s)")
         if not gain.value > 0:
             warnings.append(f"{name}: the photon transfer slope is {gain.value:.3g} DN/e⁻; no system gain")
-            gain = None
+            gain = gain_regions = None
+    photons = ctx.photons[transfer.order]
+    responsivity = None
+    known = fit_points & np.isfinite(photons) & (photons > 0)
+    if known.any():
+        # EMVA: R is fitted through the origin over the points K is fitted to.
+        if known.sum() < fit_points.sum():
+            warnings.append(
+                f"{name}: {int(fit_points.sum() - known.sum())} of the {int(fit_points.sum())} flats of the gain fit "
+                "have no photon count; the responsivity and η rest on the others"
+            )
+        ps, xs = photons[known], x[known]
+        responsivity = np.tensordot(ps, xs, axes=(0, 0)) / float(ps @ ps)
     curve = PhotonTransferCurve(
         channel=name,
         labels=tuple(ctx.flats[i].label for i in transfer.order),
@@ -1465,7 +1839,14 @@ def _flat_figures(ctx: _Context, c: int, black_dn: np.ndarray, warnings: list[st
         saturation_index=sat,
         gain_dn_per_e=None if gain is None else gain.value,
     )
-    figures = {"saturation_dn": None, "saturation_above_dark_dn": None, "full_well_dn": None, "full_well_source": None}
+    figures = {
+        "saturation_dn": None,
+        "saturation_above_dark_dn": None,
+        "saturation_above_dark_dn_regions": None,
+        "full_well_dn": None,
+        "full_well_source": None,
+        "saturation_photons": None,
+    }
     if sat is not None:
         collapsed = [i for i in range(sat + 1, len(x)) if y[i, 0] < PLATEAU_VARIANCE_FRACTION * y[sat, 0]]
         if collapsed:
@@ -1479,12 +1860,16 @@ def _flat_figures(ctx: _Context, c: int, black_dn: np.ndarray, warnings: list[st
         figures = {
             "saturation_dn": _estimate(transfer.mean[sat]),
             "saturation_above_dark_dn": _estimate(x[sat]),
+            "saturation_above_dark_dn_regions": x[sat].copy(),
             "full_well_dn": full_well,
             "full_well_source": source,
+            "saturation_photons": float(photons[sat]) if np.isfinite(photons[sat]) else None,
         }
     return _FlatFigures(
         gain_dn_per_e=gain,
-        prnu_pct=_prnu(ctx, c, transfer, warnings),
+        gain_dn_per_e_regions=gain_regions,
+        responsivity_dn_per_photon_regions=responsivity,
+        prnu=_prnu(ctx, c, transfer, warnings),
         linearity_error_pct=_linearity(ctx, c, transfer, warnings),
         curve=curve,
         **figures,
@@ -1495,50 +1880,67 @@ def _full_scale_name(transfer: _PhotonTransfer) -> str:
     return "saturation" if transfer.saturation is not None else "the largest mean (no saturation)"
 
 
-def _prnu(ctx: _Context, c: int, transfer: _PhotonTransfer, warnings: list[str]) -> Estimate:
-    """PRNU of channel `c`, % (EMVA 1288 4.0; see `fit_noise`)."""
+def _prnu(ctx: _Context, c: int, transfer: _PhotonTransfer, warnings: list[str]) -> _Prnu:
+    """PRNU1288 of channel `c` and its pixel, row and column parts, % (EMVA 1288 4.0; see `fit_noise`)."""
     name, phase = ctx.channels[c]
     full_scale = transfer.full_scale_dn
     position, in_range = _mid_signal_flat(transfer.mean_above[:, 0], full_scale, ctx.frames[transfer.order])
     f = int(transfer.order[position])
     flat, dark_set = ctx.flats[f], ctx.flat_sets[f]
+    level = transfer.mean_above[position, 0] / full_scale
     if not in_range:
-        level = transfer.mean_above[position, 0] / full_scale
         warnings.append(
             f"{name}: no flat lies within 30–70 % of {_full_scale_name(transfer)}; PRNU and dead pixels use "
             f"{flat.label} at {level:.0%}"
         )
     ok = _plane(ctx.valid, phase)
     regions = ctx.regions[c]
-    image = _plane(flat.stats.mean_dn, phase)
-    variance = _plane(flat.stats.temporal_variance_dn2, phase)
-    dark_mean = ctx.darks.at(dark_set, flat.exposure_time_s)[0][c]
-    if ctx.shading_order is not None:
-        surface = _shading_surface(image - dark_mean[0], ok, ctx.shading_order)
+    same = [g for g in dark_set.groups if math.isclose(g.exposure_time_s, flat.exposure_time_s, rel_tol=1e-6)]
+    dark_group = max(same, key=lambda g: g.stats.count) if same else ctx.dsnu_group
+    light = _filled(_plane(flat.stats.mean_dn, phase), ok)
+    dark = _filled(_plane(dark_group.stats.mean_dn, phase), ok)
+    light_variance = _plane(flat.stats.temporal_variance_dn2, phase)
+    dark_temporal = ctx.darks.variance_dn2[ctx.darks.index[id(dark_group)], c]
+    dark_level = ctx.darks.at(dark_set, flat.exposure_time_s)[0][c]
+    if ctx.shading_correction == "polynomial":
+        surface = _shading_surface(light - dark_level[0], ok, SHADING_POLYNOMIAL_ORDER)
         if surface is None:
             warnings.append(f"{name}: the illumination of {flat.label} could not be fitted; PRNU keeps its shading")
         else:
             # The signal, and its temporal noise with it, as under uniform light.
-            image = dark_mean[0] + (image - dark_mean[0]) / surface
-            variance = variance / surface**2
-    temporal = _masked_means(variance, ok, regions) - flat.stats.frame_mean_variance_dn2(phase)
-    light = _masked_variances(image, ok, regions) - temporal / flat.stats.count
-    signal = _masked_means(image, ok, regions) - dark_mean
-    same = [g for g in dark_set.groups if math.isclose(g.exposure_time_s, flat.exposure_time_s, rel_tol=1e-6)]
-    dark_group = max(same, key=lambda g: g.stats.count) if same else ctx.dsnu_group
-    dark = _masked_variances(_plane(dark_group.stats.mean_dn, phase), ok, regions)
-    dark -= ctx.darks.variance_dn2[ctx.darks.index[id(dark_group)], c] / dark_group.stats.count
-    return _sigma_estimate(_estimate(1e4 * (light - dark) / signal**2))
+            light = dark_level[0] + (light - dark_level[0]) / surface
+            light_variance = light_variance / surface**2
+    light_temporal = _masked_means(light_variance, ok, regions) - flat.stats.frame_mean_variance_dn2(phase)
+    signal = _masked_means(light, ok, regions) - dark_level
+    if ctx.shading_correction == "highpass":
+        light, dark = highpass_filtered(light), highpass_filtered(dark)
+        light_temporal = light_temporal * HIGHPASS_PIXEL_VARIANCE_GAIN
+        dark_temporal = dark_temporal * HIGHPASS_PIXEL_VARIANCE_GAIN
+    parts = _spatial_variances(light, light_temporal / flat.stats.count, regions) - _spatial_variances(
+        dark, dark_temporal / dark_group.stats.count, regions
+    )
+    total, pixel, row, column = (_sigma_estimate(e) for e in parts.scaled(1e4 / signal**2).estimates())
+    stack = f"{flat.label} ({flat.stats.count} frames)"
+    spectrogram = _spectrogram(
+        name,
+        "PRNU",
+        light - dark,
+        100.0 / signal[0],
+        total.value,
+        100.0 * math.sqrt(max(float(light_temporal[0]), 0.0)) / signal[0],
+    )
+    return _Prnu(total, pixel, row, column, stack, f"{level:.0%} of {_full_scale_name(transfer)}", spectrogram)
 
 
 def _linearity(ctx: _Context, c: int, transfer: _PhotonTransfer, warnings: list[str]) -> Estimate | None:
     """Linearity error of channel `c`, % (EMVA 1288 4.0; see `fit_noise`).
 
-    LE = (max δ − min δ)/2 of the relative deviations δ_i = (y_i − (a·t_i + b))/(a·t_i + b)·100 % from the
-    line fitted to y = μ_y − μ_y.dark against t with weights 1/y, over 5–95 % of μ_y.sat − μ_y.dark (up to
-    the largest mean when the flats do not reach saturation). The `emva1288` reference implementation's
-    LE_min and LE_max are min δ and max δ over the same points (it fits against the photon count, which
-    is proportional to t under constant irradiance), so LE = (LE_max − LE_min)/2. u(LE) =
+    LE = (max δ − min δ)/2 of the relative deviations δ_i = (y_i − (a·u_i + b))/(a·u_i + b)·100 % from the
+    line fitted to y = μ_y − μ_y.dark against u with weights 1/y, over 5–95 % of μ_y.sat − μ_y.dark (up to
+    the largest mean when the flats do not reach saturation); u is the photon count μ_p where every one of
+    those flats has one (as EMVA), else the exposure time t (proportional to μ_p under constant
+    irradiance). The `emva1288` reference implementation's LE_min and LE_max are min δ and max δ over the
+    same points, so LE = (LE_max − LE_min)/2. u(LE) =
     sqrt(u(δ_max)² + u(δ_min)²)/2, u(δ_i) the temporal noise of point i's spatial mean relative to the fit.
     """
     x = transfer.mean_above[:, 0]
@@ -1546,16 +1948,18 @@ def _linearity(ctx: _Context, c: int, transfer: _PhotonTransfer, warnings: list[
     top = LINEARITY_RANGE[1] if transfer.saturation is not None else 1.0
     times = np.array([ctx.flats[i].exposure_time_s for i in transfer.order])
     inside = (x >= LINEARITY_RANGE[0] * full_scale) & (x <= top * full_scale)
-    if np.unique(times[inside]).size < 3:
+    photons = ctx.photons[transfer.order][inside]
+    u = photons if np.all(np.isfinite(photons)) else times[inside]
+    if np.unique(u).size < 3:
         if len(ctx.flats) >= 3:
             warnings.append(
-                f"{ctx.channels[c][0]}: fewer than 3 exposure times within {LINEARITY_RANGE[0]:.0%}–{top:.0%} of "
-                f"{_full_scale_name(transfer)}; no linearity error"
+                f"{ctx.channels[c][0]}: fewer than 3 exposure times (or photon counts) within "
+                f"{LINEARITY_RANGE[0]:.0%}–{top:.0%} of {_full_scale_name(transfer)}; no linearity error"
             )
         return None
-    t, y = times[inside], x[inside]
-    offset, slope = np.polynomial.polynomial.polyfit(t, y, 1, w=1.0 / y)
-    fitted = offset + slope * t
+    y = x[inside]
+    offset, slope = np.polynomial.polynomial.polyfit(u, y, 1, w=1.0 / y)
+    fitted = offset + slope * u
     deviation = 100 * (y - fitted) / fitted
     frames = ctx.frames[transfer.order][inside]
     pixels = np.count_nonzero(_plane(ctx.valid, ctx.channels[c][1]))
@@ -1563,6 +1967,64 @@ def _linearity(ctx: _Context, c: int, transfer: _PhotonTransfer, warnings: list[
     u_deviation = 100 * noise_dn / fitted
     high, low = int(np.argmax(deviation)), int(np.argmin(deviation))
     return Estimate((deviation[high] - deviation[low]) / 2, math.hypot(u_deviation[high], u_deviation[low]) / 2)
+
+
+def _sensitivity(dark: _DarkFigures, flat: _FlatFigures | None, gain: Estimate | None) -> dict[str, Estimate | None]:
+    """μ_e.min, SNR_max, DR and, with photon counts, R, η, μ_p.sat and μ_p.min of one channel (see
+    `fit_noise`, *Sensitivity*): the ChannelNoise fields of those names. Each is computed on the whole
+    channel and on each tile (K, σ²_y.dark, μ_y.sat and R of the tile) for its uncertainty."""
+    names = (
+        "sensitivity_threshold_e",
+        "snr_max",
+        "dynamic_range",
+        "responsivity_dn_per_photon",
+        "quantum_efficiency_pct",
+        "saturation_photons",
+        "sensitivity_threshold_photons",
+    )
+    out: dict[str, Estimate | None] = dict.fromkeys(names)
+    if gain is None:
+        return out
+    measured = flat is not None and flat.gain_dn_per_e_regions is not None
+    gain_regions = flat.gain_dn_per_e_regions if measured else np.full(dark.variance_0_dn2.shape, gain.value)
+    threshold_e = np.sqrt(dark.variance_0_dn2 / gain_regions**2 + 0.25) + 0.5
+    out["sensitivity_threshold_e"] = _estimate(threshold_e)
+    if flat is None:
+        return out
+    saturation_e = None
+    if flat.saturation_above_dark_dn_regions is not None:
+        saturation_e = flat.saturation_above_dark_dn_regions / gain_regions
+        out["snr_max"] = _estimate(np.sqrt(np.maximum(saturation_e, 0.0)))
+    responsivity = flat.responsivity_dn_per_photon_regions
+    if responsivity is None:
+        if saturation_e is not None:
+            out["dynamic_range"] = _estimate(saturation_e / threshold_e)
+        return out
+    efficiency = responsivity / gain_regions
+    threshold_photons = threshold_e / efficiency
+    out["responsivity_dn_per_photon"] = _estimate(responsivity)
+    out["quantum_efficiency_pct"] = _estimate(100 * efficiency)
+    out["sensitivity_threshold_photons"] = _estimate(threshold_photons)
+    if flat.saturation_photons is not None:
+        out["saturation_photons"] = Estimate(flat.saturation_photons, math.nan)
+        out["dynamic_range"] = _estimate(flat.saturation_photons / threshold_photons)
+    elif saturation_e is not None:
+        out["dynamic_range"] = _estimate(saturation_e / threshold_e)
+    return out
+
+
+def _per_gain_squared(estimate: Estimate | None, gain: Estimate | None, factor: Estimate) -> Estimate | None:
+    """A variance rate, DN²/s, in electrons per second: estimate/K² × factor, first-order uncertainty."""
+    if estimate is None or gain is None:
+        return None
+    scale = factor.value / gain.value**2
+    value = estimate.value * scale
+    uncertainty = math.sqrt(
+        (estimate.uncertainty * scale) ** 2
+        + (value * 2 * gain.uncertainty / gain.value) ** 2
+        + (value * factor.uncertainty / factor.value) ** 2
+    )
+    return Estimate(value, uncertainty)
 
 
 def _fit_channel(ctx: _Context, c: int, warnings: list[str]) -> _ChannelFit:
@@ -1594,6 +2056,7 @@ def _fit_channel(ctx: _Context, c: int, warnings: list[str]) -> _ChannelFit:
     if ctx.flats:
         dead_count = int(np.count_nonzero(_plane(ctx.dead_map, phase)))
         dead_fraction = Estimate(dead_count / pixels, math.sqrt(dead_count) / pixels)
+    prnu = None if flat is None else flat.prnu
     noise = ChannelNoise(
         channel=name,
         pixels=pixels,
@@ -1611,9 +2074,15 @@ def _fit_channel(ctx: _Context, c: int, warnings: list[str]) -> _ChannelFit:
         dsnu1288_e=_per_gain(dark.dsnu1288_dn, gain),
         dark_current_dn_per_s=rate_dn,
         dark_current_e_per_s=_per_gain(rate_dn, gain),
+        dark_current_from_variance_e_per_s=_per_gain_squared(dark.variance_slope_dn2_per_s, gain, to_reference),
         dark_current_doubling_c=doubling,
         gain_dn_per_e=gain,
-        prnu_pct=None if flat is None else flat.prnu_pct,
+        prnu_pct=None if prnu is None else prnu.total_pct,
+        prnu_pixel_pct=None if prnu is None else prnu.pixel_pct,
+        prnu_row_pct=None if prnu is None else prnu.row_pct,
+        prnu_column_pct=None if prnu is None else prnu.column_pct,
+        prnu_stack=None if prnu is None else prnu.stack,
+        prnu_level=None if prnu is None else prnu.level,
         saturation_dn=None if flat is None else flat.saturation_dn,
         saturation_capacity_e=None if flat is None else _per_gain(flat.saturation_above_dark_dn, gain),
         full_well_e=None if flat is None else _per_gain(flat.full_well_dn, gain),
@@ -1622,10 +2091,12 @@ def _fit_channel(ctx: _Context, c: int, warnings: list[str]) -> _ChannelFit:
         hot_pixel_dark_current_e_per_s=hot_current,
         dead_pixel_fraction=dead_fraction,
         linearity_error_pct=None if flat is None else flat.linearity_error_pct,
+        **_sensitivity(dark, flat, gain),
     )
     image = _plane(ctx.longest_dark.stats.mean_dn, phase)
     histogram = _dark_histogram(ctx, c, image, dark.spatial_variance_dn2)
-    return _ChannelFit(noise, None if flat is None else flat.curve, histogram, hot_rates_e)
+    spectrograms = (dark.spectrogram,) if prnu is None else (dark.spectrogram, prnu.spectrogram)
+    return _ChannelFit(noise, None if flat is None else flat.curve, histogram, spectrograms, hot_rates_e)
 
 
 def _dark_histogram(ctx: _Context, c: int, image: np.ndarray, spatial_dn2: float) -> DarkHistogram:
@@ -1714,6 +2185,8 @@ def _combine(results: list[ChannelNoise], hot_rates_e: list[tuple[np.ndarray, fl
     pixels = sum(r.pixels for r in results)
 
     def weighted(field: str) -> Estimate | None:
+        if field in COLOUR_FIELDS:
+            return None
         values = [getattr(r, field) for r in results]
         if field in SATURATION_FIELDS:
             # One pixel design under every filter: the channels that reach saturation give it.
@@ -1744,10 +2217,13 @@ def _combine(results: list[ChannelNoise], hot_rates_e: list[tuple[np.ndarray, fl
     linearity = [r.linearity_error_pct for r in results]
     sources = {r.full_well_source for r in results} - {None}
     special = ("channel", "pixels", "full_well_source", "hot_pixel_fraction", "dead_pixel_fraction")
-    special += ("hot_pixel_dark_current_e_per_s", "linearity_error_pct")
+    special += ("hot_pixel_dark_current_e_per_s", "linearity_error_pct", "prnu_stack", "prnu_level")
+    stacks = list(dict.fromkeys(r.prnu_stack for r in results if r.prnu_stack is not None))
     return ChannelNoise(
         channel="combined",
         pixels=pixels,
+        prnu_stack=" and ".join(stacks) if stacks else None,
+        prnu_level=None,
         full_well_source=None if not sources else sources.pop() if len(sources) == 1 else "mixed",
         hot_pixel_fraction=pooled("hot_pixel_fraction"),
         dead_pixel_fraction=pooled("dead_pixel_fraction"),

@@ -3,8 +3,10 @@
 Panels: the photon transfer curve of each channel (EMVA 1288 4.0: σ²_y − σ²_y.dark against
 μ_y − μ_y.dark, the fitted line through the origin, the fit range and the saturation point, when the
 flats reach it); the histogram of each channel's averaged dark image (pixels per DN on a log scale, hot
-pixels in the logarithmic tail) with the Gaussian the fit predicts; the map of hot and dead pixels; and
-the table of combined figures with the fit's warnings.
+pixels in the logarithmic tail) with the Gaussian the fit predicts; the map of hot and dead pixels; the
+table of combined figures with where DSNU and PRNU come from, whether illumination shading was corrected,
+and the fit's warnings; and the horizontal and vertical spectrograms of DSNU and PRNU (EMVA 1288 4.0
+§8.6) with the DSNU1288 / PRNU1288 level and one frame's temporal noise.
 
 Drawn with matplotlib's object API (`matplotlib.figure.Figure`, no pyplot state) and written through
 `camgen.io.files.atomic_path`, so a partial PNG never appears under the final name.
@@ -21,12 +23,14 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.ticker import FixedLocator, FormatStrFormatter, NullLocator
 
-from camgen.fit.noise import GAIN_FIT_LIMIT, DarkHistogram, NoiseFit, PhotonTransferCurve
+from camgen.fit.noise import GAIN_FIT_LIMIT, DarkHistogram, NoiseFit, PhotonTransferCurve, Spectrogram
 from camgen.io.files import atomic_path
 
 PANEL_SIZE_IN = (4.0, 3.2)
 """Width and height of one panel, inches."""
 DPI = 100
+SUMMARY_WRAP_CHARS = 64
+"""Notes and warnings in the summary panel are wrapped at this many characters (a 4-inch panel at 6.5 pt)."""
 
 
 def _photon_transfer_panel(ax: Axes, curve: PhotonTransferCurve) -> None:
@@ -108,9 +112,35 @@ def _summary_panel(ax: Axes, fit: NoiseFit) -> None:
     for name, value, uncertainty, unit in fit.summary_rows():
         spread = f" ± {uncertainty:.2g}" if math.isfinite(uncertainty) and uncertainty > 0 else ""
         lines.append(f"{name[:38]:38s} {value:>11.5g}{spread} {unit}")
+    for note in fit.notes:
+        lines += textwrap.wrap(f"· {note}", width=SUMMARY_WRAP_CHARS, subsequent_indent="  ")
     for warning in fit.warnings:
-        lines += textwrap.wrap(f"! {warning}", width=78, subsequent_indent="  ")
+        lines += textwrap.wrap(f"! {warning}", width=SUMMARY_WRAP_CHARS, subsequent_indent="  ")
     ax.text(0.0, 1.0, "\n".join(lines), va="top", ha="left", family="monospace", fontsize=6.5, transform=ax.transAxes)
+
+
+def _spectrogram_panel(ax: Axes, spectrograms: list[Spectrogram]) -> None:
+    """Horizontal (solid) and vertical (dashed) spectrograms of one kind, a colour per channel, with the
+    non-uniformity (DSNU1288 or PRNU1288) and one frame's temporal noise σ_y.stack as levels."""
+    kind, unit = spectrograms[0].kind, spectrograms[0].unit
+    for i, s in enumerate(spectrograms):
+        colour = f"C{i}"
+        ax.plot(s.horizontal_frequency_per_px[1:], s.horizontal[1:], "-", lw=0.8, color=colour, label=s.channel)
+        ax.plot(s.vertical_frequency_per_px[1:], s.vertical[1:], "--", lw=0.8, color=colour)
+        ax.axhline(s.nonuniformity, color=colour, lw=1.2, alpha=0.6)
+        ax.axhline(s.temporal, color=colour, lw=1.0, ls=":", alpha=0.6)
+    ax.plot([], [], "k-", lw=0.8, label="horizontal")
+    ax.plot([], [], "k--", lw=0.8, label="vertical")
+    ax.plot([], [], "k-", lw=1.2, alpha=0.6, label=f"{kind}1288")
+    ax.plot([], [], "k:", lw=1.0, alpha=0.6, label="σ_y.stack (one frame)")
+    ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(FormatStrFormatter("%.3g"))
+    ax.yaxis.set_minor_formatter(FormatStrFormatter("%.3g"))
+    ax.set_xlim(0.0, 0.5)
+    ax.set_xlabel("cycles per pixel")
+    ax.set_ylabel(f"σ per frequency ({unit})")
+    ax.set_title(f"{kind} spectrogram (EMVA 1288 §8.6)")
+    ax.legend(fontsize="x-small", loc="upper right", ncol=2)
 
 
 def noise_report_figure(fit: NoiseFit) -> Figure:
@@ -123,13 +153,13 @@ def noise_report_figure(fit: NoiseFit) -> Figure:
     Returns
     -------
     matplotlib.figure.Figure
-        Three rows of panels: photon transfer per channel (a note when there were no flats), dark
-        histogram per channel, then the defect map and the summary table.
+        Four rows of panels: photon transfer per channel (a note when there were no flats), dark
+        histogram per channel, the defect map and the summary table, then the DSNU and PRNU spectrograms.
     """
     channels = len(fit.dark_histograms)
     columns = max(channels, 2)
-    figure = Figure(figsize=(PANEL_SIZE_IN[0] * columns, PANEL_SIZE_IN[1] * 3.2), layout="constrained")
-    grid = figure.add_gridspec(3, columns, height_ratios=(1.0, 1.0, 1.2))
+    figure = Figure(figsize=(PANEL_SIZE_IN[0] * columns, PANEL_SIZE_IN[1] * 4.4), layout="constrained")
+    grid = figure.add_gridspec(4, columns, height_ratios=(1.0, 1.0, 1.4, 1.0))
     span = 1 if channels > 1 else columns
     if fit.photon_transfer:
         for i, curve in enumerate(fit.photon_transfer):
@@ -143,6 +173,14 @@ def noise_report_figure(fit: NoiseFit) -> Figure:
     half = columns // 2
     _defect_panel(figure.add_subplot(grid[2, :half]), fit)
     _summary_panel(figure.add_subplot(grid[2, half:]), fit)
+    for k, kind in enumerate(("DSNU", "PRNU")):
+        spectrograms = [s for s in fit.spectrograms if s.kind == kind]
+        ax = figure.add_subplot(grid[3, k * half : (k + 1) * half])
+        if spectrograms:
+            _spectrogram_panel(ax, spectrograms)
+        else:
+            ax.axis("off")
+            ax.text(0.5, 0.5, f"no flats: no {kind} spectrogram", ha="center", va="center")
     figure.suptitle("sensor noise after EMVA 1288 (release 4.0)")
     return figure
 
