@@ -698,6 +698,87 @@ CASES = [
         "actors[0].random_walk.leg_length_m",
         "must give legs and a region of at least 0.1 m",
     ),
+    # Types are strict: text, booleans and numbers are not taken for one another.
+    (
+        "quoted_number",
+        "profile",
+        edit(FIXED_PROFILE, "width_px: 640", "width_px: '320' #<"),
+        "sensor.width_px",
+        "must be a number, got '320', which the quotes make text; remove the quotes",
+    ),
+    (
+        "boolean_for_a_number",
+        "profile",
+        edit(FIXED_PROFILE, "bit_depth: 12", "bit_depth: true #<"),
+        "sensor.bit_depth",
+        "must be a number, got true: true and false are booleans, not numbers",
+    ),
+    (
+        "boolean_in_a_list_of_numbers",
+        "scene",
+        edit(SCENE, "position_m: [0, -5, 3]", "position_m: [0, -5, yes] #<"),
+        "cameras[0].mount.position_m[2]",
+        "must be a number, got true: true",
+    ),
+    (
+        "quoted_boolean",
+        "scene",
+        edit(SCENE, "environment:\n", "environment:\n  shadows: 'false' #<\n"),
+        "environment.shadows",
+        "must be true or false, got 'false'; remove the quotes",
+    ),
+    (
+        "number_for_a_boolean",
+        "scene",
+        edit(SCENE, "environment:\n", "environment:\n  shadows: 1 #<\n"),
+        "environment.shadows",
+        "must be true or false, got 1",
+    ),
+    (
+        "exponent_without_a_dot_is_a_number",
+        "profile",
+        edit(FIXED_PROFILE, "black_level_dn: 64", "black_level_dn: 1e4 #<"),
+        "sensor.black_level_dn",
+        "must be below the white level 4095 DN of a 12-bit ADC, got 10000",
+    ),
+    (
+        "yaml_tag_on_a_value",
+        "profile",
+        edit(
+            FIXED_PROFILE, "description: test fixed camera", 'description: !!python/object/apply:os.system ["true"] #<'
+        ),
+        "description",
+        "has the YAML tag !!python/object/apply:os.system, which camgen does not read",
+    ),
+    # A union of forms reports the form that was meant, once.
+    (
+        "seed_count_zero",
+        "dataset",
+        "scenes: [scenes/ok.yaml]\nseeds: {start: 0, count: 0} #<\n",
+        "seeds.count",
+        "must be ≥ 1, got 0",
+    ),
+    (
+        "seed_count_negative",
+        "dataset",
+        "scenes: [scenes/ok.yaml]\nseeds: {start: 0, count: -1} #<\n",
+        "seeds.count",
+        "must be ≥ 1, got -1",
+    ),
+    (
+        "seeds_neither_form",
+        "dataset",
+        "scenes: [scenes/ok.yaml]\nseeds: twelve #<\n",
+        "seeds",
+        "must be a list or a mapping of keys, got 'twelve'",
+    ),
+    (
+        "seed_list_item_not_a_number",
+        "dataset",
+        "scenes: [scenes/ok.yaml]\nseeds: [1, x] #<\n",
+        "seeds[1]",
+        "must be a number, got 'x'",
+    ),
 ]
 
 
@@ -779,7 +860,9 @@ ALIAS_BOMB = "\n".join(
 )
 HOSTILE = [
     ("bad_int_tag", "duration_s: !!int foo\n", "duration_s cannot be read"),
-    ("python_object_tag", "duration_s: !!python/object:os.system x\n", "could not determine a constructor"),
+    ("python_object_tag", "duration_s: !!python/object:os.system x\n", "has the YAML tag !!python/object:os.system"),
+    ("tag_on_a_list", "cameras: !!python/object/apply:os.system [true]\n", "(nothing was constructed or run)"),
+    ("binary_tag", "description: !!binary aGVsbG8=\n", "has the YAML tag !!binary"),
     ("bad_merge_key", "duration_s: 2\n<<: 5\n", "has a bad merge key"),
     ("self_alias", "a: &x [*x]\n", "is an alias that contains itself"),
     ("deep_nesting", "a: " + "[" * 3000 + "]" * 3000 + "\n", "is nested too deeply to read"),

@@ -2,12 +2,62 @@
 
 from __future__ import annotations
 
-from pydantic import BaseModel, ConfigDict
-from pydantic_core import PydanticCustomError
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, GetCoreSchemaHandler
+from pydantic_core import CoreSchema, PydanticCustomError, core_schema
+
+
+def _not_text_or_bool(value: Any) -> Any:
+    if isinstance(value, str | bool):
+        raise PydanticCustomError("number_type", "Input should be a number")
+    return value
+
+
+def _a_bool(value: Any) -> Any:
+    if isinstance(value, str | int | float) and not isinstance(value, bool):
+        raise PydanticCustomError("bool_type", "Input should be a valid boolean")
+    return value
+
+
+# Where a core schema nests further schemas (models, unions, lists, tuples, defaults, validators).
+_NESTED = ("schema", "items_schema", "choices", "fields", "definitions", "keys_schema", "values_schema", "steps")
+
+
+def _strict_scalars(schema: CoreSchema, owner: type) -> CoreSchema:
+    """`schema` with every number refusing text and booleans, and every boolean refusing text and numbers.
+
+    Pydantic's strict mode would do this but also refuse a YAML list for a tuple, so the check goes in
+    front of each number and boolean instead. Other models' schemas are left alone: each model strictens
+    its own when it is built.
+    """
+    kind = schema.get("type")
+    if kind in ("float", "int"):
+        return core_schema.no_info_before_validator_function(_not_text_or_bool, schema)
+    if kind == "bool":
+        return core_schema.no_info_before_validator_function(_a_bool, schema)
+    if kind == "model" and schema.get("cls") is not owner:
+        return schema
+    for key in _NESTED:
+        nested = schema.get(key)
+        if isinstance(nested, dict) and "type" in nested:
+            schema[key] = _strict_scalars(nested, owner)
+        elif isinstance(nested, dict):  # fields by name, or a tagged union's choices by tag
+            schema[key] = {name: _strict_scalars(item, owner) for name, item in nested.items()}
+        elif isinstance(nested, list):  # union choices, plain or (schema, label), and definitions
+            schema[key] = [
+                (_strict_scalars(item[0], owner), item[1]) if isinstance(item, tuple) else _strict_scalars(item, owner)
+                for item in nested
+            ]
+    return schema
 
 
 class Model(BaseModel):
-    """Frozen, strict about unknown keys, no NaN or infinity; field docstrings become schema docs."""
+    """Frozen, strict about unknown keys, no NaN or infinity; field docstrings become schema docs.
+
+    Numbers and booleans are strict as well (`_strict_scalars`): YAML's ``'320'`` is text and ``true`` a
+    boolean, and neither is taken for a number; ``'yes'`` or ``1`` is not taken for true.
+    """
 
     model_config = ConfigDict(
         extra="forbid",
@@ -16,6 +66,10 @@ class Model(BaseModel):
         use_attribute_docstrings=True,
         validate_default=True,
     )
+
+    @classmethod
+    def __get_pydantic_core_schema__(cls, source: type[BaseModel], handler: GetCoreSchemaHandler) -> CoreSchema:
+        return _strict_scalars(handler(source), cls)
 
 
 def invalid(subpath: str, message: str) -> PydanticCustomError:

@@ -51,6 +51,8 @@ def _data_path(loc: tuple, data: Any) -> KeyPath:
             path.append(part)
         elif isinstance(node, dict) and part == node.get("type"):
             continue  # the tag of a discriminated union, also when a model validator's error ends on it
+        elif isinstance(part, str) and not isinstance(node, dict):
+            continue  # the label of a union's form ('list[constrained-int]') below a list or a value
         elif last or not isinstance(node, dict):
             path.append(part)
         # else: a discriminator tag such as 'box' in ('meshes', 0, 'box', 'size_m'): not user data
@@ -154,12 +156,19 @@ def _phrase(error: dict, root: type[BaseModel], path: KeyPath, data: Any) -> str
         return f"must be {op} {show_value(bound)}{got}"
     if kind == "finite_number":
         return f"must be a finite number{got}"
-    if kind in ("float_type", "float_parsing", "int_type", "int_parsing"):
+    if kind == "number_type" and isinstance(value, bool):
+        return f"must be a number{got}: true and false are booleans, not numbers"
+    if kind == "number_type" and _reads_as_number(value):
+        return f"must be a number{got}, which the quotes make text; remove the quotes"
+    if kind in ("number_type", "float_type", "float_parsing", "int_type", "int_parsing"):
         return f"must be a number{got}"
     if kind == "int_from_float":
         return f"must be a whole number{got}"
+    if kind == "int_parsing_size":
+        return f"must be a whole number of a sensible size{got}"
     if kind in ("bool_type", "bool_parsing"):
-        return f"must be true or false{got}"
+        quoted = "; remove the quotes" if isinstance(value, str) and value.lower() in ("true", "false") else ""
+        return f"must be true or false{got}{quoted}"
     if kind == "string_type":
         return f"must be text{got}"
     if kind in ("list_type", "tuple_type"):
@@ -194,11 +203,75 @@ def _phrase(error: dict, root: type[BaseModel], path: KeyPath, data: Any) -> str
     return f"{error['msg'][0].lower()}{error['msg'][1:]}{got}"
 
 
+def _reads_as_number(text: Any) -> bool:
+    try:
+        float(text)
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
+_KIND_OF_INPUT = {
+    "list_type": "a list",
+    "tuple_type": "a list",
+    "dict_type": "a mapping of keys",
+    "model_type": "a mapping of keys",
+    "model_attributes_type": "a mapping of keys",
+    "number_type": "a number",
+    "float_type": "a number",
+    "float_parsing": "a number",
+    "int_type": "a number",
+    "int_parsing": "a number",
+    "string_type": "text",
+    "bool_type": "true or false",
+    "bool_parsing": "true or false",
+}
+"""Errors that say only that the input is not the kind a form of a union wants, and that kind."""
+
+
+def _one_form_per_union(errors: list[dict], data: Any) -> list[dict]:
+    """A union of forms (``seeds: [1, 2]`` or ``seeds: {start, count}``) that takes none reports every
+    form's failure. Keep the form the input was meant for: drop the forms that failed only on the kind
+    of input when another form got further into it; when none did, say the kinds allowed in one error."""
+    mismatched: dict[KeyPath, list[dict]] = {}
+    kept = []
+    for error in errors:
+        loc = tuple(error["loc"])
+        if error["type"] in _KIND_OF_INPUT and len(loc) > 1 and isinstance(loc[-1], str):
+            where = _data_path(loc, data)
+            where = where[:-1] if where[-1:] == loc[-1:] else where
+            node = _value_at(data, where)
+            if not (isinstance(node, dict) and loc[-1] in node):
+                mismatched.setdefault(where, []).append(error)
+                continue
+        kept.append(error)
+    for where, forms in mismatched.items():
+        if any(_data_path(tuple(e["loc"]), data)[: len(where)] == where for e in kept):
+            continue
+        if len(forms) == 1:
+            kept += forms
+            continue
+        kinds = " or ".join(dict.fromkeys(_KIND_OF_INPUT[e["type"]] for e in forms))
+        message = f"must be {kinds}, got {show_value(forms[0]['input'])}"
+        kept.append(
+            {
+                **forms[0],
+                "loc": tuple(forms[0]["loc"])[:-1],
+                "type": "camgen",
+                "ctx": {"message": message, "subpath": ""},
+            }
+        )
+    return kept
+
+
 def problems_from(exc: ValidationError, doc: YamlDocument | None, root: type[BaseModel]) -> list[Problem]:
     """One located `Problem` per pydantic error, in file order."""
     data = doc.data if doc is not None else None
     problems = []
-    for error in exc.errors(include_url=False):
+    errors = exc.errors(include_url=False)
+    if data is not None:
+        errors = _one_form_per_union(errors, data)
+    for error in errors:
         path = _data_path(tuple(error["loc"]), data) if data is not None else tuple(error["loc"])
         if error["type"] == "missing" and path and isinstance(path[-1], int):
             # A fixed-length list such as position_m: [x, y] — say so instead of "[2] is required".

@@ -7,6 +7,7 @@ the last one).
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -42,6 +43,25 @@ def _location(file: str, mark: yaml.Mark) -> Location:
 MAX_VALUES = 200_000
 """Values one document may expand to: far above any real scene, far below an alias bomb."""
 
+_PLAIN_TAGS = frozenset(
+    f"tag:yaml.org,2002:{name}" for name in ("map", "seq", "str", "int", "float", "bool", "null", "timestamp")
+)
+"""The tags of plain YAML data, given implicitly or written out (``!!int 3``); any other tag
+(``!!python/object``, ``!!binary``, ``!custom``) is refused before anything is constructed."""
+
+
+class _Loader(yaml.SafeLoader):
+    """PyYAML's safe loader, which follows YAML 1.1, also reading the exponent numbers of YAML 1.2
+    (``1e6``, ``1e-9``, ``1.5e3``) as floats: YAML 1.1 wants a dot and a signed exponent (``1.0e+6``) and reads
+    ``1e6`` as text."""
+
+
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
+    list("-+.0123456789"),
+)
+
 
 class _Walker:
     """Builds plain data from composed nodes, recording each key path's location.
@@ -73,6 +93,14 @@ class _Walker:
             raise self.fail(node, path, f"makes the document expand past {MAX_VALUES} values (nested aliases?)")
         if id(node) in self.open:
             raise self.fail(node, path, "is an alias that contains itself")
+        if node.tag not in _PLAIN_TAGS:
+            tag = node.tag.replace("tag:yaml.org,2002:", "!!")
+            raise self.fail(
+                node,
+                path,
+                f"has the YAML tag {tag}, which camgen does not read: configuration is plain YAML data "
+                "(nothing was constructed or run); remove the tag",
+            )
         if isinstance(node, yaml.MappingNode):
             self.open.add(id(node))
             try:
@@ -103,7 +131,7 @@ class _Walker:
 def parse_yaml(text: str, file: str) -> YamlDocument:
     """Parse one YAML document from `text`; `file` names it in error messages."""
     try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
+        node = yaml.compose(text, Loader=_Loader)
     except yaml.MarkedYAMLError as exc:
         # Point at where the broken construct opened (an unclosed [ or {), else where parsing stopped.
         mark = exc.context_mark or exc.problem_mark
