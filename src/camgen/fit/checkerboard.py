@@ -12,7 +12,7 @@ import cv2
 import numpy as np
 
 from camgen.config.scene import CheckerboardMesh
-from camgen.fit.lens import BoardSpec, detect_board
+from camgen.fit.lens import BoardSpec, detect_board, one_opencv_thread
 
 LUMINANCE_WEIGHTS_BT709 = np.array([0.2126, 0.7152, 0.0722], np.float32)
 """Y of linear BT.709 RGB (ITU-R BT.709-6, item 3.2)."""
@@ -63,6 +63,7 @@ RECTILINEAR = cv2.CALIB_ZERO_TANGENT_DIST | cv2.CALIB_FIX_K1 | cv2.CALIB_FIX_K2 
 removes their correlation with k1…k3 (it matters at long focal lengths, where perspective is weak)."""
 
 
+@one_opencv_thread
 def calibrate(
     board: CheckerboardMesh, corners: list[np.ndarray], size_px: tuple[int, int], flags: int = 0
 ) -> Calibration:
