@@ -108,6 +108,33 @@ def test_no_foot_sliding(model, speed_m_s):
     assert gait.running == (speed_m_s > 2.1)
 
 
+@pytest.mark.parametrize("speed_m_s", [3.0, 4.5])
+def test_a_runner_bounces_and_flies_ballistically(model, speed_m_s):
+    """Running, the pelvis rises and falls by 6–10 cm per step (Cavanagh & Lafortune 1980; Gullstrand et al.
+    2009), lowest while a foot is planted, and falls freely (≈ −g) while both feet are off the ground."""
+    route = Route(np.array([[0.0, 0.0], [60.0, 0.0]]), np.zeros(2), speed_m_s, 0.0)
+    walker = Walker(model, route)
+    dt = 1 / 400
+    times = np.arange(2.0, 4.0, dt)
+    heights, airborne = [], []
+    ground = model.joints_m[INDEX["ball_l"], 2] + 1e-6
+    for t in times:
+        pose = walker.pose(float(t))
+        G = global_transforms(model.joints_m, pose)
+        heights.append(pose.T_world_from_pelvis[2, 3])
+        airborne.append(all(G[INDEX[f"ball_{side}"], 2, 3] > ground for side in "lr"))
+    heights, airborne = np.array(heights), np.array(airborne)
+    assert 0.055 < heights.max() - heights.min() < 0.10
+    assert airborne.any() and not airborne.all()
+    # a parabola through each flight (the pelvis height is tabulated 96 times a stride, linear between)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], airborne.astype(int), [0]])))
+    flights = [(a, b) for a, b in zip(edges[::2], edges[1::2], strict=True) if b - a >= 8]
+    assert len(flights) >= 4
+    for a, b in flights:
+        assert 2 * np.polyfit(times[a:b], heights[a:b], 2)[0] == pytest.approx(-9.81, abs=1.5)
+    assert heights[airborne].mean() > heights[~airborne].mean()
+
+
 def test_stride_follows_speed_and_body_size():
     """Alexander's relative stride grows with speed and is ~1.41 m at 1.37 m/s for h = 0.9 m (Perry)."""
     assert gait_parameters(1.37, 0.9).stride_m == pytest.approx(1.41, rel=0.03)
