@@ -110,19 +110,26 @@ def test_no_foot_sliding(model, speed_m_s):
 
 @pytest.mark.parametrize("speed_m_s", [3.0, 4.5])
 def test_a_runner_bounces_and_flies_ballistically(model, speed_m_s):
-    """Running, the pelvis rises and falls by 6–10 cm per step (Cavanagh & Lafortune 1980; Gullstrand et al.
-    2009), lowest while a foot is planted, and falls freely (≈ −g) while both feet are off the ground."""
+    """Running, the pelvis rises and falls by 5.5–10 cm per step (Lee & Farley 1998; Gullstrand et al. 2009),
+    lowest while a foot is planted, and falls freely (≈ −g) while both feet are off the ground; the stance
+    knee flexes to 35–55° (about 45°: Novacheck 1998), not into a crouch."""
     route = Route(np.array([[0.0, 0.0], [60.0, 0.0]]), np.zeros(2), speed_m_s, 0.0)
     walker = Walker(model, route)
     dt = 1 / 400
     times = np.arange(2.0, 4.0, dt)
-    heights, airborne = [], []
+    heights, airborne, stance_knees = [], [], []
     ground = model.joints_m[INDEX["ball_l"], 2] + 1e-6
     for t in times:
         pose = walker.pose(float(t))
         G = global_transforms(model.joints_m, pose)
         heights.append(pose.T_world_from_pelvis[2, 3])
         airborne.append(all(G[INDEX[f"ball_{side}"], 2, 3] > ground for side in "lr"))
+        for side in "lr":
+            if G[INDEX[f"ball_{side}"], 2, 3] <= ground:
+                hip, knee, ankle = (G[INDEX[f"{joint}_{side}"], :3, 3] for joint in ("thigh", "calf", "foot"))
+                thigh, shin = hip - knee, ankle - knee
+                cosine = thigh @ shin / np.linalg.norm(thigh) / np.linalg.norm(shin)
+                stance_knees.append(180 - math.degrees(math.acos(cosine)))
     heights, airborne = np.array(heights), np.array(airborne)
     assert 0.055 < heights.max() - heights.min() < 0.10
     assert airborne.any() and not airborne.all()
@@ -133,6 +140,7 @@ def test_a_runner_bounces_and_flies_ballistically(model, speed_m_s):
     for a, b in flights:
         assert 2 * np.polyfit(times[a:b], heights[a:b], 2)[0] == pytest.approx(-9.81, abs=1.5)
     assert heights[airborne].mean() > heights[~airborne].mean()
+    assert 35 < max(stance_knees) < 55
 
 
 def test_stride_follows_speed_and_body_size():
