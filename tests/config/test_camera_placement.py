@@ -67,7 +67,7 @@ def test_a_camera_inside_a_box_is_a_located_warning(workspace: Path, capsys):
         warnings.simplefilter("always")
         load_scene(path)
     assert [type(w.message) for w in caught] == [ConfigWarning]
-    assert "inside the closed box 'hut'" in str(caught[0].message)
+    assert "inside the closed box 'hut'" in str(caught[0].message) and "sees through it" in str(caught[0].message)
     assert main(["validate", str(path)]) == 0
     err = capsys.readouterr().err
     assert err.startswith("warning ") and f"{path}:" in err

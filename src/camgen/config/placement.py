@@ -3,8 +3,9 @@
 The renderer draws a mesh's front faces only (back-face culling, `render.scene_graph._material`). A plane
 or checkerboard is one-sided: seen from behind it vanishes, so a camera under the ground would film the
 actors' undersides through the ground and the ground truth would mark them visible. Such a camera is
-refused. A camera inside a closed solid (box, cylinder, sphere) sees only that solid's inside; that can be
-meant (a room modelled as a box) and so is a warning, not an error.
+refused. A camera inside a closed solid (box, cylinder, sphere) sees through it, since the solid's faces
+point outward and are culled from inside: right for a housing modelled around the camera, wrong for a
+camera placed in a wall by mistake or a room modelled as a box, so it is a warning, not an error.
 """
 
 from __future__ import annotations
@@ -76,9 +77,10 @@ def camera_placement_problems(scene: Scene) -> tuple[list[Problem], list[Problem
                 notes.append(
                     Problem(
                         key,
-                        f"puts camera {camera.name!r} inside the closed {mesh.type} {mesh.name!r}: it sees only "
-                        f"the {mesh.type}'s inside and nothing outside it (got {shown}); move the camera out "
-                        "unless the mesh is meant as a room around it",
+                        f"puts camera {camera.name!r} inside the closed {mesh.type} {mesh.name!r} (got {shown}): "
+                        f"the {mesh.type}'s faces point outward and are not drawn from inside, so the camera sees "
+                        "through it as if it were not there; right for a housing around the camera, otherwise "
+                        "move the camera out (a room around a camera is modelled with planes facing inward)",
                     )
                 )
     return errors, notes
