@@ -488,3 +488,28 @@ def test_a_rendered_output_with_one_camera_per_view_is_read_as_it_is(charuco_fol
         assert len(names) == len(views) and len(set(names)) == len(names)
         assert names[0].endswith("pose_00/frames/000000.png")
         np.testing.assert_allclose(fit.K_px, charuco_fit.K_px, rtol=1e-9)
+
+
+def test_calibrations_in_threads_run_on_one_opencv_thread_and_restore_the_count():
+    import threading
+    import time
+
+    from camgen.fit.lens import one_opencv_thread
+
+    seen = []
+
+    @one_opencv_thread
+    def work(seconds):
+        seen.append(cv2.getNumThreads())
+        time.sleep(seconds)
+        seen.append(cv2.getNumThreads())
+
+    before = cv2.getNumThreads()
+    threads = [threading.Thread(target=work, args=(s,)) for s in (0.1, 0.2)]
+    threads[0].start()
+    time.sleep(0.03)
+    threads[1].start()
+    for thread in threads:
+        thread.join()
+    assert seen == [1, 1, 1, 1]  # the second call's end too, after the first restored nothing early
+    assert cv2.getNumThreads() == before

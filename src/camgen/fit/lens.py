@@ -31,6 +31,7 @@ from __future__ import annotations
 import functools
 import math
 import re
+import threading
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -635,18 +636,33 @@ def one_opencv_thread(function):
     that depends on scheduling, and Levenberg–Marquardt carries the last-digit differences into different
     paths. Measured on this machine with 15 views: the rational model's coefficients differed by up to 79
     between identical calls on 2 threads, and agreed to the last bit on one (which cost 1.3× the time).
-    Fitted profiles are written at full precision, so the same images must give the same bytes."""
+    Fitted profiles are written at full precision, so the same images must give the same bytes.
+
+    OpenCV's thread count is process-wide: while any such call runs, all OpenCV work in the process runs
+    on one thread. Calls from several threads share one count of those running (under a lock), and the
+    last to finish restores the count the first found."""
 
     @functools.wraps(function)
     def on_one_thread(*args, **kwargs):
-        threads = cv2.getNumThreads()
-        cv2.setNumThreads(1)
+        with _SINGLE_THREAD_LOCK:
+            if not _single_thread_users:
+                _single_thread_users.append(cv2.getNumThreads())
+                cv2.setNumThreads(1)
+            _single_thread_users.append(None)
         try:
             return function(*args, **kwargs)
         finally:
-            cv2.setNumThreads(threads)
+            with _SINGLE_THREAD_LOCK:
+                _single_thread_users.pop()
+                if len(_single_thread_users) == 1:
+                    cv2.setNumThreads(_single_thread_users.pop())
 
     return on_one_thread
+
+
+_SINGLE_THREAD_LOCK = threading.Lock()
+_single_thread_users: list[int | None] = []
+"""While `one_opencv_thread` calls run: the thread count found by the first, then one entry per call."""
 
 
 @one_opencv_thread
