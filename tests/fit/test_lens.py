@@ -430,16 +430,25 @@ def unrelated_views(board: BoardSpec, size_px: tuple[int, int], count: int, rng:
 
 def test_views_from_unrelated_homographies_are_refused(charuco_fit):
     board = parse_board("checkerboard:9x6:25mm")
-    views = unrelated_views(board, CHARUCO_SIZE_PX, 8, np.random.default_rng(5))
+    views = unrelated_views(board, CHARUCO_SIZE_PX, 8, np.random.default_rng(0))
     with pytest.raises(ConfigError, match="is not trustworthy") as raised:
         fit_lens(views, CHARUCO_SIZE_PX)
     message = str(raised.value)
     assert "px RMS, more than the 1 px" in message and "--accept-poor-fit" in message
+    assert "views with the worst RMS: warped_" in message
     forced = fit_lens(views, CHARUCO_SIZE_PX, accept_poor_fit=True)
     assert forced.rms_px > 1.0
     assert any("px RMS" in warning for warning in forced.warnings)
     # the consistent synthetic views raise no doubt
     assert not any("px RMS" in w or "more uncertain" in w or "folds over" in w for w in charuco_fit.warnings)
+
+
+def test_a_fit_whose_distortion_folds_inside_the_image_is_refused_even_when_accepted():
+    board = parse_board("checkerboard:9x6:25mm")
+    views = unrelated_views(board, CHARUCO_SIZE_PX, 8, np.random.default_rng(5))
+    for accept in (False, True):
+        with pytest.raises(ConfigError, match=r"folds over inside the image.*no profile can hold such a lens"):
+            fit_lens(views, CHARUCO_SIZE_PX, accept_poor_fit=accept)
 
 
 def written_rms_px(fit: LensFit, detections, directory: Path, fragment: dict | None = None) -> float:

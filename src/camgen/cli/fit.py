@@ -105,7 +105,8 @@ def add_parser(subparsers) -> None:
         "--accept-poor-fit",
         action="store_true",
         help="write the profile even when the fit shows the views disagree (RMS over 1 px, fx or fy more "
-        "uncertain than 2 %%, distortion folding over inside the image); the doubts become warnings",
+        "uncertain than 2 %%); the doubts become warnings, also in the profile's header (distortion that "
+        "folds over inside the image is refused all the same: no profile can hold it)",
     )
     _add_output_options(lens, "lens")
     lens.set_defaults(run=run_lens)
@@ -496,9 +497,10 @@ def run_lens(args: argparse.Namespace, out: Console, err: Console) -> int:
         f"model {fit.model}, RMS {fit.rms_px:.4f} px over {views} views; "
         f"rejected: {listing([name for name, _ in fit.rejected]) or 'none'}",
         f"chosen: {fit.selection}",
+        *(f"warning: {warning}" for warning in fit.warnings),
         *(f"{name}: {_significant(value, std)} {unit}" for name, value, std, unit in fit.summary_rows()),
-        "values below at full precision: the coefficients are correlated, so none may be rounded alone",
         *_candidate_lines(fit),
+        "values below at full precision: the coefficients are correlated, so none may be rounded alone",
     ]
     _write_outputs(
         args, out, fit.profile_fragment(), header, lambda path: write_lens_report(fit, images.detections, path)

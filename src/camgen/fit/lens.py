@@ -615,18 +615,26 @@ def _inconsistency(calibration: _Calibration, size_px: tuple[int, int]) -> list[
                 f"{name} is {value:.4g} ± {std:.2g} px (±{std / abs(value):.1%}), more uncertain than "
                 f"±{FOCAL_RELATIVE_STD_MAX:.0%}"
             )
-    corner_radius = corner_radius_normalized(K, *size_px)
-    if np.any(calibration.distortion) and math.isfinite(corner_radius):
-        reach = radial_reach(calibration.distortion, r_undistorted_max=20.0 * max(corner_radius, 1.0))
-        if reach < corner_radius:
-            coefficients = ", ".join(
-                f"{n} {v:.3g}" for n, v in zip(DISTORTION_NAMES, calibration.distortion, strict=False) if v
-            )
-            doubts.append(
-                f"the fitted distortion ({coefficients}) folds over inside the image: its radial mapping turns "
-                f"back at normalised radius {reach:.3f}, the image corner lies at {corner_radius:.3f}"
-            )
     return doubts
+
+
+def _fold(calibration: _Calibration, size_px: tuple[int, int]) -> str | None:
+    """Why the fitted distortion folds over inside the image, or None: a profile cannot hold such a lens
+    (`camgen.config.profile.Profile` refuses it, by the same test)."""
+    K = calibration.K_px
+    corner_radius = corner_radius_normalized(K, *size_px)
+    if not np.any(calibration.distortion) or not math.isfinite(corner_radius):
+        return None
+    reach = radial_reach(calibration.distortion, r_undistorted_max=20.0 * max(corner_radius, 1.0))
+    if reach >= corner_radius:
+        return None
+    coefficients = ", ".join(
+        f"{n} {v:.3g}" for n, v in zip(DISTORTION_NAMES, calibration.distortion, strict=False) if v
+    )
+    return (
+        f"the fitted distortion ({coefficients}) folds over inside the image: its radial mapping turns back at "
+        f"normalised radius {reach:.3f}, the image corner lies at {corner_radius:.3f}"
+    )
 
 
 def one_opencv_thread(function):
@@ -717,8 +725,9 @@ def fit_lens(
     ConfigError
         Fewer than `MIN_VIEWS` views show the board, or remain after rejecting outliers (the message
         names the files and why each was dropped), or the calibration fails, or (unless
-        `accept_poor_fit`) the fit shows the views disagree: RMS above `CONSISTENT_RMS_MAX_PX`, fx or fy
-        more uncertain than `FOCAL_RELATIVE_STD_MAX`, or distortion that folds over inside the image.
+        `accept_poor_fit`) the fit shows the views disagree: RMS above `CONSISTENT_RMS_MAX_PX` or fx or fy
+        more uncertain than `FOCAL_RELATIVE_STD_MAX`; and whatever `accept_poor_fit` says, when the fitted
+        distortion folds over inside the image (no profile can hold it).
     """
     total = len(detections) + len(unusable)
     rejected = [(name, reason) for name, reason in unusable]
@@ -769,12 +778,23 @@ def fit_lens(
             warnings.append(f"model {score.name} could not be calibrated on these views, so it was not a candidate")
     warnings += _coverage_warnings(kept, calibration.K_px, size_px)
     doubts = _inconsistency(calibration, size_px)
+    fold = _fold(calibration, size_px)
+    worst = sorted(zip(kept, calibration.per_view_rms_px, strict=True), key=lambda item: -item[1])[:5]
+    worst_views = listing([f"{d.name} ({rms:.2g} px)" for d, rms in worst])
+    advice = (
+        "check that every image comes from one camera at one zoom and focus, uncropped and unscaled, that the "
+        "board is flat and that the board spec matches it, and add views with the board tilted 20–45° towards "
+        "each side; a fisheye lens is beyond the Brown–Conrady models fitted here"
+    )
+    if fold is not None:
+        raise ConfigError(
+            f"{'; '.join([fold, *doubts])}; no profile can hold such a lens (views with the worst RMS: "
+            f"{worst_views}): {advice}"
+        )
     if doubts and not accept_poor_fit:
         raise ConfigError(
-            f"the fit of {listing([d.name for d in kept])} is not trustworthy: {'; '.join(doubts)}; "
-            "a profile from it would be wrong: check that every image comes from one camera at one zoom and "
-            "focus, uncropped and unscaled, that the board is flat and that the board spec matches it, and add "
-            "views with the board tilted 20–45° towards each side (or pass --accept-poor-fit to write it anyway)"
+            f"the fit is not trustworthy: {'; '.join(doubts)} (views with the worst RMS: {worst_views}); a "
+            f"profile from it would be wrong: {advice} (or pass --accept-poor-fit to write it anyway)"
         )
     warnings += doubts
     return LensFit(
