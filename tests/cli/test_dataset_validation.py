@@ -57,3 +57,17 @@ def test_batch_frames_beyond_the_jobs_is_a_warning(tmp_path: Path, capsys):
     assert main(["batch", str(dataset), "-o", str(tmp_path / "out"), "--plan", "--frames", "1000000"]) == 0
     err = capsys.readouterr().err
     assert "warning --frames 1000000: 4 of 4 jobs have fewer frames" in err and "walk-small-seed3 10" in err
+
+
+def test_a_dataset_finds_its_profiles_where_its_scenes_do(tmp_path: Path, capsys, monkeypatch):
+    """A dataset whose scenes name a profile kept elsewhere: validate and batch search --profiles and
+    $CAMGEN_PROFILE_PATH as validate does for the scene alone."""
+    dataset = make_dataset(tmp_path)
+    elsewhere = tmp_path / "elsewhere"
+    (tmp_path / "profiles").rename(elsewhere)
+    assert main(["validate", str(dataset)]) == 1
+    capsys.readouterr()
+    assert main(["validate", "--profiles", str(elsewhere), str(tmp_path / "scenes/walk.yaml"), str(dataset)]) == 0
+    assert "4 jobs compile" in capsys.readouterr().out
+    monkeypatch.setenv("CAMGEN_PROFILE_PATH", str(elsewhere))
+    assert main(["batch", str(dataset), "-o", str(tmp_path / "out"), "--plan"]) == 0

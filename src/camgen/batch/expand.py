@@ -11,6 +11,7 @@ change the compiled scene and so the job hash.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -45,7 +46,7 @@ class BatchJob:
     data; empty without one. Compiling applies exactly these."""
 
 
-def expand(dataset_path: str | Path) -> list[BatchJob]:
+def expand(dataset_path: str | Path, profile_dirs: Sequence[Path] = ()) -> list[BatchJob]:
     """The jobs of a dataset file, in order: scenes × profiles × seeds (product), or the i-th of each (zip).
 
     Raises ConfigError, naming the dataset file and the entry, for a missing scene file or an unknown profile.
@@ -53,8 +54,8 @@ def expand(dataset_path: str | Path) -> list[BatchJob]:
     dataset_path = Path(dataset_path)
     if not dataset_path.is_file():
         raise ConfigError(f"{dataset_path}: no such dataset file; give the path of a dataset YAML file")
-    dataset = load_dataset(dataset_path)
-    profile_paths = {ref: find_profile(ref, dataset_path) for ref in dataset.profiles}
+    dataset = load_dataset(dataset_path, profile_dirs)
+    profile_paths = {ref: find_profile(ref, dataset_path, profile_dirs) for ref in dataset.profiles}
     scenes = [dataset_path.parent / scene for scene in dataset.scenes]
     profiles: list[str | None] = list(dataset.profiles) or [None]
     seeds = dataset.seed_list
@@ -105,18 +106,20 @@ def _read_scene(dataset_path: Path, scene_path: Path) -> Scene:
         ) from None
 
 
-def compile_batch_job(batch_job: BatchJob, settings: PlanSettings | None = None) -> Job:
+def compile_batch_job(
+    batch_job: BatchJob, settings: PlanSettings | None = None, profile_dirs: Sequence[Path] = ()
+) -> Job:
     """Load the job's scene, give every camera the job's profile (if any) and the scene the job's seed, apply
     the job's randomized values, compile.
 
     Raises ConfigError naming the dataset file and the job when the scene or the combination is invalid.
     """
     try:
-        loaded = load_scene(batch_job.scene_path)
+        loaded = load_scene(batch_job.scene_path, profile_dirs)
         profiles, profile_names = loaded.profile_models, loaded.profile_names
         cameras = loaded.scene.cameras
         if batch_job.profile_path is not None:
-            override = load_profile(batch_job.profile_path)
+            override = load_profile(batch_job.profile_path, profile_dirs)
             cameras = [camera.model_copy(update={"profile": override.name}) for camera in cameras]
             profiles = {camera.name: override.profile for camera in cameras}
             profile_names = {camera.name: override.name for camera in cameras}

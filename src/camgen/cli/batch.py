@@ -15,7 +15,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
 
-from camgen.cli.common import check_output_directory
+from camgen.cli.common import add_profile_dirs_option, check_output_directory, profile_dirs
 from camgen.cli.progress import ProgressLines
 from camgen.errors import ConfigError
 
@@ -49,6 +49,7 @@ def add_parser(subparsers) -> None:
         metavar="ADDR",
         help="the Ray cluster to run on (e.g. auto, HOST:6379, ray://HOST:10001); default: start a local Ray",
     )
+    add_profile_dirs_option(parser)
     parser.set_defaults(run=run)
 
 
@@ -62,11 +63,12 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         raise ConfigError(f"--frames must be ≥ 1, got {args.frames}")
     check_options(workers=args.workers, retries=args.retries, executor=args.executor, address=args.address)
     check_output_directory(args.out, "-o", "give a directory to write the dataset into")
-    batch_jobs = expand(args.dataset)
+    dirs = profile_dirs(args)
+    batch_jobs = expand(args.dataset, dirs)
     jobs = []
     for batch in batch_jobs:
         try:
-            jobs.append((batch, compile_batch_job(batch)))
+            jobs.append((batch, compile_batch_job(batch, profile_dirs=dirs)))
         except ConfigError as exc:  # this job fails (reported, no render); the others go on
             jobs.append((batch, "; ".join(str(problem) for problem in exc.problems)))
     shorter = [(batch.name, job.frame_count) for batch, job in jobs if not isinstance(job, str)]
@@ -117,7 +119,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             workers=args.workers,
             retries=args.retries,
             frames=args.frames,
-            description=load_dataset(args.dataset).description,
+            description=load_dataset(args.dataset, dirs).description,
             on_event=on_event,
             executor=args.executor,
             address=args.address,

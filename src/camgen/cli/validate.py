@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from pathlib import Path
 
 from rich.console import Console
@@ -37,7 +38,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             elif kind == "scene":
                 load_scene(path, dirs)
             else:
-                kind = f"dataset, {_check_dataset(path)} jobs compile"
+                kind = f"dataset, {_check_dataset(path, dirs)} jobs compile"
             out.print(f"[green]ok[/green]  {escape(str(path))} ({kind})")
         except ConfigError as exc:
             failed += 1
@@ -48,7 +49,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     return 1 if failed else 0
 
 
-def _check_dataset(path: Path) -> int:
+def _check_dataset(path: Path, profile_dirs: Sequence[Path]) -> int:
     """The number of jobs of a dataset; raises ConfigError with every job that does not compile.
 
     A dataset is valid only if every job compiles: a scene that is invalid alone, a profile that does not fit
@@ -57,10 +58,10 @@ def _check_dataset(path: Path) -> int:
     from camgen.batch.expand import compile_batch_job, expand
 
     problems = []
-    jobs = expand(path)
+    jobs = expand(path, profile_dirs)
     for job in jobs:
         try:
-            compile_batch_job(job)
+            compile_batch_job(job, profile_dirs=profile_dirs)
         except ConfigError as exc:
             problems.extend(exc.problems)
     if problems:

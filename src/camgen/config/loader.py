@@ -201,8 +201,9 @@ def _mesh_file_bounds(directory: Path, reference: str) -> tuple[tuple[float, flo
     return tuple(map(float, low)), tuple(map(float, high))
 
 
-def load_dataset(path: str | Path) -> Dataset:
-    """Load a dataset spec and check that every scene and profile it names exists."""
+def load_dataset(path: str | Path, profile_dirs: Sequence[Path] = ()) -> Dataset:
+    """Load a dataset spec and check that every scene and profile it names exists (profile names are
+    looked up in `profile_dirs`, then beside the dataset, as `find_profile` does)."""
     path = Path(path)
     doc = load_yaml(path)
     dataset: Dataset = validate(Dataset, doc)
@@ -218,7 +219,7 @@ def load_dataset(path: str | Path) -> Dataset:
     for i, reference in enumerate(dataset.profiles):
         key = ("profiles", i)
         try:
-            find_profile(reference, path, (), doc.locate(key), key)
+            find_profile(reference, path, profile_dirs, doc.locate(key), key)
         except ConfigError as exc:
             problems += exc.problems
     if problems:
