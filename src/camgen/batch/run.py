@@ -411,17 +411,20 @@ PR_SET_PDEATHSIG = 1
 def _stop_with_parent() -> None:
     """On Linux, ask the kernel for SIGTERM when the parent dies, so that a parent killed with SIGKILL (no
     handler runs) leaves no worker rendering as an orphan; a parent that died before the request was made
-    is caught by its pid having changed. Elsewhere nothing: the parent's handlers stop the workers."""
+    is caught by the worker's parent no longer being the pid that started it. The kernel sends the signal
+    when the *thread* that started the worker ends: `run_batch` starts and waits for its workers in one
+    thread. Elsewhere nothing: the parent's handlers stop the workers."""
     if not sys.platform.startswith("linux"):
         return
     import ctypes
 
-    parent = os.getppid()
+    parent = multiprocessing.parent_process()  # the pid the batch had when it started this worker
     try:
-        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+        if ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0) != 0:
+            return
     except (OSError, AttributeError):
         return
-    if os.getppid() != parent:
+    if parent is not None and os.getppid() != parent.pid:
         os._exit(128 + signal.SIGTERM)
 
 
