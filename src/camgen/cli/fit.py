@@ -509,8 +509,8 @@ def run_lens(args: argparse.Namespace, out: Console, err: Console) -> int:
 
 
 def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from camgen.fit.frames import VIDEO_SUFFIXES, read_rgb8_frames, reference_files, video_frame_rate
-    from camgen.fit.match import fit_match
+    from camgen.fit.frames import VIDEO_SUFFIXES, listing, read_rgb8_frames, reference_files, video_frame_rate
+    from camgen.fit.match import ReferenceContentError, fit_match
     from camgen.fit.match_report import write_match_report
 
     if args.max_frames < 1:
@@ -556,8 +556,8 @@ def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
                 codec=codec,
                 codec_fps=codec_fps,
             )
-        except ConfigError as exc:  # fit_match sees arrays only: say which reference it was
-            where = " ".join(str(path) for path in args.reference)
+        except ReferenceContentError as exc:  # fit_match sees arrays only: say which reference it was
+            where = listing([str(path) for path in args.reference])
             raise ConfigError([Problem((), f"--reference {where}: {problem}") for problem in exc.problems]) from None
     _warn(err, list(fit.warnings))
     rows = [(key, value, fit.uncertainties.get(key, math.nan), "") for key, value in fit.parameters.items()]

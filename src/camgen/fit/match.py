@@ -146,6 +146,12 @@ from camgen.sensor.cfa import cfa_site_values, mosaic
 from camgen.sensor.characteristics import saturation_e
 from camgen.sensor.exposure import gain_linear
 
+
+class ReferenceContentError(ConfigError):
+    """The reference cannot be fitted because of what it shows (no frames, no noise, too few unclipped
+    samples): the caller, who knows its files, names them."""
+
+
 DEFAULT_BINS = 32
 """Intensity bins over 0…256 (8 codes each)."""
 MIN_COUNT = MappingProxyType({"temporal": 200, "spatial": 24})
@@ -439,7 +445,9 @@ def _collect(
     for frame in frames_rgb8:
         statistics.add(frame)
     if statistics.frames == 0:
-        raise ConfigError("the reference holds no frames; give a video or 8-bit images of the camera's output")
+        raise ReferenceContentError(
+            "the reference holds no frames; give a video or 8-bit images of the camera's output"
+        )
     return statistics
 
 
@@ -649,12 +657,12 @@ def _nlf(
                 samples, unit = int(np.count_nonzero(~statistics.moving)), "static pixels"
             else:
                 samples, unit = sum(b[0].shape[0] for b in statistics.blocks), f"{BLOCK_PX} × {BLOCK_PX} blocks"
-            raise ConfigError(
+            raise ReferenceContentError(
                 f"{samples} {unit} from {statistics.frames} frame(s) over {edges.size - 1} intensity bins, fewer "
                 f"than the {count} needed per bin for a {chosen} noise estimate (the fullest bin holds "
                 f"{int(nlf.count.max())}); give larger or more frames, or fewer bins"
             )
-        raise ConfigError(
+        raise ReferenceContentError(
             f"no intensity bin of the reference holds {count} unclipped samples for a {chosen} noise estimate "
             f"(in the first frame {share[0]:.0%} of the samples are 0 and {share[1]:.0%} are 255); give footage "
             "with mid-tone regions, neither black nor saturated"
@@ -1193,7 +1201,7 @@ def fit_match(
     if not np.any(reference.variance[reference.usable] > 0):
         low, high = int(statistics.first.min()), int(statistics.first.max())
         flat = f"its first frame is one flat level ({low} in every pixel) and " if low == high else ""
-        raise ConfigError(
+        raise ReferenceContentError(
             f"the reference shows no noise: {flat}its {reference.method} variance is 0 in every intensity bin it "
             "fills, so it holds no noise-level information to fit; give the camera's own output with its noise "
             "(several frames of a static view, or images with flat but noisy regions), not a synthetic, uniform "
