@@ -497,6 +497,12 @@ def test_a_rendered_output_with_one_camera_per_view_is_read_as_it_is(charuco_fol
         assert len(names) == len(views) and len(set(names)) == len(names)
         assert names[0].endswith("pose_00/frames/000000.png")
         np.testing.assert_allclose(fit.K_px, charuco_fit.K_px, rtol=1e-9)
+    # a camera's later frames repeat its view: one per camera is read; two jobs' renders are not mixed
+    shutil.copy(views[0], tmp_path / "out" / "checkerboard-0123abcd" / "pose_00" / "frames" / "000001.png")
+    assert len(detect_in_folder(tmp_path / "out", parse_board(CHARUCO_SPEC)).detections) == len(views)
+    shutil.copytree(tmp_path / "out" / "checkerboard-0123abcd", tmp_path / "out" / "checkerboard-4567ef01")
+    with pytest.raises(ConfigError, match="holds the renders of 2 jobs"):
+        detect_in_folder(tmp_path / "out", parse_board(CHARUCO_SPEC))
 
 
 def test_calibrations_in_threads_run_on_one_opencv_thread_and_restore_the_count():

@@ -620,7 +620,8 @@ def truncation(data: bytes) -> str | None:
 RENDERED_FRAME_PATTERNS = ("*/frames/*", "*/*/frames/*")
 """Where a camgen render keeps each camera's frames, below a job directory (CAMERA/frames/) or below
 the -o directory of a render (JOB/CAMERA/frames/): `image_files` looks there when a folder holds no
-images itself, so `fit lens` takes the checkerboard scene's output (one camera per view) as it is."""
+images itself, so `fit lens` takes the checkerboard scene's output (one camera per view, its first
+frame) as it is."""
 
 
 def image_files(directory: Path) -> list[Path]:
@@ -631,12 +632,26 @@ def image_files(directory: Path) -> list[Path]:
         raise ConfigError(f"{directory} {state}; give the folder that holds the board images")
     suffixes = IMAGE_SUFFIXES | RAW_SUFFIXES
     files = [p for p in sorted(directory.iterdir()) if p.suffix.lower() in suffixes]
-    for pattern in RENDERED_FRAME_PATTERNS:
-        if not files:
-            files = [p for p in sorted(directory.glob(pattern)) if p.suffix.lower() in suffixes and p.is_file()]
+    for depth, pattern in enumerate(RENDERED_FRAME_PATTERNS):
+        if files:
+            break
+        frames = [p for p in sorted(directory.glob(pattern)) if p.suffix.lower() in suffixes and p.is_file()]
+        jobs = sorted({p.relative_to(directory).parts[0] for p in frames}) if depth == 1 else []
+        if len(jobs) > 1:
+            raise ConfigError(
+                f"{directory} holds the renders of {len(jobs)} jobs ({listing(jobs)}), which may differ in lens; "
+                "give one job's directory"
+            )
+        # One view per camera: a camera's later frames repeat its first view (the board does not move), and
+        # a repeated view would sit in training and held-out folds alike.
+        first = {}
+        for path in frames:
+            first.setdefault(path.parent, path)
+        files = list(first.values())
     if not files:
         raise ConfigError(
-            f"{directory} holds no images (.png, .jpg, .tif, raw files), nor a camgen render's CAMERA/frames/ folders"
+            f"{directory} holds no images ({', '.join(sorted(suffixes))}), nor a camgen render's CAMERA/frames/ "
+            "folders with such images"
         )
     return files
 
