@@ -190,12 +190,10 @@ def _print_rows(out: Console, title: str, rows: Sequence[tuple[str, float, float
     out.print(table)
 
 
-OPENCV_DEFAULT_MODEL = "k1k2k3p"
-"""The candidate `cv2.calibrateCamera` fits without flags (k1, k2, p1, p2, k3), for comparison."""
-
-
 def _label(fit, name: str) -> str:
     """A candidate's name, marked when it is the chosen model or OpenCV's default."""
+    from camgen.fit.lens import OPENCV_DEFAULT_MODEL
+
     tags = [
         tag for tag, on in (("chosen", name == fit.model), ("OpenCV's default", name == OPENCV_DEFAULT_MODEL)) if on
     ]

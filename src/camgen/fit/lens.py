@@ -176,6 +176,8 @@ DISTORTION_MODELS = (
     DistortionModel("rational", DISTORTION_NAMES, cv2.CALIB_RATIONAL_MODEL),
 )
 """The default candidates, simplest first ("k1k2k3p" is OpenCV's default model)."""
+OPENCV_DEFAULT_MODEL = "k1k2k3p"
+"""The candidate `cv2.calibrateCamera` fits without flags (k1, k2, p1, p2, k3), shown beside the chosen one."""
 
 
 @dataclass(frozen=True)
