@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -11,7 +12,7 @@ from rich.markup import escape
 
 from camgen.cli.common import add_profile_dirs_option, detect_kind, profile_dirs
 from camgen.config import load_profile, load_scene
-from camgen.errors import ConfigError
+from camgen.errors import ConfigError, Problem
 
 
 def add_parser(subparsers) -> None:
@@ -38,7 +39,9 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             elif kind == "scene":
                 load_scene(path, dirs)
             else:
-                kind = f"dataset, {_check_dataset(path, dirs)} jobs compile"
+                status = err.status(f"compiling every job of {escape(str(path))}") if err.is_terminal else None
+                with status or contextlib.nullcontext():
+                    kind = f"dataset, {_check_dataset(path, dirs)} jobs compile"
             out.print(f"[green]ok[/green]  {escape(str(path))} ({kind})")
         except ConfigError as exc:
             failed += 1
@@ -64,6 +67,8 @@ def _check_dataset(path: Path, profile_dirs: Sequence[Path]) -> int:
             compile_batch_job(job, profile_dirs=profile_dirs)
         except ConfigError as exc:
             problems.extend(exc.problems)
+        except Exception as exc:  # a job's compile failing in camgen itself: report it with the job, go on
+            problems.append(Problem((), f"{path}: job {job.name}: does not compile ({type(exc).__name__}: {exc})"))
     if problems:
         raise ConfigError(problems)
     return len(jobs)
