@@ -85,3 +85,39 @@ def workspace(tmp_path: Path) -> Path:
     write(tmp_path, "profiles/ptz.yaml", PTZ_PROFILE)
     (tmp_path / "scenes").mkdir()
     return tmp_path
+
+
+@pytest.fixture(scope="session")
+def renderer():
+    """One headless OpenGL context for every rendering test (creating EGL contexts is slow)."""
+    from camgen.render.renderer import Renderer
+
+    with Renderer() as instance:
+        yield instance
+
+
+@pytest.fixture(scope="session")
+def board_views(renderer, tmp_path_factory):
+    """name → (directory, job, 8-bit grey views) of the board scene through a `tests.fit.boards.DISTORTIONS`
+    lens, rendered once per session: tests/fit/test_lens.py fits them as a person would (the PNGs in
+    directory/images), tests/render/test_lens_calibration.py calibrates them with OpenCV alone."""
+    import cv2
+
+    from camgen.fit.checkerboard import gray8_from_radiance
+    from tests.fit.boards import CALIBRATION_VIEWS, DISTORTIONS, lens_output, lens_profile, write_board_scene
+
+    cache = {}
+
+    def views(name: str):
+        if name not in cache:
+            directory = tmp_path_factory.mktemp(f"board_{name}")
+            job = write_board_scene(directory, name, lens_profile(distortion=DISTORTIONS[name]), CALIBRATION_VIEWS)
+            (directory / "images").mkdir()
+            grays = []
+            for camera, radiance in lens_output(renderer, job):
+                grays.append(gray8_from_radiance(radiance))
+                cv2.imwrite(str(directory / "images" / f"{camera.name}.png"), grays[-1])
+            cache[name] = directory, job, grays
+        return cache[name]
+
+    return views

@@ -66,13 +66,11 @@ from camgen.fit.lens import (
 from camgen.fit.lens_report import write_lens_report
 from camgen.fit.profile_yaml import write_profile
 from tests.fit.boards import (
-    CALIBRATION_VIEWS,
     DISTORTIONS,
     charuco_pose,
     charuco_views,
     lens_profile,
     the_board,
-    write_board_scene,
     write_board_scene_like,
     write_gray8_views,
 )
@@ -133,25 +131,14 @@ def board_spec(job) -> str:
 # --- rendered checkerboards (1–3) ------------------------------------------------------------------
 
 
-@pytest.fixture(scope="module")
-def renderer():
-    """One EGL context for this module (tests/render's session fixture is not visible here)."""
-    from camgen.render.renderer import Renderer
-
-    with Renderer() as instance:
-        yield instance
-
-
 @pytest.fixture(scope="module", params=RENDERED_PROFILES)
-def rendered(request, renderer, tmp_path_factory):
-    """(profile name, its YAML, planned job, folder of the 8-bit views, first fit), rendered once."""
+def rendered(request, board_views):
+    """(profile name, its YAML, planned job, folder of the 8-bit views, first fit), rendered once a session
+    (`board_views`, shared with tests/render/test_lens_calibration.py)."""
     name = request.param
-    directory = tmp_path_factory.mktemp(name)
-    profile_text = lens_profile(distortion=DISTORTIONS[name])
-    job = write_board_scene(directory, name, profile_text, CALIBRATION_VIEWS)
-    write_gray8_views(renderer, job, directory / "images")
+    directory, job, _ = board_views(name)
     _, fit = fit_folder(directory / "images", board_spec(job), pixel_pitch_um=PIXEL_PITCH_UM)
-    return name, profile_text, job, directory, fit
+    return name, lens_profile(distortion=DISTORTIONS[name]), job, directory, fit
 
 
 @pytest.mark.opengl

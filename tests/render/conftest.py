@@ -1,19 +1,10 @@
-"""One headless OpenGL context for every rendering test (creating EGL contexts is slow)."""
+"""Helpers for the rendering tests (their OpenGL context, `renderer`, is tests/conftest.py's)."""
 
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from camgen.config.scene import Scene
-
-
-@pytest.fixture(scope="session")
-def renderer():
-    from camgen.render.renderer import Renderer
-
-    with Renderer() as instance:
-        yield instance
 
 
 def scene_from(**document) -> Scene:

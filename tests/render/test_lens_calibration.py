@@ -52,7 +52,6 @@ import pytest
 from camgen.fit.checkerboard import calibrate, find_corners, gray8_from_radiance, inner_corners
 from camgen.optics.projection import project_points
 from tests.fit.boards import (
-    CALIBRATION_VIEWS,
     DISTORTIONS,
     IMAGE_CORNERS,
     board_corners_world_m,
@@ -74,16 +73,12 @@ CA_CORNERS_AVERAGED = 12
 
 
 @pytest.fixture(scope="module", params=list(DISTORTIONS))
-def lens_calibration(request, renderer, tmp_path_factory):
-    """(job, corners found per view, calibration) of one distortion profile, rendered once."""
-    name = request.param
-    job = write_board_scene(
-        tmp_path_factory.mktemp(name), name, lens_profile(distortion=DISTORTIONS[name]), CALIBRATION_VIEWS
-    )
+def lens_calibration(request, board_views):
+    """(job, corners found per view, calibration) of one distortion profile, rendered once a session
+    (`board_views`, shared with tests/fit/test_lens.py)."""
+    _, job, views = board_views(request.param)
     board = the_board(job)
-    found = [
-        find_corners(gray8_from_radiance(radiance), inner_corners(board)) for _, radiance in lens_output(renderer, job)
-    ]
+    found = [find_corners(gray8, inner_corners(board)) for gray8 in views]
     camera = job.cameras[0]
     result = calibrate(board, [c for c in found if c is not None], (camera.width_px, camera.height_px))
     return job, found, result
