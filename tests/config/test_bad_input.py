@@ -28,7 +28,7 @@ CASES = [
         "profile",
         edit(FIXED_PROFILE, "focal_length_mm: 4.0", "focal_length_mm: -4.0 #<"),
         "lens.focal_length_mm",
-        "must be > 0, got -4",
+        "must be ≥ 0.5, got -4; real lenses span 0.5–2000 mm",
     ),
     (
         "wrong_type_width",
@@ -698,6 +698,211 @@ CASES = [
         "actors[0].random_walk.leg_length_m",
         "must give legs and a region of at least 0.1 m",
     ),
+    # Issue 26. Values the schema took but the physics could not: each bound names its range and source.
+    (
+        "conversion_gain_beyond_any_sensor",
+        "profile",
+        edit(FIXED_PROFILE, "conversion_gain_dn_per_e: 0.4", "conversion_gain_dn_per_e: 1e308 #<"),
+        "sensor.conversion_gain_dn_per_e",
+        "must be ≤ 100, got 1e+308; system gains K run from 1e-4 DN/e⁻",
+    ),
+    (
+        "plane_larger_than_the_world",
+        "scene",
+        edit(SCENE, "size_m: [20, 20]", "size_m: [1e308, 20] #<"),
+        "environment.meshes[0].size_m[0]",
+        "must be ≤ 20000, got 1e+308; nothing is larger than the world, which spans ±10000 m",
+    ),
+    (
+        "sensor_hotter_than_it_works",
+        "profile",
+        edit(FIXED_PROFILE, "bit_depth: 12", "bit_depth: 12\n  temperature_c: 150 #<"),
+        "sensor.temperature_c",
+        "must be ≤ 105, got 150; an image sensor works from −40 °C",
+    ),
+    (
+        "dark_current_doubling_too_fast",
+        "profile",
+        edit(FIXED_PROFILE, "read_noise_e: 2.0", "read_noise_e: 2.0\n    dark_current_doubling_c: 0.1 #<"),
+        "sensor.noise.dark_current_doubling_c",
+        "must be ≥ 2, got 0.1; silicon's dark current doubles every 3–14 °C",
+    ),
+    (
+        "dark_current_at_temperature_beyond_any_sensor",
+        "profile",
+        edit(
+            edit(FIXED_PROFILE, "bit_depth: 12", "bit_depth: 12\n  temperature_c: 105"),
+            "read_noise_e: 2.0",
+            "read_noise_e: 2.0\n    dark_current_e_per_s: 1 #<\n    dark_current_reference_c: -40\n"
+            "    dark_current_doubling_c: 2",
+        ),
+        "sensor.noise.dark_current_e_per_s",
+        "is 6.68e+21 e⁻/s at temperature_c (105 °C: 1 e⁻/s at -40 °C, doubling every 2 °C), more than the 1e+08",
+    ),
+    (
+        "sensor_wider_than_any",
+        "profile",
+        edit(FIXED_PROFILE, "width_px: 640", "width_px: 32768 #<"),
+        "sensor.width_px",
+        "must be ≤ 16384, got 32768; no sensor has more than 16384 pixels along a side",
+    ),
+    (
+        "sensor_more_pixels_than_any",
+        "profile",
+        edit(edit(FIXED_PROFILE, "width_px: 640", "width_px: 16384 #<"), "height_px: 480", "height_px: 16384"),
+        "sensor.width_px",
+        "× height_px must be ≤ 160 MP (the largest area sensors sold have 151 MP), got 16384 × 16384 = 268.4 MP",
+    ),
+    (
+        "full_well_of_one_electron",
+        "profile",
+        edit(edit(FIXED_PROFILE, "full_well_e: 10000", "full_well_e: 1 #<"), "read_noise_e: 2.0", "read_noise_e: 5"),
+        "sensor.full_well_e",
+        "must be ≥ 100, got 1; real wells hold 100 e⁻ to 10 Me⁻",
+    ),
+    (
+        "full_well_within_the_read_noise",
+        "profile",
+        edit(edit(FIXED_PROFILE, "full_well_e: 10000", "full_well_e: 200 #<"), "read_noise_e: 2.0", "read_noise_e: 50"),
+        "sensor.full_well_e",
+        "must be ≥ 10 × noise.read_noise_e = 500 e⁻ (a dynamic range full well / read noise of at least 20 dB",
+    ),
+    (
+        "fixed_pattern_deeper_than_the_well",
+        "profile",
+        edit(FIXED_PROFILE, "read_noise_e: 2.0", "read_noise_e: 2.0\n    dsnu_e: 20000 #<"),
+        "sensor.noise.dsnu_e",
+        "must be ≤ full_well_e (10000 e⁻): a fixed-pattern offset larger than the well fills every pixel",
+    ),
+    (
+        "focal_length_of_a_kilometre",
+        "profile",
+        edit(FIXED_PROFILE, "focal_length_mm: 4.0", "focal_length_mm: 1e6 #<"),
+        "lens.focal_length_mm",
+        "must be ≤ 2000, got 1e+06; real lenses span 0.5–2000 mm",
+    ),
+    (
+        "bitrate_below_any_camera",
+        "profile",
+        FIXED_PROFILE + "codec: {bitrate_kbps: 1e-9} #<\n",
+        "codec.bitrate_kbps",
+        "must be ≥ 32, got 1e-09; surveillance cameras and recorders offer 32 kbit/s and up",
+    ),
+    (
+        "waypoint_beyond_the_world",
+        "scene",
+        edit(SCENE, "waypoints_m: [[-3, 5], [3, 5]]", "waypoints_m: [[-1e308, 5], [3, 5]] #<"),
+        "actors[0].path.waypoints_m[0][0]",
+        "must be ≥ -10000, got -1e+308; scenes lie within ±10000 m of the origin",
+    ),
+    (
+        "camera_beyond_the_world",
+        "scene",
+        edit(SCENE, "position_m: [0, -5, 3]", "position_m: [1e308, -5, 3] #<"),
+        "cameras[0].mount.position_m[0]",
+        "must be ≤ 10000, got 1e+308; scenes lie within ±10000 m of the origin, where the renderer's float32",
+    ),
+    # The same class, found by setting every number of a profile and a scene to ±1e308, 1e12 and 1e-300.
+    (
+        "whole_number_too_large_to_hold",
+        "profile",
+        edit(FIXED_PROFILE, "width_px: 640", "width_px: 1e308 #<"),
+        "sensor.width_px",
+        "must be a whole number of a sensible size, got 1e+308; no sensor has more than 16384 pixels",
+    ),
+    (
+        "optical_axis_off_the_sensor",
+        "profile",
+        edit(FIXED_PROFILE, "cfa: RGGB", "cfa: RGGB\n  principal_point_offset_px: [1e308, 0] #<"),
+        "sensor.principal_point_offset_px",
+        "must put the optical axis on the sensor, within ±320 px across and ±240 px down, got [1e+308, 0]",
+    ),
+    (
+        "channel_noise_scale_overflows",
+        "profile",
+        edit(FIXED_PROFILE, "read_noise_e: 2.0", "read_noise_e: 2.0\n    channel_scale: {r: 1e308} #<"),
+        "sensor.noise.channel_scale.r",
+        "must be ≤ 10, got 1e+308; a channel's noise is 0–10 times the physical model's",
+    ),
+    (
+        "sharpening_radius_of_a_kilometre",
+        "profile",
+        FIXED_PROFILE + "isp: {sharpen_amount: 1, sharpen_radius_px: 1e12} #<\n",
+        "isp.sharpen_radius_px",
+        "must be ≤ 20, got 1e+12; a camera sharpens detail a few pixels wide",
+    ),
+    (
+        "white_balance_gain_overflows",
+        "profile",
+        FIXED_PROFILE + "isp: {white_balance: {mode: fixed, gains_rgb: [1e308, 1, 1]}} #<\n",
+        "isp.white_balance.gains_rgb[0]",
+        "must be ≤ 20, got 1e+308; white balance multiplies a channel by 1–4",
+    ),
+    (
+        "key_frame_interval_beyond_the_encoder",
+        "profile",
+        FIXED_PROFILE + "codec: {gop_frames: 1000000000000} #<\n",
+        "codec.gop_frames",
+        "must be ≤ 10000, got 1000000000000; cameras set a key frame every 1 to about a thousand frames",
+    ),
+    (
+        "frame_rate_below_the_video_fraction",
+        "scene",
+        edit(SCENE, "fps: 10", "fps: 1e-300 #<"),
+        "fps",
+        "must be ≥ 0.001, got 1e-300; the video stores the frame rate as a fraction",
+    ),
+    (
+        "sky_brighter_than_the_sun",
+        "scene",
+        edit(SCENE, "environment:\n", "environment:\n  sky_luminance_cd_m2: 1e308 #<\n"),
+        "environment.sky_luminance_cd_m2",
+        "must be ≤ 2e+09, got 1e+308; nothing a camera sees is brighter than the sun's disc",
+    ),
+    (
+        "lamp_brighter_than_a_lighthouse",
+        "scene",
+        edit(
+            SCENE,
+            "  - {type: ambient, illuminance_lux: 1000}\n",
+            "  - {type: ambient, illuminance_lux: 1000}\n"
+            "  - {type: point, position_m: [0, 0, 3], intensity_cd: 1e308} #<\n",
+        ),
+        "lights[1].intensity_cd",
+        "must be ≤ 1e+08, got 1e+308; the brightest lamps, lighthouse and searchlight beams",
+    ),
+    (
+        "walker_slower_than_standing",
+        "scene",
+        edit(SCENE, "speed_m_s: 1.4", "speed_m_s: 1e-300 #<"),
+        "actors[0].path.speed_m_s",
+        "must be ≥ 0.01, got 1e-300; an actor moves at 0.01–100 m/s",
+    ),
+    (
+        "mesh_file_scaled_beyond_the_world",
+        "scene",
+        edit(
+            SCENE,
+            "    - type: plane\n      name: ground\n      size_m: [20, 20]",
+            "    - {type: file, name: statue, path: statue.glb, scale: 1e9} #<",
+        ),
+        "environment.meshes[0].scale",
+        "must be ≤ 1000, got 1e+09; a scale turns the file's units into metres",
+    ),
+    (
+        "tilt_range_beyond_a_half_turn",
+        "profile",
+        edit(PTZ_PROFILE, "tilt_range_deg: [-90, 10]", "tilt_range_deg: [-90, 1e308] #<"),
+        "ptz.tilt_range_deg[1]",
+        "must be ≤ 180, got 1e+308; a tilt range's ends lie within ±180°",
+    ),
+    (
+        "zoom_sweep_slower_than_any_motor",
+        "profile",
+        edit(PTZ_PROFILE, "pan_max_deg_s: 100", "pan_max_deg_s: 100\n  zoom_wide_to_tele_s: 1e308 #<"),
+        "ptz.zoom_wide_to_tele_s",
+        "must be ≤ 100, got 1e+308; a zoom crosses its range in 1–10 s on real cameras",
+    ),
     # Types are strict: text, booleans and numbers are not taken for one another.
     (
         "quoted_number",
@@ -849,7 +1054,55 @@ def test_cli_reports_without_traceback(workspace: Path, command: str, capsys):
     assert code in (1, 2)
     assert "Traceback" not in captured.err + captured.out
     assert f"{path}:2:" in captured.err
-    assert "fps must be > 0, got -5" in captured.err
+    assert "fps must be ≥ 0.001, got -5" in captured.err
+
+
+# The issue's inputs as reported, where one line breaks two bounds: each is reported at its own place.
+BOTH_REPORTED = [
+    (
+        "sensor_32768_square",
+        "profile",
+        edit(edit(FIXED_PROFILE, "width_px: 640", "width_px: 32768"), "height_px: 480", "height_px: 32768"),
+        [(3, "sensor.width_px must be ≤ 16384"), (4, "sensor.height_px must be ≤ 16384")],
+    ),
+    (
+        "plane_1e308_square",
+        "scene",
+        edit(SCENE, "size_m: [20, 20]", "size_m: [1e308, 1e308]"),
+        [(8, "size_m[0] must be ≤ 20000, got 1e+308"), (8, "size_m[1] must be ≤ 20000, got 1e+308")],
+    ),
+    (
+        "hot_sensor_with_fast_doubling",
+        "profile",
+        edit(
+            edit(FIXED_PROFILE, "bit_depth: 12", "bit_depth: 12\n  temperature_c: 150"),
+            "read_noise_e: 2.0",
+            "read_noise_e: 2.0\n    dark_current_doubling_c: 0.1",
+        ),
+        [(8, "sensor.temperature_c must be ≤ 105, got 150"), (14, "dark_current_doubling_c must be ≥ 2, got 0.1")],
+    ),
+    (
+        "waypoints_at_plus_and_minus_1e308",
+        "scene",
+        edit(SCENE, "waypoints_m: [[-3, 5], [3, 5]]", "waypoints_m: [[-1e308, 5], [1e308, 5]]"),
+        [
+            (15, "waypoints_m[0][0] must be ≥ -10000, got -1e+308"),
+            (15, "waypoints_m[1][0] must be ≤ 10000, got 1e+308"),
+        ],
+    ),
+]
+
+
+@pytest.mark.parametrize(
+    ("kind", "text", "expected"), [c[1:] for c in BOTH_REPORTED], ids=[c[0] for c in BOTH_REPORTED]
+)
+def test_every_broken_bound_is_reported(workspace: Path, kind: str, text: str, expected: list, capsys):
+    path = write(workspace, f"{kind}s/both.yaml", text)
+    assert main(["validate", "--kind", kind, str(path)]) == 1
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    for line, fragment in expected:
+        assert re.search(rf"{re.escape(str(path))}:{line}:\d+: \S*{re.escape(fragment)}", err), (fragment, err)
 
 
 # Hostile YAML: each must end in a located error, never a traceback or a hang.

@@ -32,7 +32,8 @@ SIDE_PX = st.integers(1, 64)
 
 
 def sensors(width_px=SIDE_PX, height_px=SIDE_PX):
-    """Profile sensors over the schema's ranges (mono and Bayer, 8–16 bits, 0–72 dB, −60…150 °C)."""
+    """Profile sensors over the schema's ranges (mono and Bayer, 8–16 bits, 0–72 dB, −40…105 °C, a full
+    well of at least 10 read-noise σ)."""
     return st.builds(
         lambda w, h, pitch, cfa, bits, full_well, gain, black_frac, gain_max, temp, noise: Sensor(
             width_px=w,
@@ -45,7 +46,7 @@ def sensors(width_px=SIDE_PX, height_px=SIDE_PX):
             black_level_dn=black_frac * (2**bits - 1),
             analog_gain_max_db=gain_max,
             temperature_c=temp,
-            noise=noise,
+            noise={**noise, "read_noise_e": min(noise["read_noise_e"], full_well / 10)},
         ),
         width_px,
         height_px,
@@ -56,7 +57,7 @@ def sensors(width_px=SIDE_PX, height_px=SIDE_PX):
         st.floats(1e-3, 10.0),
         st.floats(0.0, 0.5),
         st.floats(0.0, 72.0),
-        st.floats(-60.0, 150.0),
+        st.floats(-40.0, 105.0),
         st.fixed_dictionaries(
             {
                 "read_noise_e": st.floats(0.0, 50.0),

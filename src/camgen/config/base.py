@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 from pydantic import BaseModel, ConfigDict, GetCoreSchemaHandler
@@ -79,6 +80,19 @@ def invalid(subpath: str, message: str) -> PydanticCustomError:
     layer turns it into a file location. `message` continues the key path: ``must be ≥ 0.5, got 0.3``.
     """
     return PydanticCustomError("camgen", "{message}", {"message": message, "subpath": subpath})
+
+
+@dataclass(frozen=True)
+class Why:
+    """Where a field's bounds come from, for the error when a value breaks them.
+
+    Put it in `Annotated` beside the `Field` bounds: ``Annotated[float, Field(gt=0, le=2000), Why("…")]``.
+    The bounds stay pydantic's own (the JSON Schema and `camgen.fit` read them); the message becomes
+    ``lens.focal_length_mm must be ≤ 2000, got 1e+06; <text>``. The text states the allowed range in
+    words, with its unit and source.
+    """
+
+    text: str
 
 
 def parse_subpath(subpath: str) -> tuple[str | int, ...]:

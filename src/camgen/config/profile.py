@@ -12,7 +12,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from camgen.config.base import Model, invalid
+from camgen.config.base import Model, Why, invalid
 from camgen.optics.distortion import radial_reach
 from camgen.optics.intrinsics import camera_matrix_px, corner_radius_normalized
 from camgen.optics.projection import LensInversionError, undistort_points
@@ -21,6 +21,26 @@ PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegativeFloat = Annotated[float, Field(ge=0)]
 Fraction = Annotated[float, Field(ge=0, le=1)]
 Rgb = tuple[float, float, float]
+
+SENSOR_SIDE_MAX_PX = 16384
+"""Most pixels along one side of a sensor: line-scan sensors reach 16k; the largest area sensors sold
+(151 MP, Sony IMX411: 14192 × 10640) stay below it."""
+SENSOR_PIXELS_MAX = 160_000_000
+"""Most pixels on a sensor: the largest area sensors sold have 151 MP (Sony IMX411/IMX461)."""
+TEMPERATURE_RANGE_C = (-40.0, 105.0)
+"""Temperatures a working image sensor reaches, °C: cameras are rated for −40 °C ambient (outdoor
+surveillance housings: −40…+60 °C), and the die runs warmer than the air around it, up to the +105 °C of
+AEC-Q100 grade 2 (automotive) sensors; consumer and industrial sensor datasheets stop at +85 °C."""
+DARK_CURRENT_MAX_E_PER_S = 1e8
+"""Most dark current a pixel may have at the operating temperature, e⁻/s: it would fill even the deepest
+wells (`full_well_e` ≤ 10 Me⁻) in 0.1 s and a typical 10 ke⁻ well in 0.1 ms; hot real sensors stay below
+~10⁵ e⁻/s (50 e⁻/s at 25 °C doubling every 6.5 °C gives 2.5·10⁵ e⁻/s at 105 °C)."""
+DYNAMIC_RANGE_MIN = 10.0
+"""Smallest full well over read noise (EMVA 1288's dynamic range μ_e.sat/σ_d, here 20 dB): far below
+any real sensor (55–80 dB), far above a well that one read-noise σ fills."""
+FOCAL_LENGTH_RANGE_MM = (0.5, 2000.0)
+"""Focal lengths of real camera lenses, mm: from the shortest rectilinear lenses on small sensors
+(≈ 0.8 mm) to the longest long-range surveillance and broadcast zooms (1000–2000 mm tele end)."""
 
 
 class QuantumEfficiency(Model):
@@ -31,12 +51,19 @@ class QuantumEfficiency(Model):
     b: Fraction = 0.55
 
 
-class ChannelNoiseScale(Model):
-    """Per-channel multipliers on the temporal noise (seed paper Fig. 5); 1 is the physical model."""
+NoiseScale = Annotated[
+    float,
+    Field(ge=0, le=10),
+    Why("a channel's noise is 0–10 times the physical model's (measured cameras differ by tens of per cent)"),
+]
 
-    r: NonNegativeFloat = 1.0
-    g: NonNegativeFloat = 1.0
-    b: NonNegativeFloat = 1.0
+
+class ChannelNoiseScale(Model):
+    """Per-channel multipliers on the temporal noise (seed paper Fig. 5); 1 is the physical model, 0–10."""
+
+    r: NoiseScale = 1.0
+    g: NoiseScale = 1.0
+    b: NoiseScale = 1.0
 
 
 class Noise(Model):
@@ -61,10 +88,25 @@ class Noise(Model):
     """Column-wise offset fixed-pattern noise, electrons rms."""
     dark_current_e_per_s: NonNegativeFloat = 1.0
     """Mean dark current at `dark_current_reference_c`, electrons per second per pixel."""
-    dark_current_reference_c: float = 25.0
-    """Temperature at which `dark_current_e_per_s` holds, °C."""
-    dark_current_doubling_c: PositiveFloat = 6.5
-    """Temperature rise that doubles the dark current, °C."""
+    dark_current_reference_c: Annotated[
+        float,
+        Field(ge=TEMPERATURE_RANGE_C[0], le=TEMPERATURE_RANGE_C[1]),
+        Why("an image sensor works from −40 °C (outdoor cameras' rating) to +105 °C (AEC-Q100 grade 2)"),
+    ] = 25.0
+    """Temperature at which `dark_current_e_per_s` holds, °C (datasheets: 25–60 °C)."""
+    dark_current_doubling_c: Annotated[
+        float,
+        Field(ge=2, le=20),
+        Why(
+            "silicon's dark current doubles every 3–14 °C over −40…+105 °C (from diffusion to generation "
+            "current, Eg = 1.12 eV; 5–10 °C in real sensors), so 2–20 °C"
+        ),
+    ] = 6.5
+    """Temperature rise that doubles the dark current, °C; 2–20 °C allowed. From the temperature
+    dependence of silicon's dark current (Janesick, Scientific Charge-Coupled Devices, SPIE 2001):
+    diffusion current ∝ T³·exp(−Eg/kT) doubles every ≈ 3 °C at −40 °C and ≈ 4.5 °C at 25 °C,
+    depletion (generation) current ∝ T^1.5·exp(−Eg/2kT) every ≈ 9 °C at 25 °C and ≈ 14 °C at 105 °C;
+    CMOS image sensors measure 5–10 °C."""
     hot_pixel_fraction: Fraction = 0.0
     """Fraction of pixels with elevated dark current."""
     hot_pixel_dark_current_e_per_s: NonNegativeFloat = 0.0
@@ -83,9 +125,17 @@ class Sensor(Model):
     """Sensor part number, for people (not used in computation)."""
     format: str = ""
     """Optical format as sold, e.g. 1/2.8" (not used in computation: the pitch and resolution are)."""
-    width_px: Annotated[int, Field(gt=0, le=32768)]
-    """Effective (output) pixels horizontally."""
-    height_px: Annotated[int, Field(gt=0, le=32768)]
+    width_px: Annotated[
+        int,
+        Field(gt=0, le=SENSOR_SIDE_MAX_PX),
+        Why(f"no sensor has more than {SENSOR_SIDE_MAX_PX} pixels along a side (16k line-scan sensors)"),
+    ]
+    """Effective (output) pixels horizontally (`SENSOR_SIDE_MAX_PX`; `SENSOR_PIXELS_MAX` in all)."""
+    height_px: Annotated[
+        int,
+        Field(gt=0, le=SENSOR_SIDE_MAX_PX),
+        Why(f"no sensor has more than {SENSOR_SIDE_MAX_PX} pixels along a side (16k line-scan sensors)"),
+    ]
     """Effective (output) pixels vertically."""
     pixel_pitch_um: Annotated[float, Field(gt=0, le=100)]
     """Horizontal pixel pitch, µm."""
@@ -97,19 +147,38 @@ class Sensor(Model):
     """Colour filter array, read from the top-left 2×2 block row by row."""
     bit_depth: Annotated[int, Field(ge=8, le=16)] = 12
     """ADC resolution, bits."""
-    full_well_e: PositiveFloat
-    """Charge a pixel holds before it clips, electrons. An EMVA 1288 measurement places the saturation
+    full_well_e: Annotated[
+        float,
+        Field(ge=100, le=1e7),
+        Why(
+            "real wells hold 100 e⁻ to 10 Me⁻ (sub-µm phone pixels ~1 ke⁻, large scientific pixels "
+            "~1 Me⁻); give electrons, not DN"
+        ),
+    ]
+    """Charge a pixel holds before it clips, electrons (100 e⁻ … 10 Me⁻, and at least `DYNAMIC_RANGE_MIN`
+    times the read noise). An EMVA 1288 measurement places the saturation
     capacity μ_e.sat at the peak of the photon-transfer variance, where shot noise and PRNU have
     started clipping pixels: about 4 % below this figure for 10 ke⁻ and 1 % PRNU (tests/sensor).
     Enter a datasheet's μ_e.sat a few σ higher."""
-    conversion_gain_dn_per_e: PositiveFloat
-    """System gain K at 0 dB analog gain, DN per electron."""
+    conversion_gain_dn_per_e: Annotated[
+        float,
+        Field(ge=1e-4, le=100),
+        Why(
+            "system gains K run from 1e-4 DN/e⁻ (a 12-bit ADC over a 10 Me⁻ well) to ~10 DN/e⁻ "
+            "(photon-counting qCMOS), so 1e-4…100 DN/e⁻; give DN per electron, not electrons per DN"
+        ),
+    ]
+    """System gain K at 0 dB analog gain, DN per electron (EMVA 1288's K), 1e-4 … 100."""
     black_level_dn: NonNegativeFloat = 0.0
     """Offset added before the ADC clip, DN."""
     analog_gain_max_db: Annotated[float, Field(ge=0, le=72)] = 0.0
     """Largest analog/digital gain the camera applies, dB (20·log10)."""
-    temperature_c: Annotated[float, Field(ge=-60, le=150)] = 40.0
-    """Operating sensor temperature, °C (drives dark current)."""
+    temperature_c: Annotated[
+        float,
+        Field(ge=TEMPERATURE_RANGE_C[0], le=TEMPERATURE_RANGE_C[1]),
+        Why("an image sensor works from −40 °C (outdoor cameras' rating) to +105 °C (AEC-Q100 grade 2)"),
+    ] = 40.0
+    """Operating sensor temperature, °C (drives dark current), within `TEMPERATURE_RANGE_C`."""
     frame_rate_max_hz: PositiveFloat = 30.0
     """Highest frame rate at full resolution, Hz."""
     quantum_efficiency: QuantumEfficiency = QuantumEfficiency()
@@ -144,6 +213,45 @@ class Sensor(Model):
                 "noise.hot_pixel_dark_current_e_per_s",
                 "must be > 0 when noise.hot_pixel_fraction is set (a hot pixel needs a dark current)",
             )
+        offset = self.principal_point_offset_px
+        if abs(offset[0]) > self.width_px / 2 or abs(offset[1]) > self.height_px / 2:
+            raise invalid(
+                "principal_point_offset_px",
+                f"must put the optical axis on the sensor, within ±{self.width_px / 2:g} px across and "
+                f"±{self.height_px / 2:g} px down, got [{offset[0]:g}, {offset[1]:g}]",
+            )
+        if self.width_px * self.height_px > SENSOR_PIXELS_MAX:
+            raise invalid(
+                "width_px",
+                f"× height_px must be ≤ {SENSOR_PIXELS_MAX / 1e6:g} MP (the largest area sensors sold have 151 MP), "
+                f"got {self.width_px} × {self.height_px} = {self.width_px * self.height_px / 1e6:.4g} MP",
+            )
+        noise = self.noise
+        if self.full_well_e < DYNAMIC_RANGE_MIN * noise.read_noise_e:
+            raise invalid(
+                "full_well_e",
+                f"must be ≥ {DYNAMIC_RANGE_MIN:g} × noise.read_noise_e = {DYNAMIC_RANGE_MIN * noise.read_noise_e:g} e⁻ "
+                f"(a dynamic range full well / read noise of at least {20 * math.log10(DYNAMIC_RANGE_MIN):g} dB, "
+                f"EMVA 1288; real sensors have 55–80 dB), got {self.full_well_e:g}",
+            )
+        for key in ("dsnu_e", "row_fpn_e", "column_fpn_e"):
+            if getattr(noise, key) > self.full_well_e:
+                raise invalid(
+                    f"noise.{key}",
+                    f"must be ≤ full_well_e ({self.full_well_e:g} e⁻): a fixed-pattern offset larger than the "
+                    f"well fills every pixel, got {getattr(noise, key):g}",
+                )
+        rise = 2.0 ** ((self.temperature_c - noise.dark_current_reference_c) / noise.dark_current_doubling_c)
+        for key in ("dark_current_e_per_s", "hot_pixel_dark_current_e_per_s"):
+            at_reference = getattr(noise, key)
+            if at_reference * rise > DARK_CURRENT_MAX_E_PER_S:
+                raise invalid(
+                    f"noise.{key}",
+                    f"is {at_reference * rise:.3g} e⁻/s at temperature_c ({self.temperature_c:g} °C: "
+                    f"{at_reference:g} e⁻/s at {noise.dark_current_reference_c:g} °C, doubling every "
+                    f"{noise.dark_current_doubling_c:g} °C), more than the {DARK_CURRENT_MAX_E_PER_S:g} e⁻/s "
+                    "that would fill the deepest well in 0.1 s; check the temperatures and the doubling",
+                )
         return self
 
 
@@ -167,10 +275,21 @@ class Distortion(Model):
         return not np.any(self.as_array())
 
 
+FocalLength = Annotated[
+    float,
+    Field(ge=FOCAL_LENGTH_RANGE_MM[0], le=FOCAL_LENGTH_RANGE_MM[1]),
+    Why(
+        f"real lenses span {FOCAL_LENGTH_RANGE_MM[0]:g}–{FOCAL_LENGTH_RANGE_MM[1]:g} mm, from the shortest "
+        "rectilinear lenses to the longest long-range zooms"
+    ),
+]
+"""A focal length, mm, within `FOCAL_LENGTH_RANGE_MM`."""
+
+
 class ZoomPosition(Model):
     """Lens properties at one focal length; values between entries are interpolated linearly."""
 
-    focal_length_mm: PositiveFloat
+    focal_length_mm: FocalLength
     f_number: Annotated[float, Field(ge=0.5, le=64)] | None = None
     """Aperture at this focal length (zoom lenses ramp, e.g. F1.6 wide → F4.4 tele)."""
     distortion: Distortion | None = None
@@ -243,9 +362,9 @@ class Lens(Model):
 
     model: str = ""
     """Lens part number, for people."""
-    focal_length_mm: PositiveFloat | None = None
+    focal_length_mm: FocalLength | None = None
     """Focal length of a fixed lens, mm. Give this or `focal_length_range_mm`, not both."""
-    focal_length_range_mm: tuple[PositiveFloat, PositiveFloat] | None = None
+    focal_length_range_mm: tuple[FocalLength, FocalLength] | None = None
     """[wide, tele] focal lengths of a zoom or varifocal lens, mm."""
     f_number: Annotated[float, Field(ge=0.5, le=64)]
     """Working f-number N = f/D at the wide end (seed paper eq. 3)."""
@@ -391,9 +510,16 @@ class Exposure(Model):
         return self
 
 
+WhiteBalanceGain = Annotated[
+    float,
+    Field(ge=0.05, le=20),
+    Why("white balance multiplies a channel by 1–4 from daylight to tungsten light, so 0.05–20 at the most"),
+]
+
+
 class WhiteBalance(Model):
     mode: Literal["auto_grey_world", "fixed"] = "auto_grey_world"
-    gains_rgb: tuple[PositiveFloat, PositiveFloat, PositiveFloat] = (1.0, 1.0, 1.0)
+    gains_rgb: tuple[WhiteBalanceGain, WhiteBalanceGain, WhiteBalanceGain] = (1.0, 1.0, 1.0)
     """Fixed white-balance gains (R, G, B), used when mode is fixed."""
 
 
@@ -440,7 +566,12 @@ class Isp(Model):
     """Spatial/temporal denoise strength, 0 = off."""
     sharpen_amount: Annotated[float, Field(ge=0, le=5)] = 0.0
     """Unsharp-mask amount, 0 = off."""
-    sharpen_radius_px: PositiveFloat = 1.0
+    sharpen_radius_px: Annotated[
+        float,
+        Field(gt=0, le=20),
+        Why("a camera sharpens detail a few pixels wide (unsharp-mask σ of 0.5–3 px), so at most 20 px"),
+    ] = 1.0
+    """σ of the unsharp mask's Gaussian, px."""
 
     @property
     def ccm_is_identity(self) -> bool:
@@ -459,14 +590,36 @@ class Isp(Model):
         return self
 
 
+BITRATE_RANGE_KBPS = (32.0, 1_000_000.0)
+"""Bitrates a camera stream may have, kbit/s. The floor is the lowest rate surveillance recorders and
+cameras offer (32 kbit/s: Hikvision's rate lists start at "32K"). Lower targets are not met anyway:
+x264 at 320×240 made 17 kbit/s when asked for 1 or 10, and below 1 kbit/s `io.video` hands FFmpeg
+0 bit/s, which turns rate control off without a word (7 Mbit/s of noise frames). The ceiling (1 Gbit/s)
+is above H.264 level 6.2's 800 Mbit/s."""
+
+
 class Codec(Model):
     """How the camera encodes its stream."""
 
     name: Literal["h264", "h265", "mjpeg"] = "h264"
-    bitrate_kbps: Annotated[float, Field(gt=0)] | None = 4096.0
-    """Target bitrate, kbit/s; null uses constant quality (crf)."""
+    bitrate_kbps: (
+        Annotated[
+            float,
+            Field(ge=BITRATE_RANGE_KBPS[0], le=BITRATE_RANGE_KBPS[1]),
+            Why(
+                f"surveillance cameras and recorders offer {BITRATE_RANGE_KBPS[0]:g} kbit/s and up; under "
+                "1 kbit/s the rate rounds to 0 bit/s and FFmpeg silently drops rate control"
+            ),
+        ]
+        | None
+    ) = 4096.0
+    """Target bitrate, kbit/s (`BITRATE_RANGE_KBPS`); null uses constant quality (crf)."""
     crf: Annotated[int, Field(ge=0, le=51)] = 23
-    gop_frames: Annotated[int, Field(ge=1)] = 50
+    gop_frames: Annotated[
+        int,
+        Field(ge=1, le=10_000),
+        Why("cameras set a key frame every 1 to about a thousand frames, so 1–10000"),
+    ] = 50
     """Frames between key frames (I-frame interval)."""
     preset: Literal["ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower", "veryslow"] = (
         "veryfast"
@@ -476,13 +629,25 @@ class Codec(Model):
     pixel_format: Literal["yuv420p", "yuv422p", "yuv444p"] = "yuv420p"
 
 
+PanLimit = Annotated[float, Field(ge=-360, le=360), Why("a pan range's ends lie within one turn either way, ±360°")]
+TiltLimit = Annotated[
+    float, Field(ge=-180, le=180), Why("a tilt range's ends lie within ±180° (a head that flips over reaches 180°)")
+]
+ZoomSweepTime = Annotated[
+    float,
+    Field(gt=0, le=100),
+    Why("a zoom crosses its range in 1–10 s on real cameras, so at most 100 s"),
+]
+"""Time for a full zoom sweep, s."""
+
+
 class Ptz(Model):
     """Pan–tilt–zoom head limits. Pan and tilt are relative to the mount; tilt > 0 looks up."""
 
-    pan_range_deg: tuple[float, float] = (-180.0, 180.0)
+    pan_range_deg: tuple[PanLimit, PanLimit] = (-180.0, 180.0)
     pan_continuous: bool = True
     """Endless pan (slip ring): the range wraps around."""
-    tilt_range_deg: tuple[float, float] = (-90.0, 20.0)
+    tilt_range_deg: tuple[TiltLimit, TiltLimit] = (-90.0, 20.0)
     pan_max_deg_s: PositiveFloat = 100.0
     """Fastest pan, degrees per second."""
     tilt_max_deg_s: PositiveFloat = 100.0
@@ -491,7 +656,7 @@ class Ptz(Model):
     pan_step_deg: NonNegativeFloat = 0.0
     """Mechanical resolution of pan, degrees (0 = continuous)."""
     tilt_step_deg: NonNegativeFloat = 0.0
-    zoom_wide_to_tele_s: PositiveFloat = 3.5
+    zoom_wide_to_tele_s: ZoomSweepTime = 3.5
     """Time for a full zoom sweep, s. The zoom motor moves magnification at a constant rate in log
     scale (1×→2× takes as long as 10×→20×) and reaches that rate in `ZOOM_RAMP_S` (camgen.plan.ptz)."""
     autofocus_time_s: NonNegativeFloat = 0.0

@@ -12,6 +12,7 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from camgen.config.base import Model, invalid
+from camgen.config.world import Point2
 
 PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegativeFloat = Annotated[float, Field(ge=0)]
@@ -133,7 +134,7 @@ class FollowProgram(Model):
     """Image height the target should span, as a fraction of the frame; null keeps the zoom."""
     speed_deg_s: PositiveFloat | None = None
     """Pan and tilt speed limit while following, deg/s; null: the head's maximum."""
-    acquire_region_m: Annotated[list[tuple[float, float]], Field(min_length=3)] | None = None
+    acquire_region_m: Annotated[list[Point2], Field(min_length=3)] | None = None
     """Ground polygon [[x, y], …] of this camera's coverage, m: the target is followed only inside
     it (hand-over between cameras); null: wherever the camera sees it."""
     lost_after_s: NonNegativeFloat = 1.0

@@ -10,8 +10,10 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field, ValidationError, ValidatorFunctionWrapHandler, field_validator, model_validator
 
-from camgen.config.base import Model, invalid
+from camgen.config.base import Model, Why, invalid
+from camgen.config.profile import ZoomSweepTime
 from camgen.config.ptz_program import FollowProgram, PtzPreset, PtzProgram, program_presets
+from camgen.config.world import WORLD_EXTENT_M, Length, Point2, Point3
 
 # Lights the renderer shades per type. Sun and spot lights each need a shadow-map texture unit;
 # OpenGL 3.3 guarantees 16 units, of which pyrender reserves 6, so 4 of each fit anywhere.
@@ -20,8 +22,26 @@ MAX_LIGHTS = {"sun": 4, "spot": 4, "point": 16}
 PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegativeFloat = Annotated[float, Field(ge=0)]
 Fraction = Annotated[float, Field(ge=0, le=1)]
-Vec3 = tuple[float, float, float]
+Angles3 = tuple[float, float, float]
 Name = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9_.-]+$")]
+Luminance = Annotated[
+    float,
+    Field(ge=0, le=2e9),
+    Why("nothing a camera sees is brighter than the sun's disc, 1.6e9 cd/m², so 0–2e9 cd/m²"),
+]
+"""A luminance, cd/m²."""
+Intensity = Annotated[
+    float,
+    Field(gt=0, le=1e8),
+    Why("the brightest lamps, lighthouse and searchlight beams, reach about 1e7 cd, so at most 1e8 cd"),
+]
+"""A luminous intensity, cd."""
+Speed = Annotated[
+    float,
+    Field(ge=0.01, le=100),
+    Why("an actor moves at 0.01–100 m/s (1 cm/s to a fast car); one that stands still has a single waypoint"),
+]
+"""An actor's speed, m/s."""
 
 
 class Material(Model):
@@ -30,13 +50,13 @@ class Material(Model):
     color_rgb: tuple[Fraction, Fraction, Fraction] = (0.5, 0.5, 0.5)
     roughness: Fraction = 0.8
     metallic: Fraction = 0.0
-    emission_cd_m2: NonNegativeFloat = 0.0
+    emission_cd_m2: Luminance = 0.0
     """Luminance the surface emits by itself (signs, screens, lamps), cd/m²."""
 
 
 class Placement(Model):
-    position_m: Vec3 = (0.0, 0.0, 0.0)
-    rotation_deg: Vec3 = (0.0, 0.0, 0.0)
+    position_m: Point3 = (0.0, 0.0, 0.0)
+    rotation_deg: Angles3 = (0.0, 0.0, 0.0)
     """Rotation about the world X, Y, then Z axes (extrinsic), degrees."""
     material: Material = Material()
 
@@ -44,28 +64,28 @@ class Placement(Model):
 class BoxMesh(Placement):
     type: Literal["box"]
     name: Name
-    size_m: tuple[PositiveFloat, PositiveFloat, PositiveFloat]
+    size_m: tuple[Length, Length, Length]
     """Extents along the local X, Y, Z axes, m; the box is centred on position_m."""
 
 
 class CylinderMesh(Placement):
     type: Literal["cylinder"]
     name: Name
-    radius_m: PositiveFloat
-    height_m: PositiveFloat
+    radius_m: Length
+    height_m: Length
     """Along the local Z axis, centred on position_m."""
 
 
 class SphereMesh(Placement):
     type: Literal["sphere"]
     name: Name
-    radius_m: PositiveFloat
+    radius_m: Length
 
 
 class PlaneMesh(Placement):
     type: Literal["plane"]
     name: Name
-    size_m: tuple[PositiveFloat, PositiveFloat]
+    size_m: tuple[Length, Length]
     """Extents along the local X and Y axes, m; the plane faces local +Z."""
 
 
@@ -74,9 +94,12 @@ class CheckerboardMesh(Placement):
     name: Name
     squares: tuple[Annotated[int, Field(ge=2, le=100)], Annotated[int, Field(ge=2, le=100)]]
     """Squares along local X and Y (a board with 10×7 squares has 9×6 inner corners)."""
-    square_size_m: PositiveFloat
+    square_size_m: Length
     """Edge of one square, m. The board lies in its local XY plane, facing +Z, centred on position_m."""
-    border_m: NonNegativeFloat | None = None
+    border_m: (
+        Annotated[float, Field(ge=0, le=2 * WORLD_EXTENT_M), Why(f"at most the world's {2 * WORLD_EXTENT_M:g} m")]
+        | None
+    ) = None
     """Width of the light margin around the squares (detectors need it), m; null is one square."""
     dark_color_rgb: tuple[Fraction, Fraction, Fraction] = (0.03, 0.03, 0.03)
     """Linear reflectance of the dark squares; the light squares and the margin use material.color_rgb."""
@@ -91,7 +114,11 @@ class FileMesh(Placement):
     name: Name
     path: str
     """Mesh file (glTF, OBJ, PLY, STL, …), relative to the scene file."""
-    scale: PositiveFloat = 1.0
+    scale: Annotated[
+        float,
+        Field(ge=1e-6, le=1000),
+        Why("a scale turns the file's units into metres: 0.001 for millimetres, 1000 for kilometres; 1e-6–1000"),
+    ] = 1.0
 
 
 Mesh = Annotated[
@@ -112,17 +139,17 @@ class SunLight(Model):
 
 class PointLight(Model):
     type: Literal["point"]
-    position_m: Vec3
-    intensity_cd: PositiveFloat
+    position_m: Point3
+    intensity_cd: Intensity
     """Luminous intensity, candela (a 1000 lm isotropic lamp ≈ 80 cd). Casts no shadows."""
     color_rgb: tuple[Fraction, Fraction, Fraction] = (1.0, 1.0, 1.0)
 
 
 class SpotLight(Model):
     type: Literal["spot"]
-    position_m: Vec3
-    target_m: Vec3
-    intensity_cd: PositiveFloat
+    position_m: Point3
+    target_m: Point3
+    intensity_cd: Intensity
     cone_half_angle_deg: Annotated[float, Field(gt=0, lt=90)] = 30.0
     """Where the beam ends; it is at full intensity within 80 % of this angle and fades to the edge."""
     color_rgb: tuple[Fraction, Fraction, Fraction] = (1.0, 1.0, 1.0)
@@ -138,7 +165,7 @@ Light = Annotated[SunLight | PointLight | SpotLight | AmbientLight, Field(discri
 
 
 class Environment(Model):
-    sky_luminance_cd_m2: NonNegativeFloat = 0.0
+    sky_luminance_cd_m2: Luminance = 0.0
     """Luminance of the background where no geometry is hit, cd/m² (clear day sky ≈ 5000)."""
     meshes: list[Mesh] = []
     shadows: bool = True
@@ -149,9 +176,9 @@ class Environment(Model):
 class ActorPath(Model):
     """Constant-speed motion along straight segments between ground waypoints, pausing at each."""
 
-    waypoints_m: Annotated[list[tuple[float, float]], Field(min_length=1)]
+    waypoints_m: Annotated[list[Point2], Field(min_length=1)]
     """[[x, y], …] on the ground, m. One waypoint: the actor stands still."""
-    speed_m_s: Annotated[float, Field(gt=0, le=100)] = 1.4
+    speed_m_s: Speed = 1.4
     start_s: NonNegativeFloat = 0.0
     """When the actor leaves the first waypoint, s."""
     loop: bool = False
@@ -217,12 +244,12 @@ class RandomWalk(Model):
     per scene, so the same seed always gives the same walk.
     """
 
-    region_m: tuple[tuple[float, float], tuple[float, float]]
+    region_m: tuple[Point2, Point2]
     """[[x_min, y_min], [x_max, y_max]]: the rectangle (aligned with the world axes) the actor stays in, m."""
-    start_m: tuple[float, float] | None = None
+    start_m: Point2 | None = None
     """[x, y] where the walk starts, inside region_m, m; null is the region's centre."""
-    speed_m_s: Annotated[float, Field(gt=0, le=100)] = 1.4
-    leg_length_m: tuple[PositiveFloat, PositiveFloat] = (3.0, 10.0)
+    speed_m_s: Speed = 1.4
+    leg_length_m: tuple[Length, Length] = (3.0, 10.0)
     """[min, max] length of one straight leg, m (shorter where the region's edge stops it)."""
     pause_s: tuple[NonNegativeFloat, NonNegativeFloat] = (0.0, 2.0)
     """[min, max] time the actor stands still after each leg, s."""
@@ -347,7 +374,7 @@ class Actor(Model):
 class Mount(Model):
     """Where a camera (or its PTZ head) is fixed and which way its zero position looks."""
 
-    position_m: Vec3
+    position_m: Point3
     yaw_deg: float = 0.0
     """Heading, counter-clockwise from +X seen from above, degrees."""
     pitch_deg: Annotated[float, Field(ge=-90, le=90)] = 0.0
@@ -420,7 +447,7 @@ class Eptz(HeadPositions):
     tilt_max_deg_s: PositiveFloat = 30.0
     accel_deg_s2: PositiveFloat = 120.0
     """Acceleration of the virtual pan and tilt, deg/s²."""
-    zoom_wide_to_tele_s: PositiveFloat = 2.0
+    zoom_wide_to_tele_s: ZoomSweepTime = 2.0
     """Time for the full digital zoom range, s (constant rate in log scale)."""
 
     @model_validator(mode="after")
@@ -478,7 +505,14 @@ class Outputs(Model):
 class Scene(Model):
     description: str = ""
     duration_s: Annotated[float, Field(gt=0, le=86_400)]
-    fps: Annotated[float, Field(gt=0, le=240)] = 25.0
+    fps: Annotated[
+        float,
+        Field(ge=0.001, le=240),
+        Why(
+            "the video stores the frame rate as a fraction with a denominator of at most 1001 (io.video), so "
+            "at least one frame per 1000 s; and no sensor profile here runs faster than 240 Hz"
+        ),
+    ] = 25.0
     seed: Annotated[int, Field(ge=0)] = 0
     environment: Environment = Environment()
     lights: list[Light] = []

@@ -13,7 +13,7 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
-from camgen.config.base import parse_subpath
+from camgen.config.base import Why, parse_subpath
 from camgen.config.yaml_source import KeyPath, YamlDocument
 from camgen.errors import ConfigError, Problem
 
@@ -130,6 +130,41 @@ def _tuple_length(root: type[BaseModel], path: KeyPath, data: Any) -> int | None
     return None
 
 
+def _why(root: type[BaseModel], path: KeyPath, data: Any) -> str | None:
+    """The `Why` beside the bounds of the field (or list item) at `path`, if it has one."""
+    items = len(path) - next((i for i, part in enumerate(reversed(path)) if isinstance(part, str)), len(path))
+    field_path, indices = path[:items], path[items:]
+    parent = _model_at(root, field_path[:-1], data) if field_path else None
+    info = next((i for n, i in (parent.model_fields.items() if parent else ()) if field_path[-1] in (n, i.alias)), None)
+    if info is None:
+        return None
+    metadata, annotation = list(info.metadata), info.annotation
+    for index in indices:
+        candidates = [t for t in _unwrap(annotation) if typing.get_origin(t) in (list, tuple)]
+        if not candidates:
+            return None
+        args = typing.get_args(candidates[0])
+        if typing.get_origin(candidates[0]) is list or args[-1] is Ellipsis:
+            annotation = args[0]
+        elif isinstance(index, int) and index < len(args):
+            annotation = args[index]
+        else:
+            return None
+        metadata = []
+    metadata += _metadata(annotation)
+    return next((m.text for m in metadata if isinstance(m, Why)), None)
+
+
+def _metadata(annotation: Any) -> list[Any]:
+    """The `Annotated` metadata of a type, also inside Optional/Union."""
+    origin = typing.get_origin(annotation)
+    if origin is typing.Annotated:
+        return [*annotation.__metadata__, *_metadata(typing.get_args(annotation)[0])]
+    if origin in (typing.Union, types.UnionType):
+        return [m for arg in typing.get_args(annotation) for m in _metadata(arg)]
+    return []
+
+
 def allowed_keys(model: type[BaseModel]) -> list[str]:
     return [info.alias or name for name, info in model.model_fields.items()]
 
@@ -153,7 +188,8 @@ def _phrase(error: dict, root: type[BaseModel], path: KeyPath, data: Any) -> str
     if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
         op = {"greater_than": ">", "greater_than_equal": "≥", "less_than": "<", "less_than_equal": "≤"}[kind]
         bound = next(iter(ctx.values()))
-        return f"must be {op} {show_value(bound)}{got}"
+        why = _why(root, path, data)
+        return f"must be {op} {show_value(bound)}{got}" + (f"; {why}" if why else "")
     if kind == "finite_number":
         return f"must be a finite number{got}"
     if kind == "number_type" and isinstance(value, bool):
@@ -165,7 +201,8 @@ def _phrase(error: dict, root: type[BaseModel], path: KeyPath, data: Any) -> str
     if kind == "int_from_float":
         return f"must be a whole number{got}"
     if kind == "int_parsing_size":
-        return f"must be a whole number of a sensible size{got}"
+        why = _why(root, path, data)
+        return f"must be a whole number of a sensible size{got}" + (f"; {why}" if why else "")
     if kind in ("bool_type", "bool_parsing"):
         quoted = "; remove the quotes" if isinstance(value, str) and value.lower() in ("true", "false") else ""
         return f"must be true or false{got}{quoted}"
