@@ -1105,6 +1105,19 @@ def test_every_broken_bound_is_reported(workspace: Path, kind: str, text: str, e
         assert re.search(rf"{re.escape(str(path))}:{line}:\d+: \S*{re.escape(fragment)}", err), (fragment, err)
 
 
+def test_plan_refuses_a_job_that_cannot_fit_in_memory_before_compiling(workspace: Path, monkeypatch, capsys):
+    # On a 1 GiB machine an hour at 30 fps (108 000 frame states, about 1.6 GiB) cannot be compiled.
+    monkeypatch.setattr("camgen.plan.budget.memory_bytes", lambda: (2**30, "physical"))
+    text = edit(edit(SCENE, "duration_s: 1", "duration_s: 3600 #<"), "fps: 10", "fps: 30")
+    path = write(workspace, "scenes/hour.yaml", text)
+    assert main(["plan", str(path)]) in (1, 2)
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert f"{path}:1:1: duration_s × fps = 3600 s × 30 Hz = 108000 frames for each of 1 camera(s)" in err
+    assert "need about 1.65 GiB, more than 50% of this machine's 1 GiB of physical memory" in err
+    assert "duration_s ≤ 1092 s at this fps): shorten duration_s or lower fps, or split the sequence" in err
+
+
 # Hostile YAML: each must end in a located error, never a traceback or a hang.
 ALIAS_BOMB = "\n".join(
     ["a0: &a0 [x, x, x, x, x, x, x, x, x, x]"]

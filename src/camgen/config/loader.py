@@ -41,6 +41,12 @@ class LoadedScene:
     profiles: dict[str, LoadedProfile]
     file_bounds: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]]
     """Local bounds (low, high corners, m) of every mesh file the scene uses, by its path as written."""
+    document: YamlDocument | None = None
+    """The scene file as read, to locate problems found after loading (`locate`)."""
+
+    def locate(self, key_path: tuple) -> Location | None:
+        """Where `key_path` (or its nearest ancestor) is written in the scene file."""
+        return self.document.locate(key_path) if self.document is not None else None
 
     @property
     def profile_models(self) -> dict[str, Profile]:
@@ -171,7 +177,9 @@ def load_scene(path: str | Path, profile_dirs: Sequence[Path] = ()) -> LoadedSce
     if located:
         raise ConfigError(located)
     warn_about([Problem(p.path, p.message, doc.locate(p.path)) for p in camera_placement_problems(scene)[1]])
-    return LoadedScene(name=path.stem, path=path.resolve(), scene=scene, profiles=profiles, file_bounds=file_bounds)
+    return LoadedScene(
+        name=path.stem, path=path.resolve(), scene=scene, profiles=profiles, file_bounds=file_bounds, document=doc
+    )
 
 
 def _mesh_file_bounds(directory: Path, reference: str) -> tuple[tuple[float, float, float], tuple[float, float, float]]:

@@ -23,7 +23,7 @@ from camgen.config.scene import (
     actor_shape,
     is_procedural_person,
 )
-from camgen.errors import ConfigError
+from camgen.errors import ConfigError, Problem
 from camgen.isp.eptz import eptz_window_px, output_camera_matrix, window_centre_px
 from camgen.motion.pose import R_world_from_cam, T_world_from_cam, rot_z
 from camgen.motion.ptz import HeadTrack
@@ -40,6 +40,7 @@ from camgen.optics.intrinsics import (
 from camgen.optics.projection import LensInversionError
 from camgen.optics.remap import SUPPORT_PX, LensGeometry, border_points_px, source_overshoot_px
 from camgen.optics.vignetting import aperture_weight, relative_illumination
+from camgen.plan.budget import check_job_size
 from camgen.plan.job import CameraJob, CameraState, Decision, Job, PlanSettings, RenderSpec, Stage
 from camgen.plan.ptz import head_track, holding_track, installed_focal_length_mm
 from camgen.plan.visibility import Bounds, box_corners, local_bounds, placement, visible_depth_range_m
@@ -778,6 +779,7 @@ def compile(
     problems = check_cameras(scene, dict(profiles))
     if problems:
         raise ConfigError(problems)
+    check_job_size(scene)
     static_boxes = [box_corners(*local_bounds(mesh, file_bounds), placement(mesh)) for mesh in scene.environment.meshes]
     routes = actor_routes(scene)
     actor_boxes = [
@@ -814,12 +816,19 @@ def compile(
 
 
 def compile_scene(loaded: LoadedScene, settings: PlanSettings | None = None) -> Job:
-    """Compile a scene as returned by `camgen.config.load_scene`."""
-    return compile(
-        loaded.scene,
-        loaded.profile_models,
-        scene_name=loaded.name,
-        profile_names=loaded.profile_names,
-        settings=settings,
-        file_bounds=loaded.file_bounds,
-    )
+    """Compile a scene as returned by `camgen.config.load_scene`; problems point into its file."""
+    try:
+        return compile(
+            loaded.scene,
+            loaded.profile_models,
+            scene_name=loaded.name,
+            profile_names=loaded.profile_names,
+            settings=settings,
+            file_bounds=loaded.file_bounds,
+        )
+    except ConfigError as exc:
+        # A problem about a key of the scene (no location: compile sees models, not the file) points at it.
+        located = [
+            Problem(p.path, p.message, loaded.locate(p.path)) if p.path and not p.location else p for p in exc.problems
+        ]
+        raise ConfigError(located) from None
