@@ -31,8 +31,10 @@ demo: setup
 	$(BIN)/camgen plan scenes/parking_lot.yaml
 	$(BIN)/camgen render scenes/parking_lot.yaml -o $(OUT) --frames 50
 
+# Two test processes (pytest-xdist), each test file kept on one so its module fixtures are made once:
+# pytest took 365 s against 495 s on one process, on a 2-core machine at d87dd8f (fresh clones, same day).
 test: setup
-	$(BIN)/python -m pytest -q --durations=15
+	$(BIN)/python -m pytest -q -n 2 --dist loadfile --durations=15
 
 # The numerical stress suite with 20× the examples, random (not derandomized) inputs each run.
 stress: setup
