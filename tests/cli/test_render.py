@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from camgen.cli.main import main
-from tests.conftest import SCENE, write
+from tests.conftest import FIXED_PROFILE, SCENE, write
 
 pytestmark = pytest.mark.opengl
 
@@ -77,3 +77,32 @@ def test_render_rejects_bad_numbers(workspace, capsys, option, message):
     scene = write(workspace, "scenes/walk.yaml", SCENE)
     assert main(["render", str(scene), "-o", str(workspace / "out"), *option]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_sigterm_stops_a_render_like_ctrl_c(workspace):
+    """A render stopped by SIGTERM (a service manager's stop) exits 143 within seconds and leaves no partial
+    file and no manifest, as after Ctrl-C."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    small = FIXED_PROFILE.replace("width_px: 640", "width_px: 160").replace("height_px: 480", "height_px: 120")
+    write(workspace, "profiles/fixed.yaml", small)
+    scene = write(workspace, "scenes/long.yaml", SCENE.replace("duration_s: 1", "duration_s: 60"))
+    out = workspace / "out"
+    process = subprocess.Popen(
+        [sys.executable, "-m", "camgen.cli.main", "render", str(scene), "-o", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    deadline = time.monotonic() + 120
+    while not (out.is_dir() and any(".partial" in p.name for p in out.rglob("*"))):
+        assert time.monotonic() < deadline and process.poll() is None, "the render never started writing"
+        time.sleep(0.05)
+    process.send_signal(signal.SIGTERM)
+    _, stderr = process.communicate(timeout=10)
+    assert process.returncode == 128 + signal.SIGTERM, stderr.decode()
+    assert b"terminated" in stderr and b"Traceback" not in stderr
+    assert not [p.name for p in out.rglob("*") if ".partial" in p.name]
+    assert not list(out.rglob("manifest.json"))

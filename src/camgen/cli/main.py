@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 import warnings
 
 from rich.console import Console
@@ -34,6 +36,10 @@ def main(argv: list[str] | None = None) -> int:
     width = None if sys.stdout.isatty() else 160
     out = Console(highlight=False, width=width)
     err = Console(stderr=True, highlight=False, width=width)
+    # SIGTERM (a service manager's stop, `kill`) unwinds like Ctrl-C: partial outputs keep their temporary
+    # names and are removed, no manifest is written. (`batch` installs its own handlers while it runs.)
+    in_main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _terminate) if in_main_thread else None
     try:
         with warnings.catch_warnings():
             warnings.showwarning = _printer(err, warnings.showwarning)
@@ -42,9 +48,23 @@ def main(argv: list[str] | None = None) -> int:
         for problem in exc.problems:
             err.print(f"[red]error[/red] {escape(str(problem))}", soft_wrap=True)
         return 2
+    except Terminated:
+        err.print("terminated")
+        return 128 + signal.SIGTERM
     except KeyboardInterrupt:
         err.print("interrupted")
         return 130
+    finally:
+        if in_main_thread:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+
+
+class Terminated(KeyboardInterrupt):
+    """Raised by SIGTERM in the main thread, so that a command stopped by it unwinds as after Ctrl-C."""
+
+
+def _terminate(signum: int, frame) -> None:
+    raise Terminated
 
 
 def _printer(err: Console, fallback):
