@@ -440,11 +440,12 @@ def _render_job(job_json: str, out_dir: str, frames: int | None, scene_path: str
     global _in_job
     try:
         _in_job = True
-        return _render(job_json, out_dir, frames, scene_path)
-    except _WorkerStop:
+        try:
+            return _render(job_json, out_dir, frames, scene_path)
+        finally:
+            _in_job = False
+    except _WorkerStop:  # also when SIGTERM lands in the inner finally, before _in_job is False
         os._exit(128 + signal.SIGTERM)
-    finally:
-        _in_job = False
 
 
 def _render(job_json: str, out_dir: str, frames: int | None, scene_path: str) -> JobResult:
