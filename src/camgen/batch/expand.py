@@ -137,3 +137,21 @@ def compile_batch_job(
     except ConfigError as exc:
         where = f"{batch_job.dataset_path}: job {batch_job.name} (entry {batch_job.index})"
         raise ConfigError([Problem((), f"{where}: {problem}", None) for problem in exc.problems]) from None
+
+
+def compile_dataset(
+    dataset_path: str | Path, profile_dirs: Sequence[Path] = ()
+) -> list[tuple[BatchJob, Job | ConfigError]]:
+    """Every job of a dataset (`expand`) with its compiled Job, or the ConfigError that says why it does not
+    compile (`compile_batch_job`); one job failing does not stop the others. A compile that fails inside
+    camgen itself is reported the same way, naming the job and the exception, not as a traceback."""
+    compiled: list[tuple[BatchJob, Job | ConfigError]] = []
+    for batch_job in expand(dataset_path, profile_dirs):
+        try:
+            compiled.append((batch_job, compile_batch_job(batch_job, profile_dirs=profile_dirs)))
+        except ConfigError as exc:
+            compiled.append((batch_job, exc))
+        except Exception as exc:
+            where = f"{batch_job.dataset_path}: job {batch_job.name}"
+            compiled.append((batch_job, ConfigError(f"{where}: does not compile ({type(exc).__name__}: {exc})")))
+    return compiled

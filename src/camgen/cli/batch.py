@@ -54,7 +54,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from camgen.batch.expand import compile_batch_job, expand
+    from camgen.batch.expand import compile_dataset
     from camgen.batch.run import check_options, frames_of, run_batch
     from camgen.config.loader import load_dataset
     from camgen.plan.execute import job_directory_name
@@ -64,15 +64,16 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     check_options(workers=args.workers, retries=args.retries, executor=args.executor, address=args.address)
     check_output_directory(args.out, "-o", "give a directory to write the dataset into")
     dirs = profile_dirs(args)
-    batch_jobs = expand(args.dataset, dirs)
-    jobs = []
-    for batch in batch_jobs:
-        try:
-            jobs.append((batch, compile_batch_job(batch, profile_dirs=dirs)))
-        except ConfigError as exc:  # this job fails (reported, no render); the others go on
-            jobs.append((batch, "; ".join(str(problem) for problem in exc.problems)))
-    shorter = [(batch.name, job.frame_count) for batch, job in jobs if not isinstance(job, str)]
-    shorter = [(name, count) for name, count in shorter if args.frames is not None and count < args.frames]
+    # a job that does not compile fails (reported, no render); the others go on
+    jobs = [
+        (batch, "; ".join(str(problem) for problem in job.problems) if isinstance(job, ConfigError) else job)
+        for batch, job in compile_dataset(args.dataset, dirs)
+    ]
+    shorter = [
+        (batch.name, job.frame_count)
+        for batch, job in jobs
+        if not isinstance(job, str) and args.frames is not None and job.frame_count < args.frames
+    ]
     if shorter:
         counts = ", ".join(f"{name} {count}" for name, count in shorter[:4]) + (" …" if len(shorter) > 4 else "")
         err.print(

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 from collections.abc import Sequence
+from contextlib import nullcontext
 from pathlib import Path
 
 from rich.console import Console
@@ -12,7 +12,7 @@ from rich.markup import escape
 
 from camgen.cli.common import add_profile_dirs_option, detect_kind, profile_dirs
 from camgen.config import load_profile, load_scene
-from camgen.errors import ConfigError, Problem
+from camgen.errors import ConfigError
 
 
 def add_parser(subparsers) -> None:
@@ -39,8 +39,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             elif kind == "scene":
                 load_scene(path, dirs)
             else:
-                status = err.status(f"compiling every job of {escape(str(path))}") if err.is_terminal else None
-                with status or contextlib.nullcontext():
+                with err.status(f"compiling every job of {escape(str(path))}") if err.is_terminal else nullcontext():
                     kind = f"dataset, {_check_dataset(path, dirs)} jobs compile"
             out.print(f"[green]ok[/green]  {escape(str(path))} ({kind})")
         except ConfigError as exc:
@@ -58,17 +57,10 @@ def _check_dataset(path: Path, profile_dirs: Sequence[Path]) -> int:
     A dataset is valid only if every job compiles: a scene that is invalid alone, a profile that does not fit
     a scene's PTZ program, or randomized values that break a scene all show here, not hours into a batch.
     """
-    from camgen.batch.expand import compile_batch_job, expand
+    from camgen.batch.expand import compile_dataset
 
-    problems = []
-    jobs = expand(path, profile_dirs)
-    for job in jobs:
-        try:
-            compile_batch_job(job, profile_dirs=profile_dirs)
-        except ConfigError as exc:
-            problems.extend(exc.problems)
-        except Exception as exc:  # a job's compile failing in camgen itself: report it with the job, go on
-            problems.append(Problem((), f"{path}: job {job.name}: does not compile ({type(exc).__name__}: {exc})"))
+    jobs = compile_dataset(path, profile_dirs)
+    problems = [problem for _, job in jobs if isinstance(job, ConfigError) for problem in job.problems]
     if problems:
         raise ConfigError(problems)
     return len(jobs)
