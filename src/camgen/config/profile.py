@@ -13,7 +13,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from camgen.config.base import Model, Why, invalid
-from camgen.optics.distortion import radial_reach
+from camgen.optics.distortion import fold_inside
 from camgen.optics.intrinsics import camera_matrix_px, corner_radius_normalized
 from camgen.optics.projection import LensInversionError, undistort_points
 
@@ -743,8 +743,8 @@ class Profile(Model):
                 continue
             corner = self.corner_radius_normalized(focal_length)
             K = self.camera_matrix_px(focal_length)
-            reach = radial_reach(distortion.as_array(), r_undistorted_max=20.0 * max(corner, 1.0))
-            if reach < corner:
+            reach = fold_inside(distortion.as_array(), corner)
+            if reach is not None:
                 raise invalid(
                     key,
                     f"folds over inside the image at {focal_length:.4g} mm: the radial mapping turns back "

@@ -42,7 +42,7 @@ import numpy as np
 
 from camgen.errors import ConfigError
 from camgen.fit.frames import FrameReadError, image_files, listing, mixed_sizes_error, read_gray8
-from camgen.optics.distortion import radial_reach
+from camgen.optics.distortion import fold_inside
 from camgen.optics.intrinsics import corner_radius_normalized
 
 BOARD_EXAMPLES = (
@@ -602,7 +602,7 @@ def _coverage_warnings(detections: Sequence[Detection], K_px: np.ndarray, size_p
     return warnings
 
 
-def _inconsistency(calibration: _Calibration, size_px: tuple[int, int]) -> list[str]:
+def _inconsistency(calibration: _Calibration) -> list[str]:
     """What in a calibration shows that its views disagree, or that they do not determine the lens."""
     doubts = []
     if calibration.rms_px > CONSISTENT_RMS_MAX_PX:
@@ -627,8 +627,8 @@ def _fold(calibration: _Calibration, size_px: tuple[int, int]) -> str | None:
     corner_radius = corner_radius_normalized(K, *size_px)
     if not np.any(calibration.distortion) or not math.isfinite(corner_radius):
         return None
-    reach = radial_reach(calibration.distortion, r_undistorted_max=20.0 * max(corner_radius, 1.0))
-    if reach >= corner_radius:
+    reach = fold_inside(calibration.distortion, corner_radius)
+    if reach is None:
         return None
     coefficients = ", ".join(
         f"{n} {v:.3g}" for n, v in zip(DISTORTION_NAMES, calibration.distortion, strict=False) if v
@@ -654,25 +654,36 @@ def one_opencv_thread(function):
 
     @functools.wraps(function)
     def on_one_thread(*args, **kwargs):
-        with _SINGLE_THREAD_LOCK:
-            if not _single_thread_users:
-                _single_thread_users.append(cv2.getNumThreads())
-                cv2.setNumThreads(1)
-            _single_thread_users.append(None)
-        try:
+        with _ONE_THREAD:
             return function(*args, **kwargs)
-        finally:
-            with _SINGLE_THREAD_LOCK:
-                _single_thread_users.pop()
-                if len(_single_thread_users) == 1:
-                    cv2.setNumThreads(_single_thread_users.pop())
 
     return on_one_thread
 
 
-_SINGLE_THREAD_LOCK = threading.Lock()
-_single_thread_users: list[int | None] = []
-"""While `one_opencv_thread` calls run: the thread count found by the first, then one entry per call."""
+class _OneOpenCVThread:
+    """OpenCV on one thread while any user is inside; the first in saves the thread count, the last out
+    restores it."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._users = 0
+        self._saved_threads = 0
+
+    def __enter__(self) -> None:
+        with self._lock:
+            if self._users == 0:
+                self._saved_threads = cv2.getNumThreads()
+                cv2.setNumThreads(1)
+            self._users += 1
+
+    def __exit__(self, *exc) -> None:
+        with self._lock:
+            self._users -= 1
+            if self._users == 0:
+                cv2.setNumThreads(self._saved_threads)
+
+
+_ONE_THREAD = _OneOpenCVThread()
 
 
 @one_opencv_thread
@@ -779,7 +790,7 @@ def fit_lens(
         if not math.isfinite(score.held_out_rms_px):
             warnings.append(f"model {score.name} could not be calibrated on these views, so it was not a candidate")
     warnings += _coverage_warnings(kept, calibration.K_px, size_px)
-    doubts = _inconsistency(calibration, size_px)
+    doubts = _inconsistency(calibration)
     fold = _fold(calibration, size_px)
     worst = sorted(zip(kept, calibration.per_view_rms_px, strict=True), key=lambda item: -item[1])[:5]
     worst_views = listing([f"{d.name} ({rms:.2g} px)" for d, rms in worst])

@@ -160,6 +160,15 @@ def radial_reach(coeffs, r_undistorted_max: float, samples: int = 20001) -> floa
     return float(g[-1])
 
 
+def fold_inside(coeffs, corner_radius: float) -> float | None:
+    """The distorted radius where the radial mapping turns back (`radial_reach`), when that lies inside an
+    image whose farthest corner is at normalised radius `corner_radius`; None when the mapping rises
+    monotonically out to the corner. The search runs out to 20 × the corner radius (at least 20), past
+    any lens a profile describes."""
+    reach = radial_reach(coeffs, r_undistorted_max=20.0 * max(corner_radius, 1.0))
+    return reach if reach < corner_radius else None
+
+
 def monotone_radius(coeffs, r_undistorted_max: float = 20.0, samples: int = 20001) -> float:
     """Undistorted radius where the monotone branch ends (fold or pole); ∞ if it reaches the limit."""
     r, _ = _monotone_branch(_coefficients(coeffs), r_undistorted_max, samples)
