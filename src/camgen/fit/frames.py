@@ -26,7 +26,7 @@ from __future__ import annotations
 import csv
 import math
 from collections import defaultdict
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -47,6 +47,8 @@ IMAGE_SUFFIXES = frozenset({".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".
 METADATA_FILE = "frames.csv"
 """Side file looked for in a frame folder: columns ``file,exposure_time_s[,temperature_c]`` and, for
 flats, optionally ``photons_per_pixel`` or ``irradiance_w_per_m2``."""
+ADD_SIDE_FILE = f"add {METADATA_FILE} to the folder with the columns file,exposure_time_s,temperature_c"
+"""The fix for frames whose exposure time the files do not give."""
 LIGHT_COLUMNS = ("photons_per_pixel", "irradiance_w_per_m2")
 """Side-file columns that give a flat frame's light: μ_p of its exposure, or the irradiance E, W/m²."""
 BAYER_NAMES = ("RGGB", "BGGR", "GRBG", "GBRG")
@@ -528,14 +530,13 @@ def _check_scan(directory, kind, scan, shapes, cfas, no_exposure, zero_exposure,
     if no_exposure:
         where = f"not in {metadata_file}" if metadata_file else "no side file"
         raise ConfigError(
-            f"{directory}: no exposure time for {listing(no_exposure)} (not in the file's EXIF, {where}); add "
-            f"{METADATA_FILE} to the folder with the columns file,exposure_time_s,temperature_c"
+            f"{directory}: no exposure time for {listing(no_exposure)} (not in the file's EXIF, {where}); "
+            f"{ADD_SIDE_FILE}"
         )
     if zero_exposure:
         raise ConfigError(
             f"{directory}: {listing(zero_exposure)} state an exposure time of 0 s in their EXIF, which is no "
-            f"real exposure (the camera did not record it); add {METADATA_FILE} to the folder with the columns "
-            "file,exposure_time_s,temperature_c"
+            f"real exposure (the camera did not record it); {ADD_SIDE_FILE}"
         )
     few = {label: group.files for label, group in scan.groups.items() if len(group.files) < 2}
     if few:
@@ -617,43 +618,42 @@ def truncation(data: bytes) -> str | None:
     return None
 
 
-RENDERED_FRAME_PATTERNS = ("*/frames/*", "*/*/frames/*")
-"""Where a camgen render keeps each camera's frames, below a job directory (CAMERA/frames/) or below
-the -o directory of a render (JOB/CAMERA/frames/): `image_files` looks there when a folder holds no
-images itself, so `fit lens` takes the checkerboard scene's output (one camera per view, its first
-frame) as it is."""
-
-
 def image_files(directory: Path) -> list[Path]:
-    """Board images in `directory` (any image or raw file), sorted; where it holds none, the frames of
-    every camera of a camgen render below it (`RENDERED_FRAME_PATTERNS`)."""
+    """Board images in `directory` (any image or raw file), sorted. Where it holds none, the views of a
+    camgen render below it: a job directory (CAMERA/frames/) or a render's -o directory holding one job
+    (JOB/CAMERA/frames/), so `fit lens` takes the checkerboard scene's output (one camera per view) as it
+    is. Each camera gives its first frame: its later frames repeat the view (the board does not move), and
+    a repeated view would sit in training and held-out folds alike."""
     if not directory.is_dir():
         state = "is not a folder" if directory.exists() else "does not exist"
         raise ConfigError(f"{directory} {state}; give the folder that holds the board images")
     suffixes = IMAGE_SUFFIXES | RAW_SUFFIXES
     files = [p for p in sorted(directory.iterdir()) if p.suffix.lower() in suffixes]
-    for depth, pattern in enumerate(RENDERED_FRAME_PATTERNS):
-        if files:
-            break
-        frames = [p for p in sorted(directory.glob(pattern)) if p.suffix.lower() in suffixes and p.is_file()]
-        jobs = sorted({p.relative_to(directory).parts[0] for p in frames}) if depth == 1 else []
+    if not files:
+        files = _first_frame_per_camera(directory.glob("*/frames/*"), suffixes)
+    if not files:
+        files = _first_frame_per_camera(directory.glob("*/*/frames/*"), suffixes)
+        jobs = sorted({p.relative_to(directory).parts[0] for p in files})
         if len(jobs) > 1:
             raise ConfigError(
                 f"{directory} holds the renders of {len(jobs)} jobs ({listing(jobs)}), which may differ in lens; "
                 "give one job's directory"
             )
-        # One view per camera: a camera's later frames repeat its first view (the board does not move), and
-        # a repeated view would sit in training and held-out folds alike.
-        first = {}
-        for path in frames:
-            first.setdefault(path.parent, path)
-        files = list(first.values())
     if not files:
         raise ConfigError(
             f"{directory} holds no images ({', '.join(sorted(suffixes))}), nor a camgen render's CAMERA/frames/ "
             "folders with such images"
         )
     return files
+
+
+def _first_frame_per_camera(frames: Iterable[Path], suffixes: frozenset[str]) -> list[Path]:
+    """The first (by name) image file of each frames/ folder among `frames`, sorted."""
+    first: dict[Path, Path] = {}
+    for path in sorted(frames):
+        if path.suffix.lower() in suffixes and path.is_file():
+            first.setdefault(path.parent, path)
+    return list(first.values())
 
 
 def read_rgb8_frames(paths: Sequence[Path], *, max_frames: int) -> Iterator[tuple[str, np.ndarray]]:
