@@ -9,7 +9,7 @@ import pytest
 
 from camgen.cli.main import main
 from camgen.config import load_scene
-from camgen.config.placement import camera_placement_problems
+from camgen.config.placement import cameras_behind_planes, cameras_inside_solids
 from camgen.errors import ConfigError, ConfigWarning
 from tests.conftest import SCENE, write
 
@@ -58,7 +58,8 @@ def test_a_turned_plane_is_judged_in_its_own_frame(mesh: str, behind: bool, work
         with pytest.raises(ConfigError, match="behind the"):
             load_scene(path)
     else:
-        assert camera_placement_problems(load_scene(path).scene) == ([], [])
+        scene = load_scene(path).scene
+        assert cameras_behind_planes(scene) == [] and cameras_inside_solids(scene) == []
 
 
 def test_a_camera_inside_a_box_is_a_located_warning(workspace: Path, capsys):

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from camgen.config.dataset import Dataset
-from camgen.config.placement import camera_placement_problems, warn_about
+from camgen.config.placement import cameras_behind_planes, cameras_inside_solids, warn_about
 from camgen.config.profile import Profile
 from camgen.config.scene import Camera, FileMesh, Scene
 from camgen.config.validation import show_value, validate
@@ -176,7 +176,7 @@ def load_scene(path: str | Path, profile_dirs: Sequence[Path] = ()) -> LoadedSce
     ]
     if located:
         raise ConfigError(located)
-    warn_about([Problem(p.path, p.message, doc.locate(p.path)) for p in camera_placement_problems(scene)[1]])
+    warn_about([Problem(p.path, p.message, doc.locate(p.path)) for p in cameras_inside_solids(scene)])
     return LoadedScene(
         name=path.stem, path=path.resolve(), scene=scene, profiles=profiles, file_bounds=file_bounds, document=doc
     )
@@ -386,7 +386,7 @@ def _check_head(base: tuple, camera: Camera, profile: Profile) -> list[Problem]:
 def check_cameras(scene: Scene, profiles: dict[str, Profile]) -> list[Problem]:
     """Checks that need both a camera and its profile, and of where each camera stands; key paths are
     relative to the scene."""
-    problems = camera_placement_problems(scene)[0]
+    problems = cameras_behind_planes(scene)
     slowest = min(scene.cameras, key=lambda c: profiles[c.name].sensor.frame_rate_max_hz)
     limit_hz = profiles[slowest.name].sensor.frame_rate_max_hz
     if scene.fps > limit_hz:

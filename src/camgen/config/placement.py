@@ -1,4 +1,6 @@
-"""Where a camera stands relative to the scene's meshes: checks that no pixel can make up for.
+"""Where meshes and cameras stand: a mesh's bounds in its own frame and its placement in the world
+(`local_bounds`, `placement`; plan and render use them too), and checks of each camera's position
+against the meshes that no pixel can make up for.
 
 The renderer draws a mesh's front faces only (back-face culling, `render.scene_graph._material`). A plane
 or checkerboard is one-sided: seen from behind it vanishes, so a camera under the ground would film the
@@ -11,34 +13,61 @@ camera placed in a wall by mistake or a room modelled as a box, so it is a warni
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 
 import numpy as np
 
-from camgen.config.scene import BoxMesh, CheckerboardMesh, CylinderMesh, PlaneMesh, Scene, SphereMesh
-from camgen.errors import ConfigWarning, Problem
-from camgen.motion.pose import rotation_xyz_deg
+from camgen.config.scene import BoxMesh, CheckerboardMesh, CylinderMesh, FileMesh, PlaneMesh, Scene, SphereMesh
+from camgen.errors import ConfigError, ConfigWarning, Problem
+from camgen.motion.pose import T_world_from_cam, rotation_xyz_deg
 
 BEHIND_TOLERANCE_M = 1e-6
 """A camera this close to a plane counts as on it, not behind it (float round-off of the placement)."""
 
 
+Bounds = tuple[np.ndarray, np.ndarray]
+
+
+def local_bounds(shape, file_bounds: Mapping[str, Bounds] | None = None) -> Bounds:
+    """Axis-aligned bounds of a mesh in its own frame, before its placement."""
+    if isinstance(shape, BoxMesh):
+        half = np.array(shape.size_m) / 2
+        return -half, half
+    if isinstance(shape, CylinderMesh):
+        half = np.array([shape.radius_m, shape.radius_m, shape.height_m / 2])
+        return -half, half
+    if isinstance(shape, SphereMesh):
+        return -np.full(3, shape.radius_m), np.full(3, shape.radius_m)
+    if isinstance(shape, PlaneMesh):
+        half = np.array([shape.size_m[0] / 2, shape.size_m[1] / 2, 0.0])
+        return -half, half
+    if isinstance(shape, CheckerboardMesh):
+        border = shape.border_width_m
+        half = np.array([s * shape.square_size_m / 2 + border for s in shape.squares] + [0.0])
+        return -half, half
+    if isinstance(shape, FileMesh):
+        if not file_bounds or shape.path not in file_bounds:
+            raise ConfigError(f"the bounds of mesh file {shape.path!r} were not loaded; use camgen.config.load_scene")
+        low, high = file_bounds[shape.path]
+        return np.asarray(low) * shape.scale, np.asarray(high) * shape.scale
+    raise TypeError(f"unknown shape {type(shape).__name__}")
+
+
+def placement(shape) -> np.ndarray:
+    """T_world_from_mesh of a placed shape (rotation about X, Y, Z, then the offset)."""
+    return T_world_from_cam(shape.position_m, rotation_xyz_deg(shape.rotation_deg))
+
+
 def _local(position_m, mesh) -> np.ndarray:
-    """A world point in the mesh's own frame (before its rotation about X, Y, Z and its offset)."""
-    R_world_from_mesh = rotation_xyz_deg(mesh.rotation_deg)
-    return R_world_from_mesh.T @ (np.asarray(position_m, dtype=np.float64) - np.asarray(mesh.position_m))
-
-
-def _plane_half_extent_m(mesh: PlaneMesh | CheckerboardMesh) -> tuple[float, float]:
-    if isinstance(mesh, PlaneMesh):
-        return mesh.size_m[0] / 2, mesh.size_m[1] / 2
-    border_m = mesh.border_width_m
-    return tuple(s * mesh.square_size_m / 2 + border_m for s in mesh.squares)
+    """A world point in the mesh's own frame (before its placement)."""
+    T_world_from_mesh = placement(mesh)
+    return T_world_from_mesh[:3, :3].T @ (np.asarray(position_m, dtype=np.float64) - T_world_from_mesh[:3, 3])
 
 
 def _inside(local_m: np.ndarray, mesh) -> bool:
     x, y, z = local_m
     if isinstance(mesh, BoxMesh):
-        return bool(np.all(np.abs(local_m) < np.asarray(mesh.size_m) / 2))
+        return bool(np.all(np.abs(local_m) < local_bounds(mesh)[1]))
     if isinstance(mesh, CylinderMesh):
         return x * x + y * y < mesh.radius_m**2 and abs(z) < mesh.height_m / 2
     if isinstance(mesh, SphereMesh):
@@ -46,44 +75,53 @@ def _inside(local_m: np.ndarray, mesh) -> bool:
     return False
 
 
-def camera_placement_problems(scene: Scene) -> tuple[list[Problem], list[Problem]]:
-    """(errors, warnings) about each camera's position against the scene's meshes; key paths from the scene.
-
-    Errors: a camera behind a one-sided plane or checkerboard, within its outline. Warnings: a camera
-    inside a box, cylinder or sphere. Mesh files are not checked (whether one is closed is not known here).
-    """
-    errors: list[Problem] = []
-    notes: list[Problem] = []
+def cameras_behind_planes(scene: Scene) -> list[Problem]:
+    """A camera behind a one-sided plane or checkerboard, within its outline: an error each (key paths from
+    the scene)."""
+    problems = []
     for i, camera in enumerate(scene.cameras):
-        key = ("cameras", i, "mount", "position_m")
-        position_m = camera.mount.position_m
-        shown = "[" + ", ".join(f"{v:g}" for v in position_m) + "]"
         for mesh in scene.environment.meshes:
-            if isinstance(mesh, (PlaneMesh, CheckerboardMesh)):
-                x, y, z = _local(position_m, mesh)
-                half_x, half_y = _plane_half_extent_m(mesh)
-                if z < -BEHIND_TOLERANCE_M and abs(x) <= half_x and abs(y) <= half_y:
-                    errors.append(
-                        Problem(
-                            key,
-                            f"puts camera {camera.name!r} {-z:.3g} m behind the {mesh.type} {mesh.name!r}, which "
-                            "is opaque from its front (local +Z) side only: from behind, the camera would see "
-                            "through it and the ground truth would mark what lies beyond as visible; move the "
-                            "camera to its front side (above the ground: z > 0), or turn the plane with "
-                            f"rotation_deg, or use a thin box, which is opaque from both sides; got {shown}",
-                        )
-                    )
-            elif _inside(_local(position_m, mesh), mesh):
-                notes.append(
+            if not isinstance(mesh, (PlaneMesh, CheckerboardMesh)):
+                continue
+            x, y, z = _local(camera.mount.position_m, mesh)
+            half_x, half_y, _ = local_bounds(mesh)[1]
+            if z < -BEHIND_TOLERANCE_M and abs(x) <= half_x and abs(y) <= half_y:
+                problems.append(
                     Problem(
-                        key,
-                        f"puts camera {camera.name!r} inside the closed {mesh.type} {mesh.name!r} (got {shown}): "
-                        f"the {mesh.type}'s faces point outward and are not drawn from inside, so the camera sees "
-                        "through it as if it were not there; right for a housing around the camera, otherwise "
-                        "move the camera out (a room around a camera is modelled with planes facing inward)",
+                        ("cameras", i, "mount", "position_m"),
+                        f"puts camera {camera.name!r} {-z:.3g} m behind the {mesh.type} {mesh.name!r}, which "
+                        "is opaque from its front (local +Z) side only: from behind, the camera would see "
+                        "through it and the ground truth would mark what lies beyond as visible; move the "
+                        "camera to its front side (above the ground: z > 0), or turn the plane with "
+                        f"rotation_deg, or use a thin box, which is opaque from both sides; got "
+                        f"{_shown(camera.mount.position_m)}",
                     )
                 )
-    return errors, notes
+    return problems
+
+
+def cameras_inside_solids(scene: Scene) -> list[Problem]:
+    """A camera inside a box, cylinder or sphere: a warning each (key paths from the scene). Mesh files are
+    not checked (whether one is closed is not known here)."""
+    problems = []
+    for i, camera in enumerate(scene.cameras):
+        for mesh in scene.environment.meshes:
+            if _inside(_local(camera.mount.position_m, mesh), mesh):
+                problems.append(
+                    Problem(
+                        ("cameras", i, "mount", "position_m"),
+                        f"puts camera {camera.name!r} inside the closed {mesh.type} {mesh.name!r} (got "
+                        f"{_shown(camera.mount.position_m)}): the {mesh.type}'s faces point outward and are not "
+                        "drawn from inside, so the camera sees through it as if it were not there; right for a "
+                        "housing around the camera, otherwise move the camera out (a room around a camera is "
+                        "modelled with planes facing inward)",
+                    )
+                )
+    return problems
+
+
+def _shown(position_m) -> str:
+    return "[" + ", ".join(f"{v:g}" for v in position_m) + "]"
 
 
 def warn_about(problems: list[Problem]) -> None:

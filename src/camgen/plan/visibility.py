@@ -3,13 +3,11 @@ view frustum."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-
 import numpy as np
 
-from camgen.config.scene import BoxMesh, CheckerboardMesh, CylinderMesh, FileMesh, PlaneMesh, SphereMesh
-from camgen.errors import ConfigError
-from camgen.motion.pose import T_world_from_cam, rotation_xyz_deg
+from camgen.config.placement import Bounds, local_bounds, placement
+
+__all__ = ["Bounds", "box_corners", "local_bounds", "placement", "visible_depth_range_m"]
 
 # The 6 faces of a box whose corners are indexed by bits (x, y, z) = (i & 1, i >> 1 & 1, i >> 2 & 1).
 _BOX_FACES = ((0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4), (1, 3, 7, 5))
@@ -85,36 +83,3 @@ def visible_depth_range_m(
                 z_min = min(z_min, float(polygon[:, 2].min()))
                 z_max = max(z_max, float(polygon[:, 2].max()))
     return (z_min, z_max) if np.isfinite(z_min) else None
-
-
-Bounds = tuple[np.ndarray, np.ndarray]
-
-
-def local_bounds(shape, file_bounds: Mapping[str, Bounds] | None = None) -> Bounds:
-    """Axis-aligned bounds of a mesh in its own frame, before its placement."""
-    if isinstance(shape, BoxMesh):
-        half = np.array(shape.size_m) / 2
-        return -half, half
-    if isinstance(shape, CylinderMesh):
-        half = np.array([shape.radius_m, shape.radius_m, shape.height_m / 2])
-        return -half, half
-    if isinstance(shape, SphereMesh):
-        return -np.full(3, shape.radius_m), np.full(3, shape.radius_m)
-    if isinstance(shape, PlaneMesh):
-        half = np.array([shape.size_m[0] / 2, shape.size_m[1] / 2, 0.0])
-        return -half, half
-    if isinstance(shape, CheckerboardMesh):
-        border = shape.border_width_m
-        half = np.array([s * shape.square_size_m / 2 + border for s in shape.squares] + [0.0])
-        return -half, half
-    if isinstance(shape, FileMesh):
-        if not file_bounds or shape.path not in file_bounds:
-            raise ConfigError(f"the bounds of mesh file {shape.path!r} were not loaded; use camgen.config.load_scene")
-        low, high = file_bounds[shape.path]
-        return np.asarray(low) * shape.scale, np.asarray(high) * shape.scale
-    raise TypeError(f"unknown shape {type(shape).__name__}")
-
-
-def placement(shape) -> np.ndarray:
-    """T_world_from_mesh of a placed shape (rotation about X, Y, Z, then the offset)."""
-    return T_world_from_cam(shape.position_m, rotation_xyz_deg(shape.rotation_deg))
