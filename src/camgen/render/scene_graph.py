@@ -27,6 +27,7 @@ import numpy as np
 import trimesh
 
 from camgen.actors import Crowd, PersonRig, person_rig
+from camgen.config.placement import placement
 from camgen.config.scene import (
     Actor,
     AmbientLight,
@@ -45,7 +46,7 @@ from camgen.config.scene import (
     is_procedural_person,
 )
 from camgen.errors import ConfigError
-from camgen.motion.pose import T_world_from_cam, rot_z, rotation_xyz_deg
+from camgen.motion.pose import T_world_from_cam, rot_z
 from camgen.motion.trajectory import Route, actor_routes
 from camgen.render.gl import pyrender
 
@@ -114,11 +115,6 @@ def actor_pose(route: Route, time_s: float) -> np.ndarray:
     """T_world_from_actor at `time_s`: on the ground where its route puts it, x along its heading."""
     xy, heading = route.at(time_s)
     return T_world_from_cam((float(xy[0]), float(xy[1]), 0.0), rot_z(float(heading)))
-
-
-def placement(shape) -> np.ndarray:
-    """T_parent_from_mesh of a placed shape: rotation about X, Y, Z (extrinsic), then the offset."""
-    return T_world_from_cam(shape.position_m, rotation_xyz_deg(shape.rotation_deg))
 
 
 def _material(material: Material, color_rgb=None) -> pyrender.MetallicRoughnessMaterial:
