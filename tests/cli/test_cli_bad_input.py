@@ -204,3 +204,40 @@ def test_render_says_when_frames_exceed_the_scene(workspace, capsys, monkeypatch
     code, _, err = run(["render", str(scene), "-o", str(workspace / "out"), "--frames", "1000000"], capsys)
     assert code == 0 and rendered == [range(10)]
     assert "--frames 1000000: " in err and "has only 10 frames (duration_s 1 × fps 10); rendering those 10" in err
+
+
+def _camera_output(root: Path, files: dict[str, str]) -> Path:
+    """A job directory walk-0123abcd/ with one camera directory cam/ holding `files` (name → text)."""
+    camera = root / "walk-0123abcd" / "cam"
+    camera.mkdir(parents=True)
+    (camera.parent / "manifest.json").write_text('{"fps": 10, "files": {}}')
+    for name, text in files.items():
+        (camera / name).write_text(text)
+    return camera.parent
+
+
+COCO = '{"images": [{"id": 1, "frame_index": 0, "width": 8, "height": 8}], "annotations": [], "categories": []}'
+
+
+@pytest.mark.parametrize(
+    ("argv", "files", "message"),
+    [
+        (["{root}/nothing"], None, "{root}/nothing: no such directory; give the directory `camgen render -o`"),
+        (["{root}/taken"], None, "{root}/taken: is a file, not a directory; give the directory"),
+        (["{root}"], None, "{root}: no camgen output in it (no job directory with manifest.json"),
+        (["{root}"], {"camera.jsonl": ""}, "{job}/cam: no coco.json; the preview draws the COCO annotations"),
+        (["{job}/cam"], {"coco.json": COCO}, "{job}/cam: no video.mp4 and no PNG or TIFF frames in frames/"),
+        (["{job}", "--camera", "door"], {"coco.json": COCO}, "--camera door: no such camera in {job} (it has cam)"),
+        (["{job}", "-o", "{root}/taken"], {"coco.json": COCO, "video.mp4": ""}, "-o {root}/taken: is a file"),
+        (["{job}"], {"coco.json": "{", "video.mp4": ""}, "{job}/cam/coco.json: not valid JSON"),
+        (["{job}"], {"coco.json": COCO, "video.mp4": "not a video"}, "{job}/cam/video.mp4: cannot be decoded as video"),
+        (["{job}", "--max-width", "0"], {"coco.json": COCO}, "--max-width must be ≥ 16 px, got 0"),
+    ],
+)
+def test_preview_names_what_is_not_a_render(tmp_path, capsys, argv, files, message):
+    (tmp_path / "taken").write_text("kept")
+    job = _camera_output(tmp_path, files) if files is not None else tmp_path / "walk-0123abcd"
+    paths = {"root": tmp_path, "job": job}
+    code, _, err = run(["preview", *(arg.format(**paths) for arg in argv)], capsys)
+    assert code == 2 and message.format(**paths) in " ".join(err.split())
+    assert not list(tmp_path.glob("**/*.webm")) and (tmp_path / "taken").read_text() == "kept"

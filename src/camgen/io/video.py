@@ -4,6 +4,9 @@ The encoder follows the camera's `Codec` profile: rate control (target bitrate o
 fixed key-frame interval, and the chroma subsampling of the stream. Encoding goes through PyAV (FFmpeg's
 libx264, libx265 and mjpeg encoders). The file appears under its final name only once it is complete.
 
+`read_video_rgb8` reads a video back as RGB frames; `webm_vp9_writer` writes a VP9 WebM for looking at
+in a browser (`camgen preview`), not as a camera streams.
+
 Conventions
 -----------
 * Colour: H.264 and H.265 streams are BT.709, limited range (Y' 16–235), and say so in the stream's VUI;
@@ -24,6 +27,8 @@ import math
 import numbers
 import os
 import tempfile
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from fractions import Fraction
 from pathlib import Path
 from types import MappingProxyType, TracebackType
@@ -36,7 +41,7 @@ from av.video.reformatter import ColorRange, Colorspace
 
 from camgen.config.profile import Codec
 from camgen.errors import ConfigError
-from camgen.io.files import file_mode
+from camgen.io.files import atomic_path, file_mode
 
 ENCODERS = MappingProxyType({"h264": "libx264", "h265": "libx265", "mjpeg": "mjpeg"})
 """FFmpeg encoder behind each `Codec.name`."""
@@ -270,6 +275,76 @@ def decoded_rgb8(frame: av.VideoFrame) -> np.ndarray:
         dst_color_range=ColorRange.JPEG,
     )
     return rgb.to_ndarray()
+
+
+def read_video_rgb8(path: str | Path) -> Iterator[np.ndarray]:
+    """The frames of a video file in order, each as (H, W, 3) uint8 full-range RGB (`decoded_rgb8`).
+
+    Raises
+    ------
+    ConfigError
+        (a ValueError) when FFmpeg cannot open or decode the file; frames decoded before the fault
+        have been yielded.
+    """
+    try:
+        with av.open(str(path)) as container:
+            if not container.streams.video:
+                raise ConfigError(f"{path}: holds no video stream; give the video.mp4 a render wrote")
+            for frame in container.decode(container.streams.video[0]):
+                yield decoded_rgb8(frame)
+    except av.FFmpegError as error:
+        raise ConfigError(f"{path}: cannot be decoded as video ({error}); render it again") from error
+
+
+WEBM_VP9_CRF = 32
+"""Constant quality of `webm_vp9_writer`, 0 (best) to 63: annotation lines and text stay sharp at a
+few hundred kB per second of 720p."""
+
+
+@contextmanager
+def webm_vp9_writer(
+    path: str | Path, *, width_px: int, height_px: int, fps: float, crf: int = WEBM_VP9_CRF
+) -> Iterator[Callable[[np.ndarray], None]]:
+    """A WebM (VP9, 4:2:0, BT.709 limited range) file that every current browser plays, Chromium builds
+    without H.264 included; the block gets a function that encodes one (height_px, width_px, 3) uint8 RGB
+    frame. For looking at, not for a camera's stream: libvpx's realtime mode, one thread, no rate control.
+    The file appears under `path` only when the block ends without an error, with at least one frame.
+
+    Raises
+    ------
+    ConfigError
+        (a ValueError) for an odd frame size (4:2:0 needs it even) or a non-positive frame rate.
+    ValueError
+        If a frame has another shape or dtype, or none was written.
+    """
+    _check_size(width_px, height_px, "yuv420p")
+    rate = _frame_rate(fps)
+    colour = (Colorspace.ITU709, ColorRange.MPEG)
+    written = 0
+    with atomic_path(path) as tmp, av.open(str(tmp), mode="w", format="webm") as container:
+        stream = container.add_stream("libvpx-vp9", rate=rate)
+        context = stream.codec_context
+        context.width, context.height, context.pix_fmt = width_px, height_px, "yuv420p"
+        context.time_base = 1 / rate
+        context.colorspace, context.color_range = colour
+        context.color_primaries = context.color_trc = H273_BT709
+        context.bit_rate = 0
+        context.thread_count = 1
+        context.options = {"crf": str(crf), "b": "0", "deadline": "realtime", "cpu-used": "8"}
+
+        def write(frame_rgb8: np.ndarray) -> None:
+            nonlocal written
+            _check_frame(frame_rgb8, width_px, height_px)
+            frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(frame_rgb8), format="rgb24")
+            frame = frame.reformat(format="yuv420p", dst_colorspace=colour[0], dst_color_range=colour[1])
+            frame.pts = written
+            container.mux(stream.encode(frame))
+            written += 1
+
+        yield write
+        if written == 0:
+            raise ValueError(f"{path}: no frames were written, so there is no video to save; write a frame first")
+        container.mux(stream.encode(None))
 
 
 def _frame_rate(fps: float) -> Fraction:
