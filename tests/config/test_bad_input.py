@@ -477,6 +477,20 @@ CASES = [
         "got 'reidd'; did you mean 'reid'?",
     ),
     (
+        "annotation_image_format",
+        "scene",
+        edit(SCENE, "duration_s: 1", "duration_s: 1\noutputs: {annotation_images: gif} #<"),
+        "outputs.annotation_images",
+        "must be one of 'jpg' or 'png', got 'gif'",
+    ),
+    (
+        "mot_detections_without_mot",
+        "scene",
+        edit(SCENE, "duration_s: 1", "duration_s: 1\noutputs: {annotations: [coco], mot_detections: true} #<"),
+        "outputs.mot_detections",
+        "but outputs.annotations has no 'mot'",
+    ),
+    (
         "negative_duration",
         "scene",
         edit(SCENE, "duration_s: 1", "duration_s: -1 #<"),

@@ -37,3 +37,22 @@ def test_a_failed_write_leaves_nothing(tmp_path):
         tmp.write_bytes(b"partial")
         raise RuntimeError("interrupted")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_an_interrupt_just_after_the_temporary_file_is_made_leaves_nothing(tmp_path, monkeypatch):
+    """Ctrl-C or SIGTERM can land right after the temporary file exists (tempfile.mkstemp's window left
+    it behind): the writer knows its name by then and removes it."""
+    import camgen.io.files as files
+
+    create = files._create_private
+
+    def create_then_interrupt(tmp):
+        os.close(create(tmp))
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(files, "_create_private", create_then_interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        write_text_atomic(tmp_path / "a.txt", "x")
+    with pytest.raises(KeyboardInterrupt), atomic_path(tmp_path / "b.bin") as tmp:
+        tmp.write_bytes(b"x")
+    assert list(tmp_path.iterdir()) == []

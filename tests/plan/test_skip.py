@@ -156,9 +156,15 @@ def test_raw_only_output_plans_no_isp(workspace):
 
 
 def test_annotations_only_plans_no_radiance(workspace):
-    camera = plan(workspace, SCENE + "outputs: {video: false, annotations: [mot]}\n")
+    camera = plan(workspace, SCENE + "outputs: {video: false, annotations: [coco]}\n")
     assert camera.render.passes == ("instance_id",)
     assert not any(n.startswith(("sensor.", "isp.")) for n in stage_names(camera))
+
+
+@pytest.mark.parametrize("kind", ["mot", "yolo", "reid"])
+def test_annotations_written_with_their_frames_plan_the_camera(workspace, kind):
+    camera = plan(workspace, SCENE + f"outputs: {{video: false, annotations: [{kind}]}}\n", name=f"{kind}.yaml")
+    assert "radiance" in camera.render.passes and "isp.tone" in stage_names(camera)
 
 
 def test_job_round_trips_through_json_and_its_id_is_its_content(workspace):

@@ -1,18 +1,15 @@
 """Do detectors trained on real photographs find camgen's people?
 
-The detector is OpenCV's HOG people detector (Dalal & Triggs 2005, "Histograms of Oriented Gradients
-for Human Detection"; its linear SVM is trained on the INRIA Person data set: real photographs), which
-ships compiled into OpenCV's contrib build (`opencv-contrib-python-headless`), so no weights are
-downloaded. Each example scene's cameras render frames spread over the sequence with COCO ground
-truth; the detector runs on the 8-bit frames as the camera delivers them.
+The detector is OpenCV's HOG people detector (`camgen.annotate.detection`: Dalal & Triggs 2005, its
+linear SVM trained on the INRIA Person data set of real photographs). Each example scene's cameras
+render frames spread over the sequence with COCO ground truth; the detector runs on the 8-bit frames
+as the camera delivers them.
 
 Scoring follows the pedestrian-detection convention (Dollár et al. 2012, "Pedestrian Detection: An
 Evaluation of the State of the Art"): ground truth people at least `MIN_HEIGHT_PX` tall and at least
 `MIN_VISIBILITY` visible count; smaller or more occluded people are "ignore" regions (a detection on
 them is neither a hit nor a false alarm). A detection matches a person at IoU ≥ 0.5 (greedy, highest
-score first). HOG's boxes include the window's margin; they are shrunk as OpenCV's peopledetect
-sample does (15 % of the width and 5 % of the height on each side) before matching. The detector looks
-for people from 96 px tall, so frames are upscaled by `UPSCALE` first.
+score first).
 """
 
 from __future__ import annotations
@@ -24,13 +21,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
-import numpy as np
+
+from camgen.annotate.detection import detect_people, hog_detector
 
 MIN_HEIGHT_PX = 96
 MIN_VISIBILITY = 0.7
 IOU_MATCH = 0.5
-UPSCALE = 1.5
-HIT_THRESHOLD = 0.0
 FRAMES_PER_CAMERA = 5
 
 
@@ -52,28 +48,6 @@ class DetectionScore:
     def precision(self) -> float:
         counted = self.hits + self.false_alarms
         return self.hits / counted if counted else float("nan")
-
-
-def hog_detector():
-    """OpenCV's default HOG people detector, or None when this OpenCV build lacks it (OpenCV 5 moved
-    HOG to its contrib build)."""
-    if not hasattr(cv2, "HOGDescriptor"):
-        return None
-    hog = cv2.HOGDescriptor()
-    hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
-    return hog
-
-
-def detect_people(hog, bgr: np.ndarray) -> list[tuple[float, float, float, float, float]]:
-    """(x0, y0, x1, y1, score) boxes in pixel-edge coordinates of the frame."""
-    big = cv2.resize(bgr, None, fx=UPSCALE, fy=UPSCALE, interpolation=cv2.INTER_LINEAR)
-    rects, weights = hog.detectMultiScale(big, hitThreshold=HIT_THRESHOLD, winStride=(8, 8), padding=(8, 8), scale=1.05)
-    out = []
-    for (x, y, w, h), score in zip(rects, np.ravel(weights), strict=True):
-        pad_w, pad_h = 0.15 * w, 0.05 * h
-        out.append(((x + pad_w) / UPSCALE, (y + pad_h) / UPSCALE, (x + w - pad_w) / UPSCALE, (y + h - pad_h) / UPSCALE,
-                    float(score)))  # fmt: skip
-    return out
 
 
 def iou(a, b) -> float:

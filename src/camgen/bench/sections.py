@@ -503,8 +503,9 @@ def _growth(repo: Path) -> Section:
 
 
 def _people(repo: Path) -> Section:
+    from camgen.annotate.detection import UPSCALE
     from camgen.bench.people_cases import PEOPLE, detection_table, people_cases, total
-    from camgen.bench.realism import FRAMES_PER_CAMERA, MIN_HEIGHT_PX, MIN_VISIBILITY, UPSCALE
+    from camgen.bench.realism import FRAMES_PER_CAMERA, MIN_HEIGHT_PX, MIN_VISIBILITY
 
     scores: list = []
     counts: dict[str, int] = {}

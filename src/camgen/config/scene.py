@@ -496,10 +496,30 @@ class Outputs(Model):
     frames: Literal["png", "tiff", "exr"] | None = None
     raw_dng: bool = False
     depth: Literal["png16", "exr"] | None = None
-    annotations: list[Literal["mot", "coco", "reid"]] = ["mot", "coco"]
-    """mot: gt/gt.txt and seqinfo.ini (with gt/keypoints.jsonl when people are filmed); coco: coco.json;
-    reid: crops of each person from the delivered frames, named as Market-1501's (reid/)."""
+    annotations: list[Literal["mot", "coco", "reid", "yolo"]] = ["mot", "coco"]
+    """mot: a MOTChallenge sequence as MOT17 ships one (img1/ of the delivered frames counted from 1,
+    gt/gt.txt, seqinfo.ini; gt/keypoints.jsonl when people are filmed); coco: coco.json; reid: crops
+    of each person from the delivered frames, named as Market-1501's (reid/); yolo: Ultralytics YOLO
+    labels (images/, labels/, data.yaml). mot, reid and yolo need the delivered 8-bit frames, so they
+    run the sensor and ISP even without a video."""
+    annotation_images: Literal["jpg", "png"] = "jpg"
+    """Format of the frames written beside the MOT and YOLO labels (img1/, images/): jpg as MOT17
+    ships them (`camgen.io.annotations.SEQUENCE_JPEG_QUALITY`), or png (lossless, larger)."""
+    mot_detections: bool = False
+    """Also write det/det.txt beside a MOT sequence: OpenCV's HOG people detector's boxes on the
+    delivered frames, as MOTChallenge's public detections (for trackers that take them). Slow: about
+    5 s a 1080p frame on 2 cores."""
     camera_metadata: bool = True
+
+    @model_validator(mode="after")
+    def _check(self) -> Outputs:
+        if self.mot_detections and "mot" not in self.annotations:
+            raise invalid(
+                "mot_detections",
+                "writes det/det.txt into a MOT sequence, but outputs.annotations has no 'mot': add it, "
+                "or drop mot_detections",
+            )
+        return self
 
 
 class Scene(Model):

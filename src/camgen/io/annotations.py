@@ -1,22 +1,36 @@
-"""MOTChallenge and COCO files of one camera's annotated sequence.
+"""The label files of one camera's annotated sequence: MOTChallenge, COCO and YOLO.
 
-MOTChallenge (`gt/gt.txt`, `seqinfo.ini`; the MOT17/MOT20 ground-truth layout), one line per object
-and frame: ``frame, id, bb_left, bb_top, bb_width, bb_height, conf, class, visibility`` with frames
-counted from 1 and boxes in MOT's 1-based pixel coordinates (bb_left = x0 + 1 for camgen's pixel-edge
-x0). The box is the amodal box clipped to the image (MOT boxes cover the whole object, occluded parts
-included); conf is 1 (consider) when some of the object is visible, else 0; visibility, as MOT17
-counts it, includes cropping by the image border: (visible / unoccluded pixels) × (1 − truncation),
-truncation being the share of the amodal box outside the image. Classes follow MOT17's table
-(`MOT_CLASSES`).
+MOTChallenge, laid out as MOT17/MOT20 ship a sequence (Milan et al. 2016, "MOT16: A Benchmark for
+Multi-Object Tracking", arXiv:1603.00831; the MOTChallenge devkit): ``img1/000001.jpg`` … (the
+delivered 8-bit frames, named by frame number counted from 1, JPEG at `SEQUENCE_JPEG_QUALITY` or PNG),
+``seqinfo.ini`` (``[Sequence]`` name, imDir=img1, frameRate, seqLength, imWidth, imHeight, imExt) and
+``gt/gt.txt``, one line per object and frame: ``frame, id, bb_left, bb_top, bb_width, bb_height, conf,
+class, visibility`` with frames counted from 1 and boxes in MOT's 1-based pixel coordinates (bb_left =
+x0 + 1 for camgen's pixel-edge x0). The box is the whole object's projection, occluded parts included,
+and not clipped: as in MOT17 it reaches outside the image where the object does; conf is 1 (consider)
+when some of the object is visible, else 0; visibility, as MOT17 counts it, includes cropping by the
+image border: (visible / unoccluded pixels) × (1 − truncation), truncation being the share of the
+amodal box outside the image. Classes follow MOT17's table (`MOT_CLASSES`). Optional ``det/det.txt``
+holds public detections as MOT17's do: ``frame, -1, bb_left, bb_top, bb_width, bb_height, conf, -1,
+-1, -1`` with conf the detector's score.
 
 COCO (`coco.json`, one file per sequence, with the video/track extension used by TAO and
 YouTube-VIS-style datasets): ``videos``, ``images`` (one per frame, with ``video_id`` and
 ``frame_index``), ``annotations`` (one per visible object and frame: ``bbox`` [x, y, w, h] of the
 visible pixels, ``segmentation`` as compressed RLE of the visible mask, ``area`` in pixels,
-``track_id``, ``amodal_bbox``, ``visibility``, ``truncation``, ``bbox_3d_world_m`` and
-``bbox_3d_cam_m`` (8 corners each); for people also COCO ``keypoints``, ``num_keypoints`` and
-``keypoints_world_m``), ``categories`` (camgen's actor classes; ``person`` with COCO's 17 keypoint
-names and skeleton) and ``tracks`` (one per actor, TAO-style, with a person's attribute labels).
+``track_id``, ``amodal_bbox`` (clipped to the image), ``visibility``, ``truncation``,
+``bbox_3d_world_m`` and ``bbox_3d_cam_m`` (8 corners each); for people also COCO ``keypoints``,
+``num_keypoints`` and ``keypoints_world_m``), ``categories`` (camgen's actor classes; ``person`` with
+COCO's 17 keypoint names and skeleton) and ``tracks`` (one per actor, TAO-style, with a person's
+attribute labels).
+
+YOLO, as Ultralytics reads a detection data set (docs.ultralytics.com/datasets/detect): ``images/``
+(the delivered frames, named by frame index counted from 0 as camgen's other per-frame files),
+``labels/`` (one text file per image, the same stem, one line per visible object: ``class x_center
+y_center width height`` of the visible box, normalised by the image's width and height to [0, 1];
+class ids index `YOLO_CLASSES` from 0; an image with nothing visible has an empty file) and
+``data.yaml`` (``train`` and ``val`` both naming ``images``, the one sequence; ``names``: class id →
+name).
 """
 
 from __future__ import annotations
@@ -30,11 +44,23 @@ from pycocotools import mask as mask_utils
 
 from camgen.annotate.keypoints import COCO_KEYPOINTS, COCO_SKELETON
 from camgen.io.files import atomic_path, write_text_atomic
+from camgen.io.frames import write_frame
 
 MOT_CLASSES = {"person": 1, "car": 3, "truck": 3, "bus": 3, "bicycle": 4, "motorcycle": 5, "other": 6}
 """MOT17 class ids: 1 pedestrian, 3 car (all motor vehicles of four or more wheels), 4 bicycle,
 5 motorbike, 6 non-motorised vehicle (camgen's 'other')."""
 COCO_CATEGORIES = ("person", "car", "truck", "bus", "bicycle", "motorcycle", "other")
+YOLO_CLASSES = COCO_CATEGORIES
+"""YOLO class names by class id (from 0): COCO's category ids less one."""
+ANNOTATIONS_OF_DELIVERED_FRAMES = ("mot", "reid", "yolo")
+"""Annotation formats written with (or cut from) the delivered 8-bit frames."""
+IMAGE_SUFFIXES = {"jpg": ".jpg", "png": ".png"}
+"""File suffix of the MOT and YOLO images by `Outputs.annotation_images`."""
+SEQUENCE_JPEG_QUALITY = 95
+"""libjpeg quality (0–100) of the MOT and YOLO images, stored without chroma subsampling (4:4:4). On
+the test scene's 640×480 frames this errs by 1.7 DN RMS (8-bit), under the simulated camera's own
+temporal noise there (2.2 DN), at a fifth of the PNG's size; the usual 4:2:0 subsampling erred by
+3.6 DN RMS and up to 129 DN at coloured edges, and quality 100 quadruples the file for 0.8 DN."""
 
 
 class SequenceAnnotations:
@@ -42,13 +68,26 @@ class SequenceAnnotations:
     instance image is kept) and writes the MOTChallenge and COCO files at the end."""
 
     def __init__(
-        self, *, name: str, fps: float, width_px: int, height_px: int, frame_count: int, frame_suffix: str | None = None
+        self,
+        *,
+        name: str,
+        fps: float,
+        width_px: int,
+        height_px: int,
+        frame_count: int,
+        frame_suffix: str | None = None,
+        image_suffix: str = ".jpg",
+        detections: bool = False,
     ):
         """`frame_suffix`: the extension of the frame files written beside (frames/NNNNNN.ext, frames
-        counted from 0), or None when only the video holds the frames (its frame `frame_index`)."""
+        counted from 0), or None when only the video holds the frames (its frame `frame_index`).
+        `image_suffix`: the extension of the MOT and YOLO images (`IMAGE_SUFFIXES`). `detections`:
+        whether det/det.txt is written (`add_detections` fills it)."""
         self.name, self.fps, self.width_px, self.height_px = name, fps, width_px, height_px
-        self.frame_count, self.frame_suffix = frame_count, frame_suffix
+        self.frame_count, self.frame_suffix, self.image_suffix = frame_count, frame_suffix, image_suffix
         self.mot: list[str] = []
+        self.detections: list[str] | None = [] if detections else None
+        """MOT det.txt lines, or None when no detections are written."""
         self.images: list[dict] = []
         self.annotations: list[dict] = []
         self.tracks: dict[int, dict] = {}
@@ -88,12 +127,13 @@ class SequenceAnnotations:
         if people:
             self.keypoint_lines.append(json.dumps({"frame": frame.frame + 1, "people": people}, separators=(",", ":")))
         for obj in frame.objects:
-            x0, y0, x1, y1 = (round(v, 4) for v in obj.amodal_box)  # the same digits on every machine
+            u0, v0, u1, v1 = (round(v, 4) for v in obj.unclipped_box)  # the same digits on every machine
             self.mot.append(
-                f"{frame.frame + 1},{obj.track_id},{x0 + 1:.3f},{y0 + 1:.3f},{x1 - x0:.3f},{y1 - y0:.3f},"
+                f"{frame.frame + 1},{obj.track_id},{u0 + 1:.3f},{v0 + 1:.3f},{u1 - u0:.3f},{v1 - v0:.3f},"
                 f"{1 if obj.visible_pixels > 0 else 0},{MOT_CLASSES[obj.cls]},"
                 f"{obj.visibility * (1.0 - obj.truncation):.4f}"
             )
+            x0, y0, x1, y1 = (round(v, 4) for v in obj.amodal_box)
             if obj.visible_box is None:
                 continue
             vx0, vy0, vx1, vy1 = obj.visible_box
@@ -118,6 +158,49 @@ class SequenceAnnotations:
                 }
             )
 
+    def add_detections(self, frame_index: int, boxes) -> None:
+        """A frame's detections, (x0, y0, x1, y1, score) in pixel edges
+        (`camgen.annotate.detection.detect_people`), as MOT det.txt lines."""
+        for x0, y0, x1, y1, score in boxes:
+            x0, y0, x1, y1 = (round(float(v), 4) for v in (x0, y0, x1, y1))
+            self.detections.append(
+                f"{frame_index + 1},-1,{x0 + 1:.3f},{y0 + 1:.3f},{x1 - x0:.3f},{y1 - y0:.3f},{score:.4f},-1,-1,-1"
+            )
+
+    def write_mot_image(self, directory: Path, frame_index: int, rgb8: np.ndarray) -> Path:
+        """One delivered frame as MOT's ``img1/<frame number from 1>.jpg|png``."""
+        path = directory / "img1" / f"{frame_index + 1:06d}{self.image_suffix}"
+        write_image(path, rgb8)
+        return path
+
+    def write_yolo_frame(self, directory: Path, frame, rgb8: np.ndarray) -> list[Path]:
+        """One delivered frame as ``images/<frame index>.jpg|png`` and its YOLO labels
+        ``labels/<frame index>.txt`` (a `camgen.plan.annotations.FrameAnnotations`)."""
+        image = directory / "images" / f"{frame.frame:06d}{self.image_suffix}"
+        write_image(image, rgb8)
+        labels = directory / "labels" / f"{frame.frame:06d}.txt"
+        lines = [
+            yolo_label(YOLO_CLASSES.index(obj.cls), obj.visible_box, self.width_px, self.height_px)
+            for obj in frame.objects
+            if obj.visible_box is not None
+        ]
+        write_text_atomic(labels, "".join(line + "\n" for line in lines))
+        return [image, labels]
+
+    def write_yolo_data(self, directory: Path) -> Path:
+        """``data.yaml`` of the sequence's YOLO data set. It has no ``path`` key: Ultralytics then takes
+        the folder holding data.yaml as the root (an absolute path would tie the file to one output
+        folder and break byte-identical renders)."""
+        path = directory / "data.yaml"
+        names = "".join(f"  {i}: {name}\n" for i, name in enumerate(YOLO_CLASSES))
+        write_text_atomic(
+            path,
+            f"# camgen sequence {self.name}: an Ultralytics YOLO detection data set\n"
+            "# (docs.ultralytics.com/datasets/detect); the root is this file's folder\n"
+            "train: images\nval: images\nnames:\n" + names,
+        )
+        return path
+
     def coco_document(self) -> dict:
         return {
             "info": {"description": f"camgen sequence {self.name}"},
@@ -129,19 +212,24 @@ class SequenceAnnotations:
         }
 
     def write_mot(self, directory: Path) -> list[Path]:
-        """`gt/gt.txt` and `seqinfo.ini` under `directory`, and `gt/keypoints.jsonl` when people were
-        annotated: per frame (counted from 1, as gt.txt) each person's track id, its COCO keypoints
-        (x, y, v) and its 3-D keypoints in the world, m."""
+        """`gt/gt.txt` and `seqinfo.ini` under `directory` (img1/ is written frame by frame,
+        `write_mot_image`), `det/det.txt` when detections were asked for, and `gt/keypoints.jsonl` when
+        people were annotated: per frame (counted from 1, as gt.txt) each person's track id, its COCO
+        keypoints (x, y, v) and its 3-D keypoints in the world, m."""
         gt = directory / "gt" / "gt.txt"
-        write_text_atomic(gt, "\n".join(self.mot) + ("\n" if self.mot else ""))
+        write_text_atomic(gt, "".join(line + "\n" for line in self.mot))
         seqinfo = directory / "seqinfo.ini"
         write_text_atomic(
             seqinfo,
             "[Sequence]\n"
-            f"name={self.name}\nimDir=frames\nframeRate={self.fps:g}\nseqLength={self.frame_count}\n"
-            f"imWidth={self.width_px}\nimHeight={self.height_px}\nimExt={self.frame_suffix or '.png'}\n",
+            f"name={self.name}\nimDir=img1\nframeRate={self.fps:g}\nseqLength={self.frame_count}\n"
+            f"imWidth={self.width_px}\nimHeight={self.height_px}\nimExt={self.image_suffix}\n",
         )
         written = [gt, seqinfo]
+        if self.detections is not None:
+            det = directory / "det" / "det.txt"
+            write_text_atomic(det, "".join(line + "\n" for line in self.detections))
+            written.append(det)
         if self.keypoint_lines:
             keypoints = directory / "gt" / "keypoints.jsonl"
             write_text_atomic(keypoints, "\n".join(self.keypoint_lines) + "\n")
@@ -184,6 +272,31 @@ def write_reid_crops(directory: Path, frame, rgb8: np.ndarray, *, camera_number:
             tmp.write_bytes(data.tobytes())
         written.append(path)
     return written
+
+
+def yolo_label(class_id: int, box, width_px: int, height_px: int) -> str:
+    """``class x_center y_center width height`` of a pixel-edge box (x0, y0, x1, y1) inside a
+    `width_px` × `height_px` image, normalised to [0, 1] (Ultralytics YOLO), 6 decimals."""
+    x0, y0, x1, y1 = box
+    return (
+        f"{class_id} {(x0 + x1) / 2 / width_px:.6f} {(y0 + y1) / 2 / height_px:.6f} "
+        f"{(x1 - x0) / width_px:.6f} {(y1 - y0) / height_px:.6f}"
+    )
+
+
+def write_image(path: Path, rgb8: np.ndarray) -> None:
+    """An 8-bit (H, W, 3) RGB frame as JPEG (`SEQUENCE_JPEG_QUALITY`, 4:4:4) or PNG, by `path`'s suffix."""
+    if path.suffix == ".png":
+        write_frame(path, rgb8, format="png")
+        return
+    quality = [cv2.IMWRITE_JPEG_QUALITY, SEQUENCE_JPEG_QUALITY]
+    full_chroma = [cv2.IMWRITE_JPEG_SAMPLING_FACTOR, cv2.IMWRITE_JPEG_SAMPLING_FACTOR_444]
+    ok, data = cv2.imencode(".jpg", rgb8[..., ::-1], quality + full_chroma)
+    if not ok:
+        raise OSError(f"could not encode {path} as JPEG")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data.tobytes())
 
 
 def _category(category_id: int, name: str) -> dict:

@@ -1,7 +1,7 @@
 """File writing that never leaves a partial file under the final name, and the checks that find a
 path camgen cannot read or write before any work is done.
 
-The temporary file `tempfile.mkstemp` makes is private (0600); a finished file gets `file_mode()`,
+The temporary file is private (0600); a finished file gets `file_mode()`,
 what a file written in place would get under the user's umask (rw-r--r-- under the usual 022), so
 datasets can be shared as the user's other files are.
 """
@@ -9,6 +9,7 @@ datasets can be shared as the user's other files are.
 from __future__ import annotations
 
 import os
+import secrets
 import stat
 import tempfile
 from collections.abc import Iterator
@@ -125,14 +126,14 @@ def write_text_atomic(path: str | Path, text: str) -> None:
     """Write `text` to a temporary file beside `path`, then rename it into place."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial", dir=path.parent)
+    tmp = path.with_name(f".{path.name}.{secrets.token_hex(8)}.partial")
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+        with os.fdopen(_create_private(tmp), "w", encoding="utf-8") as handle:
             handle.write(text)
         os.chmod(tmp, file_mode())
         os.replace(tmp, path)
     except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+        tmp.unlink(missing_ok=True)
         raise
 
 
@@ -144,12 +145,23 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix}", dir=path.parent)
-    os.close(fd)
+    tmp = path.with_name(f".{path.stem}.{secrets.token_hex(8)}.partial{path.suffix}")
     try:
-        yield Path(tmp)
+        os.close(_create_private(tmp))
+        yield tmp
         os.chmod(tmp, file_mode())
         os.replace(tmp, path)
     except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+        tmp.unlink(missing_ok=True)
         raise
+
+
+def _create_private(tmp: Path) -> int:
+    """Create the temporary file `tmp` (0600, failing if it exists) and return its descriptor.
+
+    The name is chosen (64 random bits) before the file exists and the file is made inside the
+    writer's ``try``, so an interrupt (Ctrl-C, SIGTERM) anywhere after its creation removes it;
+    `tempfile.mkstemp` creates the file before its caller learns the name, and an interrupt in
+    between left the file behind.
+    """
+    return os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)

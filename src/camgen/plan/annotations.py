@@ -5,7 +5,8 @@ For every actor in view at a frame:
 - the visible box and mask from the instance pass after the lens (`LensStages.apply`: the same
   nearest-pixel remap as the pixels);
 - the amodal box from the actor's rendered mesh (its vertices and edges, posed as drawn) projected
-  through the frame's camera matrix and distortion (`camgen.annotate.boxes.amodal_box`);
+  through the frame's camera matrix and distortion (`camgen.annotate.boxes.amodal_box`), kept as it
+  is and clipped to the image;
 - visibility = visible pixels / pixels of the actor drawn alone (an unoccluded instance draw through
   the same lens), and truncation from the amodal box;
 - the 3D box of the actor's local bounds in world and camera frames.
@@ -38,6 +39,9 @@ class ObjectAnnotation:
     """Tight box of the visible pixels (pixel edges); None when fully occluded."""
     amodal_box: Box | None
     """The whole object's projection, clipped to the image (pixel edges)."""
+    unclipped_box: Box
+    """The whole object's projection as it is, reaching outside the image where the object does (pixel
+    edges; MOT17's boxes are so)."""
     visible_pixels: int
     unoccluded_pixels: int
     visibility: float
@@ -149,6 +153,7 @@ class Annotator:
                     cls=actor.cls,
                     visible_box=None if seen is None else seen.box,
                     amodal_box=clipped,
+                    unclipped_box=box,
                     visible_pixels=pixels,
                     unoccluded_pixels=unoccluded_pixels,
                     visibility=0.0 if unoccluded_pixels == 0 else min(1.0, pixels / unoccluded_pixels),

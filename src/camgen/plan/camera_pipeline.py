@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from camgen.io.annotations import ANNOTATIONS_OF_DELIVERED_FRAMES
 from camgen.isp.pipeline import CameraIsp
 from camgen.optics.remap import (
     STACKED_ROWS_MAX,
@@ -120,7 +121,7 @@ class CameraPipeline:
         isp_steps = {name for name in self.stages if name.startswith("isp.")}
         self.isp = (
             CameraIsp(profile.isp, sensor, frame_interval_s=1.0 / job.fps, steps=isp_steps, executor=executor)
-            if "io.video" in self.stages or "io.frames" in self.stages or cuts_reid_crops(self.stages)
+            if "io.video" in self.stages or "io.frames" in self.stages or annotates_delivered_frames(self.stages)
             else None
         )
         self._mosaic_maps: dict = {}
@@ -276,6 +277,12 @@ class CameraPipeline:
                 limits=self.limits,
             )
         return level
+
+
+def annotates_delivered_frames(stages) -> bool:
+    """Whether the annotations write or cut from the delivered 8-bit frames (MOT, YOLO, re-ID)."""
+    annotate = stages.get("annotate")
+    return annotate is not None and bool(set(ANNOTATIONS_OF_DELIVERED_FRAMES) & set(annotate.params["formats"]))
 
 
 def cuts_reid_crops(stages) -> bool:

@@ -24,6 +24,7 @@ from camgen.config.scene import (
     is_procedural_person,
 )
 from camgen.errors import ConfigError, Problem
+from camgen.io.annotations import ANNOTATIONS_OF_DELIVERED_FRAMES
 from camgen.isp.eptz import eptz_window_px, output_camera_matrix, window_centre_px
 from camgen.motion.pose import R_world_from_cam, T_world_from_cam, rot_z
 from camgen.motion.ptz import HeadTrack
@@ -282,9 +283,10 @@ def _compile_camera(
         exposure.exposure_time_s if exposure.mode == "manual" else min(exposure.exposure_time_max_s, frame_period_s)
     )
 
-    reid = "reid" in outputs.annotations  # crops of the delivered frames
-    needs_image = outputs.video or outputs.frames is not None or outputs.raw_dng or reid
-    needs_isp = outputs.video or outputs.frames is not None or reid
+    # Re-ID crops, MOT's img1/ and YOLO's images/ are cut from or are the delivered frames.
+    delivered = bool(set(outputs.annotations) & set(ANNOTATIONS_OF_DELIVERED_FRAMES))
+    needs_image = outputs.video or outputs.frames is not None or outputs.raw_dng or delivered
+    needs_isp = outputs.video or outputs.frames is not None or delivered
     annotations = bool(outputs.annotations)
     mono = sensor.cfa == "mono"
     decisions: list[Decision] = []
@@ -500,7 +502,9 @@ def _compile_camera(
     passes: list[str] = []
     if needs_image:
         passes.append("radiance")
-        decisions.append(Decision(stage="pass.radiance", included=True, reason="video, frames or raw output"))
+        decisions.append(
+            Decision(stage="pass.radiance", included=True, reason="video, frames, raw or annotation images")
+        )
     else:
         decisions.append(Decision(stage="pass.radiance", included=False, reason="no image output requested"))
     depth_consumers = [
@@ -630,7 +634,12 @@ def _compile_camera(
     if outputs.frames is not None:
         stages.append(Stage(name="io.frames", params={"format": outputs.frames}))
     if annotations:
-        stages.append(Stage(name="annotate", passes=("instance_id",), params={"formats": list(outputs.annotations)}))
+        params: dict = {"formats": list(outputs.annotations)}
+        if {"mot", "yolo"} & set(outputs.annotations):
+            params["images"] = outputs.annotation_images
+        if outputs.mot_detections:
+            params["detections"] = "hog"
+        stages.append(Stage(name="annotate", passes=("instance_id",), params=params))
     if outputs.depth is not None:
         stages.append(Stage(name="io.depth", passes=("depth_m",), params={"format": outputs.depth}))
     if outputs.camera_metadata:

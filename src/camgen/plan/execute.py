@@ -19,7 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from camgen.io.annotations import SequenceAnnotations, write_reid_crops
+from camgen.annotate.detection import detect_people, hog_detector
+from camgen.io.annotations import IMAGE_SUFFIXES, SequenceAnnotations, write_reid_crops
 from camgen.io.dng import SRGB_FROM_XYZ, write_dng
 from camgen.io.files import atomic_path, write_text_atomic
 from camgen.io.frames import write_depth, write_frame
@@ -176,11 +177,21 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
     video = None
     metadata: list[str] = []
     camera_renderer = CameraRenderer(context.renderer, build_scene_graph(job.scene, resolve_path), camera)
-    annotator = sequence = None
+    annotator = sequence = detector = None
+    formats = ()
     if "annotate" in stages:
         annotator = Annotator(camera_renderer, lens)
         width_px, height_px = camera.output_size_px or (camera.width_px, camera.height_px)
         frames_format = stages["io.frames"].params["format"] if "io.frames" in stages else None
+        params = stages["annotate"].params
+        formats = params["formats"]
+        if "detections" in params:
+            detector = hog_detector()
+            if detector is None:
+                raise RuntimeError(
+                    "outputs.mot_detections needs OpenCV's HOG people detector, which this OpenCV build "
+                    "lacks; install opencv-contrib-python-headless"
+                )
         sequence = SequenceAnnotations(
             name=camera.name,
             fps=job.fps,
@@ -188,6 +199,8 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
             height_px=height_px,
             frame_count=max(indices) + 1 if indices else 0,
             frame_suffix=None if frames_format is None else FRAME_SUFFIX[frames_format],
+            image_suffix=IMAGE_SUFFIXES[params.get("images", "jpg")],
+            detections=detector is not None,
         )
         graph = camera_renderer.graph
         for actor, node, rig in zip(graph.actors, graph.actor_nodes, graph.people, strict=True):
@@ -251,6 +264,15 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                         result.files += write_reid_crops(
                             directory, annotated, rgb8, camera_number=context.camera_index + 1
                         )
+                if rgb8 is not None:
+                    with clock("io.annotation_images"):
+                        if "mot" in formats:
+                            result.files.append(sequence.write_mot_image(directory, frame.index, rgb8))
+                        if "yolo" in formats:
+                            result.files += sequence.write_yolo_frame(directory, annotated, rgb8)
+                    if detector is not None:
+                        with clock("annotate.detect"):
+                            sequence.add_detections(frame.index, detect_people(detector, rgb8[..., ::-1]))
             if "io.camera_metadata" in stages:
                 record = state.model_dump(mode="json")
                 output_K = record.pop("output_K_px")
@@ -281,12 +303,13 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
             write_text_atomic(directory / "camera.jsonl", "\n".join(metadata) + "\n")
             result.files.append(directory / "camera.jsonl")
         if sequence is not None:
-            formats = stages["annotate"].params["formats"]
             with clock("annotate"):
                 if "mot" in formats:
                     result.files += sequence.write_mot(directory)
                 if "coco" in formats:
                     result.files.append(sequence.write_coco(directory / "coco.json"))
+                if "yolo" in formats:
+                    result.files.append(sequence.write_yolo_data(directory))
         clock.end_frame()
         result.stage_frames, result.finish_s = clock.frames[:-1], clock.frames[-1]
         result.frame_wall_s = clock.frame_wall_s[:-1]
