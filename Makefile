@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 OUT    ?= out
 
-.PHONY: setup demo test stress bench lint clean
+.PHONY: setup demo test stress bench lint clean blender test-blender
 
 setup: $(STAMP)
 
@@ -42,6 +42,15 @@ stress: setup
 
 bench: setup
 	$(BIN)/camgen bench --write BENCHMARKS.md
+
+# Blender's bpy pins numpy < 2, so it gets a venv of its own; test-blender checks camgen's glTF
+# skinning against a character Blender exports and evaluates there and then.
+blender:
+	test -x .venv-blender/bin/python || $(PYTHON) -m venv .venv-blender
+	.venv-blender/bin/python -m pip install --quiet bpy
+
+test-blender: setup blender
+	CAMGEN_BLENDER_PYTHON=$(CURDIR)/.venv-blender/bin/python $(BIN)/python -m pytest -q tests/actors/test_character_blender.py
 
 lint: setup
 	$(BIN)/ruff check src tests

@@ -80,7 +80,7 @@ def test_shadows_rule_out_the_static_background(workspace):
 
 
 def test_only_planned_passes_are_rendered(workspace, renderer):
-    annotations_only = SUNNY + "outputs: {video: false, annotations: [mot]}\n"
+    annotations_only = SUNNY + "outputs: {video: false, annotations: [coco]}\n"  # mot writes images too
     job = _job(workspace, annotations_only)
     frame = next(render_camera(renderer, job, job.cameras[0]))
     assert job.cameras[0].render.passes == ("instance_id",)

@@ -12,14 +12,17 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from camgen.config.dataset import Dataset
 from camgen.config.placement import cameras_behind_planes, cameras_inside_solids, warn_about
 from camgen.config.profile import Profile
-from camgen.config.scene import Camera, FileMesh, Scene
+from camgen.config.scene import Camera, FileMesh, Scene, is_character
 from camgen.config.validation import show_value, validate
 from camgen.config.yaml_source import YamlDocument, load_yaml, merge_documents
 from camgen.errors import ConfigError, Location, Problem
 from camgen.io.files import input_file_problem
+from camgen.io.gltf import IN_PLACE_SPEED_M_S, clip_ground_travel, load_character, posed_bounds
 
 PROFILE_NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
 
@@ -162,12 +165,23 @@ def load_scene(path: str | Path, profile_dirs: Sequence[Path] = ()) -> LoadedSce
     file_meshes = [(("environment", "meshes", i, "path"), m) for i, m in enumerate(scene.environment.meshes)]
     file_meshes += [(("actors", i, "shape", "path"), a.shape) for i, a in enumerate(scene.actors)]
     file_bounds = {}
+    characters = {i for i, actor in enumerate(scene.actors) if is_character(actor)}
+    read: dict[str, object] = {}  # each character file parsed once
     for key, mesh in file_meshes:
         if isinstance(mesh, FileMesh) and mesh.path not in file_bounds:
             try:
-                file_bounds[mesh.path] = _mesh_file_bounds(path.parent, mesh.path)
+                if key[0] == "actors" and key[1] in characters:
+                    file_bounds[mesh.path] = _character_bounds(path.parent, mesh.path, read)
+                else:
+                    file_bounds[mesh.path] = _mesh_file_bounds(path.parent, mesh.path)
             except ConfigError as exc:
                 problems.append(Problem(key, exc.problems[0].message, doc.locate(key)))
+    for i in sorted(characters):
+        if scene.actors[i].shape.path in file_bounds:
+            problems += [
+                Problem(p.path, p.message, doc.locate(p.path))
+                for p in _character_problems(path.parent, scene.actors[i], ("actors", i, "shape", "animation"), read)
+            ]
     if problems:
         raise ConfigError(problems)
     located = [
@@ -207,6 +221,60 @@ def _mesh_file_bounds(directory: Path, reference: str) -> tuple[tuple[float, flo
         raise ConfigError(f"holds no geometry ({path}); give a mesh file with triangles")
     low, high = loaded.bounds
     return tuple(map(float, low)), tuple(map(float, high))
+
+
+def _character_bounds(
+    directory: Path, reference: str, read: dict
+) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """Bounds of a glTF character in the actor's axes (x forward, z up), over its rest pose and every
+    pose its animations take (`camgen.io.gltf`)."""
+    character = _read_character(directory, reference, read)
+    low, high = posed_bounds(character, [None, *character.clips])
+    return tuple(map(float, low)), tuple(map(float, high))
+
+
+def _read_character(directory: Path, reference: str, read: dict):
+    if reference in read:
+        return read[reference]
+    path = directory / reference
+    if not path.exists():
+        raise ConfigError(f"refers to {reference!r}, but {path.resolve()} does not exist")
+    problem = input_file_problem(path)
+    if problem:
+        raise ConfigError(f"refers to {reference!r}, but {path.resolve()} {problem}; give a glTF 2.0 file")
+    read[reference] = load_character(path)
+    return read[reference]
+
+
+def _character_problems(directory: Path, actor, key: tuple, read: dict) -> list[Problem]:
+    """Animation names the file lacks, and a clip that walks in place on a moving actor with no speed."""
+    character = _read_character(directory, actor.shape.path, read)
+    animation = actor.shape.animation
+    problems = []
+    for name in ("clip", "idle_clip"):
+        wanted = getattr(animation, name) if animation is not None else None
+        if wanted is not None and wanted not in [c.name for c in character.clips]:
+            known = ", ".join(repr(c.name) for c in character.clips) or "none"
+            problems.append(
+                Problem((*key, name), f"names {wanted!r}, which {actor.shape.path} lacks (its animations: {known})")
+            )
+    if problems or (animation is not None and animation.clip_speed_m_s is not None):
+        return problems
+    walk = character.clip(animation.clip if animation is not None else None)
+    moves = actor.random_walk is not None or (actor.path is not None and len(actor.path.waypoints_m) > 1)
+    if walk is not None and walk.duration_s > 0 and moves:
+        travel, duration = clip_ground_travel(character, walk)
+        speed = float(np.linalg.norm(travel)) * actor.shape.scale / duration
+        if speed < IN_PLACE_SPEED_M_S:
+            problems.append(
+                Problem(
+                    (*key, "clip_speed_m_s"),
+                    f"is needed: the animation {walk.name!r} of {actor.shape.path} walks in place (its body travels "
+                    f"{speed:.3f} m/s), so one loop's length is unknown; give the walking speed the clip was animated "
+                    "for (about 1.3 m/s for an adult's walk, Bohannon 1997)",
+                )
+            )
+    return problems
 
 
 def load_dataset(path: str | Path, profile_dirs: Sequence[Path] = ()) -> Dataset:

@@ -109,16 +109,35 @@ class CheckerboardMesh(Placement):
         return self.square_size_m if self.border_m is None else self.border_m
 
 
+class CharacterAnimation(Model):
+    """How an actor's glTF character is animated (`camgen.actors.character`): a clip played by the
+    distance walked while the actor moves, another (or the same pose held) while it stands."""
+
+    clip: Annotated[str, Field(min_length=1)] | None = None
+    """The animation played while the actor moves; null: the file's first animation."""
+    idle_clip: Annotated[str, Field(min_length=1)] | None = None
+    """The animation played, in time, while the actor stands; null: the moving clip holds its pose."""
+    clip_speed_m_s: (
+        Annotated[float, Field(gt=0, le=15), Why("a person runs at most about 12 m/s (Bolt's peak, 2009)")] | None
+    ) = None
+    """Ground speed the moving clip was animated for, m/s; one loop then covers this × its duration.
+    null: measured from the clip's own travel (a clip that walks in place needs it)."""
+
+
 class FileMesh(Placement):
     type: Literal["file"]
     name: Name
     path: str
-    """Mesh file (glTF, OBJ, PLY, STL, …), relative to the scene file."""
+    """Mesh file (glTF, OBJ, PLY, STL, …), relative to the scene file. An actor's glTF file with a
+    skin or animations is a character: skinned and animated (`animation`) as the actor walks. glTF's
+    axes (+Y up, front +Z) become the actor's (z up, x forward)."""
     scale: Annotated[
         float,
         Field(ge=1e-6, le=1000),
         Why("a scale turns the file's units into metres: 0.001 for millimetres, 1000 for kilometres; 1e-6–1000"),
     ] = 1.0
+    animation: CharacterAnimation | None = None
+    """For an actor's glTF character: which clips play (null: the file's first, by distance walked)."""
 
 
 Mesh = Annotated[
@@ -559,6 +578,13 @@ class Scene(Model):
                         f"must be unique, got {item.name!r} again (first at {key}[{seen[item.name]}])",
                     )
                 seen[item.name] = i
+        for i, mesh in enumerate(self.environment.meshes):
+            if isinstance(mesh, FileMesh) and mesh.animation is not None:
+                raise invalid(
+                    f"environment.meshes[{i}].animation",
+                    "animates an actor's glTF character, but this is a fixed mesh of the environment; "
+                    "remove animation, or make the mesh an actor's shape",
+                )
         actor_names = [actor.name for actor in self.actors]
         for i, camera in enumerate(self.cameras):
             program = camera.head.program if camera.head is not None else None
@@ -626,6 +652,15 @@ def _standing_cylinder(name: str, radius_m: float, height_m: float) -> CylinderM
 def is_procedural_person(actor: Actor) -> bool:
     """Whether an actor is drawn as camgen's procedural person (a person given no shape)."""
     return actor.cls == "person" and actor.shape is None
+
+
+GLTF_SUFFIXES = (".glb", ".gltf")
+
+
+def is_character(actor: Actor) -> bool:
+    """Whether an actor is a glTF character: a shape read from a .glb or .gltf file, posed (and, with
+    a skin and animations, animated) by `camgen.actors.character` in the actor's axes."""
+    return isinstance(actor.shape, FileMesh) and actor.shape.path.lower().endswith(GLTF_SUFFIXES)
 
 
 def actor_shape(actor: Actor) -> BoxMesh | CylinderMesh | SphereMesh | FileMesh:

@@ -129,7 +129,8 @@ class Annotator:
                 clip = self.drawer.clip_range_m(view)
             # Drawn alone through the same lens: how much of it shows unoccluded (and, for a person,
             # how near its own surface is at each pixel, which hides keypoints on its far side).
-            alone_passes = ("depth_m", "instance_id") if rig is not None else ("instance_id",)
+            skeleton = rig is not None and rig.keypoints_m is not None
+            alone_passes = ("depth_m", "instance_id") if skeleton else ("instance_id",)
             alone = self.renderer.draw(graph, view, alone_passes, nodes=[node], clip_range_m=clip)
             lensed = self.lens.apply(state, Passes(depth_m=alone.depth_m, instance_id=alone.instance_id))
             unoccluded = post(lensed.instance_id)
@@ -141,6 +142,7 @@ class Annotator:
                 corners_world = box_corners(vertices.min(axis=0), vertices.max(axis=0), pose)
             else:
                 corners_world = box_corners(*rig.heading_box())
+            if skeleton:
                 keypoints_world = rig.keypoints_m
                 own_depth = post(np.where(lensed.depth_m > 0, lensed.depth_m, np.inf))
                 keypoints = keypoint_visibility(

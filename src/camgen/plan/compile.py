@@ -21,6 +21,7 @@ from camgen.config.scene import (
     Camera,
     Scene,
     actor_shape,
+    is_character,
     is_procedural_person,
 )
 from camgen.errors import ConfigError, Problem
@@ -153,7 +154,7 @@ def _actor_motion_px(
             if inside.any():
                 # A walking person's swinging foot and hand move up to about 2.5 times as fast as
                 # the body (the foot's speed peaks at ~2.4 × walking speed in mid-swing: Winter 1991).
-                limbs = LIMB_SPEED_FACTOR if is_procedural_person(actor) else 1.0
+                limbs = LIMB_SPEED_FACTOR if is_procedural_person(actor) or is_character(actor) else 1.0
                 worst = max(worst, limbs * float(np.max(np.hypot(*(uv[1] - uv[0])[inside].T))))
     return worst
 

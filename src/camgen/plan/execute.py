@@ -204,7 +204,7 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
         )
         graph = camera_renderer.graph
         for actor, node, rig in zip(graph.actors, graph.actor_nodes, graph.people, strict=True):
-            attributes = None if rig is None else rig.model.appearance.attributes()
+            attributes = None if rig is None or rig.model is None else rig.model.appearance.attributes()
             sequence.describe(graph.instance_ids[node], name=actor.name, cls=actor.cls, attributes=attributes)
     converge = (
         pipeline is not None and camera.exposure_mode == "auto" and job.settings.auto_exposure_start == "converged"

@@ -439,14 +439,24 @@ class Renderer:
 
 def _upload_deformed(graph) -> None:
     """Copy the vertices of primitives that moved since their last upload into their vertex buffer
-    (pyrender uploads a primitive once; its layout is positions, normals, then COLOR_0)."""
+    (pyrender uploads a primitive once, each vertex's attributes interleaved in this order: position,
+    normal, tangent, TEXCOORD_0, TEXCOORD_1, COLOR_0)."""
     deformed = getattr(graph, "deformed", set())
     for primitive in deformed:
         if primitive._vaid is None:  # not in the context yet: its first upload takes the new vertices
             continue
-        columns = [primitive.positions, primitive.normals]
-        if primitive.color_0 is not None:
-            columns.append(primitive.color_0)
+        columns = [
+            column
+            for column in (
+                primitive.positions,
+                primitive.normals,
+                primitive.tangents,
+                primitive.texcoord_0,
+                primitive.texcoord_1,
+                primitive.color_0,
+            )
+            if column is not None
+        ]
         data = np.ascontiguousarray(np.hstack(columns), dtype=np.float32)
         GL.glBindBuffer(GL.GL_ARRAY_BUFFER, primitive._buffers[0])
         GL.glBufferSubData(GL.GL_ARRAY_BUFFER, 0, data.nbytes, data)

@@ -27,6 +27,7 @@ import numpy as np
 import trimesh
 
 from camgen.actors import Crowd, PersonRig, person_rig
+from camgen.actors.character import CharacterRig, character_rig
 from camgen.config.placement import placement
 from camgen.config.scene import (
     Actor,
@@ -43,9 +44,11 @@ from camgen.config.scene import (
     SpotLight,
     SunLight,
     actor_shape,
+    is_character,
     is_procedural_person,
 )
 from camgen.errors import ConfigError
+from camgen.io.gltf import Character, load_character
 from camgen.motion.pose import T_world_from_cam, rot_z
 from camgen.motion.trajectory import Route, actor_routes
 from camgen.render.gl import pyrender
@@ -77,8 +80,8 @@ class SceneGraph:
     actor_local_poses: list[np.ndarray] = field(default_factory=list)
     actor_routes: list[Route] = field(default_factory=list)
     """Each actor's route (its path, or its random walk resolved once), in the order of `actors`."""
-    people: list[PersonRig | None] = field(default_factory=list)
-    """Each actor's procedural person (its mesh is skinned in world coordinates), or None."""
+    people: list[PersonRig | CharacterRig | None] = field(default_factory=list)
+    """Each actor's procedural person or glTF character (its mesh is posed in world coordinates), or None."""
     deformed: set = field(default_factory=set)
     """Primitives whose vertices changed since the renderer last uploaded them."""
     crowd: Crowd = field(default_factory=lambda: Crowd([]))
@@ -95,12 +98,14 @@ class SceneGraph:
         for node, rig in zip(self.actor_nodes, self.people, strict=True):
             if rig is None:
                 continue
-            primitive = node.mesh.primitives[0]
-            primitive.positions = rig.vertices_m
-            primitive.normals = rig.normals
+            if isinstance(rig, CharacterRig):
+                rig.place(time_s)
+            for primitive, part in zip(node.mesh.primitives, getattr(rig, "parts", [slice(None)]), strict=True):
+                primitive.positions = rig.vertices_m[part]
+                primitive.normals = rig.normals[part]
+                self.deformed.add(primitive)
             node.mesh._bounds = None  # pyrender caches a mesh's bounds, and the scene's bounds until
             self.scene.set_pose(node, np.eye(4))  # a node moves: the identity pose stands for "moved"
-            self.deformed.add(primitive)
 
 
 def instance_table(scene: Scene) -> tuple[Instance, ...]:
@@ -222,6 +227,50 @@ def person_mesh(rig: PersonRig) -> pyrender.Mesh:
     return pyrender.Mesh(primitives=[primitive])
 
 
+def character_mesh(rig: CharacterRig, override: Material | None) -> pyrender.Mesh:
+    """A glTF character as one primitive per file primitive, with its PBR material and textures
+    (mipmapped and filtered trilinearly: pyrender's default for a texture with an image), posed in
+    world coordinates; `override`: the scene's material instead of the file's."""
+    primitives = []
+    for primitive, part in zip(rig.character.primitives, rig.parts, strict=True):
+        m = primitive.material
+        if override is not None:
+            material = _material(override)
+        else:
+            material = pyrender.MetallicRoughnessMaterial(
+                baseColorFactor=m.base_color_factor,
+                baseColorTexture=_texture(m.base_color_image, m.wrap),
+                metallicFactor=m.metallic_factor,
+                roughnessFactor=m.roughness_factor,
+                metallicRoughnessTexture=_texture(m.metallic_roughness_image, m.wrap),
+                normalTexture=_texture(m.normal_image, m.wrap),
+                occlusionTexture=_texture(m.occlusion_image, m.wrap),
+                doubleSided=m.double_sided,
+            )
+        uses_uv = override is None and any(
+            image is not None
+            for image in (m.base_color_image, m.metallic_roughness_image, m.normal_image, m.occlusion_image)
+        )
+        primitives.append(
+            pyrender.Primitive(
+                positions=rig.vertices_m[part],
+                normals=rig.normals[part],
+                texcoord_0=primitive.texcoords if uses_uv else None,
+                color_0=primitive.colours if override is None else None,
+                indices=primitive.faces,
+                material=material,
+            )
+        )
+    return pyrender.Mesh(primitives=primitives)
+
+
+def _texture(image: np.ndarray | None, wrap: tuple[int, int]):
+    if image is None:
+        return None
+    sampler = pyrender.Sampler(wrapS=wrap[0], wrapT=wrap[1])  # filters: pyrender's trilinear default
+    return pyrender.Texture(source=image, source_channels="RGBA"[: image.shape[2]], sampler=sampler)
+
+
 def _look_along(direction: np.ndarray, position=(0.0, 0.0, 0.0)) -> np.ndarray:
     """A node pose whose −z axis points along `direction` (how pyrender aims lights)."""
     z = -np.asarray(direction, dtype=np.float64)
@@ -256,6 +305,24 @@ def _add_lights(scene: pyrender.Scene, lights) -> None:
             raise TypeError(f"unknown light {type(light).__name__}")
 
 
+def _character_rig(actor: Actor, route: Route, characters: dict[str, Character], resolve_path) -> CharacterRig:
+    shape = actor.shape
+    if resolve_path is None:
+        raise ConfigError(f"character file {shape.path!r} needs the scene's directory to be found")
+    if shape.path not in characters:
+        characters[shape.path] = load_character(resolve_path(shape.path))
+    animation = shape.animation
+    return character_rig(
+        characters[shape.path],
+        route,
+        T_actor_from_mesh=placement(shape),
+        scale=shape.scale,
+        clip=animation.clip if animation is not None else None,
+        idle_clip=animation.idle_clip if animation is not None else None,
+        clip_speed_m_s=animation.clip_speed_m_s if animation is not None else None,
+    )
+
+
 def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None = None) -> SceneGraph:
     """Meshes, actors (at t = 0) and lights of `scene` as a pyrender scene; no camera yet."""
     ambient_lux = sum(light.illuminance_lux for light in scene.lights if isinstance(light, AmbientLight))
@@ -266,10 +333,18 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
     instances = instance_table(scene)
     routes = actor_routes(scene)
     actor_nodes, local_poses, environment_nodes, people = [], [], [], []
+    characters: dict[str, Character] = {}
     for index, actor in enumerate(scene.actors):
         if is_procedural_person(actor):
             rig = person_rig(actor, routes[actor.name], scene_seed=scene.seed, actor_index=index)
             actor_nodes.append(graph.add(person_mesh(rig), name=f"actor:{actor.name}"))
+            local_poses.append(np.eye(4))
+            people.append(rig)
+            continue
+        if is_character(actor):
+            rig = _character_rig(actor, routes[actor.name], characters, resolve_path)
+            override = actor.shape.material if "material" in actor.shape.model_fields_set else None
+            actor_nodes.append(graph.add(character_mesh(rig, override), name=f"actor:{actor.name}"))
             local_poses.append(np.eye(4))
             people.append(rig)
             continue
@@ -294,7 +369,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         actor_local_poses=local_poses,
         actor_routes=[routes[actor.name] for actor in scene.actors],
         people=people,
-        crowd=Crowd([rig for rig in people if rig is not None]),
+        crowd=Crowd([rig for rig in people if isinstance(rig, PersonRig)]),
     )
     result.place_actors(0.0)
     return result

@@ -26,6 +26,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from camgen.actors.character import CharacterRig
 from camgen.config.scene import actor_shape
 from camgen.errors import ConfigError
 from camgen.motion.pose import R_HEAD_FROM_CV, R_mount_from_head
@@ -219,7 +220,9 @@ def _reach(graph: SceneGraph) -> tuple[np.ndarray, np.ndarray]:
     for actor, route, node, local, rig in zip(
         graph.actors, graph.actor_routes, graph.actor_nodes, graph.actor_local_poses, graph.people, strict=True
     ):
-        if rig is not None:  # a person's mesh is posed in the world: its envelope bounds it
+        if isinstance(rig, CharacterRig):  # posed in the world: its reach over its clips bounds it
+            radius = rig.envelope_radius_m()
+        elif rig is not None:  # a person's mesh is posed in the world: its envelope bounds it
             shape = actor_shape(actor)
             radius = float(np.max(np.linalg.norm(box_corners(*local_bounds(shape), placement(shape)), axis=1)))
         else:
