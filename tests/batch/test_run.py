@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from camgen.batch.dataset_files import CARD_PLOTS_DIR
 from camgen.batch.expand import compile_batch_job, expand
 from camgen.batch.run import is_complete
 from camgen.cli.main import main
@@ -25,7 +26,7 @@ def job_files(out: Path) -> dict[str, bytes]:
     return {
         path.relative_to(out).as_posix(): path.read_bytes()
         for job_dir in out.iterdir()
-        if job_dir.is_dir()
+        if job_dir.is_dir() and job_dir.name != CARD_PLOTS_DIR
         for path in sorted(job_dir.rglob("*"))
         if path.is_file()
     }
@@ -53,10 +54,12 @@ def copy_of(reference: Path, tmp_path: Path) -> Path:
 def test_a_run_writes_four_verified_jobs_and_a_dataset_record(reference, capsys):
     out = reference / "out"
     assert set(statuses(out).values()) == {"done"} and len(statuses(out)) == 4
-    assert len([p for p in out.iterdir() if p.is_dir()]) == 4
+    assert len([p for p in out.iterdir() if p.is_dir() and p.name != CARD_PLOTS_DIR]) == 4
     readme = (out / "DATASET.md").read_text()
     assert "a walker seen through two small cameras" in readme and f"camgen verify {out}" in readme
     assert "| walk-wide-seed4 |" in readme
+    assert len(json.loads((out / "coco.json").read_text())["videos"]) == 4
+    assert "| walk-wide-seed4 | cam | wide | 160×120 | 10 | 2 |" in (out / "DATASET_CARD.md").read_text()
     assert main(["verify", str(out)]) == 0
 
 
@@ -83,6 +86,8 @@ def test_a_complete_run_is_skipped_and_a_broken_job_redone(reference, tmp_path, 
         "walk-wide-seed4": "skipped",
     }
     assert job_files(out) == job_files(reference / "out")
+    merged, expected = (json.loads((directory / "coco.json").read_text()) for directory in (out, reference / "out"))
+    assert {**merged, "info": None} == {**expected, "info": None}  # rebuilt from disk (info names the git commit)
     # Into a log (capsys's stderr is not a terminal), progress comes as lines; a frame rate once jobs are done.
     last = capsys.readouterr().err.splitlines()[-1]
     assert re.fullmatch(r"batch: 4/4 jobs \(100 %\), \d+\.\d frames/s, elapsed \d:\d\d:\d\d, ETA 0:00:00", last), last

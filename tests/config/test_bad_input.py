@@ -505,6 +505,20 @@ CASES = [
         "zip needs lists of one length, got scenes: 1, seeds: 2",
     ),
     (
+        "dataset_split_shares_not_summing_to_one",
+        "dataset",
+        "scenes: [scenes/ok.yaml]\nsplits: {train: 0.8, val: 0.2, test: 0.2} #<\n",
+        "splits",
+        "train + val + test must be 1, got 0.8 + 0.2 + 0.2 = 1.2",
+    ),
+    (
+        "dataset_split_share_negative",
+        "dataset",
+        "scenes: [scenes/ok.yaml]\nsplits:\n  train: 0.9\n  val: -0.1 #<\n  test: 0.2\n",
+        "splits.val",
+        "must be ≥ 0, got -0.1",
+    ),
+    (
         "dataset_missing_scene",
         "dataset",
         "scenes:\n  - scenes/nope.yaml #<\n",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shlex
 import signal
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -20,7 +21,8 @@ from camgen.cli.progress import ProgressLines
 from camgen.errors import ConfigError
 
 if TYPE_CHECKING:
-    from camgen.batch.run import JobOutcome
+    from camgen.batch.run import BatchSummary, JobOutcome
+    from camgen.config.dataset import Dataset
 
 
 def add_parser(subparsers) -> None:
@@ -114,17 +116,19 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
                     soft_wrap=True,
                 )
 
+        dataset = load_dataset(args.dataset, dirs)
         summary = run_batch(
             jobs,
             args.out,
             workers=args.workers,
             retries=args.retries,
             frames=args.frames,
-            description=load_dataset(args.dataset, dirs).description,
+            description=dataset.description,
             on_event=on_event,
             executor=args.executor,
             address=args.address,
         )
+    _write_dataset_files(args, dataset, summary, out, err)
     table = Table(title=f"{escape(str(args.dataset))} → {escape(str(args.out))}")
     for column in ("done", "skipped", "failed", "frames", "wall time", "frames/s"):
         table.add_column(column, justify="right")
@@ -145,6 +149,63 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         )
         return 128 + summary.stop_signal  # the shell's code for a command a signal ended: 130, 143
     return 0 if summary.ok else 1
+
+
+def _write_dataset_files(
+    args: argparse.Namespace, dataset: Dataset, summary: BatchSummary, out: Console, err: Console
+) -> None:
+    """The merged COCO file, its splits and the dataset card (`camgen.batch.dataset_files`), from what is on
+    disk after the jobs, whichever way they ended."""
+    from camgen.batch.dataset_files import CARD_NAME, MERGED_NAME, JobRecord, write_dataset_files
+
+    records = [
+        JobRecord(
+            name=o.batch.name,
+            directory=None if o.directory is None else o.directory.name,
+            status=o.status,
+            scene=o.batch.scene_path.name,
+            profile=o.batch.profile,
+            seed=o.batch.seed,
+            error=o.error,
+        )
+        for o in summary.outcomes
+    ]
+    split_seed = dataset.seed if dataset.splits.seed is None else dataset.splits.seed
+    try:
+        write_dataset_files(
+            args.out,
+            records,
+            dataset=args.dataset.stem,
+            description=dataset.description,
+            ratios=dataset.splits.ratios,
+            split_seed=split_seed,
+            command=command_line(args),
+            licence=dataset.license,
+            frames_limit=args.frames,
+        )
+    except OSError as exc:
+        err.print(f"[red]error[/red] the dataset files were not written: {escape(str(exc))}", soft_wrap=True)
+        return
+    out.print(
+        f"dataset files: {escape(str(args.out / MERGED_NAME))} (+ coco_train/val/test.json, splits.json), "
+        f"{escape(str(args.out / CARD_NAME))}",
+        soft_wrap=True,
+    )
+
+
+def command_line(args: argparse.Namespace) -> str:
+    """The `camgen batch` command as parsed: every option with the value it ran with, for the dataset card."""
+    words = ["camgen", "batch", str(args.dataset), "-o", str(args.out), "--workers", str(args.workers)]
+    words += ["--retries", str(args.retries)]
+    if args.frames is not None:
+        words += ["--frames", str(args.frames)]
+    if args.executor != "local":
+        words += ["--executor", args.executor]
+    if args.address is not None:
+        words += ["--address", args.address]
+    for directory in args.profiles:
+        words += ["--profiles", str(directory)]
+    return shlex.join(words)
 
 
 @contextmanager

@@ -71,8 +71,43 @@ class Randomize(Model):
         return self
 
 
+class Splits(Model):
+    """How `camgen batch` divides the dataset's jobs into train, val and test (`camgen.batch.dataset_files`).
+
+    A job is one sequence (all its cameras go to one split, so one event never appears in two splits). The
+    jobs are shuffled by a numpy Generator seeded with `seed` and cut into counts rounded by the largest
+    remainder, each split with a ratio above 0 getting at least one job while there are jobs to give."""
+
+    train: Annotated[float, Field(ge=0, le=1)] = 0.7
+    """Share of the jobs in the training split."""
+    val: Annotated[float, Field(ge=0, le=1)] = 0.15
+    """Share of the jobs in the validation split."""
+    test: Annotated[float, Field(ge=0, le=1)] = 0.15
+    """Share of the jobs in the test split."""
+    seed: Annotated[int, Field(ge=0)] | None = None
+    """Seed of the shuffle; null: the dataset's `seed`."""
+
+    @property
+    def ratios(self) -> dict[str, float]:
+        return {"train": self.train, "val": self.val, "test": self.test}
+
+    @model_validator(mode="after")
+    def _check(self) -> Splits:
+        total = self.train + self.val + self.test
+        if abs(total - 1.0) > 1e-6:
+            raise invalid(
+                "",
+                f"train + val + test must be 1, got {self.train:g} + {self.val:g} + {self.test:g} = {total:g}; "
+                "scale them to sum to 1",
+            )
+        return self
+
+
 class Dataset(Model):
     description: str = ""
+    license: str = ""
+    """The licence of the rendered data (an SPDX id such as CC-BY-4.0, or its name), for the dataset card and
+    the merged COCO file's `licenses`; empty: the card says none was given."""
     scenes: Annotated[list[str], Field(min_length=1)]
     """Scene files, relative to the dataset file."""
     profiles: list[str] = []
@@ -84,6 +119,8 @@ class Dataset(Model):
     """Root seed of `randomize`: with a job's name it fixes that job's draws (not the scenes' seeds)."""
     randomize: Randomize | None = None
     """Per-job variation of the scenes and profiles; null renders them as written."""
+    splits: Splits = Splits()
+    """Train/val/test shares of the jobs in the dataset-level COCO files `camgen batch` writes."""
 
     @property
     def seed_list(self) -> list[int]:
