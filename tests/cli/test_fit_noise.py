@@ -23,7 +23,8 @@ from camgen.cli.fit import SHADING_CHOICES
 from camgen.cli.main import main
 from camgen.config import load_profile
 from camgen.config.profile import Noise, Sensor
-from camgen.fit.noise import PLANCK_J_S, SHADING_CORRECTIONS, SPEED_OF_LIGHT_M_PER_S
+from camgen.fit.noise import PLANCK_J_S, SPEED_OF_LIGHT_M_PER_S
+from camgen.fit.noise_spatial import SHADING_CORRECTIONS
 from camgen.io.dng import write_dng
 from camgen.sensor.capture import SensorModel
 from camgen.sensor.characteristics import dark_current_e_per_s

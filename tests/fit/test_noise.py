@@ -83,15 +83,11 @@ import pytest
 
 from camgen.config.profile import Noise, Sensor
 from camgen.errors import ConfigError
-from camgen.fit.noise import (
-    HIGHPASS_PIXEL_VARIANCE_GAIN,
-    FrameGroup,
-    StackStatistics,
-    channel_phases,
-    fit_noise,
-    photons_per_pixel,
-)
+from camgen.fit.noise import fit_noise, photons_per_pixel
 from camgen.fit.noise_report import DPI, noise_report_figure, write_noise_report
+from camgen.fit.noise_spatial import HIGHPASS_PIXEL_VARIANCE_GAIN
+from camgen.fit.noise_stack import FrameGroup, StackStatistics
+from camgen.fit.noise_statistics import channel_phases
 from camgen.sensor.capture import NOISE_TERMS, SensorModel
 from camgen.sensor.characteristics import dark_current_e_per_s
 from camgen.sensor.fixed_pattern import fixed_pattern

@@ -23,7 +23,7 @@ from camgen.errors import ConfigError, Problem
 
 CFA_CHOICES = ("RGGB", "BGGR", "GRBG", "GBRG", "mono")
 SHADING_CHOICES = ("none", "highpass", "polynomial")
-"""`camgen.fit.noise.SHADING_CORRECTIONS` (not imported: the parser is built without the fit's dependencies)."""
+"""`camgen.fit.noise_spatial.SHADING_CORRECTIONS` (not imported: the parser is built without the fit's dependencies)."""
 
 
 def add_parser(subparsers) -> None:
@@ -326,8 +326,9 @@ def _flat_photons(stack, args: argparse.Namespace, pixel_area_um2: float | None)
 
 def run_noise(args: argparse.Namespace, out: Console, err: Console) -> int:
     from camgen.fit.frames import listing, scan_stacks
-    from camgen.fit.noise import FrameGroup, StackStatistics, fit_noise
+    from camgen.fit.noise import fit_noise
     from camgen.fit.noise_report import write_noise_report
+    from camgen.fit.noise_stack import FrameGroup, StackStatistics
 
     _check_positive(args.gain_dn_per_e, "--gain-dn-per-e")
     for value, option in (

@@ -1,4 +1,4 @@
-"""A one-page PNG report of a sensor noise fit (`camgen.fit.noise.NoiseFit`).
+"""A one-page PNG report of a sensor noise fit (`camgen.fit.noise_result.NoiseFit`).
 
 Panels: the photon transfer curve of each channel (EMVA 1288 4.0: σ²_y − σ²_y.dark against
 μ_y − μ_y.dark, the fitted line through the origin, the fit range and the saturation point, when the
@@ -23,7 +23,9 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.ticker import FixedLocator, FormatStrFormatter, NullLocator
 
-from camgen.fit.noise import GAIN_FIT_LIMIT, DarkHistogram, NoiseFit, PhotonTransferCurve, Spectrogram
+from camgen.fit.noise_flat import GAIN_FIT_LIMIT
+from camgen.fit.noise_result import DarkHistogram, NoiseFit, PhotonTransferCurve
+from camgen.fit.noise_spatial import Spectrogram
 from camgen.io.files import atomic_path
 
 PANEL_SIZE_IN = (4.0, 3.2)
