@@ -22,14 +22,10 @@ from camgen.config.loader import load_profile
 from camgen.config.profile import Codec, Profile, WhiteBalance
 from camgen.errors import ConfigError
 from camgen.fit.frames import read_rgb8_frames
-from camgen.fit.match import (
-    MatchFit,
-    NoiseLevelFunction,
-    estimate_tone,
-    fit_match,
-    nlf_from_frames,
-)
+from camgen.fit.match import MatchFit, fit_match
+from camgen.fit.match_nlf import NoiseLevelFunction, nlf_from_frames
 from camgen.fit.match_report import write_match_report
+from camgen.fit.match_tone import estimate_tone
 from camgen.io.frames import write_frame
 from camgen.io.video import VideoWriter
 from camgen.isp.pipeline import CameraIsp

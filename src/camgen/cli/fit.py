@@ -509,8 +509,9 @@ def run_lens(args: argparse.Namespace, out: Console, err: Console) -> int:
 
 def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
     from camgen.fit.frames import VIDEO_SUFFIXES, listing, read_rgb8_frames, reference_files, video_frame_rate
-    from camgen.fit.match import ReferenceContentError, fit_match
+    from camgen.fit.match import fit_match
     from camgen.fit.match_report import write_match_report
+    from camgen.fit.match_statistics import ReferenceContentError
 
     if args.max_frames < 1:
         raise ConfigError(f"--max-frames must be ≥ 1, got {args.max_frames}")

@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from camgen.fit.match import MatchFit, NoiseLevelFunction
+from camgen.fit.match import MatchFit
+from camgen.fit.match_nlf import NoiseLevelFunction
 from camgen.io.files import atomic_path
 
 CHANNELS = (("R", "tab:red"), ("G", "tab:green"), ("B", "tab:blue"))
