@@ -99,6 +99,19 @@ class PersonRig:
         """Pose and skin this person alone (`Crowd.place` skins many at once)."""
         M = self.pose_skeleton(time_s)
         self.vertices_m, self.normals = skin(self.model.vertices_m, self.model.normals, self.weights, M)
+        self.settle(time_s)
+
+    def settle(self, time_s: float) -> None:
+        """A falling or fallen body rests on the ground: lifted by what of its posed mesh (a hand, a
+        heel) went below it (`camgen.actors.actions`' pivot lift is computed on the rest shape)."""
+        if not self.walker.falling(time_s):
+            return
+        below = -float(self.vertices_m[:, 2].min())
+        if below > 0:
+            self.vertices_m[:, 2] += below
+            self.joints_m[:, 2] += below
+            self.keypoints_m[:, 2] += below
+            self.T_world_from_pelvis[2, 3] += below
 
 
 class Crowd:
@@ -124,13 +137,15 @@ class Crowd:
         vertices, normals = skin(self._rest_vertices, self._rest_normals, self._weights, M)
         for rig, part in zip(self.rigs, self._slices, strict=True):
             rig.vertices_m, rig.normals = vertices[part], normals[part]
+            rig.settle(time_s)
 
 
 def person_rig(actor: Actor, route: Route, *, scene_seed: int, actor_index: int) -> PersonRig:
     """The procedural person of a person actor (no shape) walking its route."""
     appearance = person_appearance(actor, scene_seed=scene_seed, actor_index=actor_index)
     phase = (identity_seed(actor, scene_seed=scene_seed, actor_index=actor_index) % 1000) / 1000
-    return PersonRig(_model(appearance), Walker(_model(appearance), route, phase_seed=phase))
+    walker = Walker(_model(appearance), route, phase_seed=phase, actions=tuple(actor.actions))
+    return PersonRig(_model(appearance), walker)
 
 
 __all__ = ["COCO_KEYPOINTS", "Crowd", "PersonRig", "identity_seed", "person_appearance", "person_rig"]

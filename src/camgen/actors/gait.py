@@ -36,7 +36,26 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
+from camgen.actors.actions import (
+    ARM_BLEND_S,
+    FALL_DIRECTIONS,
+    HIP_ABOVE_SEAT_M,
+    KNEE_BUCKLE_RAD,
+    RISE_S,
+    SEATED_RECLINE_RAD,
+    SIT_S,
+    TRANSITION_LEAN_RAD,
+    arm_rotations,
+    blend_rotation,
+    bracing_arm,
+    fall_angle_rad,
+    phone_arm,
+    seated_arm,
+    wave_arm,
+    window_weight,
+)
 from camgen.actors.person import PersonModel
 from camgen.actors.skeleton import INDEX, JOINTS, Pose, cross, global_transforms, rot_axis, rotation_between
 from camgen.motion.trajectory import Route
@@ -111,8 +130,10 @@ class FootState:
 class Walker:
     """The pose of one person along one route at any time (pure: same time, same pose)."""
 
-    def __init__(self, model: PersonModel, route: Route, phase_seed: float = 0.0):
+    def __init__(self, model: PersonModel, route: Route, phase_seed: float = 0.0, actions: tuple = ()):
+        """`actions`: the person's `camgen.config.scene.PersonAction`s (`camgen.actors.actions`)."""
         self.model, self.route = model, route
+        self.actions = tuple(sorted(actions, key=lambda a: a.start_s))
         J = model.joints_m
         self.hip_height_m = float(J[INDEX["thigh_l"], 2])
         self.gait = gait_parameters(route.speed_m_s, self.hip_height_m)
@@ -221,11 +242,18 @@ class Walker:
         ankles = [self._ankle(foot, "l" if side == 0 else "r") for side, foot in enumerate(feet)]
         walking_height = float(np.interp((distance / gait.stride_m) % 1.0, self._phases, self._heights, period=1.0))
         height = amp * walking_height + (1 - amp) * self.stand_height_m
+        action = self._action_at(time_s)
+        seated = 0.0
+        if action is not None and action.type == "sit":  # the pelvis lowers and moves back onto the seat
+            seated = window_weight(time_s, action.start_s, action.duration_s, SIT_S)
+            seat_xy = pelvis_xy - 0.9 * self.thigh_m * np.array([math.cos(yaw), math.sin(yaw)])
+            pelvis_xy = pelvis_xy + (seat_xy - pelvis_xy) * seated
+            height += (action.seat_height_m + HIP_ABOVE_SEAT_M - height) * seated
         T_pelvis = np.eye(4)
         T_pelvis[:3, :3] = R_pelvis
         T_pelvis[:3, 3] = (pelvis_xy[0], pelvis_xy[1], height)
         local = np.tile(np.eye(3), (len(JOINTS), 1, 1))
-        lean = gait.lean_rad * amp
+        lean = gait.lean_rad * amp + TRANSITION_LEAN_RAD * math.sin(math.pi * seated) + SEATED_RECLINE_RAD * seated
         local[INDEX["spine_01"]] = rot_axis("y", lean)
         local[INDEX["spine_03"]] = rot_axis("z", -1.5 * pelvic_rotation)
         local[INDEX["neck_01"]] = rot_axis("y", -lean * 0.7) @ rot_axis("z", 0.5 * pelvic_rotation)
@@ -237,7 +265,79 @@ class Walker:
             swing = gait.arm_swing_rad * math.sin(cycle) * sign * amp - math.radians(4)
             elbow = gait.elbow_rad * (0.75 + 0.25 * math.sin(cycle) * sign) * amp + math.radians(12) * (1 - amp)
             self._pose_arm(local, side, sign, swing, elbow)
+        if action is not None:
+            T_pelvis = self._act(action, time_s, local, T_pelvis, feet, seated)
         return Pose(T_pelvis, local)
+
+    # Named actions (camgen.actors.actions) ------------------------------------------------------
+    def _action_at(self, time_s: float):
+        """The action under way at `time_s` (a fall's rise after its window included), or None."""
+        for action in self.actions:
+            end = action.start_s + action.duration_s + (RISE_S if action.type == "fall" else 0.0)
+            if action.start_s <= time_s <= end:
+                return action
+        return None
+
+    def falling(self, time_s: float) -> bool:
+        """Whether a fall (or the rise after it) is under way at `time_s`."""
+        action = self._action_at(time_s)
+        return action is not None and action.type == "fall" and time_s > action.start_s
+
+    def _act(self, action, time_s: float, local, T_pelvis: np.ndarray, feet, seated: float) -> np.ndarray:
+        """Pose the arms and head for `action` over the gait's pose in `local`; a fall also tips the
+        whole body (the returned pelvis transform)."""
+        J = self.model.joints_m
+        if action.type in ("wave", "phone"):
+            w = window_weight(time_s, action.start_s, action.duration_s, ARM_BLEND_S)
+            side, sign = ("l", 1) if action.side == "left" else ("r", -1)
+            upper, fore = wave_arm(time_s, sign) if action.type == "wave" else phone_arm(sign)
+            self._blend_arm(local, side, upper, fore, w)
+            if action.type == "phone":  # the head bends over the phone (45° in all)
+                local[INDEX["neck_01"]] = local[INDEX["neck_01"]] @ rot_axis("y", math.radians(25) * w)
+                local[INDEX["head"]] = local[INDEX["head"]] @ rot_axis("y", math.radians(20) * w)
+            return T_pelvis
+        if action.type == "sit":
+            for side, sign in (("l", 1), ("r", -1)):
+                self._blend_arm(local, side, *seated_arm(sign), seated)
+            return T_pelvis
+        # A fall: the tilt of a toppling body, then lying, then rising over RISE_S.
+        end = action.start_s + action.duration_s
+        if time_s <= end:
+            theta = fall_angle_rad(time_s - action.start_s, self.stand_height_m)
+        else:
+            theta = fall_angle_rad(end - action.start_s, self.stand_height_m) * (1 - _smooth((time_s - end) / RISE_S))
+        tilt = theta / (math.pi / 2)
+        for side, sign in (("l", 1), ("r", -1)):
+            self._blend_arm(local, side, *bracing_arm(sign, action.direction), min(1.0, 2 * tilt))
+            i_thigh, i_calf = INDEX[f"thigh_{side}"], INDEX[f"calf_{side}"]
+            local[i_calf] = local[i_calf] @ rot_axis("y", KNEE_BUCKLE_RAD * tilt)
+            local[i_thigh] = local[i_thigh] @ rot_axis("y", -0.5 * KNEE_BUCKLE_RAD * tilt)
+        heading = math.atan2(T_pelvis[1, 0], T_pelvis[0, 0]) + FALL_DIRECTIONS[action.direction]
+        towards = np.array([math.cos(heading), math.sin(heading), 0.0])
+        # The body tips over the edge of its feet on the side it falls to: the balls or the heels.
+        edges = [max((foot.ball_m, self._ankle(foot, name)), key=lambda p: p[:2] @ towards[:2])
+                 for foot, name in zip(feet, ("l", "r"), strict=True)]  # fmt: skip
+        pivot = np.mean(edges, axis=0)
+        pivot[2] = 0.0
+        R = Rotation.from_rotvec(theta * cross(np.array([0.0, 0.0, 1.0]), towards)).as_matrix()
+        # Lifted so that no part of the (rest-shaped) body goes below the ground as it tips.
+        rest = self.model.vertices_m - np.array([*J[INDEX["pelvis"], :2], 0.0])
+        along = rest[:, :2] @ np.array([math.cos(FALL_DIRECTIONS[action.direction]),
+                                         math.sin(FALL_DIRECTIONS[action.direction])])  # fmt: skip
+        pivot_along = float((pivot - T_pelvis[:3, 3])[:2] @ towards[:2])
+        lift = max(0.0, float(np.max((along - pivot_along) * math.sin(theta) - rest[:, 2] * math.cos(theta))))
+        T = np.eye(4)
+        T[:3, :3] = R
+        T[:3, 3] = pivot - R @ pivot + np.array([0.0, 0.0, lift])
+        return T @ T_pelvis
+
+    def _blend_arm(self, local, side: str, upper_dir: np.ndarray, fore_dir: np.ndarray, w: float) -> None:
+        if w <= 0:
+            return
+        R_upper, R_fore = arm_rotations(self.model.joints_m, side, upper_dir, fore_dir)
+        i_upper, i_lower = INDEX[f"upperarm_{side}"], INDEX[f"lowerarm_{side}"]
+        local[i_upper] = blend_rotation(local[i_upper], R_upper, w)
+        local[i_lower] = blend_rotation(local[i_lower], R_fore, w)
 
     def _raw_height(self, route: Route, distance_m: float) -> float:
         """The highest pelvis from which every planted leg reaches its foot, walking along `route`."""

@@ -5,6 +5,7 @@ World frame: right-handed, Z up, metres, ground at z = 0 (DESIGN.md "Conventions
 
 from __future__ import annotations
 
+import itertools
 import math
 from typing import Annotated, Any, Literal
 
@@ -354,6 +355,25 @@ ActorClass = Literal["person", "car", "truck", "bus", "bicycle", "motorcycle", "
 ActorShape = Annotated[BoxMesh | CylinderMesh | SphereMesh | FileMesh, Field(discriminator="type")]
 
 
+class PersonAction(Model):
+    """A named action of a procedural person over a time window (`camgen.actors.actions` cites the
+    postures and timings): wave and phone while walking or standing; sit and fall only standing."""
+
+    type: Literal["wave", "phone", "sit", "fall"]
+    start_s: Annotated[float, Field(ge=0)]
+    """When the action begins, s (it fades in from here)."""
+    duration_s: Annotated[float, Field(gt=0, le=86_400)]
+    """How long it lasts, s, fading out at its end (a fallen person lies until then, then rises)."""
+    side: Literal["left", "right"] = "right"
+    """The hand that waves or holds the phone."""
+    direction: Literal["forward", "backward", "left", "right"] = "forward"
+    """Which way a fall goes, relative to the way the person faces."""
+    seat_height_m: Annotated[
+        float, Field(ge=0.3, le=0.8), Why("seats from a low bench (0.3 m) to a bar stool (0.8 m)")
+    ] = 0.45
+    """Height of the seat the person sits on, m (public benches: 0.40–0.48 m, BS 8300)."""
+
+
 class Actor(Model):
     """Something that moves and is annotated: it gets a track id, a class, boxes and masks."""
 
@@ -369,6 +389,9 @@ class Actor(Model):
     """A region to wander in; give either this or path."""
     appearance: PersonAppearance | None = None
     """For a person without a shape: its identity seed and any attribute to pin (null: all drawn)."""
+    actions: list[PersonAction] = []
+    """For a person without a shape: named actions (wave, phone, sit, fall) at given times; they must
+    not overlap."""
 
     @model_validator(mode="after")
     def _check(self) -> Actor:
@@ -380,6 +403,23 @@ class Actor(Model):
             )
         if self.path is not None and self.random_walk is not None:
             raise invalid("random_walk", "cannot be given together with path; keep one of the two")
+        if self.actions and (self.cls != "person" or self.shape is not None):
+            raise invalid(
+                "actions",
+                "are for a procedural person, but this actor is "
+                + (f"a {self.cls!r}" if self.cls != "person" else "given a shape")
+                + "; remove actions, or make it a person without a shape",
+            )
+        ordered = sorted(range(len(self.actions)), key=lambda k: self.actions[k].start_s)
+        for a, b in itertools.pairwise(ordered):
+            first, second = self.actions[a], self.actions[b]
+            if second.start_s < first.start_s + first.duration_s:
+                raise invalid(
+                    f"actions[{b}].start_s",
+                    f"is {second.start_s:g} s, inside actions[{a}] ({first.type}, {first.start_s:g}–"
+                    f"{first.start_s + first.duration_s:g} s); a person does one action at a time: start it at "
+                    f"{first.start_s + first.duration_s:g} s or later",
+                )
         if self.appearance is not None and (self.cls != "person" or self.shape is not None):
             raise invalid(
                 "appearance",

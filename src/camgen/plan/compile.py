@@ -772,6 +772,34 @@ def isp_steps(isp: Isp, sensor: Sensor) -> set[str]:
     return {name for name, wanted, _, _ in isp_stage_choices(isp, sensor) if wanted}
 
 
+STANDING_CHECK_STEP_S = 0.05
+"""Whole-body actions are checked to fall where the person stands at this step of scene time, s."""
+
+
+def standing_action_problems(scene: Scene, routes: Mapping[str, Route]) -> list[Problem]:
+    """A sit or a fall must happen where the person stands (`camgen.actors.actions`): one that
+    overlaps a walked leg of the route is refused, naming when the person walks."""
+    problems = []
+    for i, actor in enumerate(scene.actors):
+        for k, action in enumerate(actor.actions):
+            if action.type not in ("sit", "fall"):
+                continue
+            route = routes[actor.name]
+            end = min(action.start_s + action.duration_s, scene.duration_s)
+            times = np.append(np.arange(action.start_s, end, STANDING_CHECK_STEP_S), end)
+            walking = [t for t in times if route.standing(float(t)) is None]
+            if walking:
+                problems.append(
+                    Problem(
+                        ("actors", i, "actions", k, "start_s"),
+                        f"starts a {action.type} at {action.start_s:g} s, but {actor.name} walks at "
+                        f"{walking[0]:.2f} s of it; a person sits or falls where they stand: give the path a "
+                        "pause_s there, or start the action after the person arrives",
+                    )
+                )
+    return problems
+
+
 def compile(
     scene: Scene,
     profiles: Mapping[str, Profile],
@@ -792,6 +820,9 @@ def compile(
     check_job_size(scene)
     static_boxes = [box_corners(*local_bounds(mesh, file_bounds), placement(mesh)) for mesh in scene.environment.meshes]
     routes = actor_routes(scene)
+    problems = standing_action_problems(scene, routes)
+    if problems:
+        raise ConfigError(problems)
     actor_boxes = [
         box
         for actor in scene.actors
