@@ -36,6 +36,8 @@ from camgen.render.renderer import Passes, Renderer
 from camgen.render.scene_graph import build_scene_graph, instance_table
 from camgen.render.sequence import CameraRenderer
 
+PARTIAL_SUFFIX = ".partial"
+"""A camera's folder is written under its name with this suffix and renamed when complete."""
 NOISE_THREADS = 2
 """Threads for the sensor's row bands and the tone lookup (the machines here have 2 cores)."""
 
@@ -131,16 +133,29 @@ def execute(
     for stale in ("manifest.json", "job.json"):
         (job_dir / stale).unlink(missing_ok=True)
     for camera in job.cameras:
-        if (wanted is None or camera.name in wanted) and (job_dir / camera.name).is_dir():
-            shutil.rmtree(job_dir / camera.name)
+        for directory in (job_dir / camera.name, job_dir / f"{camera.name}{PARTIAL_SUFFIX}"):
+            if (wanted is None or camera.name in wanted) and directory.is_dir():
+                shutil.rmtree(directory)
     results = []
     maps = LensMapCache()  # cameras with the same lens and zoom share their maps
     with ThreadPoolExecutor(NOISE_THREADS) as executor:
         for camera_index, camera in enumerate(job.cameras):
             if wanted is not None and camera.name not in wanted:
                 continue
-            context = _Context(job, camera_index, job_dir / camera.name, renderer, maps, executor)
-            results.append(_execute_camera(context, indices, resolve_path, save_passes, on_frame))
+            # A camera's files (per-frame images included) are written under a temporary name and the
+            # folder is renamed when the camera is complete; a render stopped part-way leaves none.
+            partial = job_dir / f"{camera.name}{PARTIAL_SUFFIX}"
+            context = _Context(job, camera_index, partial, renderer, maps, executor)
+            try:
+                result = _execute_camera(context, indices, resolve_path, save_passes, on_frame)
+            except BaseException:
+                shutil.rmtree(partial, ignore_errors=True)
+                raise
+            final = job_dir / camera.name
+            partial.replace(final)
+            result.directory = final
+            result.files = [final / path.relative_to(partial) for path in result.files]
+            results.append(result)
     # Written last: a job directory with job.json in it holds a finished render, of the cameras and
     # frames the manifest's `rendered` names (all of them unless --camera/--frames chose fewer).
     write_text_atomic(job_dir / "job.json", job.to_json())
