@@ -10,6 +10,7 @@ vertices, Blender's world axes: z up, −y front) at a few frames of each clip, 
 tests/actors/test_character_blender.py compares with camgen's glTF skinning. The shipped walker.glb
 was made by Blender 5.0.1 with this script; it and this script are CC0 (camgen's own).
 """
+
 import math
 import sys
 
@@ -22,6 +23,7 @@ bpy.ops.wm.read_factory_settings(use_empty=True)
 scene = bpy.context.scene
 scene.render.fps = 24
 
+
 def part(kind, name, loc, scale):
     if kind == "cyl":
         bpy.ops.mesh.primitive_cylinder_add(vertices=12, radius=1, depth=1, location=loc)
@@ -31,6 +33,7 @@ def part(kind, name, loc, scale):
     ob.name = name
     ob.scale = scale
     return ob
+
 
 parts = [
     part("cyl", "torso", (0, 0, 1.25), (0.17, 0.11, 0.55)),
@@ -58,9 +61,8 @@ bpy.ops.object.mode_set(mode="OBJECT")
 image = bpy.data.images.new("cloth", 64, 64)
 pixels = []
 for y in range(64):
-    for x in range(64):
-        stripe = (y // 8) % 2
-        pixels += [0.6, 0.15, 0.1, 1.0] if stripe else [0.1, 0.2, 0.55, 1.0]
+    stripe = (y // 8) % 2
+    pixels += ([0.6, 0.15, 0.1, 1.0] if stripe else [0.1, 0.2, 0.55, 1.0]) * 64
 image.pixels = pixels
 image.pack()
 material = bpy.data.materials.new("cloth")
@@ -79,9 +81,16 @@ rig.name = "Armature"
 bpy.ops.object.mode_set(mode="EDIT")
 bones = rig.data.edit_bones
 root = bones[0]
-root.name = "hips"; root.head = (0, 0, 0.95); root.tail = (0, 0, 1.1)
+root.name = "hips"
+root.head, root.tail = (0, 0, 0.95), (0, 0, 1.1)
+
+
 def bone(name, head, tail, parent):
-    b = bones.new(name); b.head = head; b.tail = tail; b.parent = bones[parent]; return b
+    b = bones.new(name)
+    b.head, b.tail, b.parent = head, tail, bones[parent]
+    return b
+
+
 bone("spine", (0, 0, 1.1), (0, 0, 1.5), "hips")
 bone("head", (0, 0, 1.5), (0, 0, 1.78), "spine")
 bone("thigh_l", (0.09, 0, 0.93), (0.09, 0, 0.51), "hips")
@@ -92,11 +101,14 @@ bone("arm_l", (0.22, 0, 1.48), (0.22, 0, 0.95), "spine")
 bone("arm_r", (-0.22, 0, 1.48), (-0.22, 0, 0.95), "spine")
 bpy.ops.object.mode_set(mode="OBJECT")
 bpy.ops.object.select_all(action="DESELECT")
-body.select_set(True); rig.select_set(True)
+body.select_set(True)
+rig.select_set(True)
 bpy.context.view_layer.objects.active = rig
 bpy.ops.object.parent_set(type="ARMATURE_AUTO")
 
-# Clips: a 1 s walk that carries the body 1.3 m towards −Y (Blender's front), and a 2 s idle sway.
+
+# Clips: a 1 s walk in place (a scene gives the speed it was made for, clip_speed_m_s) facing −Y,
+# Blender's front, and a 2 s idle sway.
 def action(name, frames, keys):
     rig.animation_data_create()
     act = bpy.data.actions.new(name)
@@ -118,23 +130,39 @@ def action(name, frames, keys):
     rig.animation_data.action = None
     return act
 
+
 swing = math.radians(28)
 walk_keys = []
 for frame in range(1, 26, 3):
     phase = 2 * math.pi * (frame - 1) / 24
     s = math.sin(phase)
-    walk_keys.append((frame, {
-        "thigh_l": (swing * s, None), "thigh_r": (-swing * s, None),
-        "shin_l": (max(0.0, -1.1 * math.cos(phase)) * 0.6, None), "shin_r": (max(0.0, 1.1 * math.cos(phase)) * 0.6, None),
-        "arm_l": (-0.6 * swing * s, None), "arm_r": (0.6 * swing * s, None),
-        "hips": (0.0, None),
-    }))
+    walk_keys.append(
+        (
+            frame,
+            {
+                "thigh_l": (swing * s, None),
+                "thigh_r": (-swing * s, None),
+                "shin_l": (max(0.0, -1.1 * math.cos(phase)) * 0.6, None),
+                "shin_r": (max(0.0, 1.1 * math.cos(phase)) * 0.6, None),
+                "arm_l": (-0.6 * swing * s, None),
+                "arm_r": (0.6 * swing * s, None),
+                "hips": (0.0, None),
+            },
+        )
+    )
 walk = action("Walk", 24, walk_keys)
 idle_keys = [(f, {"spine": (0.04 * math.sin(2 * math.pi * (f - 1) / 48), None)}) for f in range(1, 50, 6)]
 idle = action("Idle", 48, idle_keys)
 
-bpy.ops.export_scene.gltf(filepath=out, export_format="GLB", export_animations=True, export_animation_mode="NLA_TRACKS",
-                          export_skins=True, export_image_format="AUTO", export_yup=True)
+bpy.ops.export_scene.gltf(
+    filepath=out,
+    export_format="GLB",
+    export_animations=True,
+    export_animation_mode="NLA_TRACKS",
+    export_skins=True,
+    export_image_format="AUTO",
+    export_yup=True,
+)
 print("wrote", out)
 
 if reference:
