@@ -117,9 +117,8 @@ def test_instance_ids_follow_the_projected_box_edges(renderer):
     T = look_at((0.0, 0.0, 2.5), (0.0, 10.0, 0.8))
     out = renderer.draw(graph, View(K, T, 640, 480), ("instance_id",))
     T_cam = np.linalg.inv(T)
-    from camgen.config.placement import placement
+    from camgen.config.placement import box_corners, placement
     from camgen.config.scene import BoxMesh
-    from camgen.plan.visibility import box_corners
 
     for instance_id, box in enumerate(boxes, start=1):
         shape = BoxMesh.model_validate(box)

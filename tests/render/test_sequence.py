@@ -155,8 +155,8 @@ def test_a_render_larger_than_the_gpu_allows_is_refused_with_the_fix(workspace):
 def test_view_at_turns_the_camera_with_the_head_rates():
     """A sub-frame view `dt` after the frame time is the head's pose at pan + ṗ·dt, tilt + ṫ·dt, with
     the focal lengths scaled by exp(ż·dt) (from R_world_from_cam, independently)."""
+    from camgen.job import CameraState, RenderSpec
     from camgen.motion.pose import R_world_from_cam, T_world_from_cam
-    from camgen.plan.job import CameraState, RenderSpec
     from camgen.render.sequence import view_at
 
     mount = dict(yaw_deg=30.0, pitch_deg=-5.0, roll_deg=2.0)

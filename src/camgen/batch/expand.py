@@ -22,9 +22,9 @@ from camgen.config.scene import Scene
 from camgen.config.validation import validate
 from camgen.config.yaml_source import load_yaml
 from camgen.errors import ConfigError, Problem
+from camgen.job import Job
 from camgen.plan import PlanSettings
 from camgen.plan.compile import compile
-from camgen.plan.job import Job
 
 
 @dataclass(frozen=True)

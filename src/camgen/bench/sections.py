@@ -14,7 +14,7 @@ import numpy as np
 from camgen.bench.harness import Case, Result, markdown_table, power_law_fit
 from camgen.bench.plots import TradeoffPoint, growth_plot, stage_bars, threshold_plot, tradeoff_plot
 from camgen.bench.report import Plots, Section
-from camgen.plan.job import PlanSettings
+from camgen.job import PlanSettings
 from camgen.plan.timing import shares_text
 
 SKIP_NOISE_FRACTION = 0.25

@@ -1,6 +1,6 @@
-"""Where meshes and cameras stand: a mesh's bounds in its own frame and its placement in the world
-(`local_bounds`, `placement`; plan and render use them too), and checks of each camera's position
-against the meshes that no pixel can make up for.
+"""Where meshes and cameras stand: a mesh's bounds in its own frame, its placement in the world and the
+corners of a placed box (`local_bounds`, `placement`, `box_corners`; plan and render use them too), and
+checks of each camera's position against the meshes that no pixel can make up for.
 
 The renderer draws a mesh's front faces only (back-face culling, `render.scene_graph._material`). A plane
 or checkerboard is one-sided: seen from behind it vanishes, so a camera under the ground would film the
@@ -56,6 +56,20 @@ def local_bounds(shape, file_bounds: Mapping[str, Bounds] | None = None) -> Boun
 def placement(shape) -> np.ndarray:
     """T_world_from_mesh of a placed shape (rotation about X, Y, Z, then the offset)."""
     return T_world_from_cam(shape.position_m, rotation_xyz_deg(shape.rotation_deg))
+
+
+def box_corners(low: np.ndarray, high: np.ndarray, T_world_from_local: np.ndarray) -> np.ndarray:
+    """The 8 world-frame corners (8, 3) of an axis-aligned local box."""
+    i = np.arange(8)
+    local = np.stack(
+        [
+            np.where(i & 1, high[0], low[0]),
+            np.where(i >> 1 & 1, high[1], low[1]),
+            np.where(i >> 2 & 1, high[2], low[2]),
+        ],
+        axis=-1,
+    )
+    return local @ T_world_from_local[:3, :3].T + T_world_from_local[:3, 3]
 
 
 def _local(position_m, mesh) -> np.ndarray:

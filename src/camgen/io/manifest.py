@@ -42,7 +42,7 @@ from camgen.errors import ConfigError
 from camgen.io.files import write_text_atomic
 
 if TYPE_CHECKING:
-    from camgen.plan.job import Job
+    from camgen.job import Job
 
 MANIFEST_NAME = "manifest.json"
 JOB_NAME = "job.json"

@@ -23,7 +23,7 @@ import numpy as np
 
 from camgen.annotate.boxes import Box, amodal_box, clip_box, mask_boxes, points_box, truncation, unique_edges
 from camgen.annotate.keypoints import keypoint_visibility
-from camgen.plan.job import CameraState
+from camgen.job import CameraState
 from camgen.plan.lens_stages import LensStages
 from camgen.plan.visibility import box_corners
 from camgen.render.renderer import Passes

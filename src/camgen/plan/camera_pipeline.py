@@ -25,6 +25,7 @@ import numpy as np
 
 from camgen.io.annotations import ANNOTATIONS_OF_DELIVERED_FRAMES
 from camgen.isp.pipeline import CameraIsp
+from camgen.job import CameraJob, CameraState, Job
 from camgen.optics.remap import (
     STACKED_ROWS_MAX,
     LensMapCache,
@@ -34,7 +35,6 @@ from camgen.optics.remap import (
     remap_mosaic,
     stack_channels,
 )
-from camgen.plan.job import CameraJob, CameraState, Job
 from camgen.plan.lens_stages import LensStages
 from camgen.plan.timing import StageClock
 from camgen.render.renderer import Passes

@@ -27,6 +27,7 @@ from camgen.config.scene import (
 from camgen.errors import ConfigError, Problem
 from camgen.io.annotations import ANNOTATIONS_OF_DELIVERED_FRAMES
 from camgen.isp.eptz import eptz_window_px, output_camera_matrix, window_centre_px
+from camgen.job import CameraJob, CameraState, Decision, Job, PlanSettings, RenderSpec, Stage
 from camgen.motion.pose import R_world_from_cam, T_world_from_cam, rot_z
 from camgen.motion.ptz import HeadTrack
 from camgen.motion.trajectory import Route, actor_routes
@@ -43,7 +44,6 @@ from camgen.optics.projection import LensInversionError
 from camgen.optics.remap import SUPPORT_PX, LensGeometry, border_points_px, source_overshoot_px
 from camgen.optics.vignetting import aperture_weight, relative_illumination
 from camgen.plan.budget import check_job_size
-from camgen.plan.job import CameraJob, CameraState, Decision, Job, PlanSettings, RenderSpec, Stage
 from camgen.plan.ptz import head_track, holding_track, installed_focal_length_mm
 from camgen.plan.visibility import Bounds, box_corners, local_bounds, placement, visible_depth_range_m
 from camgen.sensor.capture import NOISE_TERM_OFF, NOISE_TERMS, noise_term_is_on

@@ -26,10 +26,10 @@ from camgen.io.files import atomic_path, write_text_atomic
 from camgen.io.frames import write_depth, write_frame
 from camgen.io.manifest import write_manifest
 from camgen.isp.eptz import crop_and_scale
+from camgen.job import CameraJob, Job
 from camgen.optics.remap import LensMapCache
 from camgen.plan.annotations import Annotator
 from camgen.plan.camera_pipeline import CameraPipeline, cuts_reid_crops, frame_rng
-from camgen.plan.job import CameraJob, Job
 from camgen.plan.lens_stages import LensStages
 from camgen.plan.timing import StageClock, stage_sums
 from camgen.render.renderer import Passes, Renderer

@@ -19,12 +19,12 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from camgen.job import CameraJob, CameraState
 from camgen.optics.depth_of_field import disc_kernel, layered_blur, signed_coc_px
 from camgen.optics.diffraction import diffraction_blur
 from camgen.optics.intrinsics import corner_radius_normalized
 from camgen.optics.remap import LensGeometry, LensMapCache, LensMaps, output_grid_px, remap_image, remap_nearest
 from camgen.optics.vignetting import aperture_weight, relative_illumination
-from camgen.plan.job import CameraJob, CameraState
 from camgen.render.renderer import Passes
 from camgen.render.sequence import crop_to_output
 

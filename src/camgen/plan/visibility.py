@@ -5,26 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from camgen.config.placement import Bounds, local_bounds, placement
+from camgen.config.placement import Bounds, box_corners, local_bounds, placement
 
 __all__ = ["Bounds", "box_corners", "local_bounds", "placement", "visible_depth_range_m"]
 
-# The 6 faces of a box whose corners are indexed by bits (x, y, z) = (i & 1, i >> 1 & 1, i >> 2 & 1).
+# The 6 faces of a box whose corners are indexed by bits (x, y, z) = (i & 1, i >> 1 & 1, i >> 2 & 1), as
+# `box_corners` orders them.
 _BOX_FACES = ((0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4), (1, 3, 7, 5))
-
-
-def box_corners(low: np.ndarray, high: np.ndarray, T_world_from_local: np.ndarray) -> np.ndarray:
-    """The 8 world-frame corners (8, 3) of an axis-aligned local box."""
-    i = np.arange(8)
-    local = np.stack(
-        [
-            np.where(i & 1, high[0], low[0]),
-            np.where(i >> 1 & 1, high[1], low[1]),
-            np.where(i >> 2 & 1, high[2], low[2]),
-        ],
-        axis=-1,
-    )
-    return local @ T_world_from_local[:3, :3].T + T_world_from_local[:3, 3]
 
 
 def _clip(polygon: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:

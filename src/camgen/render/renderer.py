@@ -26,8 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
+from camgen.config.placement import box_corners
 from camgen.config.scene import MAX_LIGHTS
-from camgen.plan.visibility import box_corners
 from camgen.render.gl import pyrender
 
 from OpenGL import GL  # isort: skip — after camgen.render.gl, which selects the EGL platform

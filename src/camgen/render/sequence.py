@@ -27,12 +27,12 @@ import cv2
 import numpy as np
 
 from camgen.actors.character import CharacterRig
+from camgen.config.placement import box_corners, local_bounds, placement
 from camgen.config.scene import actor_shape
 from camgen.errors import ConfigError
+from camgen.job import CameraJob, CameraState, Job, RenderSpec
 from camgen.motion.pose import R_HEAD_FROM_CV, R_mount_from_head
 from camgen.optics.motion_blur import sub_frame_count, sub_frame_offsets
-from camgen.plan.job import CameraJob, CameraState, Job, RenderSpec
-from camgen.plan.visibility import box_corners, local_bounds, placement
 from camgen.render.renderer import Passes, Renderer, View, clip_planes_m
 from camgen.render.scene_graph import SceneGraph, build_scene_graph
 
