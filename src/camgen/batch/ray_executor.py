@@ -1,8 +1,9 @@
 """Batch jobs as Ray tasks: one task per job, on a local Ray or the cluster at an address.
 
-Each task runs the pool's `_render_job`, so it writes the same bytes. Ray reuses worker processes, so a
-worker keeps the one Renderer that `_render_job` opens on its first job. The output directory and the scenes
-must be on a filesystem that every node sees at the same path, and camgen must be installed on every node.
+Each task runs `render_job` (`camgen.batch.executor`), as the pool does, so it writes the same bytes. Ray
+reuses worker processes, so a worker keeps the one Renderer that `render_job` opens on its first job. The
+output directory and the scenes must be on a filesystem that every node sees at the same path, and camgen
+must be installed on every node.
 Ray's own task retries are off (``max_retries=0``): `run_batch` retries failed jobs itself.
 """
 
@@ -13,7 +14,7 @@ import socket
 import threading
 from collections.abc import Collection
 
-from camgen.batch.run import STOP_GRACE_S, JobResult, _error_text, _render_job
+from camgen.batch.executor import STOP_GRACE_S, JobResult, error_text, render_job
 from camgen.errors import ConfigError
 
 try:
@@ -27,7 +28,7 @@ CONNECT_TIMEOUT_S = 5.0
 FORCED_SETTLE_S = 5.0
 """After a stop, how long to wait for force-cancelled tasks (their workers killed) to settle."""
 
-_render_task = ray.remote(num_cpus=1, max_retries=0)(_render_job)
+_render_task = ray.remote(num_cpus=1, max_retries=0)(render_job)
 
 
 class RayExecutor:
@@ -50,9 +51,9 @@ class RayExecutor:
                 ray.init(address=address)
         except Exception as exc:  # Ray raises ConnectionError, RuntimeError, ValueError… for a bad address
             if address is None:
-                raise ConfigError(f"cannot start a local Ray ({_error_text(exc)}); its logs are in /tmp/ray") from exc
+                raise ConfigError(f"cannot start a local Ray ({error_text(exc)}); its logs are in /tmp/ray") from exc
             raise ConfigError(
-                f"--address {address}: cannot reach a Ray cluster ({_error_text(exc)}); start one with "
+                f"--address {address}: cannot reach a Ray cluster ({error_text(exc)}); start one with "
                 "`ray start --head` and pass its address, or leave out --address for a local Ray"
             ) from exc
         finally:
@@ -78,9 +79,9 @@ class RayExecutor:
         except RayTaskError as exc:
             if isinstance(exc.cause, KeyboardInterrupt):
                 return None
-            return 0, 0.0, _error_text(exc)
+            return 0, 0.0, error_text(exc)
         except RayError as exc:  # the worker died, or (after a cancel) the task never settled
-            return 0, 0.0, _error_text(exc)
+            return 0, 0.0, error_text(exc)
 
     def cancel(self, handles: Collection[ray.ObjectRef]) -> None:
         # As the pool does: each task is interrupted (KeyboardInterrupt: its job unwinds, deleting its temporary

@@ -1,9 +1,9 @@
 """Run compiled batch jobs on a local process pool or a Ray cluster: resumable, retried, interruptible.
 
-Both executors run the same `_render_job`, so they write the same bytes; the skip, retry, record and summary
-logic is shared (`run_batch` talks to a `JobExecutor`). Each worker process opens one OpenGL `Renderer` on
-its first job and keeps it for the rest (a context per process; the pool uses a "spawn" start, so no worker
-inherits the parent's OpenGL or thread state). A job whose
+Both executors run the same `render_job`, so they write the same bytes; the skip, retry, record and summary
+logic is shared (`run_batch` talks to a `JobExecutor`; both are in `camgen.batch.executor`). Each worker
+process opens one OpenGL `Renderer` on its first job and keeps it for the rest (a context per process; the
+pool uses a "spawn" start, so no worker inherits the parent's OpenGL or thread state). A job whose
 directory already holds a manifest that `verify` passes, for the same job hash and the same frames, is
 skipped. Anything else is rendered again: `execute` clears stale files and writes the manifest last,
 so a job that was killed half-way never looks complete.
@@ -19,38 +19,39 @@ from __future__ import annotations
 
 import json
 import multiprocessing
-import os
 import signal
-import sys
 import threading
 import time
-import traceback
 from collections.abc import Callable, Collection, Hashable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal, Protocol
+from typing import Literal
 
 import camgen
+from camgen.batch.executor import (
+    STOP_GRACE_S,
+    JobExecutor,
+    JobResult,
+    error_text,
+    first_frames,
+    init_pool_worker,
+    render_job,
+)
 from camgen.batch.expand import BatchJob
 from camgen.errors import ConfigError
 from camgen.io.files import write_text_atomic
 from camgen.io.manifest import JOB_NAME, read_manifest, verify
+from camgen.job import Job
 from camgen.plan.execute import job_directory_name, rendered_record
-from camgen.plan.job import Job
 
 BATCH_MANIFEST_NAME = "dataset.json"
 """The dataset-level record in the output directory. Not manifest.json: `camgen verify OUT` would take a
 directory with a manifest.json in it for a single job directory."""
 README_NAME = "DATASET.md"
 
-STOP_GRACE_S = 5.0
-"""After a stop, how long a worker has to unwind its job (deleting its temporary files) before it is killed."""
-
 Status = Literal["done", "skipped", "failed", "interrupted"]
-JobResult = tuple[int, float, str | None]
-"""What `_render_job` returns: (frames written, seconds, error text or None)."""
 
 
 @dataclass(frozen=True)
@@ -94,11 +95,6 @@ class BatchSummary:
         return not self.interrupted and all(o.status in ("done", "skipped") for o in self.outcomes)
 
 
-def first_frames(job: Job, frame_count: int | None) -> range | None:
-    """The frames a render of the first `frame_count` frames of `job` draws (None: all of them)."""
-    return None if frame_count is None or frame_count >= job.frame_count else range(frame_count)
-
-
 def frames_of(job: Job, frame_count: int | None) -> int:
     """Frames a render of `job` writes, over all its cameras, for the first `frame_count` (None: all)."""
     return len(job.cameras) * (job.frame_count if frame_count is None else min(frame_count, job.frame_count))
@@ -117,36 +113,6 @@ def is_complete(job: Job, job_dir: Path, frame_count: int | None) -> bool:
     return recorded == job.job_id and not verify(job_dir)
 
 
-class JobExecutor(Protocol):
-    """Where jobs run: submit `_render_job` calls, wait for some to finish, read their results, cancel.
-
-    Handles are whatever the executor returns from `submit` (a Future, a Ray ObjectRef); they must be hashable.
-    """
-
-    name: str
-    """Recorded in dataset.json: "local" or "ray"."""
-
-    def submit(self, job_json: str, out_dir: str, frames: int | None, scene_path: str) -> Hashable:
-        """Start `_render_job` with these arguments; return its handle."""
-        ...
-
-    def wait(self, handles: Collection[Hashable]) -> list[Hashable]:
-        """Block until at least one of `handles` has finished; return those that have."""
-        ...
-
-    def result(self, handle: Hashable) -> JobResult | None:
-        """(frames, seconds, error) of a finished job, or None if it was cancelled or interrupted. A worker
-        that died counts as the job's error."""
-        ...
-
-    def cancel(self, handles: Collection[Hashable]) -> None:
-        """After a stop: stop `handles`, the running ones included, within about `STOP_GRACE_S`, and wait until
-        each has settled, so `result` no longer blocks."""
-        ...
-
-    def close(self) -> None: ...
-
-
 class PoolExecutor:
     """Jobs on a local "spawn" process pool of `workers` processes."""
 
@@ -154,16 +120,16 @@ class PoolExecutor:
 
     def __init__(self, workers: int) -> None:
         self._pool = ProcessPoolExecutor(
-            max_workers=workers, mp_context=multiprocessing.get_context("spawn"), initializer=_init_worker
+            max_workers=workers, mp_context=multiprocessing.get_context("spawn"), initializer=init_pool_worker
         )
 
     def submit(self, job_json: str, out_dir: str, frames: int | None, scene_path: str) -> Future:
         # The pool starts its workers in submit. A signal mask outlives exec, so with SIGINT blocked here a
-        # worker starts with it blocked, until `_init_worker` ignores it: a Ctrl-C while the worker starts up
+        # worker starts with it blocked, until `init_pool_worker` ignores it: a Ctrl-C while the worker starts up
         # does not kill it with a traceback. (Here, the signal waits for the mask to be restored.)
         unblocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
         try:
-            return self._pool.submit(_render_job, job_json, out_dir, frames, scene_path)
+            return self._pool.submit(render_job, job_json, out_dir, frames, scene_path)
         except BrokenProcessPool as exc:  # a worker died hard (out of memory, a crash in the driver)
             failed: Future = Future()
             failed.set_exception(exc)
@@ -373,103 +339,8 @@ def _result(future: Future) -> JobResult:
     too) counts as the job's error. Workers ignore SIGINT, so no job ends in a KeyboardInterrupt."""
     exc = future.exception()
     if exc is not None:  # a broken pool or an unpicklable result: the job failed, the batch goes on
-        return 0, 0.0, _error_text(exc)
+        return 0, 0.0, error_text(exc)
     return future.result()
-
-
-def _error_text(exc: BaseException) -> str:
-    """The exception's type and the last line of its message."""
-    lines = str(exc).strip().splitlines()
-    return f"{type(exc).__name__}: {lines[-1]}" if lines else type(exc).__name__
-
-
-_worker_renderer = None
-"""The worker process's one Renderer, opened on its first job and kept until the process ends."""
-_in_job = False
-"""Whether this worker process is rendering a job now."""
-
-
-class _WorkerStop(BaseException):
-    """Raised in a pool worker by SIGTERM while it renders a job: unwinding the job deletes its temporary files.
-    Not an Exception, so that `_render` does not report it as the job's error."""
-
-
-def _init_worker() -> None:
-    """A pool worker's signals: SIGINT is the parent's to act on (Ctrl-C reaches the whole process group, and
-    the parent then stops the workers); SIGTERM stops the worker. SIGINT was blocked until now (see
-    `PoolExecutor.submit`); a SIGTERM before now ended the worker at once, before it had written anything."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, _stop_worker)
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
-    _stop_with_parent()
-
-
-PR_SET_PDEATHSIG = 1
-"""prctl(2) option: the signal the kernel sends this process when its parent dies (Linux)."""
-
-
-def _stop_with_parent() -> None:
-    """On Linux, ask the kernel for SIGTERM when the parent dies, so that a parent killed with SIGKILL (no
-    handler runs) leaves no worker rendering as an orphan; a parent that died before the request was made
-    is caught by the worker's parent no longer being the pid that started it. The kernel sends the signal
-    when the *thread* that started the worker ends: `run_batch` starts and waits for its workers in one
-    thread. Elsewhere nothing: the parent's handlers stop the workers."""
-    if not sys.platform.startswith("linux"):
-        return
-    import ctypes
-
-    parent = multiprocessing.parent_process()  # the pid the batch had when it started this worker
-    try:
-        if ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0) != 0:
-            return
-    except (OSError, AttributeError):
-        return
-    if parent is not None and os.getppid() != parent.pid:
-        os._exit(128 + signal.SIGTERM)
-
-
-def _stop_worker(signum: int, frame) -> None:
-    if _in_job:
-        raise _WorkerStop
-    os._exit(128 + signum)
-
-
-def _render_job(job_json: str, out_dir: str, frames: int | None, scene_path: str) -> JobResult:
-    """Runs in a worker: render one job; returns (frames, seconds, error text or None). A pool worker stopped
-    by SIGTERM exits from here, once the job has unwound (the pool's loop would go on to the next job)."""
-    global _in_job
-    try:
-        _in_job = True
-        try:
-            return _render(job_json, out_dir, frames, scene_path)
-        finally:
-            _in_job = False
-    except _WorkerStop:  # also when SIGTERM lands in the inner finally, before _in_job is False
-        os._exit(128 + signal.SIGTERM)
-
-
-def _render(job_json: str, out_dir: str, frames: int | None, scene_path: str) -> JobResult:
-    global _worker_renderer
-    from camgen.plan.execute import execute
-    from camgen.render.renderer import Renderer
-
-    started = time.perf_counter()
-    try:
-        if _worker_renderer is None:
-            _worker_renderer = Renderer()
-        job = Job.from_json(job_json)
-        results = execute(
-            job,
-            out_dir,
-            renderer=_worker_renderer,
-            frames=first_frames(job, frames),
-            resolve_path=Path(scene_path).resolve().parent.joinpath,
-        )
-    except Exception as exc:  # reported to the parent as this job's error, with the traceback's last frame
-        stack = traceback.extract_tb(exc.__traceback__)
-        where = f" (at {Path(stack[-1].filename).name}:{stack[-1].lineno})" if stack else ""
-        return 0, time.perf_counter() - started, _error_text(exc) + where
-    return sum(result.frames for result in results), time.perf_counter() - started, None
 
 
 def write_batch_record(summary: BatchSummary, out_dir: Path, frames: int | None, description: str) -> None:

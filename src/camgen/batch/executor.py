@@ -1,0 +1,163 @@
+"""Between `run_batch` and where its jobs run: the `JobExecutor` interface each executor implements, and
+`render_job`, what every executor runs in its worker for one job.
+
+`camgen.batch.run` schedules jobs (skip, retry, record, stop) through a `JobExecutor`; the local process
+pool (`camgen.batch.run.PoolExecutor`) and Ray (`camgen.batch.ray_executor.RayExecutor`) implement it,
+and both run the same `render_job`, so they write the same bytes. The executors import this module and
+nothing of `run`; `run` imports the Ray executor only when a batch asks for it.
+
+A worker process opens one OpenGL `Renderer` on its first job and keeps it for the rest (a context per
+process). A pool worker's signals (`init_pool_worker`): SIGINT is ignored (the parent decides), SIGTERM
+unwinds the running job, deleting its temporary files, and ends the worker.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import signal
+import sys
+import time
+import traceback
+from collections.abc import Collection, Hashable
+from pathlib import Path
+from typing import Protocol
+
+from camgen.job import Job
+
+STOP_GRACE_S = 5.0
+"""After a stop, how long a worker has to unwind its job (deleting its temporary files) before it is killed."""
+
+JobResult = tuple[int, float, str | None]
+"""What `render_job` returns: (frames written, seconds, error text or None)."""
+
+
+def first_frames(job: Job, frame_count: int | None) -> range | None:
+    """The frames a render of the first `frame_count` frames of `job` draws (None: all of them)."""
+    return None if frame_count is None or frame_count >= job.frame_count else range(frame_count)
+
+
+class JobExecutor(Protocol):
+    """Where jobs run: submit `render_job` calls, wait for some to finish, read their results, cancel.
+
+    Handles are whatever the executor returns from `submit` (a Future, a Ray ObjectRef); they must be hashable.
+    """
+
+    name: str
+    """Recorded in dataset.json: "local" or "ray"."""
+
+    def submit(self, job_json: str, out_dir: str, frames: int | None, scene_path: str) -> Hashable:
+        """Start `render_job` with these arguments; return its handle."""
+        ...
+
+    def wait(self, handles: Collection[Hashable]) -> list[Hashable]:
+        """Block until at least one of `handles` has finished; return those that have."""
+        ...
+
+    def result(self, handle: Hashable) -> JobResult | None:
+        """(frames, seconds, error) of a finished job, or None if it was cancelled or interrupted. A worker
+        that died counts as the job's error."""
+        ...
+
+    def cancel(self, handles: Collection[Hashable]) -> None:
+        """After a stop: stop `handles`, the running ones included, within about `STOP_GRACE_S`, and wait until
+        each has settled, so `result` no longer blocks."""
+        ...
+
+    def close(self) -> None: ...
+
+
+def error_text(exc: BaseException) -> str:
+    """The exception's type and the last line of its message."""
+    lines = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {lines[-1]}" if lines else type(exc).__name__
+
+
+_worker_renderer = None
+"""The worker process's one Renderer, opened on its first job and kept until the process ends."""
+_in_job = False
+"""Whether this worker process is rendering a job now."""
+
+
+class _WorkerStop(BaseException):
+    """Raised in a pool worker by SIGTERM while it renders a job: unwinding the job deletes its temporary files.
+    Not an Exception, so that `_render` does not report it as the job's error."""
+
+
+def init_pool_worker() -> None:
+    """A pool worker's signals: SIGINT is the parent's to act on (Ctrl-C reaches the whole process group, and
+    the parent then stops the workers); SIGTERM stops the worker. SIGINT was blocked until now (see
+    `camgen.batch.run.PoolExecutor.submit`); a SIGTERM before now ended the worker at once, before it had
+    written anything."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _stop_worker)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    _stop_with_parent()
+
+
+PR_SET_PDEATHSIG = 1
+"""prctl(2) option: the signal the kernel sends this process when its parent dies (Linux)."""
+
+
+def _stop_with_parent() -> None:
+    """On Linux, ask the kernel for SIGTERM when the parent dies, so that a parent killed with SIGKILL (no
+    handler runs) leaves no worker rendering as an orphan; a parent that died before the request was made
+    is caught by the worker's parent no longer being the pid that started it. The kernel sends the signal
+    when the *thread* that started the worker ends: `run_batch` starts and waits for its workers in one
+    thread. Elsewhere nothing: the parent's handlers stop the workers."""
+    if not sys.platform.startswith("linux"):
+        return
+    import ctypes
+
+    parent = multiprocessing.parent_process()  # the pid the batch had when it started this worker
+    try:
+        if ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0) != 0:
+            return
+    except (OSError, AttributeError):
+        return
+    if parent is not None and os.getppid() != parent.pid:
+        os._exit(128 + signal.SIGTERM)
+
+
+def _stop_worker(signum: int, frame) -> None:
+    if _in_job:
+        raise _WorkerStop
+    os._exit(128 + signum)
+
+
+def render_job(job_json: str, out_dir: str, frames: int | None, scene_path: str) -> JobResult:
+    """Runs in a worker: render one job; returns (frames, seconds, error text or None). A pool worker stopped
+    by SIGTERM exits from here, once the job has unwound (the pool's loop would go on to the next job)."""
+    global _in_job
+    try:
+        _in_job = True
+        try:
+            return _render(job_json, out_dir, frames, scene_path)
+        finally:
+            _in_job = False
+    except _WorkerStop:  # also when SIGTERM lands in the inner finally, before _in_job is False
+        os._exit(128 + signal.SIGTERM)
+
+
+def _render(job_json: str, out_dir: str, frames: int | None, scene_path: str) -> JobResult:
+    global _worker_renderer
+    from camgen.plan.execute import execute
+    from camgen.render.renderer import Renderer
+
+    started = time.perf_counter()
+    try:
+        if _worker_renderer is None:
+            _worker_renderer = Renderer()
+        job = Job.from_json(job_json)
+        results = execute(
+            job,
+            out_dir,
+            renderer=_worker_renderer,
+            frames=first_frames(job, frames),
+            resolve_path=Path(scene_path).resolve().parent.joinpath,
+        )
+    except Exception as exc:  # reported to the parent as this job's error, with the traceback's last frame
+        stack = traceback.extract_tb(exc.__traceback__)
+        where = f" (at {Path(stack[-1].filename).name}:{stack[-1].lineno})" if stack else ""
+        return 0, time.perf_counter() - started, error_text(exc) + where
+    return sum(result.frames for result in results), time.perf_counter() - started, None
