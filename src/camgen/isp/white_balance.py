@@ -110,7 +110,7 @@ def cfa_gain_image(gains_rgb: np.ndarray, cfa: str, height_px: int, width_px: in
     Returns
     -------
     (height_px, width_px) float32
-        Entry (y, x) = g_c with c the channel of site (y, x) (`camgen.isp.demosaic.cfa_channel_index`).
+        Entry (y, x) = g_c with c the channel of site (y, x) (`camgen.sensor.cfa.cfa_channel_index`).
 
     Raises
     ------

@@ -569,7 +569,7 @@ def _compile_camera(
             params={"supersampling": settings.supersampling, "static_background": static_background},
         )
     )
-    # Blur stages run on the margin-rendered pinhole image, before the remap (see `camgen.plan.optics`).
+    # Blur stages run on the margin-rendered pinhole image, before the remap (see `camgen.plan.lens_stages`).
     blur_stages = (
         (
             "optics.motion_blur",

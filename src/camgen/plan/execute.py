@@ -1,10 +1,17 @@
-"""Run a compiled Job: render each camera's planned passes and write what this version can write.
+"""Run a compiled Job: render each camera's planned passes, frame by frame, and write its outputs.
 
-Implemented so far: the render stage (ideal pinhole radiance, depth, ids), the camera model
-(`camgen.plan.camera_pipeline`: lens, sensor with auto-exposure, ISP), the video encoded with the
-profile's codec, and per-frame camera states (`camera.jsonl`). The annotation and file-output stages
-come with their issues; `unimplemented_stages` names those a job plans but this version skips, so
-callers can say so.
+Per frame: the ideal pinhole passes (radiance, depth, instance ids; `camgen.render.sequence`), the camera
+model (`camgen.plan.camera_pipeline`: lens, sensor with auto-exposure, ISP, a virtual PTZ's crop), then
+what the camera's stages ask for: the video in the profile's codec (``video.mp4``), frames (the 8-bit
+stream as PNG/TIFF, or the linear radiance as EXR), raw DNG, depth (16-bit PNG or EXR), annotations
+(`camgen.plan.annotations`: MOTChallenge with its img1 images and optional public detections, COCO,
+YOLO, Market-1501 re-ID crops) and the per-frame camera states (``camera.jsonl``).
+
+Each camera's folder is written as ``CAMERA.partial`` and renamed when the camera is complete (removed
+on any exception), so a render stopped part-way leaves no per-frame files; job.json and manifest.json
+are written last, so a job directory holding them holds a finished render. `IMPLEMENTED_STAGES` are the
+stages run here; `unimplemented_stages` names any other stage a job plans (a job compiled by another
+camgen version), so that callers can say it is skipped.
 """
 
 from __future__ import annotations
