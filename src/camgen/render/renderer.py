@@ -216,6 +216,21 @@ class _PassRenderer(pyrender.Renderer):
     def __init__(self):
         super().__init__(1, 1)
         self._program_cache = _LinearProgramCache()
+        self.shadow_focus_m: np.ndarray | None = None
+        """(N, 3) world points the current draw sees (its view frustum's corners); a sun's shadow map
+        covers only the part of the scene whose shadows can fall among them."""
+
+    def _get_light_cam_matrices(self, scene, light_node, flags):
+        """A sun's shadow camera fitted to what the draw sees (pyrender's covers a square twice the
+        scene's diagonal, wasting most of its texels): an orthographic box along the light whose
+        cross-section is the overlap, in the light's axes, of the scene's bounds and the view frustum,
+        and whose depth spans the whole scene (casters outside the view still cast into it)."""
+        light = light_node.light
+        if not isinstance(light, DirectionalLight):
+            return super()._get_light_cam_matrices(scene, light_node, flags)
+        return directional_shadow_matrices(
+            scene.get_pose(light_node)[:3, :3], box_corners(*scene.bounds, np.eye(4)), self.shadow_focus_m
+        )
 
     def _compute_max_n_lights(self, flags):
         """Room in the shader for the lights `camgen.config.scene.MAX_LIGHTS` allows (pyrender: 4 each).
@@ -413,7 +428,9 @@ class Renderer:
         renderer.check_light_counts(scene, flags)
         _upload_deformed(graph)
         renderer._update_context(scene, flags)
+        near_m, far_m = clip_range_m or _scene_clip_range_m(scene, view.T_world_from_cam)
         if flags != RenderFlags.NONE:
+            renderer.shadow_focus_m = seen_part_of_box_m(view, near_m, far_m, *scene.bounds)
             renderer.render_shadow_maps(scene, flags)
 
         size = (view.width_px, view.height_px)
@@ -429,12 +446,90 @@ class Renderer:
             target.bind()
             target.clear(graph.sky_luminance_cd_m2)
 
-        near_m, far_m = clip_range_m or _scene_clip_range_m(scene, view.T_world_from_cam)
         P = gl_projection(view.K_px, view.width_px, view.height_px, near_m, far_m)
         V = np.linalg.inv(pose_gl)
         renderer.forward(scene, nodes, graph.instance_ids, V, P, pose_gl[:3, 3], flags, lit)
         GL.glFlush()
         return target.read() if read else Passes()
+
+
+SHADOW_MARGIN_M = 0.5
+"""The fitted shadow box reaches this far beyond what the view and the scene's bounds require, m."""
+
+
+def frustum_corners_m(view: View, near_m: float, far_m: float) -> np.ndarray:
+    """(8, 3) world corners of a view's frustum between `near_m` and `far_m` (camera z)."""
+    K_inv = np.linalg.inv(view.K_px)
+    u = np.array([-0.5, view.width_px - 0.5])
+    v = np.array([-0.5, view.height_px - 0.5])
+    rays = np.array([K_inv @ (x, y, 1.0) for x in u for y in v])
+    camera = np.concatenate([rays * near_m, rays * far_m])
+    T = view.T_world_from_cam
+    return camera @ T[:3, :3].T + T[:3, 3]
+
+
+def seen_part_of_box_m(view: View, near_m: float, far_m: float, low_m, high_m) -> np.ndarray:
+    """(N, 3) the vertices of the part of the box [low_m, high_m] inside the view's frustum (the
+    intersection of two convex solids: of the points where three of their twelve bounding planes
+    meet, those inside all twelve); the frustum's corners when the two do not meet."""
+    corners = frustum_corners_m(view, near_m, far_m)
+    camera = view.T_world_from_cam[:3, 3]
+    # Frustum planes as a·x ≤ b: near, far, and the four sides through the camera centre.
+    near, far = corners[:4], corners[4:]
+    axis = view.T_world_from_cam[:3, 2]
+    normals, offsets = [-axis, axis], [-axis @ near[0], axis @ far[0]]
+    centre = corners.mean(axis=0)
+    for a, b in ((0, 1), (1, 3), (3, 2), (2, 0)):  # near corners in order (u, v): 00, 01, 10, 11
+        n = np.cross(near[a] - camera, near[b] - camera)
+        n = n if n @ (centre - camera) < 0 else -n
+        normals.append(n / np.linalg.norm(n))
+        offsets.append(normals[-1] @ camera)
+    for k in range(3):
+        e = np.zeros(3)
+        e[k] = 1.0
+        normals += [e, -e]
+        offsets += [float(high_m[k]), -float(low_m[k])]
+    A, b = np.array(normals), np.array(offsets)
+    triples = np.array([(i, j, k) for i in range(12) for j in range(i + 1, 12) for k in range(j + 1, 12)])
+    M, rhs = A[triples], b[triples]
+    solvable = np.abs(np.linalg.det(M)) > 1e-12
+    points = np.linalg.solve(M[solvable], rhs[solvable][..., None])[..., 0]
+    tolerance = 1e-6 * (1.0 + np.abs(b).max())
+    inside = points[np.all(points @ A.T <= b + tolerance, axis=1)]
+    return inside if len(inside) else corners
+
+
+def directional_shadow_matrices(
+    R_world_from_light: np.ndarray, scene_corners_m: np.ndarray, focus_m: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(V, P): view and orthographic projection of a sun's shadow map (OpenGL conventions; the light
+    looks down its −z axis, `R_world_from_light`'s third column pointing back towards the sun).
+
+    Across the light, the box is the overlap of the scene's bounds and the points `focus_m` (the
+    view's frustum), each as a rectangle in the light's x, y (so it holds every point the view sees
+    and every caster whose shadow can reach one); along it, the whole scene, so casters outside the
+    view still cast. A rectangle per axis, not a square: the texels are spent where they are seen."""
+    V = np.eye(4)
+    V[:3, :3] = R_world_from_light.T
+    scene_light = scene_corners_m @ V[:3, :3].T
+    low, high = scene_light.min(axis=0), scene_light.max(axis=0)
+    if focus_m is not None:
+        focus_light = np.asarray(focus_m) @ V[:3, :3].T
+        seen_low, seen_high = np.maximum(low, focus_light.min(axis=0)), np.minimum(high, focus_light.max(axis=0))
+        if np.all(seen_low[:2] < seen_high[:2]):
+            low[:2], high[:2] = seen_low[:2], seen_high[:2]
+    low, high = low - SHADOW_MARGIN_M, high + SHADOW_MARGIN_M
+    left, bottom, right, top = low[0], low[1], high[0], high[1]
+    near, far = -high[2], -low[2]  # the light looks down −z
+    P = np.array(
+        [
+            [2 / (right - left), 0, 0, -(right + left) / (right - left)],
+            [0, 2 / (top - bottom), 0, -(top + bottom) / (top - bottom)],
+            [0, 0, -2 / (far - near), -(far + near) / (far - near)],
+            [0, 0, 0, 1],
+        ]
+    )
+    return V, P
 
 
 def _upload_deformed(graph) -> None:

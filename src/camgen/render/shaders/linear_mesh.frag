@@ -307,6 +307,30 @@ float shadow_calc(mat4 light_matrix, sampler2D shadow_map, float nl)
     return shadow;
 }
 
+// camgen: a sun's shadow map is orthographic (camgen.render.renderer.directional_shadow_matrices), so
+// its bias is set in metres: 5 mm plus one and a half texels of the surface's depth slope, converted
+// to depth units through the map's own scale (rows of light_matrix = P·V, V a rotation). pyrender's
+// bias, 0.001 (1 − n·l) of the map's depth range, grew with the scene: tens of centimetres of
+// detached shadow on a large site.
+float shadow_calc_ortho(mat4 light_matrix, sampler2D shadow_map, float nl)
+{
+    vec4 proj_coords = vec4(light_matrix * vec4(frag_position.xyz, 1.0));
+    vec3 light_coords = proj_coords.xyz / proj_coords.w;
+    light_coords = light_coords * 0.5 + 0.5;
+    float scale_x = length(vec3(light_matrix[0][0], light_matrix[1][0], light_matrix[2][0]));
+    float scale_z = length(vec3(light_matrix[0][2], light_matrix[1][2], light_matrix[2][2]));
+    vec2 size = vec2(textureSize(shadow_map, 0));
+    float texel_m = 2.0 / (size.x * scale_x);
+    float tan_incidence = sqrt(max(1.0 - nl * nl, 0.0)) / max(nl, 0.1);
+    float bias_m = 0.005 + 1.5 * texel_m * tan_incidence;
+    float compare = light_coords.z - bias_m * 0.5 * scale_z;
+    float shadow = texture2DShadowLerp(shadow_map, size, light_coords.xy, compare);
+    if (light_coords.z > 1.0) {
+        shadow = 0.0;
+    }
+    return shadow;
+}
+
 ///////////////////////////////////////////////////////////////////////////////
 // MAIN
 ///////////////////////////////////////////////////////////////////////////////
@@ -366,7 +390,7 @@ void main()
         // Compute shadow
 #ifdef DIRECTIONAL_LIGHT_SHADOWS
         float nl = clamp(dot(n,l), 0.0, 1.0);
-        float shadow = shadow_calc(
+        float shadow = shadow_calc_ortho(
             directional_lights[i].light_matrix,
             directional_lights[i].shadow_map,
             nl

@@ -1,0 +1,87 @@
+"""Sun shadows land where the geometry of the sun puts them, at a resolution set by what the view
+sees, not by how big the scene is."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from camgen.render.renderer import View, directional_shadow_matrices, frustum_corners_m
+from tests.render.conftest import camera_matrix, look_at, scene_from
+
+pytestmark = pytest.mark.opengl
+
+CM_PER_PX = 1.0
+
+
+def _shadow_scene(ground_m: float, elevation_deg: float):
+    from camgen.render.scene_graph import build_scene_graph
+
+    return build_scene_graph(
+        scene_from(
+            environment={
+                "meshes": [
+                    {"type": "plane", "name": "ground", "size_m": [ground_m, ground_m]},
+                    {"type": "box", "name": "pole", "size_m": [0.1, 0.1, 3.0], "position_m": [0, 0, 1.5]},
+                ]
+            },
+            lights=[
+                {"type": "sun", "illuminance_lux": 50000, "azimuth_deg": 0.0, "elevation_deg": elevation_deg},
+                {"type": "ambient", "illuminance_lux": 5000},
+            ],
+        )
+    )
+
+
+def _overhead(centre_x_m: float) -> View:
+    """Straight down from 20 m onto (centre_x_m, 0), 1 cm per pixel at the ground, image x along world x."""
+    f_px = 20.0 * 100 / CM_PER_PX
+    T = look_at((centre_x_m, 0.0, 20.0), (centre_x_m, 0.0, 0.0))
+    return View(camera_matrix(f_px, f_px, 199.5, 99.5), T, 400, 200)
+
+
+@pytest.mark.parametrize("ground_m", [20.0, 400.0])
+def test_a_pole_casts_its_shadow_where_the_sun_puts_it(renderer, ground_m):
+    """A 3 m pole, 10 cm square, under a sun 40° high in the +x direction: its shadow runs along −x to
+    the shadow of the top's far edge, 0.05 + 3 / tan 40° = 3.63 m from the axis, 10 cm wide. On a
+    400 m ground, pyrender's own shadow box (a square twice the scene's diagonal over 2048 texels:
+    55 cm each) would blur the pole away; fitted to the view, the shadow's tip and width come out
+    within 2 and 3 cm on either ground."""
+    elevation = 40.0
+    graph = _shadow_scene(ground_m, elevation)
+    length_m = 3.0 / math.tan(math.radians(elevation))
+    view = _overhead(-length_m)  # the tip at the image centre
+    radiance = renderer.draw(graph, view, ("radiance",)).radiance
+    luminance = radiance @ np.array([0.2126, 0.7152, 0.0722])
+    lit = np.median(luminance)
+    shaded = luminance < 0.5 * lit
+    row = shaded[100]  # the image row through the pole's axis (world y = 0)
+    columns = np.flatnonzero(row)
+    # World x of a column: image x runs along world x; the image centre is at −length.
+    tip_x_m = -length_m + (columns.min() - 199.5) * CM_PER_PX / 100
+    assert tip_x_m == pytest.approx(-(0.05 + length_m), abs=0.02)
+    width_m = np.count_nonzero(shaded[:, 250]) * CM_PER_PX / 100  # across the shadow, 0.5 m from its tip
+    assert width_m == pytest.approx(0.1, abs=0.03)
+
+
+def test_the_shadow_box_holds_the_view_and_the_whole_scene_depth():
+    rng = np.random.default_rng(3)
+    scene = np.array([[x, y, z] for x in (-50, 50) for y in (-40, 40) for z in (0, 12)], float)
+    view = View(camera_matrix(1000, 1000, 639.5, 359.5), look_at((10, -5, 4), (12, 10, 0)), 1280, 720)
+    focus = frustum_corners_m(view, 0.05, 30.0)
+    towards_sun = np.array([0.3, -0.5, 0.8])
+    z = towards_sun / np.linalg.norm(towards_sun)
+    x = np.cross([0.0, 1.0, 0.0], z)
+    x /= np.linalg.norm(x)
+    R = np.column_stack([x, np.cross(z, x), z])
+    V, P = directional_shadow_matrices(R, scene, focus)
+    # Points the view sees inside the scene project inside the map, at depths within it.
+    inside = focus[np.all((focus >= scene.min(axis=0)) & (focus <= scene.max(axis=0)), axis=1)]
+    samples = np.concatenate([inside, rng.uniform(scene.min(axis=0), scene.max(axis=0), (200, 3))])
+    seen = samples[[np.all(np.abs((P @ V @ np.append(p, 1.0))[:2]) <= 1) for p in samples]]
+    ndc = np.array([P @ V @ np.append(p, 1.0) for p in np.concatenate([inside, scene])])
+    assert np.all(np.abs(ndc[: len(inside), :2]) <= 1.0)
+    assert np.all(np.abs(ndc[:, 2]) <= 1.0)  # every caster of the scene is within the depth range
+    assert len(seen) < len(samples)  # and the map does not cover the whole scene: it is fitted
