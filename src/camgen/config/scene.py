@@ -45,14 +45,30 @@ Speed = Annotated[
 """An actor's speed, m/s."""
 
 
+class SurfaceTexture(Model):
+    """A procedural texture over a plane's or a box's faces (`camgen.world.textures` cites sizes and
+    reflectances): the material's colour is its mean reflectance, the texture the variation around it."""
+
+    type: Literal["asphalt", "paving", "concrete", "grass", "gravel", "brick", "facade"]
+    seed: Annotated[int, Field(ge=0)] = 0
+    """Draws the texture's grain, patches and cracks; two surfaces with one seed look alike."""
+    tile_m: (
+        Annotated[float, Field(ge=0.5, le=100), Why("one repeat of a pattern: from 0.5 m to a 100 m site")] | None
+    ) = None
+    """Size of one repeat of the texture, m; null: the type's own (8 m of asphalt, 4 m of paving, …)."""
+
+
 class Material(Model):
     """A PBR metallic-roughness material; colours are linear (not sRGB-encoded) reflectances."""
 
     color_rgb: tuple[Fraction, Fraction, Fraction] = (0.5, 0.5, 0.5)
+    """Mean linear reflectance; with a texture and no colour given, the texture type's typical one."""
     roughness: Fraction = 0.8
     metallic: Fraction = 0.0
     emission_cd_m2: Luminance = 0.0
     """Luminance the surface emits by itself (signs, screens, lamps), cd/m²."""
+    texture: SurfaceTexture | None = None
+    """A procedural texture (planes and boxes; other shapes keep the plain colour)."""
 
 
 class Placement(Model):

@@ -52,6 +52,9 @@ from camgen.io.gltf import Character, load_character
 from camgen.motion.pose import T_world_from_cam, rot_z
 from camgen.motion.trajectory import Route, actor_routes
 from camgen.render.gl import pyrender
+from camgen.world.textures import TYPICAL_ALBEDO_RGB, encode_srgb8, surface_maps
+
+from OpenGL.GL import GL_REPEAT  # isort: skip — after camgen.render.gl, which selects the EGL platform
 
 CYLINDER_SECTIONS = 48
 SPHERE_SUBDIVISIONS = 3
@@ -167,8 +170,79 @@ def _plane(size_m: tuple[float, float]) -> trimesh.Trimesh:
     return trimesh.Trimesh(vertices, np.array([(0, 1, 2), (0, 2, 3)]), process=False)
 
 
+def _box_faces(size_m) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(positions (24, 3), normals (24, 3), texture coordinates in metres (24, 2), faces (12, 3)) of a
+    box centred on the origin: each face its own four vertices, its texture's u along the face's first
+    in-plane axis and v along the second (up the wall on the vertical faces)."""
+    half = np.asarray(size_m, dtype=np.float64) / 2
+    positions, normals, uvs, faces = [], [], [], []
+    # (normal axis, sign, u axis, v axis): v is z on the four walls.
+    for axis, sign, u_axis, v_axis in (
+        (0, 1, 1, 2),
+        (0, -1, 1, 2),
+        (1, 1, 0, 2),
+        (1, -1, 0, 2),
+        (2, 1, 0, 1),
+        (2, -1, 0, 1),
+    ):
+        base = len(positions)
+        for du, dv in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+            p = np.zeros(3)
+            p[axis], p[u_axis], p[v_axis] = sign * half[axis], du * half[u_axis], dv * half[v_axis]
+            positions.append(p)
+            n = np.zeros(3)
+            n[axis] = sign
+            normals.append(n)
+            uvs.append((p[u_axis] + half[u_axis], p[v_axis] + half[v_axis]))
+        # Counter-clockwise seen from outside.
+        outward = np.cross(positions[base + 1] - positions[base], positions[base + 2] - positions[base])
+        order = [(0, 1, 2), (0, 2, 3)] if outward @ normals[base] > 0 else [(0, 2, 1), (0, 3, 2)]
+        faces += [(base + a, base + b, base + c) for a, b, c in order]
+    return np.array(positions), np.array(normals), np.array(uvs), np.array(faces)
+
+
+def _textured(shape) -> pyrender.Mesh:
+    """A plane or a box with its material's procedural texture (`camgen.world.textures`): base colour
+    (the mean reflectance times the texture's variation, sRGB-encoded as glTF stores it), roughness
+    and metallic maps, repeated every `tile_m`, mipmapped and filtered trilinearly."""
+    material, texture = shape.material, shape.material.texture
+    if isinstance(shape, PlaneMesh):
+        hx, hy = shape.size_m[0] / 2, shape.size_m[1] / 2
+        positions = np.array([(-hx, -hy, 0.0), (hx, -hy, 0.0), (hx, hy, 0.0), (-hx, hy, 0.0)])
+        normals = np.tile((0.0, 0.0, 1.0), (4, 1))
+        uv_m = positions[:, :2] + (hx, hy)
+        faces = np.array([(0, 1, 2), (0, 2, 3)])
+    else:
+        positions, normals, uv_m, faces = _box_faces(shape.size_m)
+    maps = surface_maps(texture.type, texture.seed, texture.tile_m)
+    mean_rgb = material.color_rgb if "color_rgb" in material.model_fields_set else TYPICAL_ALBEDO_RGB[texture.type]
+    base = encode_srgb8(maps.albedo * np.asarray(mean_rgb, dtype=np.float32))
+    # glTF's metallic-roughness texture: roughness in G, metallic in B, scaled by the factors (1 here).
+    mr = np.zeros((*maps.roughness.shape, 3), dtype=np.uint8)
+    mr[..., 1] = np.round(np.clip(maps.roughness, 0, 1) * 255)
+    mr[..., 2] = np.round(np.clip(maps.metallic, 0, 1) * 255)
+    sampler = pyrender.Sampler(wrapS=GL_REPEAT, wrapT=GL_REPEAT)
+    pbr = pyrender.MetallicRoughnessMaterial(
+        baseColorFactor=(1.0, 1.0, 1.0, 1.0),
+        baseColorTexture=pyrender.Texture(source=base, source_channels="RGB", sampler=sampler),
+        metallicFactor=1.0,
+        roughnessFactor=1.0,
+        metallicRoughnessTexture=pyrender.Texture(source=mr, source_channels="RGB", sampler=sampler),
+        emissiveFactor=(material.emission_cd_m2,) * 3,
+        doubleSided=False,
+    )
+    # pyrender uploads the image flipped, so OpenGL's t = 1 is its row 0: t = 1 − v puts row 0 at v = 0.
+    texcoords = np.column_stack([uv_m[:, 0] / maps.tile_m, 1.0 - uv_m[:, 1] / maps.tile_m])
+    primitive = pyrender.Primitive(
+        positions=positions, normals=normals, texcoord_0=texcoords, indices=faces, material=pbr
+    )
+    return pyrender.Mesh(primitives=[primitive])
+
+
 def build_mesh(shape, resolve_path: Callable[[str], Path] | None = None) -> pyrender.Mesh:
     """A pyrender mesh in the shape's own frame (its placement goes on the node)."""
+    if isinstance(shape, PlaneMesh | BoxMesh) and shape.material.texture is not None:
+        return _textured(shape)
     material = _material(shape.material)
     if isinstance(shape, BoxMesh):
         return pyrender.Mesh.from_trimesh(trimesh.creation.box(extents=shape.size_m), material=material, smooth=False)
