@@ -1012,6 +1012,20 @@ CASES = [
         "seeds[1]",
         "must be a number, got 'x'",
     ),
+    (
+        "region_polygon_of_two_points",
+        "scene",
+        SCENE + "regions:\n  - {name: gate, polygon_m: [[0, 0], [1, 0]], required_class: detect} #<\n",
+        "regions[0].polygon_m",
+        "must have at least 3 corners [[x, y], …] to enclose an area, got 2",
+    ),
+    (
+        "region_unknown_required_class",
+        "scene",
+        SCENE + "regions:\n  - {name: gate, polygon_m: [[0, 0], [1, 0], [1, 1]], required_class: identity} #<\n",
+        "regions[0].required_class",
+        "must be one of 'detect', 'observe', 'recognise' or 'identify', got 'identity'",
+    ),
 ]
 
 

@@ -597,6 +597,26 @@ class Outputs(Model):
         return self
 
 
+class Region(Model):
+    """An area of interest on the ground (an entrance, a gate) and the IEC 62676-4 class it must be seen at
+    (`camgen.coverage`)."""
+
+    name: Name
+    polygon_m: list[Point2]
+    """[[x, y], …] corners of the polygon on the ground, m (at least 3; closed implicitly)."""
+    required_class: Literal["detect", "observe", "recognise", "identify"]
+    """The DORI class (IEC 62676-4) a person in the region must be seen at."""
+
+    @model_validator(mode="after")
+    def _check(self) -> Region:
+        if len(self.polygon_m) < 3:
+            raise invalid(
+                "polygon_m",
+                f"must have at least 3 corners [[x, y], …] to enclose an area, got {len(self.polygon_m)}; add corners",
+            )
+        return self
+
+
 class Scene(Model):
     description: str = ""
     duration_s: Annotated[float, Field(gt=0, le=86_400)]
@@ -614,6 +634,8 @@ class Scene(Model):
     actors: list[Actor] = []
     cameras: Annotated[list[Camera], Field(min_length=1)]
     outputs: Outputs = Outputs()
+    regions: list[Region] = []
+    """Areas of interest with the class they must be seen at (`camgen coverage`, `camgen layout`)."""
 
     @property
     def frame_count(self) -> int:
@@ -625,6 +647,7 @@ class Scene(Model):
             ("environment.meshes", self.environment.meshes),
             ("actors", self.actors),
             ("cameras", self.cameras),
+            ("regions", self.regions),
         ):
             seen: dict[str, int] = {}
             for i, item in enumerate(items):

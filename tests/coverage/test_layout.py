@@ -1,0 +1,69 @@
+"""Layout optimisation: the greedy's (1 − 1/e) guarantee and the online bound against brute force, the
+local search, and the CLI's scene fragment."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from camgen.cli.main import main
+from camgen.config.scene import Scene
+from camgen.coverage.layout import _gains, greedy, objective_m2, swap_search
+from tests.conftest import SCENE, write
+
+
+def test_greedy_and_swaps_against_brute_force_on_random_coverage():
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        meets = rng.random((9, 40)) < 0.25
+        weight = rng.uniform(0.5, 2.0, 40)
+        budget = 3
+        best = max(objective_m2(meets, s, weight, 0.0) for s in itertools.combinations(range(9), budget))
+        chosen = greedy(meets, budget, weight, 0.0)
+        value = objective_m2(meets, chosen, weight, 0.0)
+        assert value >= (1 - 1 / math.e) * best - 1e-9
+        improved = swap_search(meets, chosen, weight, 0.0)
+        assert objective_m2(meets, improved, weight, 0.0) >= value
+        count = meets[chosen].sum(axis=0)
+        bound = value + np.sort(_gains(meets, count, weight, 0.0))[::-1][:budget].sum()
+        assert bound >= best - 1e-9
+
+
+def test_handoff_weight_rewards_overlap():
+    meets = np.array([[1, 1, 0, 0], [1, 1, 0, 0], [0, 0, 1, 0]], dtype=bool)
+    weight = np.ones(4)
+    assert sorted(greedy(meets, 2, weight, 0.0)) == [0, 2]  # coverage alone: spread out
+    assert sorted(greedy(meets, 2, weight, 1.0)) == [0, 1]  # overlap worth as much: both on the same cells
+
+
+CANDIDATES = """\
+mounts:
+  - {name: south, position_m: [0, -9, 4], yaw_deg_range: [60, 120], pitch_deg_range: [-30, -10]}
+  - {name: east, kind: wall, position_m: [9, 0, 4], yaw_deg_range: [150, 210], pitch_deg_range: [-30, -10]}
+profiles: [fixed]
+yaw_step_deg: 30
+pitch_step_deg: 20
+"""
+REGION = "regions:\n  - {name: gate, polygon_m: [[-2, -2], [2, -2], [2, 2], [-2, 2]], required_class: observe}\n"
+
+
+def test_layout_cli_writes_a_scene_fragment_that_validates(workspace: Path, capsys):
+    scene = write(workspace, "scenes/lot.yaml", SCENE + REGION)
+    candidates = write(workspace, "candidates.yaml", CANDIDATES)
+    out = workspace / "layout"
+    assert (
+        main(["layout", str(scene), "--candidates", str(candidates), "--budget", "2", "-o", str(out), "--cell-m", "1"])
+        == 0
+    )
+    fragment = yaml.safe_load((out / "layout.yaml").read_text())
+    assert len(fragment["cameras"]) == 2
+    document = yaml.safe_load(scene.read_text()) | fragment
+    assert len(Scene.model_validate(document).cameras) == 2
+    assert (out / "layout.json").exists() and (out / "site_layout.png").exists()
+    assert "baseline" in capsys.readouterr().out
+    assert main(["layout", str(scene), "--candidates", str(candidates), "--budget", "0", "-o", str(out)]) == 2
+    assert "--budget must be ≥ 1 camera, got 0" in capsys.readouterr().err
