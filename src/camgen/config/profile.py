@@ -639,6 +639,12 @@ ZoomSweepTime = Annotated[
     Why("a zoom crosses its range in 1–10 s on real cameras, so at most 100 s"),
 ]
 """Time for a full zoom sweep, s."""
+CommandLatency = Annotated[
+    float,
+    Field(ge=0, le=5),
+    Why("IP PTZ heads start moving 50–200 ms after a command; over 5 s is no working camera"),
+]
+"""Time from a PTZ command to its head moving, s."""
 
 
 class Ptz(Model):
@@ -663,6 +669,11 @@ class Ptz(Model):
     """Time constant with which the focus follows the distance of the view after the head moves or
     zooms, s (first order in dioptres); 0 focuses instantly. Autofocus lag blurs the first frames
     after a zoom."""
+    command_latency_s: CommandLatency = 0.1
+    """Time from a command reaching the camera to its head starting to move, s (`camgen.sim`). 0.1 s is
+    a typical value, not a published one: IP PTZ heads take 50–200 ms to parse an ONVIF request and
+    pass it to the motor controller's command cycle, and no maker states it; measure a camera's own
+    as US 2016/0191858 A1 does (command time against the first frame whose pixels change)."""
 
     @model_validator(mode="after")
     def _check(self) -> Ptz:

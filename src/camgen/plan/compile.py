@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -26,9 +25,8 @@ from camgen.config.scene import (
 )
 from camgen.errors import ConfigError, Problem
 from camgen.io.annotations import ANNOTATIONS_OF_DELIVERED_FRAMES
-from camgen.isp.eptz import eptz_window_px, output_camera_matrix, window_centre_px
 from camgen.job import CameraJob, CameraState, Decision, Job, PlanSettings, RenderSpec, Stage
-from camgen.motion.pose import R_world_from_cam, T_world_from_cam, rot_z
+from camgen.motion.pose import T_world_from_cam, rot_z
 from camgen.motion.ptz import HeadTrack
 from camgen.motion.trajectory import Route, actor_routes
 from camgen.optics.diffraction import CHANNEL_WAVELENGTHS_UM
@@ -44,6 +42,8 @@ from camgen.optics.projection import LensInversionError
 from camgen.optics.remap import SUPPORT_PX, LensGeometry, border_points_px, source_overshoot_px
 from camgen.optics.vignetting import aperture_weight, relative_illumination
 from camgen.plan.budget import check_job_size
+from camgen.plan.camera_state import LensState as _LensState
+from camgen.plan.camera_state import camera_state, head_pose, lens_state
 from camgen.plan.ptz import head_track, holding_track, installed_focal_length_mm
 from camgen.plan.visibility import Bounds, box_corners, local_bounds, placement, visible_depth_range_m
 from camgen.sensor.capture import NOISE_TERM_OFF, NOISE_TERMS, noise_term_is_on
@@ -202,16 +202,6 @@ def _decision(stage: str, include: bool, force: bool, reason: str, **measure) ->
     return Decision(stage=stage, included=include, reason=reason, **measure)
 
 
-@dataclass(frozen=True)
-class _LensState:
-    """The lens at one focal length: what the per-frame states and the decisions need."""
-
-    focal_length_mm: float
-    f_number: float
-    distortion: np.ndarray
-    K: np.ndarray
-
-
 def _frame_track(scene: Scene, camera: Camera, profile: Profile, routes, file_bounds) -> tuple[HeadTrack, np.ndarray]:
     """Per-frame pan, tilt, zoom, their rates, the program's mode and target, and the focal length.
 
@@ -263,21 +253,15 @@ def _compile_camera(
     for focal_length_mm in focal_lengths_mm:
         key = round(float(focal_length_mm), 9)
         if key not in lens_of:
-            f_number, distortion = lens.at_focal_length(key)
-            K = profile.camera_matrix_px(key)
-            lens_of[key] = _LensState(key, f_number, distortion.as_array(), K)
+            lens_of[key] = lens_state(profile, key)
     frame_lens = [lens_of[round(float(f), 9)] for f in focal_lengths_mm]
     states_lens = list(lens_of.values())
-    m = camera.mount
     virtual = camera.eptz is not None  # the camera itself does not move
     view_keys = [
         (0.0, 0.0, ls.focal_length_mm) if virtual else (round(float(p), 9), round(float(t), 9), ls.focal_length_mm)
         for p, t, ls in zip(track.pan_deg, track.tilt_deg, frame_lens, strict=True)
     ]
-    pose_of = {
-        key: T_world_from_cam(m.position_m, R_world_from_cam(m.yaw_deg, m.pitch_deg, m.roll_deg, key[0], key[1]))
-        for key in dict.fromkeys(view_keys)
-    }
+    pose_of = {key: head_pose(camera, key[0], key[1]) for key in dict.fromkeys(view_keys)}
     exposure = profile.exposure
     frame_period_s = 1.0 / scene.fps
     exposure_longest_s = (
@@ -649,33 +633,24 @@ def _compile_camera(
     output_size = tuple(camera.eptz.output_size_px) if virtual else None
 
     def frame_state(k: int, ls: _LensState) -> CameraState:
-        applied = ls.distortion if include["optics.distortion"] else np.zeros(8)
-        window = output_K = None
-        if virtual:
-            centre = window_centre_px(float(track.pan_deg[k]), float(track.tilt_deg[k]), ls.K, applied)
-            window = eptz_window_px(centre, float(track.zoom_x[k]), (W, H), output_size)
-            output_K = tuple(map(tuple, output_camera_matrix(ls.K, window, output_size).tolist()))
-        return CameraState(
+        return camera_state(
             frame=k,
             time_s=float(times[k]),
             pan_deg=float(track.pan_deg[k]),
             tilt_deg=float(track.tilt_deg[k]),
             zoom_x=float(track.zoom_x[k]),
-            focal_length_mm=ls.focal_length_mm,
-            f_number=ls.f_number,
+            lens=ls,
+            T_world_from_cam_=pose_of[view_keys[k]],
             focus_distance_m=float(focus_per_frame[k]),
             exposure_time_s=exposure.exposure_time_s,
             gain_db=exposure.gain_db,
-            K_px=tuple(map(tuple, ls.K.tolist())),
-            distortion=tuple(float(x) for x in applied),
-            T_world_from_cam=tuple(map(tuple, pose_of[view_keys[k]].tolist())),
+            apply_distortion=include["optics.distortion"],
+            eptz_sizes_px=((W, H), output_size) if virtual else None,
             pan_deg_s=float(track.pan_deg_s[k]),
             tilt_deg_s=float(track.tilt_deg_s[k]),
             log_zoom_per_s=float(track.log_zoom_per_s[k]),
             ptz_mode=track.modes[k],
             follow_target=track.targets[k],
-            window_px=window,
-            output_K_px=output_K,
         )
 
     states = tuple(frame_state(k, ls) for k, ls in enumerate(frame_lens))
