@@ -63,7 +63,7 @@ environment:
       position_m: [0, 20, 1.5]
       material: {{color_rgb: [0.55, 0.5, 0.45]}}
 lights:
-  - {{type: ambient, illuminance_lux: 2000}}
+  - {{type: ambient, illuminance_lux: {illuminance_lux}}}
 actors:
   - name: walker
     class: person
@@ -79,7 +79,7 @@ cameras:
     profile: ptz
     mount: {{position_m: [0, -2, 3], yaw_deg: 90, pitch_deg: 0}}
     ptz:
-      pan_deg: 0
+      pan_deg: {dome_pan_deg}
       tilt_deg: -12
       zoom_x: 1.5
       presets:
@@ -103,11 +103,19 @@ def write_world(
     end_x_m: float = 8.0,
     speed_m_s: float = 1.5,
     program: str = "{type: hold}",
+    illuminance_lux: float = 2000.0,
+    dome_pan_deg: float = 0.0,
 ) -> Path:
     """The scene file (profiles beside it, in profiles/)."""
     write(directory, "profiles/ptz.yaml", PTZ_PROFILE)
     write(directory, "profiles/fixed.yaml", FIXED_PROFILE)
     text = SCENE.format(
-        duration_s=duration_s, start_x_m=start_x_m, end_x_m=end_x_m, speed_m_s=speed_m_s, program=program
+        duration_s=duration_s,
+        start_x_m=start_x_m,
+        end_x_m=end_x_m,
+        speed_m_s=speed_m_s,
+        program=program,
+        illuminance_lux=illuminance_lux,
+        dome_pan_deg=dome_pan_deg,
     )
     return write(directory, "world.yaml", text)

@@ -118,3 +118,32 @@ def test_bad_commands_are_clear_errors_and_the_world_keeps_running(world, render
         }
         with pytest.raises(CommandError, match="is a fixed camera"):
             sim.status("overview")
+
+
+def _crate_edge_width_px(rgb8: np.ndarray) -> int:
+    """Columns over which the blue crate's right edge rises from 10 % to 90 % of its step (blue minus
+    red, averaged over the crate's rows; the crate fills columns ~0–40 of the dome's view at pan 5°)."""
+    rows = rgb8[20:55, :80].astype(np.float32)
+    profile = (rows[..., 2] - rows[..., 0]).mean(axis=0)
+    crate, ground = profile[10:38].mean(), profile[50:80].mean()
+    step = (profile[20:70] - ground) / (crate - ground)
+    return int(np.sum((step > 0.1) & (step < 0.9)))
+
+
+def test_a_turning_head_blurs_its_frames_along_the_turn(renderer, tmp_path):
+    # Dusk (20 lux): auto-exposure opens to ~7.6 ms, over which the full-speed pan sweeps ~6.6 px.
+    dusk = write_world(tmp_path, illuminance_lux=20.0, duration_s=2.5, dome_pan_deg=-30.0)
+    with Simulation(dusk, renderer=renderer, cameras=["dome"]) as sim:
+        sim.reset()
+        for _ in range(7):  # 0.1 s latency, then 0.5 s (25°) to the full 100°/s: the crate is in view
+            turning = sim.step({"dome": ContinuousMove(pan=1.0)})["dome"]
+        assert turning.state.pan_deg_s == pytest.approx(100.0)
+        sim.step({"dome": AbsoluteMove(pan_deg=turning.state.pan_deg)})
+        still = sim.step()["dome"]
+        while still.status.pan_tilt == "MOVING" and still.frame < 24:  # brakes from 100°/s, comes back
+            still = sim.step()["dome"]
+        assert still.status.pan_tilt == "IDLE" and still.state.pan_deg == pytest.approx(turning.state.pan_deg, abs=0.01)
+    # The same view: a box blur of length L = f·ω·t_exposure along the pan rises 10–90 % over 0.8·L.
+    sweep_px = turning.state.K_px[0][0] * np.radians(100.0) * turning.state.exposure_time_s
+    assert _crate_edge_width_px(turning.rgb8) == pytest.approx(0.8 * sweep_px, abs=1.5)
+    assert _crate_edge_width_px(still.rgb8) <= 2

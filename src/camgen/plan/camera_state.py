@@ -9,6 +9,7 @@ held head renders.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,6 +18,7 @@ from camgen.config.profile import Profile
 from camgen.config.scene import Camera
 from camgen.isp.eptz import eptz_window_px, output_camera_matrix, window_centre_px
 from camgen.motion.pose import R_world_from_cam, T_world_from_cam
+from camgen.optics.intrinsics import corner_radius_normalized, corner_radius_px
 from camgen.plan.job import CameraState
 
 
@@ -110,3 +112,20 @@ def camera_state(
         window_px=window,
         output_K_px=output_K,
     )
+
+
+def camera_image_speed_px_s(
+    pan_deg_s: float, tilt_deg_s: float, log_zoom_per_s: float, K: np.ndarray, width_px: int, height_px: int
+) -> float:
+    """Image speed of the farthest pixel while the head pans, tilts and zooms at these rates, px/s.
+
+    A rotation at angular speed ω moves the image point at normalised radius r by at most f·ω·(1 + r²)
+    (pan and tilt turn about perpendicular axes, so ω = √(pan rate² + tilt rate²)); a zoom at rate
+    d ln f/dt moves it by its distance from the principal point times that rate.
+    """
+    if pan_deg_s == 0 and tilt_deg_s == 0 and log_zoom_per_s == 0:
+        return 0.0
+    omega_rad_s = math.radians(math.hypot(pan_deg_s, tilt_deg_s))
+    corner_norm = corner_radius_normalized(K, width_px, height_px)
+    rotation = max(K[0, 0], K[1, 1]) * omega_rad_s * (1.0 + corner_norm**2)
+    return rotation + corner_radius_px(K, width_px, height_px) * abs(log_zoom_per_s)

@@ -43,7 +43,7 @@ from camgen.optics.remap import SUPPORT_PX, LensGeometry, border_points_px, sour
 from camgen.optics.vignetting import aperture_weight, relative_illumination
 from camgen.plan.budget import check_job_size
 from camgen.plan.camera_state import LensState as _LensState
-from camgen.plan.camera_state import camera_state, head_pose, lens_state
+from camgen.plan.camera_state import camera_image_speed_px_s, camera_state, head_pose, lens_state
 from camgen.plan.ptz import head_track, holding_track, installed_focal_length_mm
 from camgen.plan.visibility import Bounds, box_corners, local_bounds, placement, visible_depth_range_m
 from camgen.sensor.capture import NOISE_TERM_OFF, NOISE_TERMS, noise_term_is_on
@@ -61,7 +61,7 @@ def _path_positions(route: Route, times_s: np.ndarray) -> tuple[np.ndarray, np.n
     return route.at(times_s)
 
 
-def _actor_swept_boxes(actor: Actor, route: Route, file_bounds, duration_s: float) -> list[np.ndarray]:
+def actor_swept_boxes(actor: Actor, route: Route, file_bounds, duration_s: float) -> list[np.ndarray]:
     """World corners of boxes that contain everything the actor occupies during the sequence.
 
     Along one straight leg the actor's box slides along its heading, so the volume it sweeps is its
@@ -160,21 +160,18 @@ def _actor_motion_px(
 
 
 def _camera_motion_px(track: HeadTrack, frame: int, K: np.ndarray, width_px: int, height_px: int) -> float:
-    """Image speed of the farthest pixel while the head pans, tilts and zooms at frame `frame`, px/s.
-
-    A rotation at angular speed ω moves the image point at normalised radius r by at most f·ω·(1 + r²)
-    (pan and tilt turn about perpendicular axes, so ω = √(pan rate² + tilt rate²)); a zoom at rate
-    d ln f/dt moves it by its distance from the principal point times that rate.
-    """
-    if track.pan_deg_s[frame] == 0 and track.tilt_deg_s[frame] == 0 and track.log_zoom_per_s[frame] == 0:
-        return 0.0
-    omega_rad_s = math.radians(math.hypot(track.pan_deg_s[frame], track.tilt_deg_s[frame]))
-    corner_norm = corner_radius_normalized(K, width_px, height_px)
-    rotation = max(K[0, 0], K[1, 1]) * omega_rad_s * (1.0 + corner_norm**2)
-    return rotation + corner_radius_px(K, width_px, height_px) * abs(track.log_zoom_per_s[frame])
+    """Image speed of the farthest pixel while the head pans, tilts and zooms at frame `frame`, px/s."""
+    return camera_image_speed_px_s(
+        float(track.pan_deg_s[frame]),
+        float(track.tilt_deg_s[frame]),
+        float(track.log_zoom_per_s[frame]),
+        K,
+        width_px,
+        height_px,
+    )
 
 
-def _focus_distance_m(
+def focus_distance_m(
     camera: Camera, profile: Profile, focal_length_mm: float, f_number: float, depth_range: tuple[float, float] | None
 ) -> tuple[float, str]:
     """Where the lens is focused, and why.
@@ -340,7 +337,7 @@ def _compile_camera(
         )
     focus_wanted, focus_reasons = [], []
     for key, ls in zip(view_keys, frame_lens, strict=True):
-        focus_m, focus_reason = _focus_distance_m(camera, profile, ls.focal_length_mm, ls.f_number, depth_of_view[key])
+        focus_m, focus_reason = focus_distance_m(camera, profile, ls.focal_length_mm, ls.f_number, depth_of_view[key])
         focus_wanted.append(focus_m)
         focus_reasons.append(focus_reason)
     autofocus_s = profile.ptz.autofocus_time_s if profile.ptz is not None else 0.0
@@ -801,7 +798,7 @@ def compile(
     actor_boxes = [
         box
         for actor in scene.actors
-        for box in _actor_swept_boxes(actor, routes[actor.name], file_bounds, scene.duration_s)
+        for box in actor_swept_boxes(actor, routes[actor.name], file_bounds, scene.duration_s)
     ]
     cameras = tuple(
         _compile_camera(

@@ -14,9 +14,12 @@ Determinism: the world (actors) is a function of time, and each frame's noise co
 `frame_rng(seed, camera, frame)`, so the same seed and the same commands give byte-identical frames;
 with no commands the frames are those ``camgen render`` writes for the scene with its heads held.
 
-Not yet modelled (issue 21): camera motion blur while a head turns (a turning head's frame is sharp
-unless the plan blurs for moving actors, and then only for them); the render margin is the start
-zoom's, so a lens whose distortion grows as it zooms may sample beyond it at other zooms.
+A turning head blurs its frames as a programmed one does: each mechanical PTZ camera's job carries a
+motion-blur stage whose per-frame camera motion the simulation fills in from the head's rates before
+the frame is drawn (zero while the head rests, which draws one sub-frame, exactly as the plan).
+
+Not yet modelled (issue 21): the render margin is the start zoom's, so a lens whose distortion grows
+as it zooms may sample beyond it at other zooms.
 """
 
 from __future__ import annotations
@@ -39,9 +42,9 @@ from camgen.motion.trajectory import actor_routes
 from camgen.optics.remap import LensMapCache
 from camgen.plan.annotations import Annotator, FrameAnnotations
 from camgen.plan.camera_pipeline import CameraPipeline, frame_rng
-from camgen.plan.camera_state import camera_state, head_pose, lens_state
-from camgen.plan.compile import _actor_swept_boxes, _focus_distance_m, compile
-from camgen.plan.job import CameraJob, CameraState, Job, PlanSettings
+from camgen.plan.camera_state import camera_image_speed_px_s, camera_state, head_pose, lens_state
+from camgen.plan.compile import MOTION_SAMPLE_STEP_PX, MOTION_SAMPLES_MAX, actor_swept_boxes, compile, focus_distance_m
+from camgen.plan.job import CameraJob, CameraState, Job, PlanSettings, Stage
 from camgen.plan.ptz import eptz_limits, head_limits, installed_focal_length_mm
 from camgen.plan.visibility import box_corners, local_bounds, placement, visible_depth_range_m
 from camgen.render.renderer import Passes, Renderer
@@ -182,7 +185,7 @@ class Simulation:
             if not (isinstance(width_px, int) and isinstance(height_px, int) and width_px >= 2 and height_px >= 2):
                 raise ConfigError(f"resolution_px must be two whole numbers ≥ 2 (W, H), got {resolution_px!r}")
             profiles = {name: _binned(profile, (width_px, height_px)) for name, profile in profiles.items()}
-        self.job: Job = compile(
+        job = compile(
             held,
             profiles,
             scene_name=loaded.name,
@@ -190,6 +193,12 @@ class Simulation:
             settings=settings,
             file_bounds=loaded.file_bounds,
         )
+        # The plan saw held heads; a commanded head turns, so its frames integrate the turn (below).
+        self._camera_blur_px: dict[int, tuple[list[float], float]] = {}
+        """Per mechanical PTZ camera: its blur stage's per-frame camera motion (px) and the exposure it
+        is measured over, s."""
+        blurred = tuple(self._with_camera_blur(i, camera, held, job) for i, camera in enumerate(job.cameras))
+        self.job: Job = job.model_copy(update={"cameras": blurred})
         self.scene = held
         self.fps = self.job.fps
         self.frame_count = self.job.frame_count
@@ -210,7 +219,7 @@ class Simulation:
         ] + [
             box
             for actor in held.actors
-            for box in _actor_swept_boxes(actor, routes[actor.name], loaded.file_bounds, held.duration_s)
+            for box in actor_swept_boxes(actor, routes[actor.name], loaded.file_bounds, held.duration_s)
         ]
         self.seed = self.job.seed
         self.frame = -1
@@ -333,6 +342,44 @@ class Simulation:
                 accepted.append((index, command, where))
         return accepted
 
+    def _with_camera_blur(self, index: int, camera_job: CameraJob, scene: Scene, job: Job) -> CameraJob:
+        """A mechanical PTZ camera's job with a motion-blur stage whose per-frame camera motion the
+        simulation fills in from the head's rates as it goes (zero until the head turns, which draws
+        exactly what the plan draws: one sub-frame when nothing moves)."""
+        camera = scene.cameras[index]
+        if camera.ptz is None or camera.eptz is not None or "radiance" not in camera_job.render.passes:
+            return camera_job
+        stages = list(camera_job.stages)
+        names = [stage.name for stage in stages]
+        blur = [0.0] * job.frame_count
+        if "optics.motion_blur" in names:
+            planned = stages[names.index("optics.motion_blur")]
+            stages[names.index("optics.motion_blur")] = Stage(
+                name=planned.name, passes=planned.passes, params={**planned.params, "camera_motion_px": blur}
+            )
+        else:
+            exposure = camera_job.profile.exposure
+            longest_s = (
+                exposure.exposure_time_s
+                if exposure.mode == "manual"
+                else min(exposure.exposure_time_max_s, 1.0 / job.fps)
+            )
+            params = {
+                "displacement_max_px": 0.0,
+                "camera_motion_px": blur,
+                "exposure_longest_s": longest_s,
+                "sample_step_px": MOTION_SAMPLE_STEP_PX,
+                "samples_max": MOTION_SAMPLES_MAX,
+                "threshold_px": job.settings.blur_diameter_threshold_px,
+            }
+            stages.insert(
+                names.index("render") + 1, Stage(name="optics.motion_blur", passes=("radiance",), params=params)
+            )
+        updated = camera_job.model_copy(update={"stages": tuple(stages)})
+        params = next(stage for stage in updated.stages if stage.name == "optics.motion_blur").params
+        self._camera_blur_px[index] = params["camera_motion_px"], params["exposure_longest_s"]
+        return updated
+
     def _head(self, camera_job: CameraJob) -> CommandedHead | None:
         camera = self.scene.cameras[self._cameras[camera_job.name]]
         settings = camera.head
@@ -409,7 +456,7 @@ class Simulation:
             camera_job.width_px + left + right,
             camera_job.height_px + top + bottom,
         )
-        wanted_m, _ = _focus_distance_m(camera, profile, lens.focal_length_mm, lens.f_number, depth_range)
+        wanted_m, _ = focus_distance_m(camera, profile, lens.focal_length_mm, lens.f_number, depth_range)
         time_constant_s = profile.ptz.autofocus_time_s if profile.ptz is not None else 0.0
         automatic = camera.focus_distance_m is None and profile.lens.focus_distance_m is None
         if not automatic or time_constant_s <= 0:
@@ -432,6 +479,17 @@ class Simulation:
         state = planned.model_copy(
             update={"exposure_time_s": pipeline.setting.exposure_time_s, "gain_db": pipeline.setting.gain_db}
         )
+        if index in self._camera_blur_px:  # the head's turn during the longest exposure, as the plan measures it
+            blur_px, longest_s = self._camera_blur_px[index]
+            speed_px_s = camera_image_speed_px_s(
+                state.pan_deg_s,
+                state.tilt_deg_s,
+                state.log_zoom_per_s,
+                np.array(state.K_px),
+                camera_job.width_px,
+                camera_job.height_px,
+            )
+            blur_px[self.frame] = round(speed_px_s * longest_s, 3)
         frame = drawer.frame(self.frame, state)
         if (
             self.frame == 0
