@@ -202,7 +202,12 @@ Light = Annotated[SunLight | PointLight | SpotLight | AmbientLight, Field(discri
 
 class Environment(Model):
     sky_luminance_cd_m2: Luminance = 0.0
-    """Luminance of the background where no geometry is hit, cd/m² (clear day sky ≈ 5000)."""
+    """Luminance of the background where no geometry is hit, cd/m² (clear day sky ≈ 5000); for a CIE
+    sky (`sky`), the zenith's."""
+    sky: Literal["uniform", "clear", "partly_cloudy", "overcast"] = "uniform"
+    """How the sky's luminance and colour vary over it: one luminance everywhere, or a CIE standard
+    general sky (`camgen.world.sky`: clear, type 12; partly cloudy, type 7; overcast, type 1) whose
+    sun is the scene's sun light."""
     meshes: list[Mesh] = []
     shadows: bool = True
     """Sun and spot lights cast shadows (shadow maps); point lights never do. Shadows of moving actors
@@ -673,6 +678,14 @@ class Scene(Model):
                     f"cameras[{i}].{'ptz' if camera.ptz is not None else 'eptz'}.program.target",
                     f"names actor {program.target!r}, which the scene does not have (actors: {known})",
                 )
+        if self.environment.sky in ("clear", "partly_cloudy") and not any(
+            light.type == "sun" for light in self.lights
+        ):
+            raise invalid(
+                "environment.sky",
+                f"is {self.environment.sky}, a sky lit by the sun, but the scene has no sun light to place it; "
+                "add a {type: sun, …} light, or use sky: overcast or uniform",
+            )
         for kind, limit in MAX_LIGHTS.items():
             indices = [i for i, light in enumerate(self.lights) if light.type == kind]
             if len(indices) > limit:

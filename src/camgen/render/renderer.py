@@ -139,6 +139,8 @@ class _Framebuffer:
 
     def __init__(self, width_px: int, height_px: int, passes: tuple[str, ...]):
         self.width_px, self.height_px, self.passes = width_px, height_px, passes
+        self.sky_mask: np.ndarray | None = None
+        """(H, W) bool after a `read` of radiance: where no surface was drawn (the sky)."""
         self.fbo = GL.glGenFramebuffers(1)
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.fbo)
         self.renderbuffers = []
@@ -166,7 +168,8 @@ class _Framebuffer:
 
     def clear(self, sky_luminance_cd_m2: float) -> None:
         if "radiance" in self.passes:
-            GL.glClearBufferfv(GL.GL_COLOR, 0, np.array([sky_luminance_cd_m2] * 3 + [1.0], np.float32))
+            # Alpha 0 marks the sky: every surface drawn writes alpha 1 (`read` returns the mask).
+            GL.glClearBufferfv(GL.GL_COLOR, 0, np.array([sky_luminance_cd_m2] * 3 + [0.0], np.float32))
         if "depth_m" in self.passes:
             GL.glClearBufferfv(GL.GL_COLOR, 1, np.full(4, _NO_DEPTH, np.float32))
         if "instance_id" in self.passes:
@@ -193,8 +196,10 @@ class _Framebuffer:
         for name in self.passes:
             GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT0 + PASSES.index(name))
             if name == "radiance":
-                data = GL.glReadPixels(0, 0, w, h, GL.GL_RGB, GL.GL_FLOAT)
-                out.radiance = np.frombuffer(data, np.float32).reshape(h, w, 3)
+                data = GL.glReadPixels(0, 0, w, h, GL.GL_RGBA, GL.GL_FLOAT)
+                rgba = np.frombuffer(data, np.float32).reshape(h, w, 4)
+                out.radiance = np.ascontiguousarray(rgba[..., :3])
+                self.sky_mask = rgba[..., 3] == 0.0
             elif name == "depth_m":
                 data = GL.glReadPixels(0, 0, w, h, GL.GL_RED, GL.GL_FLOAT)
                 depth = np.frombuffer(data, np.float32).reshape(h, w).copy()
@@ -450,7 +455,38 @@ class Renderer:
         V = np.linalg.inv(pose_gl)
         renderer.forward(scene, nodes, graph.instance_ids, V, P, pose_gl[:3, 3], flags, lit)
         GL.glFlush()
-        return target.read() if read else Passes()
+        if not read:
+            return Passes()
+        out = target.read()
+        if out.radiance is not None and getattr(graph, "sky", "uniform") != "uniform" and target.sky_mask.any():
+            out.radiance[target.sky_mask] = sky_view(graph, view)[target.sky_mask]
+        return out
+
+
+SKY_STEP_PX = 8
+"""The sky is evaluated every this many pixels and interpolated (it varies smoothly over degrees)."""
+
+
+def sky_view(graph, view: View) -> np.ndarray:
+    """(H, W, 3) radiance of the graph's CIE sky through each pixel of `view` (`camgen.world.sky`),
+    evaluated on a grid every `SKY_STEP_PX` pixels and interpolated bilinearly."""
+    import cv2
+
+    from camgen.world.sky import sky_radiance
+
+    w, h = view.width_px, view.height_px
+    us = np.append(np.arange(0, w, SKY_STEP_PX), w - 1).astype(np.float64)
+    vs = np.append(np.arange(0, h, SKY_STEP_PX), h - 1).astype(np.float64)
+    uu, vv = np.meshgrid(us, vs)
+    rays_cam = np.stack([uu, vv, np.ones_like(uu)], axis=-1) @ np.linalg.inv(view.K_px).T
+    rays = rays_cam @ view.T_world_from_cam[:3, :3].T
+    sun = graph.sun_direction if graph.sun_direction is not None else np.array([0.0, 0.0, 1.0])
+    coarse = sky_radiance(rays, sun, graph.sky, graph.sky_luminance_cd_m2)
+    # Interpolate onto every pixel: the grid's nodes sit at pixels us × vs.
+    map_u = np.interp(np.arange(w), us, np.arange(len(us))).astype(np.float32)
+    map_v = np.interp(np.arange(h), vs, np.arange(len(vs))).astype(np.float32)
+    mx, my = np.meshgrid(map_u, map_v)
+    return cv2.remap(coarse, mx, my, cv2.INTER_LINEAR)
 
 
 SHADOW_MARGIN_M = 0.5

@@ -9,7 +9,8 @@ luminance in cd/m² once gamma and clamping are removed (`camgen.render.renderer
 - ambient: a uniform sky of illuminance E lux lights a Lambertian surface of reflectance ρ to
   L = ρ·E/π cd/m²; pyrender adds base_colour × ambient_light, so ambient_light = E/π;
 - emission: ``emission_cd_m2`` is added as it is (white);
-- sky: pixels that hit no geometry get ``sky_luminance_cd_m2`` (the renderer's clear value).
+- sky: pixels that hit no geometry get ``sky_luminance_cd_m2`` (the renderer's clear value), or, for a
+  CIE sky, the luminance and colour of the sky in their direction (`camgen.world.sky`).
 
 Instance ids: actors take 1…A in scene order (so an actor's id is its track id), environment meshes
 A+1…A+M; 0 is the background. Ids are 32-bit, so any realistic number of instances fits.
@@ -80,6 +81,10 @@ class SceneGraph:
     instances: tuple[Instance, ...]
     sky_luminance_cd_m2: float
     shadows: bool
+    sky: str = "uniform"
+    """"uniform", or a CIE sky type of `camgen.world.sky` (then `sky_luminance_cd_m2` is the zenith's)."""
+    sun_direction: np.ndarray | None = None
+    """Unit vector towards the (first) sun light, world; None without one."""
     actor_local_poses: list[np.ndarray] = field(default_factory=list)
     actor_routes: list[Route] = field(default_factory=list)
     """Each actor's route (its path, or its random walk resolved once), in the order of `actors`."""
@@ -355,11 +360,20 @@ def _look_along(direction: np.ndarray, position=(0.0, 0.0, 0.0)) -> np.ndarray:
     return T_world_from_cam(position, np.column_stack([x, np.cross(z, x), z]))
 
 
+def _towards_sun(light: SunLight) -> np.ndarray:
+    az, el = math.radians(light.azimuth_deg), math.radians(light.elevation_deg)
+    return np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+
+
+def _sun_direction(lights) -> np.ndarray | None:
+    suns = [light for light in lights if isinstance(light, SunLight)]
+    return _towards_sun(suns[0]) if suns else None
+
+
 def _add_lights(scene: pyrender.Scene, lights) -> None:
     for light in lights:
         if isinstance(light, SunLight):
-            az, el = math.radians(light.azimuth_deg), math.radians(light.elevation_deg)
-            towards_sun = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+            towards_sun = _towards_sun(light)
             node_light = pyrender.DirectionalLight(color=light.color_rgb, intensity=light.illuminance_lux)
             scene.add(node_light, pose=_look_along(-towards_sun))
         elif isinstance(light, PointLight):
@@ -439,6 +453,8 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         instance_ids=instance_ids,
         instances=instances,
         sky_luminance_cd_m2=scene.environment.sky_luminance_cd_m2,
+        sky=scene.environment.sky,
+        sun_direction=_sun_direction(scene.lights),
         shadows=scene.environment.shadows,
         actor_local_poses=local_poses,
         actor_routes=[routes[actor.name] for actor in scene.actors],
