@@ -51,7 +51,7 @@ SCENE = Scene.model_validate(
         "cameras": [
             {"name": "cam", "profile": "p", "mount": {"position_m": [0, -2, 3.5], "yaw_deg": 90, "pitch_deg": -18}}
         ],
-        "outputs": {"video": False, "annotations": ["mot", "coco"]},
+        "outputs": {"video": False, "annotations": ["coco"]},  # instance ids only (mot draws img1 frames)
     }
 )
 

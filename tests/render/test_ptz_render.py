@@ -83,7 +83,7 @@ def test_calibration_at_a_zoom_step_recovers_its_focal_length(renderer, tmp_path
 
 def test_an_actor_has_one_global_id_in_both_cameras(renderer, tmp_path):
     data = yaml.safe_load((REPO / "scenes/intersection_two_cameras.yaml").read_text())
-    data["outputs"] = {"video": False, "annotations": ["mot"]}  # instance ids only: no radiance to draw
+    data["outputs"] = {"video": False, "annotations": ["coco"]}  # instance ids only (mot would draw img1 frames)
     path = tmp_path / "intersection.yaml"
     path.write_text(yaml.safe_dump(data, sort_keys=False))
     job = compile_scene(load_scene(path))
