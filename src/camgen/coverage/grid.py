@@ -7,10 +7,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from camgen.config.placement import local_bounds, placement
+from camgen.config.placement import box_corners, local_bounds, placement
 from camgen.config.scene import FileMesh, Scene
 from camgen.errors import ConfigError, Problem
-from camgen.plan.visibility import box_corners
 
 MARGIN_WITHOUT_MESHES_M = 20.0
 """A scene without environment meshes is covered this far around its cameras, m."""

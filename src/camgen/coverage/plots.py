@@ -7,13 +7,12 @@ from pathlib import Path
 
 import numpy as np
 
-from camgen.config.placement import local_bounds, placement
+from camgen.config.placement import box_corners, local_bounds, placement
 from camgen.config.scene import CylinderMesh, FileMesh, PlaneMesh
 from camgen.coverage.dori import DORI_CLASSES, DORI_THRESHOLDS_PX_M
 from camgen.coverage.frustum import footprint_m, image_plane_density
 from camgen.coverage.report import SceneCoverage
 from camgen.io.files import atomic_path
-from camgen.plan.visibility import box_corners
 
 DPI = 110
 CLASS_COLOURS = ("#d9d9d9", "#fde725", "#5ec962", "#21918c", "#3b528b")

@@ -17,9 +17,9 @@ import numpy as np
 from camgen.config.profile import Profile
 from camgen.config.scene import Camera
 from camgen.isp.eptz import eptz_window_px, output_camera_matrix, window_centre_px
+from camgen.job import CameraState
 from camgen.motion.pose import R_world_from_cam, T_world_from_cam
 from camgen.optics.intrinsics import corner_radius_normalized, corner_radius_px
-from camgen.plan.job import CameraState
 
 
 @dataclass(frozen=True)

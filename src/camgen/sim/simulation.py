@@ -37,6 +37,7 @@ from camgen.config.profile import Profile
 from camgen.config.scene import Camera, Scene
 from camgen.errors import ConfigError
 from camgen.isp.eptz import crop_and_scale
+from camgen.job import CameraJob, CameraState, Job, PlanSettings, Stage
 from camgen.motion.ptz import control_steps_per_frame
 from camgen.motion.trajectory import actor_routes
 from camgen.optics.remap import LensMapCache
@@ -44,7 +45,6 @@ from camgen.plan.annotations import Annotator, FrameAnnotations
 from camgen.plan.camera_pipeline import CameraPipeline, frame_rng
 from camgen.plan.camera_state import camera_image_speed_px_s, camera_state, head_pose, lens_state
 from camgen.plan.compile import MOTION_SAMPLE_STEP_PX, MOTION_SAMPLES_MAX, actor_swept_boxes, compile, focus_distance_m
-from camgen.plan.job import CameraJob, CameraState, Job, PlanSettings, Stage
 from camgen.plan.ptz import eptz_limits, head_limits, installed_focal_length_mm
 from camgen.plan.visibility import box_corners, local_bounds, placement, visible_depth_range_m
 from camgen.render.renderer import Passes, Renderer
