@@ -678,9 +678,7 @@ class Scene(Model):
                     f"cameras[{i}].{'ptz' if camera.ptz is not None else 'eptz'}.program.target",
                     f"names actor {program.target!r}, which the scene does not have (actors: {known})",
                 )
-        if self.environment.sky in ("clear", "partly_cloudy") and not any(
-            light.type == "sun" for light in self.lights
-        ):
+        if self.environment.sky in ("clear", "partly_cloudy") and not any(light.type == "sun" for light in self.lights):
             raise invalid(
                 "environment.sky",
                 f"is {self.environment.sky}, a sky lit by the sun, but the scene has no sun light to place it; "
