@@ -200,12 +200,7 @@ def _mesh_file_bounds(directory: Path, reference: str) -> tuple[tuple[float, flo
     """Axis-aligned bounds of a mesh file in its own frame (trimesh reads glTF, OBJ, PLY, STL, …)."""
     import trimesh  # heavy import, only for scenes that use mesh files
 
-    path = directory / reference
-    if not path.exists():
-        raise ConfigError(f"refers to {reference!r}, but {path.resolve()} does not exist")
-    problem = input_file_problem(path)
-    if problem:
-        raise ConfigError(f"refers to {reference!r}, but {path.resolve()} {problem}; give a mesh file")
+    path = _readable(directory, reference, "a mesh file")
     try:
         loaded = trimesh.load(path, force="scene")
     except NotImplementedError as exc:  # trimesh's "file_type 'x' not supported"
@@ -234,16 +229,20 @@ def _character_bounds(
 
 
 def _read_character(directory: Path, reference: str, read: dict):
-    if reference in read:
-        return read[reference]
+    if reference not in read:
+        read[reference] = load_character(_readable(directory, reference, "a glTF 2.0 file"))
+    return read[reference]
+
+
+def _readable(directory: Path, reference: str, kind: str) -> Path:
+    """The file a scene refers to, beside it, once it is known to exist and be readable."""
     path = directory / reference
     if not path.exists():
         raise ConfigError(f"refers to {reference!r}, but {path.resolve()} does not exist")
     problem = input_file_problem(path)
     if problem:
-        raise ConfigError(f"refers to {reference!r}, but {path.resolve()} {problem}; give a glTF 2.0 file")
-    read[reference] = load_character(path)
-    return read[reference]
+        raise ConfigError(f"refers to {reference!r}, but {path.resolve()} {problem}; give {kind}")
+    return path
 
 
 def _character_problems(directory: Path, actor, key: tuple, read: dict) -> list[Problem]:
