@@ -86,8 +86,18 @@ def test_a_fall_topples_in_under_a_second_and_lies_above_the_ground(model):
     person = rig(model, [{"type": "fall", "start_s": 1.0, "duration_s": 4.0, "direction": "backward"}])
     person.place(0.9)
     standing_pelvis = person.joints_m[INDEX["pelvis"], 2]
-    # Falls from standing reach the ground in 0.7–1 s (Hsiao & Robinovitch 1998).
+    # Falls from standing reach the ground in 0.7–1 s (Hsiao & Robinovitch 1998); the pendulum's time,
+    # against its energy integral t = √(L/g) ∫ dθ / √(2 (cos θ₀ − cos θ)) evaluated by scipy's quad.
+    from scipy.integrate import quad
+
+    from camgen.actors.actions import FALL_START_TILT_RAD, TRIP_S
+
     assert 0.7 < fall_duration_s(standing_pelvis) < 1.0
+    integral, _ = quad(
+        lambda th: 1 / math.sqrt(2 * (math.cos(FALL_START_TILT_RAD) - math.cos(th))), FALL_START_TILT_RAD, math.pi / 2
+    )
+    free_fall_s = math.sqrt(round(standing_pelvis, 3) / 9.81) * integral
+    assert fall_duration_s(standing_pelvis) - TRIP_S == pytest.approx(free_fall_s, abs=1e-3)
     previous = None
     for t in np.arange(0.9, 7.0, 0.02):
         person.place(float(t))

@@ -16,8 +16,9 @@ pose (`camgen.actors.gait.Walker.pose`) is changed; each fades in and out, so th
   forward up to 30° while lowering (trunk flexion during stand-to-sit: Schenkman et al. 1990) and
   reclines 8° seated; hands rest on the thighs. Standing up is the same, reversed.
 - **fall** (standing only): the body topples as an inverted pendulum about the edge of its feet
-  (θ'' = (g / L)·sin θ with L the pelvis height, from a 10° initial tilt, as a trip or slip gives),
-  reaching the ground in about 0.8 s for an adult (falls from standing reach the ground in 0.7–1 s:
+  (θ'' = (g / L)·sin θ with L the pelvis height, released at rest at 15°, past where a trip or slip
+  can still be recovered, after 0.15 s of tipping there), reaching the ground 0.85–0.96 s after the
+  fall begins for pelvis heights of 0.75–1 m (falls from standing reach the ground in 0.7–1 s:
   Hsiao & Robinovitch 1998, J. Biomech. 31: 1), the knees buckling 20° and the arms thrown forward to
   brace (the protective reach in 95 % of the falls of Hsiao & Robinovitch's subjects); it then lies
   on the ground until the action ends and rises over `RISE_S`.
@@ -29,6 +30,7 @@ refuses a sit or a fall while the person walks.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -45,7 +47,9 @@ SEATED_RECLINE_RAD = math.radians(-8)
 TRANSITION_LEAN_RAD = math.radians(30)
 WAVE_HZ = 2.5
 WAVE_SWING_RAD = math.radians(25)
-FALL_START_TILT_RAD = math.radians(10)
+FALL_START_TILT_RAD = math.radians(15)
+TRIP_S = 0.15
+"""The body tips smoothly from upright to `FALL_START_TILT_RAD` over this time, s, before it falls freely."""
 KNEE_BUCKLE_RAD = math.radians(20)
 RISE_S = 1.5
 """A fallen person gets up over this time, s (simplified: a reversed fall, not a real rise)."""
@@ -67,27 +71,43 @@ def window_weight(time_s: float, start_s: float, duration_s: float, blend_s: flo
 
 def fall_angle_rad(time_since_s: float, pelvis_height_m: float) -> float:
     """Tilt of a toppling body `time_since_s` after its fall began (0 before, π/2 on the ground): the
-    inverted pendulum θ'' = (g / L) sin θ from `FALL_START_TILT_RAD` at rest, integrated in closed form
-    through the energy integral, t(θ) = √(L/g) ∫ dθ / √(2 (cos θ₀ − cos θ))."""
+    inverted pendulum θ'' = (g / L) sin θ released at rest from `FALL_START_TILT_RAD`."""
     if time_since_s <= 0:
         return 0.0
-    return float(np.interp(time_since_s, *_fall_table(pelvis_height_m)))
+    if time_since_s < TRIP_S:  # losing balance: tipping smoothly to where the fall takes over
+        return FALL_START_TILT_RAD * _smooth(time_since_s / TRIP_S)
+    return float(np.interp(time_since_s - TRIP_S, *_fall_table(round(pelvis_height_m, 3))))
 
 
+@lru_cache(maxsize=64)
 def _fall_table(pelvis_height_m: float) -> tuple[np.ndarray, np.ndarray]:
-    theta = np.linspace(FALL_START_TILT_RAD, math.pi / 2, 400)
-    rate = np.sqrt(2 * (math.cos(FALL_START_TILT_RAD) - np.cos(theta)) * G_M_S2 / pelvis_height_m)
-    rate[0] = rate[1] / 2  # the integrand's singularity at θ₀ is integrable; its first step is halved
-    dt = np.diff(theta) / ((rate[1:] + rate[:-1]) / 2)
-    times = np.concatenate([[0.0], np.cumsum(dt)])
-    # Tilting from upright to θ₀ (the trip itself) takes a tenth of a second.
-    return np.concatenate([[0.0], times + 0.1]), np.concatenate([[0.0], theta])
+    """(times s, tilts rad) of the toppling pendulum until it reaches the ground, integrated with
+    scipy's adaptive Runge–Kutta to 1e-10 (the closed form is an elliptic integral)."""
+    from scipy.integrate import solve_ivp
+
+    def on_ground(_t, y):
+        return y[0] - math.pi / 2
+
+    on_ground.terminal = True
+    solution = solve_ivp(
+        lambda _t, y: [y[1], G_M_S2 / pelvis_height_m * math.sin(y[0])],
+        (0.0, 10.0),
+        [FALL_START_TILT_RAD, 0.0],
+        events=on_ground,
+        dense_output=True,
+        rtol=1e-10,
+        atol=1e-12,
+    )
+    end = float(solution.t_events[0][0])
+    times = np.linspace(0.0, end, 200)
+    tilts = np.minimum(solution.sol(times)[0], math.pi / 2)
+    tilts[-1] = math.pi / 2
+    return times, tilts
 
 
 def fall_duration_s(pelvis_height_m: float) -> float:
     """Time from the start of a fall to the body on the ground, s."""
-    times, _ = _fall_table(pelvis_height_m)
-    return float(times[-1])
+    return TRIP_S + float(_fall_table(round(pelvis_height_m, 3))[0][-1])
 
 
 def blend_rotation(a: np.ndarray, b: np.ndarray, w: float) -> np.ndarray:
