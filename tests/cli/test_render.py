@@ -101,7 +101,9 @@ def test_sigterm_stops_a_render_like_ctrl_c(workspace):
         assert time.monotonic() < deadline and process.poll() is None, "the render never started writing"
         time.sleep(0.05)
     process.send_signal(signal.SIGTERM)
-    _, stderr = process.communicate(timeout=10)
+    # A correctness bound, not a benchmark: about 1 s when the machine is free; 10 s was once exceeded
+    # while two test processes and a render shared the two cores (the first draw compiles its shaders).
+    _, stderr = process.communicate(timeout=30)
     assert process.returncode == 128 + signal.SIGTERM, stderr.decode()
     assert b"terminated" in stderr and b"Traceback" not in stderr
     assert not [p.name for p in out.rglob("*") if ".partial" in p.name]
