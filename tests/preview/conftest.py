@@ -7,23 +7,15 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import write
+from tests.conftest import PTZ_PROFILE, write
 
-PROFILE = """\
-description: small ptz camera
-sensor:
-  width_px: 320
-  height_px: 240
-  pixel_pitch_um: 6.0
-  full_well_e: 10000
-  conversion_gain_dn_per_e: 0.4
-lens:
-  focal_length_range_mm: [4.0, 40.0]
-  f_number: 1.6
-ptz:
-  pan_max_deg_s: 100
-  tilt_range_deg: [-90, 10]
-"""
+# The shared PTZ test profile at half the resolution and twice the pixel pitch (the same sensor area).
+PROFILE = (
+    PTZ_PROFILE.replace("description: test ptz camera", "description: small ptz camera")
+    .replace("width_px: 640", "width_px: 320")
+    .replace("height_px: 480", "height_px: 240")
+    .replace("pixel_pitch_um: 3.0", "pixel_pitch_um: 6.0")
+)
 
 SCENE = """\
 duration_s: 1
