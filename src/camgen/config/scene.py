@@ -575,6 +575,11 @@ class Outputs(Model):
     video: bool = True
     frames: Literal["png", "tiff", "exr"] | None = None
     raw_dng: bool = False
+    raw: Literal["png16", "tiff16", "exr"] | None = None
+    """Also write the sensor's raw mosaic per frame as it left the ADC (DN, black level included, one
+    channel, CFA unchanged) under raw/: 16-bit PNG or TIFF (lossless, as stored) or a float EXR, with
+    raw/raw.json naming the CFA, black and white levels and bit depth; the DNG (raw_dng) carries the
+    same samples with their colour metadata."""
     depth: Literal["png16", "exr"] | None = None
     annotations: list[Literal["mot", "coco", "reid", "yolo"]] = ["mot", "coco"]
     """mot: a MOTChallenge sequence as MOT17 ships one (img1/ of the delivered frames counted from 1,

@@ -267,7 +267,7 @@ def _compile_camera(
 
     # Re-ID crops, MOT's img1/ and YOLO's images/ are cut from or are the delivered frames.
     delivered = bool(set(outputs.annotations) & set(ANNOTATIONS_OF_DELIVERED_FRAMES))
-    needs_image = outputs.video or outputs.frames is not None or outputs.raw_dng or delivered
+    needs_image = outputs.video or outputs.frames is not None or outputs.raw_dng or outputs.raw is not None or delivered
     needs_isp = outputs.video or outputs.frames is not None or delivered
     annotations = bool(outputs.annotations)
     mono = sensor.cfa == "mono"
@@ -692,6 +692,8 @@ def _sensor_and_isp(profile, outputs, needs_isp, mono, force, stages, decisions)
     )
     if outputs.raw_dng:
         stages.append(Stage(name="io.raw_dng"))
+    if outputs.raw is not None:
+        stages.append(Stage(name="io.raw", params={"format": outputs.raw}))
     if not needs_isp:
         decisions.append(Decision(stage="isp", included=False, reason="only raw output requested"))
         return

@@ -43,6 +43,8 @@ from camgen.render.renderer import Passes, Renderer
 from camgen.render.scene_graph import build_scene_graph, instance_table
 from camgen.render.sequence import CameraRenderer
 
+RAW_SUFFIX = {"png16": ".png", "tiff16": ".tif", "exr": ".exr"}
+"""File suffix of each raw mosaic format (`outputs.raw`)."""
 PARTIAL_SUFFIX = ".partial"
 """A camera's folder is written under its name with this suffix and renamed when complete."""
 NOISE_THREADS = 2
@@ -72,6 +74,7 @@ IMPLEMENTED_STAGES = frozenset(
         "io.camera_metadata",
         "annotate",
         "io.raw_dng",
+        "io.raw",
         "io.frames",
         "io.depth",
     }
@@ -393,6 +396,32 @@ def _write_files(context: _Context, stages, state, frame, captured, rgb8, stream
             f_number=state.f_number,
             temperature_c=sensor.temperature_c,
         )
+        result.files.append(path)
+    if "io.raw" in stages and captured is not None:
+        kind = stages["io.raw"].params["format"]
+        sensor = camera.profile.sensor
+        if result.frames == 0:  # what a reader needs to interpret the samples, once per camera
+            meta = directory / "raw" / "raw.json"
+            write_text_atomic(
+                meta,
+                json.dumps(
+                    {
+                        "cfa": sensor.cfa,
+                        "black_level_dn": sensor.black_level_dn,
+                        "white_level_dn": sensor.white_level_dn,
+                        "bit_depth": sensor.bit_depth,
+                        "unit": "DN as the ADC delivered them, black level included",
+                    },
+                    indent=1,
+                ),
+            )
+            result.files.append(meta)
+        path = directory / "raw" / f"{name}{RAW_SUFFIX[kind]}"
+        raw = np.ascontiguousarray(captured.raw_dn)
+        if kind == "exr":
+            write_frame(path, raw.astype(np.float32), format="exr")
+        else:
+            write_frame(path, raw.astype(np.uint16), format="png" if kind == "png16" else "tiff")
         result.files.append(path)
     if "io.frames" in stages:
         kind = stages["io.frames"].params["format"]
