@@ -20,6 +20,7 @@ from camgen.io.gltf import (
     IN_PLACE_SPEED_M_S,
     Character,
     Clip,
+    clip_ground_speed_m_s,
     clip_ground_travel,
     global_transforms,
     pose_character,
@@ -146,7 +147,7 @@ def character_rig(
     cycle_m, travel = 0.0, np.zeros(3)
     if walk is not None and walk.duration_s > 0:
         travel, duration = clip_ground_travel(character, walk)
-        own_speed = float(np.linalg.norm(travel)) * scale / duration
+        own_speed = clip_ground_speed_m_s(character, walk, scale)
         if clip_speed_m_s is not None:
             cycle_m = clip_speed_m_s * duration
         elif own_speed >= IN_PLACE_SPEED_M_S:

@@ -12,8 +12,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from camgen.config.dataset import Dataset
 from camgen.config.placement import cameras_behind_planes, cameras_inside_solids, warn_about
 from camgen.config.profile import Profile
@@ -22,7 +20,7 @@ from camgen.config.validation import show_value, validate
 from camgen.config.yaml_source import YamlDocument, load_yaml, merge_documents
 from camgen.errors import ConfigError, Location, Problem
 from camgen.io.files import input_file_problem
-from camgen.io.gltf import IN_PLACE_SPEED_M_S, clip_ground_travel, load_character, posed_bounds
+from camgen.io.gltf import IN_PLACE_SPEED_M_S, clip_ground_speed_m_s, load_character, posed_bounds
 
 PROFILE_NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
 
@@ -262,8 +260,7 @@ def _character_problems(directory: Path, actor, key: tuple, read: dict) -> list[
     walk = character.clip(animation.clip if animation is not None else None)
     moves = actor.random_walk is not None or (actor.path is not None and len(actor.path.waypoints_m) > 1)
     if walk is not None and walk.duration_s > 0 and moves:
-        travel, duration = clip_ground_travel(character, walk)
-        speed = float(np.linalg.norm(travel)) * actor.shape.scale / duration
+        speed = clip_ground_speed_m_s(character, walk, actor.shape.scale)
         if speed < IN_PLACE_SPEED_M_S:
             problems.append(
                 Problem(

@@ -546,6 +546,13 @@ def clip_ground_travel(character: Character, clip: Clip) -> tuple[np.ndarray, fl
     return travel, duration
 
 
+def clip_ground_speed_m_s(character: Character, clip: Clip, scale: float) -> float:
+    """The speed the clip itself carries the character at over the ground, m/s, at `scale` (0 for a
+    clip without duration); under `IN_PLACE_SPEED_M_S` it walks in place."""
+    travel, duration = clip_ground_travel(character, clip)
+    return float(np.linalg.norm(travel)) * scale / duration if duration > 0 else 0.0
+
+
 def _centre(character: Character, clip: Clip, time_s: float) -> np.ndarray:
     return np.concatenate([p for p, _ in pose_character(character, clip, time_s)]).mean(axis=0)
 
