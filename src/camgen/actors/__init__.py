@@ -102,8 +102,8 @@ class PersonRig:
         self.settle(time_s)
 
     def settle(self, time_s: float) -> None:
-        """A falling or fallen body rests on the ground: lifted by what of its posed mesh (a hand, a
-        heel) went below it (`camgen.actors.actions`' pivot lift is computed on the rest shape)."""
+        """A falling or fallen body rests on the ground: the gait tips it about the edge of its feet,
+        and it is lifted by what of its posed mesh (a shoulder, a hand, a heel) went below the ground."""
         if not self.walker.falling(time_s):
             return
         below = -float(self.vertices_m[:, 2].min())

@@ -286,7 +286,6 @@ class Walker:
     def _act(self, action, time_s: float, local, T_pelvis: np.ndarray, feet, seated: float) -> np.ndarray:
         """Pose the arms and head for `action` over the gait's pose in `local`; a fall also tips the
         whole body (the returned pelvis transform)."""
-        J = self.model.joints_m
         if action.type in ("wave", "phone"):
             w = window_weight(time_s, action.start_s, action.duration_s, ARM_BLEND_S)
             side, sign = ("l", 1) if action.side == "left" else ("r", -1)
@@ -320,15 +319,10 @@ class Walker:
         pivot = np.mean(edges, axis=0)
         pivot[2] = 0.0
         R = Rotation.from_rotvec(theta * cross(np.array([0.0, 0.0, 1.0]), towards)).as_matrix()
-        # Lifted so that no part of the (rest-shaped) body goes below the ground as it tips.
-        rest = self.model.vertices_m - np.array([*J[INDEX["pelvis"], :2], 0.0])
-        along = rest[:, :2] @ np.array([math.cos(FALL_DIRECTIONS[action.direction]),
-                                         math.sin(FALL_DIRECTIONS[action.direction])])  # fmt: skip
-        pivot_along = float((pivot - T_pelvis[:3, 3])[:2] @ towards[:2])
-        lift = max(0.0, float(np.max((along - pivot_along) * math.sin(theta) - rest[:, 2] * math.cos(theta))))
+        # What of the tipped body goes below the ground is lifted onto it after skinning (`PersonRig.settle`).
         T = np.eye(4)
         T[:3, :3] = R
-        T[:3, 3] = pivot - R @ pivot + np.array([0.0, 0.0, lift])
+        T[:3, 3] = pivot - R @ pivot
         return T @ T_pelvis
 
     def _blend_arm(self, local, side: str, upper_dir: np.ndarray, fore_dir: np.ndarray, w: float) -> None:
