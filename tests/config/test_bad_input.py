@@ -1026,6 +1026,60 @@ CASES = [
         "regions[0].required_class",
         "must be one of 'detect', 'observe', 'recognise' or 'identify', got 'identity'",
     ),
+    (
+        "texture_unknown_type",
+        "scene",
+        edit(SCENE, "      size_m: [20, 20]", "      size_m: [20, 20]\n      material: {texture: {type: cobbles}} #<"),
+        "environment.meshes[0].material.texture.type",
+        "got 'cobbles'",
+    ),
+    (
+        "texture_tile_too_small",
+        "scene",
+        edit(
+            SCENE,
+            "      size_m: [20, 20]",
+            "      size_m: [20, 20]\n      material: {texture: {type: asphalt, tile_m: 0.1}} #<",
+        ),
+        "environment.meshes[0].material.texture.tile_m",
+        "must be ≥ 0.5, got 0.1",
+    ),
+    (
+        "sky_unknown_model",
+        "scene",
+        edit(SCENE, "environment:\n", "environment:\n  sky: sunny #<\n"),
+        "environment.sky",
+        "got 'sunny'",
+    ),
+    (
+        "raw_unknown_format",
+        "scene",
+        SCENE + "outputs: {raw: jpg} #<\n",
+        "outputs.raw",
+        "got 'jpg'",
+    ),
+    (
+        "action_unknown_type",
+        "scene",
+        edit(
+            SCENE,
+            "      speed_m_s: 1.4\n",
+            "      speed_m_s: 1.4\n    actions: [{type: dance, start_s: 0, duration_s: 1}] #<\n",
+        ),
+        "actors[0].actions[0].type",
+        "got 'dance'",
+    ),
+    (
+        "action_seat_too_high",
+        "scene",
+        edit(
+            SCENE,
+            "      speed_m_s: 1.4\n",
+            "      speed_m_s: 1.4\n    actions: [{type: sit, start_s: 0, duration_s: 1, seat_height_m: 1.2}] #<\n",
+        ),
+        "actors[0].actions[0].seat_height_m",
+        "must be ≤ 0.8, got 1.2",
+    ),
 ]
 
 
