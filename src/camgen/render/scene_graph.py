@@ -212,11 +212,10 @@ def _textured(shape) -> pyrender.Mesh:
     and metallic maps, repeated every `tile_m`, mipmapped and filtered trilinearly."""
     material, texture = shape.material, shape.material.texture
     if isinstance(shape, PlaneMesh):
-        hx, hy = shape.size_m[0] / 2, shape.size_m[1] / 2
-        positions = np.array([(-hx, -hy, 0.0), (hx, -hy, 0.0), (hx, hy, 0.0), (-hx, hy, 0.0)])
-        normals = np.tile((0.0, 0.0, 1.0), (4, 1))
-        uv_m = positions[:, :2] + (hx, hy)
-        faces = np.array([(0, 1, 2), (0, 2, 3)])
+        plane = _plane(shape.size_m)
+        positions, faces = np.asarray(plane.vertices), np.asarray(plane.faces)
+        normals = np.tile((0.0, 0.0, 1.0), (len(positions), 1))
+        uv_m = positions[:, :2] + np.array(shape.size_m) / 2
     else:
         positions, normals, uv_m, faces = _box_faces(shape.size_m)
     maps = surface_maps(texture.type, texture.seed, texture.tile_m)
