@@ -20,8 +20,8 @@ pose (`camgen.actors.gait.Walker.pose`) is changed; each fades in and out, so th
   can still be recovered, after 0.15 s of tipping there), reaching the ground 0.85–0.96 s after the
   fall begins for pelvis heights of 0.75–1 m (falls from standing reach the ground in 0.7–1 s:
   Hsiao & Robinovitch 1998, J. Biomech. 31: 1), the knees buckling 20° and the arms thrown forward to
-  brace (the protective reach in 95 % of the falls of Hsiao & Robinovitch's subjects); it then lies
-  on the ground until the action ends and rises over `RISE_S`.
+  brace (the protective reach in 95 % of the falls of Hsiao & Robinovitch's subjects), relaxing once
+  down; it then lies on the ground until the action ends and rises over `RISE_S`.
 
 People sit and fall where they stand (a bench behind the person is the scene's to place); the plan
 refuses a sit or a fall while the person walks.
@@ -51,6 +51,8 @@ FALL_START_TILT_RAD = math.radians(15)
 TRIP_S = 0.15
 """The body tips smoothly from upright to `FALL_START_TILT_RAD` over this time, s, before it falls freely."""
 KNEE_BUCKLE_RAD = math.radians(20)
+ARMS_RELAX_S = 0.3
+"""After the body reaches the ground, its bracing arms relax over this time, s, and it lies on them."""
 RISE_S = 1.5
 """A fallen person gets up over this time, s (simplified: a reversed fall, not a real rise)."""
 FALL_DIRECTIONS = {"forward": 0.0, "left": math.pi / 2, "backward": math.pi, "right": -math.pi / 2}

@@ -40,6 +40,7 @@ from scipy.spatial.transform import Rotation
 
 from camgen.actors.actions import (
     ARM_BLEND_S,
+    ARMS_RELAX_S,
     FALL_DIRECTIONS,
     HIP_ABOVE_SEAT_M,
     KNEE_BUCKLE_RAD,
@@ -51,6 +52,7 @@ from camgen.actors.actions import (
     blend_rotation,
     bracing_arm,
     fall_angle_rad,
+    fall_duration_s,
     phone_arm,
     seated_arm,
     wave_arm,
@@ -306,8 +308,11 @@ class Walker:
         else:
             theta = fall_angle_rad(end - action.start_s, self.stand_height_m) * (1 - _smooth((time_s - end) / RISE_S))
         tilt = theta / (math.pi / 2)
+        # The arms reach out while the body falls and relax once it lies (else they would prop it up).
+        since_impact_s = time_s - action.start_s - fall_duration_s(self.stand_height_m)
+        brace = min(1.0, 2 * tilt) * (1 - _smooth(since_impact_s / ARMS_RELAX_S))
         for side, sign in (("l", 1), ("r", -1)):
-            self._blend_arm(local, side, *bracing_arm(sign, action.direction), min(1.0, 2 * tilt))
+            self._blend_arm(local, side, *bracing_arm(sign, action.direction), brace)
             i_thigh, i_calf = INDEX[f"thigh_{side}"], INDEX[f"calf_{side}"]
             local[i_calf] = local[i_calf] @ rot_axis("y", KNEE_BUCKLE_RAD * tilt)
             local[i_thigh] = local[i_thigh] @ rot_axis("y", -0.5 * KNEE_BUCKLE_RAD * tilt)
