@@ -109,6 +109,13 @@ def test_bad_commands_are_clear_errors_and_the_world_keeps_running(world, render
             sim.step({"dome": [ContinuousMove(pan=0.5), ContinuousMove(tilt=-2.0)]})
         with pytest.raises(CommandError, match="pan must be a finite number, got nan"):
             sim.step({"dome": ContinuousMove(pan=math.nan)})
+        with pytest.raises(
+            CommandError, match=r"dome: command 1 \(GotoPreset\): no preset 'nowhere' \(presets: gate\)"
+        ):
+            sim.step({"dome": [ContinuousMove(pan=0.5), GotoPreset("nowhere")]})
+        with pytest.raises(CommandError, match=r"dome: expected a PTZ command or a list of them, got 'left'"):
+            sim.step({"dome": "left"})
+        assert sim.commands == []  # none of the refused steps' commands was given
         assert sim.frame == 0  # nothing moved: the good command before the bad one was not given either
         observations = sim.step({"dome": AbsoluteMove(tilt_deg=45.0)})
         assert observations.frame == 1

@@ -12,10 +12,40 @@ from rich.console import Console
 from rich.markup import escape
 
 import camgen
-from camgen.cli import batch, bench, coverage, fit, info, layout, plan, preview, render, schema, validate, verify
+from camgen.cli import (
+    batch,
+    bench,
+    coverage,
+    evaluate,
+    fit,
+    info,
+    layout,
+    plan,
+    preview,
+    render,
+    schema,
+    sim,
+    validate,
+    verify,
+)
 from camgen.errors import ConfigError, ConfigWarning
 
-SUBCOMMANDS = (validate, schema, plan, info, render, verify, preview, fit, batch, bench, coverage, layout)
+SUBCOMMANDS = (
+    validate,
+    schema,
+    plan,
+    info,
+    render,
+    verify,
+    preview,
+    fit,
+    batch,
+    bench,
+    coverage,
+    layout,
+    sim,
+    evaluate,
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -50,7 +50,7 @@ from camgen.plan.visibility import box_corners, local_bounds, placement, visible
 from camgen.render.renderer import Passes, Renderer
 from camgen.render.scene_graph import build_scene_graph
 from camgen.render.sequence import CameraRenderer
-from camgen.sim.commands import COMMAND_TYPES, Command, CommandError, PtzStatus
+from camgen.sim.commands import COMMAND_TYPES, Command, CommandError, GotoPreset, PtzStatus, SetPreset
 from camgen.sim.head import CommandedHead
 
 NOISE_THREADS = 2
@@ -75,6 +75,16 @@ class CameraObservation:
     """(H, W) uint16 raw mosaic, when the simulation was asked for it (`raw=True`)."""
     ground_truth: FrameAnnotations | None = None
     """Boxes, track ids, visibility, keypoints (`camgen.plan.annotations`), with `ground_truth=True`."""
+
+
+@dataclass(frozen=True)
+class LoggedCommand:
+    """One command the simulation accepted: given at the time of delivered frame `frame`."""
+
+    frame: int
+    time_s: float
+    camera: str
+    command: Command
 
 
 @dataclass(frozen=True)
@@ -185,6 +195,8 @@ class Simulation:
             if not (isinstance(width_px, int) and isinstance(height_px, int) and width_px >= 2 and height_px >= 2):
                 raise ConfigError(f"resolution_px must be two whole numbers ≥ 2 (W, H), got {resolution_px!r}")
             profiles = {name: _binned(profile, (width_px, height_px)) for name, profile in profiles.items()}
+        self.resolution_px = None if resolution_px is None else (int(resolution_px[0]), int(resolution_px[1]))
+        """The readout size every camera was asked for, or None (the profiles' own)."""
         job = compile(
             held,
             profiles,
@@ -227,6 +239,8 @@ class Simulation:
         self._pipelines: dict[int, CameraPipeline] = {}
         self._annotators: dict[int, Annotator | None] = {}
         self._focus_dioptres: list[float] = []
+        self.commands: list[LoggedCommand] = []
+        """Every command accepted since `reset`, in the order given (`camgen.sim.log` saves and replays them)."""
 
     # --- lifecycle ---------------------------------------------------------------------------------
 
@@ -262,6 +276,7 @@ class Simulation:
             raise ConfigError(f"seed must be a whole number ≥ 0, got {seed!r}")
         self.seed = self.job.seed if seed is None else int(seed)
         self.frame = 0
+        self.commands = []
         self._heads = [self._head(camera) for camera in self.job.cameras]
         self._pipelines = {
             i: CameraPipeline(self.job, self.job.cameras[i], maps=self._maps, executor=self._executor)
@@ -290,6 +305,7 @@ class Simulation:
         accepted = self._check(commands or {})
         for index, command, where in accepted:
             self._heads[index].command(command, self.time_s, where)
+            self.commands.append(LoggedCommand(self.frame, self.time_s, self.job.cameras[index].name, command))
         steps = control_steps_per_frame(1.0 / self.fps)
         dt = 1.0 / (self.fps * steps)
         events = {}
@@ -330,8 +346,16 @@ class Simulation:
         if not isinstance(commands, Mapping):
             raise CommandError(f"commands must map camera names to commands, got {type(commands).__name__}")
         accepted = []
+        stored: dict[int, set[str]] = {}
         for camera, given in commands.items():
-            listed = [given] if isinstance(given, COMMAND_TYPES) else list(given)
+            if not isinstance(camera, str):
+                raise CommandError(f"commands must map camera names (str) to commands, got the key {camera!r}")
+            if isinstance(given, COMMAND_TYPES):
+                listed = [given]
+            elif isinstance(given, Iterable) and not isinstance(given, (str, bytes, Mapping)):
+                listed = list(given)
+            else:
+                raise CommandError(f"{camera}: expected a PTZ command or a list of them, got {given!r}")
             for k, command in enumerate(listed):
                 where = f"{camera}: command {k} ({type(command).__name__})"
                 if not isinstance(command, COMMAND_TYPES):
@@ -339,6 +363,14 @@ class Simulation:
                     raise CommandError(f"{where}: not a PTZ command; use one of camgen.sim's {names}")
                 index = self._ptz_index(camera, type(command).__name__)
                 command.check(where)
+                if isinstance(command, SetPreset):
+                    stored.setdefault(index, set()).add(command.name)
+                head = self._heads[index]
+                if isinstance(command, GotoPreset) and command.name not in {*head.presets, *stored.get(index, ())}:
+                    names = ", ".join(sorted(head.presets)) or "none stored"
+                    raise CommandError(
+                        f"{where}: no preset {command.name!r} (presets: {names}); store it with SetPreset"
+                    )
                 accepted.append((index, command, where))
         return accepted
 
