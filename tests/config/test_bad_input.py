@@ -1059,6 +1059,27 @@ CASES = [
         "got 'jpg'",
     ),
     (
+        "radiance_unknown_format",
+        "scene",
+        SCENE + "outputs: {radiance: jpg} #<\n",
+        "outputs.radiance",
+        "must be one of 'png16', 'tiff16' or 'exr', got 'jpg'",
+    ),
+    (
+        "flow_unknown_format",
+        "scene",
+        SCENE + "outputs: {flow: png} #<\n",
+        "outputs.flow",
+        "must be one of 'flo', got 'png'",
+    ),
+    (
+        "scene_flow_not_a_switch",
+        "scene",
+        SCENE + "outputs: {scene_flow: maybe} #<\n",
+        "outputs.scene_flow",
+        "must be true or false, got 'maybe'",
+    ),
+    (
         "action_unknown_type",
         "scene",
         edit(

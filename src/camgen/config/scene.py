@@ -581,6 +581,22 @@ class Outputs(Model):
     raw/raw.json naming the CFA, black and white levels and bit depth; the DNG (raw_dng) carries the
     same samples with their colour metadata."""
     depth: Literal["png16", "exr"] | None = None
+    radiance: Literal["png16", "tiff16", "exr"] | None = None
+    """Also write the scene-referred radiance per frame under radiance/: the renderer's linear RGB
+    (BT.709 primaries, scaled so that 0.2126 R + 0.7152 G + 0.0722 B is the luminance in cd/m²) seen
+    through each output pixel (the lens's distortion places it, as depth and ids), before the lens's
+    blurs, lateral CA and vignetting and before the sensor. png16 and tiff16 store DN = radiance / scale
+    with one scale per camera in radiance/radiance.json; exr stores float32 cd/m². frames: exr is the
+    image-plane radiance instead, after the lens's blurs and vignetting (`camgen.io.radiance`)."""
+    flow: Literal["flo"] | None = None
+    """Also write the forward optical flow of each frame but the last under flow/: where the surface
+    point seen at each output pixel is in the next frame, px, through the same camera model as the
+    pixels (pose, PTZ head, zoom, distortion, a virtual PTZ's crop), as Middlebury .flo
+    (`camgen.annotate.flow`)."""
+    scene_flow: bool = False
+    """Also write the scene flow of each frame but the last under scene_flow/: the world displacement
+    (x, y, z, m) of the surface point seen at each output pixel until the next frame, as float EXR;
+    NaN where no surface is seen (the sky)."""
     annotations: list[Literal["mot", "coco", "reid", "yolo"]] = ["mot", "coco"]
     """mot: a MOTChallenge sequence as MOT17 ships one (img1/ of the delivered frames counted from 1,
     gt/gt.txt, seqinfo.ini; gt/keypoints.jsonl when people are filmed); coco: coco.json; reid: crops

@@ -160,6 +160,26 @@ def write_depth(path: str | Path, depth_m: np.ndarray, *, format: Literal["png16
     return saturated
 
 
+def write_exr(path: str | Path, image: np.ndarray, *, channel_names: tuple[str, ...]) -> None:
+    """Write a float32 (H, W, C) array as an OpenEXR of float channels with the given names (e.g. X, Y,
+    Z for a vector field), values kept as they are (NaN and ±inf included).
+
+    Raises
+    ------
+    ValueError
+        If `image` is not float32 (H, W) or (H, W, C), or `channel_names` does not name C channels.
+    ConfigError
+        (a ValueError) if the suffix is not ``.exr``.
+    """
+    _check_format("exr", FRAME_FORMATS, "write_exr", path)
+    image = image[:, :, np.newaxis] if isinstance(image, np.ndarray) and image.ndim == 2 else image
+    if not isinstance(image, np.ndarray) or image.ndim != 3 or image.dtype != np.float32:
+        raise ValueError(f"write_exr needs a float32 (H, W) or (H, W, C) array, got {getattr(image, 'shape', image)}")
+    if len(channel_names) != image.shape[2]:
+        raise ValueError(f"write_exr got {image.shape[2]} channels but {len(channel_names)} names {channel_names}")
+    _write(path, image, oiio_format="openexr", pixel_type=oiio.FLOAT, channel_names=tuple(channel_names))
+
+
 def depth_mm_u16(depth_m: np.ndarray) -> tuple[np.ndarray, int]:
     """Depth in metres → uint16 millimetres as `write_depth` stores it in a PNG.
 

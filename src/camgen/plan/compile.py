@@ -267,7 +267,15 @@ def _compile_camera(
 
     # Re-ID crops, MOT's img1/ and YOLO's images/ are cut from or are the delivered frames.
     delivered = bool(set(outputs.annotations) & set(ANNOTATIONS_OF_DELIVERED_FRAMES))
-    needs_image = outputs.video or outputs.frames is not None or outputs.raw_dng or outputs.raw is not None or delivered
+    needs_image = (
+        outputs.video
+        or outputs.frames is not None
+        or outputs.raw_dng
+        or outputs.raw is not None
+        or outputs.radiance is not None
+        or delivered
+    )
+    motion_outputs = [name for name, use in (("flow", outputs.flow), ("scene_flow", outputs.scene_flow)) if use]
     needs_isp = outputs.video or outputs.frames is not None or delivered
     annotations = bool(outputs.annotations)
     mono = sensor.cfa == "mono"
@@ -281,7 +289,7 @@ def _compile_camera(
     # --- geometric lens effects: one remap ------------------------------------------------------
     distortion_px = max(max_displacement_px(ls.distortion, ls.K, W, H) for ls in states_lens)
     no_distortion = all(not np.any(ls.distortion) for ls in states_lens)
-    use_distortion = needs_image or annotations
+    use_distortion = needs_image or annotations or bool(motion_outputs)
     decisions.append(
         _decision(
             "optics.distortion",
@@ -494,6 +502,7 @@ def _compile_camera(
         for name, use in (
             ("depth of field", include["optics.depth_of_field"]),
             ("depth output", outputs.depth is not None),
+            (" and ".join(motion_outputs) + " output", bool(motion_outputs)),
         )
         if use
     ]
@@ -504,21 +513,22 @@ def _compile_camera(
             included=depth_needed,
             reason="consumed by " + " and ".join(depth_consumers)
             if depth_needed
-            else "no depth of field and no depth output",
+            else "no depth of field and no depth or flow output",
         )
     )
     if depth_needed:
         passes.append("depth_m")
+    ids_reason = ", ".join(outputs.annotations) if annotations else ""
+    if motion_outputs:  # a surface's motion is its instance's
+        ids_reason = ", ".join(([ids_reason] if ids_reason else []) + motion_outputs)
     decisions.append(
         Decision(
             stage="pass.instance_id",
-            included=annotations,
-            reason=f"annotations requested: {', '.join(outputs.annotations)}"
-            if annotations
-            else "no annotations requested",
+            included=bool(ids_reason),
+            reason=f"requested by {ids_reason}" if ids_reason else "no annotations or flow requested",
         )
     )
-    if annotations:
+    if ids_reason:
         passes.append("instance_id")
     # The kept background is redrawn whenever the view changes: worth it while the camera mostly rests.
     still_frames = sum(1 for k in range(1, frames) if view_keys[k] == view_keys[k - 1]) + 1
@@ -624,6 +634,12 @@ def _compile_camera(
         stages.append(Stage(name="annotate", passes=("instance_id",), params=params))
     if outputs.depth is not None:
         stages.append(Stage(name="io.depth", passes=("depth_m",), params={"format": outputs.depth}))
+    if outputs.radiance is not None:
+        stages.append(Stage(name="io.radiance", passes=("radiance",), params={"format": outputs.radiance}))
+    if outputs.flow is not None:
+        stages.append(Stage(name="io.flow", passes=("depth_m", "instance_id"), params={"format": outputs.flow}))
+    if outputs.scene_flow:
+        stages.append(Stage(name="io.scene_flow", passes=("depth_m", "instance_id"), params={"format": "exr"}))
     if outputs.camera_metadata:
         stages.append(Stage(name="io.camera_metadata"))
 

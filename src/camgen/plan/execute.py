@@ -3,9 +3,10 @@
 Per frame: the ideal pinhole passes (radiance, depth, instance ids; `camgen.render.sequence`), the camera
 model (`camgen.plan.camera_pipeline`: lens, sensor with auto-exposure, ISP, a virtual PTZ's crop), then
 what the camera's stages ask for: the video in the profile's codec (``video.mp4``), frames (the 8-bit
-stream as PNG/TIFF, or the linear radiance as EXR), raw DNG, depth (16-bit PNG or EXR), annotations
-(`camgen.plan.annotations`: MOTChallenge with its img1 images and optional public detections, COCO,
-YOLO, Market-1501 re-ID crops) and the per-frame camera states (``camera.jsonl``).
+stream as PNG/TIFF, or the linear radiance as EXR), raw DNG, depth (16-bit PNG or EXR), the
+scene-referred radiance (`camgen.io.radiance`), forward optical flow and scene flow (`camgen.plan.flow`),
+annotations (`camgen.plan.annotations`: MOTChallenge with its img1 images and optional public
+detections, COCO, YOLO, Market-1501 re-ID crops) and the per-frame camera states (``camera.jsonl``).
 
 Each camera's folder is written as ``CAMERA.partial`` and renamed when the camera is complete (removed
 on any exception), so a render stopped part-way leaves no per-frame files; job.json and manifest.json
@@ -30,13 +31,16 @@ from camgen.annotate.detection import detect_people, hog_detector
 from camgen.io.annotations import IMAGE_SUFFIXES, SequenceAnnotations, write_reid_crops
 from camgen.io.dng import SRGB_FROM_XYZ, write_dng
 from camgen.io.files import atomic_path, write_text_atomic
+from camgen.io.flow import write_flo, write_scene_flow
 from camgen.io.frames import write_depth, write_frame
 from camgen.io.manifest import write_manifest
+from camgen.io.radiance import RadianceWriter
 from camgen.isp.eptz import crop_and_scale
 from camgen.job import CameraJob, Job
 from camgen.optics.remap import LensMapCache
 from camgen.plan.annotations import Annotator
 from camgen.plan.camera_pipeline import CameraPipeline, cuts_reid_crops, frame_rng
+from camgen.plan.flow import FlowField
 from camgen.plan.lens_stages import LensStages
 from camgen.plan.timing import StageClock, stage_sums
 from camgen.render.renderer import Passes, Renderer
@@ -77,6 +81,9 @@ IMPLEMENTED_STAGES = frozenset(
         "io.raw",
         "io.frames",
         "io.depth",
+        "io.radiance",
+        "io.flow",
+        "io.scene_flow",
     }
 )
 
@@ -231,6 +238,12 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
         for actor, node, rig in zip(graph.actors, graph.actor_nodes, graph.people, strict=True):
             attributes = None if rig is None or rig.model is None else rig.model.appearance.attributes()
             sequence.describe(graph.instance_ids[node], name=actor.name, cls=actor.cls, attributes=attributes)
+    radiance_files = (
+        RadianceWriter(directory / "radiance", stages["io.radiance"].params["format"])
+        if "io.radiance" in stages
+        else None
+    )
+    flow_field = FlowField(camera_renderer, lens) if {"io.flow", "io.scene_flow"} & stages.keys() else None
     converge = (
         pipeline is not None and camera.exposure_mode == "auto" and job.settings.auto_exposure_start == "converged"
     )
@@ -274,6 +287,12 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                 stream = _stream_passes(camera, stages, state, frame.passes, lens, save_passes)
             with clock("io.files"):
                 _write_files(context, stages, state, frame, captured, rgb8, stream, result)
+            if radiance_files is not None:
+                with clock("io.radiance"):
+                    scene_radiance = lens.scene_radiance(state, frame.passes.radiance)
+                    if state.window_px is not None:
+                        scene_radiance = crop_and_scale(scene_radiance, state.window_px, camera.output_size_px)
+                    result.files.append(radiance_files.write(f"{frame.index:06d}", scene_radiance))
             if annotator is not None:
                 window = state.window_px
 
@@ -298,6 +317,15 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                     if detector is not None:
                         with clock("annotate.detect"):
                             sequence.add_detections(frame.index, detect_people(detector, rgb8[..., ::-1]))
+            if flow_field is not None and frame.index + 1 < job.frame_count:
+                with clock("io.flow"):  # after the annotations: it moves the actors to the next frame
+                    flow_px, displacement_m = flow_field.flow(state, camera.states[frame.index + 1], stream)
+                    if "io.flow" in stages:
+                        result.files.append(directory / "flow" / f"{frame.index:06d}.flo")
+                        write_flo(result.files[-1], flow_px)
+                    if "io.scene_flow" in stages:
+                        result.files.append(directory / "scene_flow" / f"{frame.index:06d}.exr")
+                        write_scene_flow(result.files[-1], displacement_m)
             if "io.camera_metadata" in stages:
                 record = state.model_dump(mode="json")
                 output_K = record.pop("output_K_px")
@@ -324,6 +352,8 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
             with clock("io.video"):
                 video.close()
             result.files.append(directory / "video.mp4")
+        if radiance_files is not None and result.frames:
+            result.files.append(radiance_files.close())
         if metadata:
             write_text_atomic(directory / "camera.jsonl", "\n".join(metadata) + "\n")
             result.files.append(directory / "camera.jsonl")
@@ -354,10 +384,11 @@ DEPTH_SUFFIX = {"png16": ".png", "exr": ".exr"}
 
 def _stream_passes(camera: CameraJob, stages, state, rendered: Passes, lens: LensStages, save_passes: bool) -> Passes:
     """The frame's passes through the lens and onto the stream (a virtual PTZ's crop), once, holding
-    only those that the saved passes, the EXR frames, the depth files or the annotations use."""
+    only those that the saved passes, the EXR frames, the depth files, the annotations or the flow use."""
     radiance = save_passes or ("io.frames" in stages and stages["io.frames"].params["format"] == "exr")
-    depth = save_passes or "io.depth" in stages or radiance  # the blur stages read depth too
-    ids = save_passes or "annotate" in stages
+    flow = "io.flow" in stages or "io.scene_flow" in stages
+    depth = save_passes or "io.depth" in stages or radiance or flow  # the blur stages read depth too
+    ids = save_passes or "annotate" in stages or flow
     if not (radiance or depth or ids):
         return Passes()
     through = lens.apply(

@@ -16,6 +16,8 @@ shape changes by g'(r) ≈ 1 ± 0.2 at the corner, and its size on axis is exact
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import cv2
 import numpy as np
 
@@ -114,6 +116,17 @@ class LensStages:
         if "optics.vignetting" in stages and out.radiance is not None:
             out.radiance = out.radiance * self.vignetting_gain(state, undistorted)[..., None]
         return out
+
+    def scene_radiance(self, state: CameraState, radiance: np.ndarray) -> np.ndarray:
+        """Render-size radiance → the output frame, placed by the lens's distortion alone (the reference
+        channel's map for every channel, as depth and ids): no blur, lateral CA or vignetting; the
+        scene-referred radiance that `outputs.radiance` writes."""
+        if "optics.remap" not in self.stages:
+            return crop_to_output(radiance, self.camera.render)
+        maps = self.cache.get(self.geometry(state))
+        reference = int(np.argmin([abs(scale - 1.0) for scale in self.ca_scales]))
+        one = replace(maps, map_x=(maps.map_x[reference],), map_y=(maps.map_y[reference],))
+        return remap_image(radiance, one, self.stages["optics.remap"].params["interpolation"])
 
     def vignetting_gain(self, state: CameraState, undistorted: np.ndarray | None = None) -> np.ndarray | None:
         """Relative illumination of each output pixel, (H, W) float32; None when not planned.

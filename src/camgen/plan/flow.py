@@ -1,0 +1,121 @@
+"""Per-frame optical flow and scene flow of one camera, from the scene graph's known motion
+(`camgen.annotate.flow` does the geometry).
+
+Each output pixel of frame t (on the stream: after the lens and a virtual PTZ's crop) sees the surface
+of its instance id at its depth; its displacement until t + 1 is
+
+- zero for the environment and the sky;
+- the pose change of an actor whose node moves (a rigid shape: its pose at t + 1 times the inverse of
+  that at t), exact;
+- for an actor whose mesh is posed in the world instead (a person or glTF character, skinned; a
+  procedural vehicle), the motion of its posed mesh's vertex nearest to the point
+  (`nearest_vertex_displacement_m`): exact at vertices and for a mesh that only translates; between
+  the vertices of a limb that turns, off by the difference in motion of neighbouring vertices (a few mm
+  on a person, whose edges are a few cm).
+
+The camera at t + 1 is the plan's state of that frame: its pose (a PTZ head's pan and tilt), zoom,
+distortion and, for a virtual PTZ, the stream's camera matrix. Depth comes from the nearest render
+pixel through the lens (as the depth output's), so within a pixel a surface's slope shifts the point
+slightly along the ray; on a rotation the flow does not depend on depth at all.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from camgen.annotate.flow import (
+    forward_flow_px,
+    nearest_vertex_displacement_m,
+    rigid_displacement_m,
+    surface_points_m,
+)
+from camgen.job import CameraState
+from camgen.optics.projection import undistort_points
+from camgen.optics.remap import output_grid_px
+from camgen.plan.lens_stages import LensStages
+from camgen.render.renderer import Passes
+from camgen.render.sequence import CameraRenderer
+
+
+def stream_camera(state: CameraState) -> tuple[np.ndarray, tuple[float, ...]]:
+    """Camera matrix and distortion of the image the camera delivers (a virtual PTZ's stream: its
+    `output_K_px`, with the sensor's distortion)."""
+    return np.array(state.K_px if state.output_K_px is None else state.output_K_px), tuple(state.distortion)
+
+
+class FlowField:
+    """Forward optical flow and scene flow of one camera's frames; keeps each lens geometry's rays."""
+
+    def __init__(self, drawer: CameraRenderer, lens: LensStages):
+        self.drawer, self.lens, self.graph = drawer, lens, drawer.graph
+        camera = drawer.camera
+        self.size_px = camera.output_size_px or (camera.width_px, camera.height_px)
+        self.grid_px = output_grid_px(*self.size_px)
+        self._rays_key = None
+        self._rays = None
+
+    def rays(self, state: CameraState) -> np.ndarray:
+        """Undistorted normalised ray (H, W, 2) of each stream pixel."""
+        K, distortion = stream_camera(state)
+        key = (K.tobytes(), distortion)
+        if key == self._rays_key:
+            return self._rays
+        if state.window_px is None and "optics.remap" in self.lens.stages:
+            rays = self.lens.maps(state).undistorted_normalized  # the remap's own inverse
+        else:
+            undistorted = undistort_points(self.grid_px, K, distortion) if any(distortion) else self.grid_px
+            homogeneous = np.concatenate([undistorted, np.ones((*undistorted.shape[:2], 1))], axis=-1)
+            rays = (homogeneous @ np.linalg.inv(K).T)[..., :2]
+        self._rays_key, self._rays = key, rays
+        return rays
+
+    def _poses(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Each actor's node pose and its mesh's vertices in the world, as the graph stands."""
+        graph, poses = self.graph, []
+        for node in graph.actor_nodes:
+            pose = np.array(graph.scene.get_pose(node), dtype=np.float64)
+            local = np.concatenate([np.asarray(p.positions, dtype=np.float64) for p in node.mesh.primitives])
+            poses.append((pose, local @ pose[:3, :3].T + pose[:3, 3]))
+        return poses
+
+    def displacement_m(self, state: CameraState, next_time_s: float, passes: Passes) -> np.ndarray:
+        """World displacement (H, W, 3) m of each stream pixel's surface point from the frame to
+        `next_time_s`; NaN where no surface is seen. Leaves the graph's actors at `next_time_s`."""
+        graph = self.graph
+        graph.place_actors(state.time_s)
+        now = self._poses()
+        graph.place_actors(next_time_s)
+        later = self._poses()
+        points = self.surface_points_m(state, passes)
+        displacement = np.where(np.isfinite(points), 0.0, np.nan)
+        ids = passes.instance_id
+        for node, (pose, vertices), (pose_next, vertices_next) in zip(graph.actor_nodes, now, later, strict=True):
+            mask = ids == graph.instance_ids[node]
+            if not mask.any():
+                continue
+            if not np.array_equal(pose, pose_next) or len(vertices) != len(vertices_next):
+                displacement[mask] = rigid_displacement_m(points[mask], pose, pose_next)
+            else:  # a mesh posed in the world (or at rest): its vertices carry the motion
+                displacement[mask] = nearest_vertex_displacement_m(points[mask], vertices, vertices_next)
+        return displacement
+
+    def surface_points_m(self, state: CameraState, passes: Passes) -> np.ndarray:
+        """The world point (H, W, 3) m each stream pixel sees; NaN for the sky."""
+        return surface_points_m(self.rays(state), passes.depth_m, np.array(state.T_world_from_cam))
+
+    def flow(self, state: CameraState, next_state: CameraState, passes: Passes) -> tuple[np.ndarray, np.ndarray]:
+        """Forward flow (H, W, 2) float32 px and scene flow (H, W, 3) m from `state`'s frame to
+        `next_state`'s. `passes`: the frame's stream passes (depth_m, instance_id)."""
+        displacement = self.displacement_m(state, next_state.time_s, passes)
+        K_next, distortion_next = stream_camera(next_state)
+        flow = forward_flow_px(
+            self.grid_px,
+            self.rays(state),
+            passes.depth_m,
+            np.nan_to_num(displacement),
+            np.array(state.T_world_from_cam),
+            np.array(next_state.T_world_from_cam),
+            K_next,
+            distortion_next,
+        )
+        return flow, displacement
