@@ -1,5 +1,6 @@
 """outputs.flow and outputs.scene_flow on rendered frames: a PTZ head panning over a static scene gives
-the rotation's flow through the lens (OpenCV's projection as the reference), a box moving sideways
+the rotation's flow through the lens (OpenCV's projection as the reference), so does a virtual PTZ's
+moving crop (the same rays through the next frame's stream camera matrix), a box moving sideways
 flows by f·Δx/z, the flow carries each frame onto the next (the person's limbs included), and the files
 read back with OpenCV and OpenImageIO."""
 
@@ -48,6 +49,13 @@ cameras:
     profile: ptz
     mount: {{position_m: [0, 0, 3], yaw_deg: 90, pitch_deg: 0}}
     ptz: {{pan_deg: 10, tilt_deg: -10, program: {{type: keyframes, keys: [{{time_s: 2, pan_deg: -10, tilt_deg: -5}}]}}}}
+  - name: virtual
+    profile: wide
+    mount: {{position_m: [0, 0, 3], yaw_deg: 90, pitch_deg: -15}}
+    eptz:
+      output_size_px: [{W}, {H}]
+      zoom_x: 1.5
+      program: {{type: keyframes, keys: [{{time_s: 0.5, pan_deg: 8, zoom_x: 2}}]}}
 """
 
 
@@ -62,6 +70,11 @@ def rendered(renderer, tmp_path_factory):
     write(root, "profiles/fixed.yaml", _small(FIXED_PROFILE))
     barrel = "  f_number: 1.6\n  distortion: {k1: -0.2, k2: 0.05}\n"
     write(root, "profiles/ptz.yaml", _small(PTZ_PROFILE).replace("  f_number: 1.6\n", barrel))
+    write(
+        root,
+        "profiles/wide.yaml",
+        _small(FIXED_PROFILE).replace("  f_number: 2.0\n", "  f_number: 2.0\n  distortion: {k1: -0.15}\n"),
+    )
     job = compile_scene(load_scene(write(root, "scenes/flow.yaml", SCENE)), PlanSettings(supersampling=1))
     results = execute(job, root / "out", renderer=renderer)
     return {result.name: result.directory for result in results}
@@ -142,3 +155,24 @@ def test_the_flow_carries_the_moving_actors_onto_the_next_frame(rendered, frame)
     error = np.abs(warped - now)[chosen] / now[chosen]
     unmoved = np.abs(later - now)[chosen] / now[chosen]
     assert np.median(error) < 0.03 < 0.3 < np.median(unmoved)
+
+
+@pytest.mark.parametrize("frame", [0, 1])
+def test_a_virtual_ptz_moves_the_static_scene_by_its_crop_through_the_lens(rendered, frame):
+    directory = rendered["virtual"]
+    now, later = _states(directory)[frame : frame + 2]
+    assert now["window_px"] != later["window_px"]  # the crop pans and zooms
+    flow = cv2.readOpticalFlow(str(directory / "flow" / f"{frame:06d}.flo"))
+    grid = output_grid_px(W, H)
+    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12)
+    # camera.jsonl's K_px is the stream's; the sensor's distortion holds on it (a crop and scale).
+    distortion = np.array(now["distortion"])
+    assert abs(distortion[0]) > 0.1
+    rays = cv2.undistortPoints(grid.reshape(-1, 1, 2), np.array(now["K_px"]), distortion, criteria=criteria)
+    rays = np.column_stack([rays.reshape(-1, 2), np.ones(W * H)])
+    expected, _ = cv2.projectPoints(rays, np.zeros(3), np.zeros(3), np.array(later["K_px"]), distortion)
+    expected = expected.reshape(H, W, 2) - grid
+    static = ~np.any(np.nan_to_num(_exr(directory / "scene_flow" / f"{frame:06d}.exr"), nan=0.0) != 0, axis=-1)
+    assert static.mean() > 0.5  # the box and the walker fill the rest
+    assert np.abs(flow - expected)[static].max() < 0.01
+    assert np.abs(flow).mean() > 1.0

@@ -86,22 +86,20 @@ class FlowField:
         now = self._poses()
         graph.place_actors(next_time_s)
         later = self._poses()
-        points = self.surface_points_m(state, passes)
-        displacement = np.where(np.isfinite(points), 0.0, np.nan)
-        ids = passes.instance_id
+        depth, ids, rays = passes.depth_m, passes.instance_id, self.rays(state)
+        displacement = np.zeros((*depth.shape, 3))
+        displacement[~np.isfinite(depth)] = np.nan
+        T = np.array(state.T_world_from_cam)
         for node, (pose, vertices), (pose_next, vertices_next) in zip(graph.actor_nodes, now, later, strict=True):
             mask = ids == graph.instance_ids[node]
             if not mask.any():
                 continue
+            points = surface_points_m(rays[mask], depth[mask], T)
             if not np.array_equal(pose, pose_next) or len(vertices) != len(vertices_next):
-                displacement[mask] = rigid_displacement_m(points[mask], pose, pose_next)
+                displacement[mask] = rigid_displacement_m(points, pose, pose_next)
             else:  # a mesh posed in the world (or at rest): its vertices carry the motion
-                displacement[mask] = nearest_vertex_displacement_m(points[mask], vertices, vertices_next)
+                displacement[mask] = nearest_vertex_displacement_m(points, vertices, vertices_next)
         return displacement
-
-    def surface_points_m(self, state: CameraState, passes: Passes) -> np.ndarray:
-        """The world point (H, W, 3) m each stream pixel sees; NaN for the sky."""
-        return surface_points_m(self.rays(state), passes.depth_m, np.array(state.T_world_from_cam))
 
     def flow(self, state: CameraState, next_state: CameraState, passes: Passes) -> tuple[np.ndarray, np.ndarray]:
         """Forward flow (H, W, 2) float32 px and scene flow (H, W, 3) m from `state`'s frame to
@@ -112,7 +110,7 @@ class FlowField:
             self.grid_px,
             self.rays(state),
             passes.depth_m,
-            np.nan_to_num(displacement),
+            displacement,
             np.array(state.T_world_from_cam),
             np.array(next_state.T_world_from_cam),
             K_next,
