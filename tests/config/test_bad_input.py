@@ -1101,6 +1101,93 @@ CASES = [
         "actors[0].actions[0].seat_height_m",
         "must be ≤ 0.8, got 1.2",
     ),
+    (
+        "site_latitude_beyond_the_pole",
+        "scene",
+        edit(
+            SCENE,
+            "environment:\n",
+            "environment:\n  site: {latitude_deg: 95, longitude_deg: 2, time: 2026-06-21T12:00:00Z} #<\n",
+        ),
+        "environment.site.latitude_deg",
+        "must be ≤ 90, got 95; latitudes run from −90",
+    ),
+    (
+        "site_time_without_offset",
+        "scene",
+        edit(
+            SCENE,
+            "environment:\n",
+            "environment:\n  site: {latitude_deg: 48, longitude_deg: 2, time: 2026-06-21T12:00:00} #<\n",
+        ),
+        "environment.site.time",
+        "must say its UTC offset",
+    ),
+    (
+        "site_time_a_date_alone",
+        "scene",
+        edit(
+            SCENE, "environment:\n", "environment:\n  site: {latitude_deg: 48, longitude_deg: 2, time: 2026-06-21} #<\n"
+        ),
+        "environment.site.time",
+        "got the date 2026-06-21 alone",
+    ),
+    (
+        "site_sun_below_the_horizon",
+        "scene",
+        edit(
+            SCENE,
+            "environment:\n",
+            "environment:\n  site: {latitude_deg: 48.85, longitude_deg: 2.35, time: 2026-06-21T23:30:00+02:00} #<\n",
+        ),
+        "environment.site.time",
+        "below the horizon at 2026-06-21T23:30:00+02:00 (that day the sun rises at 05:49 and sets at 21:56 there)",
+    ),
+    (
+        "site_and_a_sun_direction",
+        "scene",
+        edit(
+            SCENE,
+            "  - {type: ambient, illuminance_lux: 1000}\n",
+            "  - {type: ambient, illuminance_lux: 1000}\n  - {type: sun, azimuth_deg: 100} #<\n",
+        ).replace(
+            "environment:\n", "environment:\n  site: {latitude_deg: 48, longitude_deg: 2, time: 2026-06-21T12:00:00Z}\n"
+        ),
+        "lights[1].azimuth_deg",
+        "leave out azimuth_deg and elevation_deg (the site places the sun)",
+    ),
+    (
+        "site_sun_under_overcast",
+        "scene",
+        edit(
+            SCENE,
+            "  - {type: ambient, illuminance_lux: 1000}\n",
+            "  - {type: ambient, illuminance_lux: 1000}\n  - {type: sun} #<\n",
+        ).replace(
+            "environment:\n",
+            "environment:\n  sky: overcast\n  site: {latitude_deg: 48, longitude_deg: 2, time: 2026-06-21T12:00:00Z}\n",
+        ),
+        "lights[1]",
+        "an overcast sky lets no direct sunlight through",
+    ),
+    (
+        "site_north_beyond_a_turn",
+        "scene",
+        edit(
+            SCENE,
+            "environment:\n",
+            "environment:\n  site: {latitude_deg: 48, longitude_deg: 2, time: 2026-06-21T12:00Z, north_deg: 400} #<\n",
+        ),
+        "environment.site.north_deg",
+        "must be ≤ 360, got 400",
+    ),
+    (
+        "fog_visibility_under_a_metre",
+        "scene",
+        edit(SCENE, "environment:\n", "environment:\n  fog: {visibility_m: 0.2} #<\n"),
+        "environment.fog.visibility_m",
+        "must be ≥ 1, got 0.2; visual ranges run from a few metres",
+    ),
 ]
 
 

@@ -7,13 +7,22 @@ from __future__ import annotations
 
 import itertools
 import math
+from datetime import date, datetime
 from typing import Annotated, Any, Literal
 
-from pydantic import Field, ValidationError, ValidatorFunctionWrapHandler, field_validator, model_validator
+from pydantic import (
+    ConfigDict,
+    Field,
+    ValidationError,
+    ValidatorFunctionWrapHandler,
+    field_validator,
+    model_validator,
+)
 
 from camgen.config.base import Model, Why, invalid
 from camgen.config.profile import ZoomSweepTime
 from camgen.config.ptz_program import FollowProgram, PtzPreset, PtzProgram, program_presets
+from camgen.config.validation import show_value
 from camgen.config.world import WORLD_EXTENT_M, Length, Point2, Point3
 
 # Lights the renderer shades per type. Sun and spot lights each need a shadow-map texture unit;
@@ -163,12 +172,22 @@ Mesh = Annotated[
 ]
 
 
+def _illuminance_from_site(schema: dict[str, Any]) -> None:
+    """JSON Schema: illuminance_lux may be left out, for a scene's `environment.site` gives it (the scene
+    fills it in before its lights are validated, `Scene._daylight_from_site`)."""
+    schema["required"] = [key for key in schema.get("required", []) if key != "illuminance_lux"]
+
+
 class SunLight(Model):
+    model_config = ConfigDict(json_schema_extra=_illuminance_from_site)
+
     type: Literal["sun"]
     illuminance_lux: Annotated[float, Field(gt=0, le=200_000)]
-    """Illuminance on a surface facing the sun, lux (clear noon ≈ 100 000)."""
+    """Illuminance on a surface facing the sun, lux (clear noon ≈ 100 000). With `environment.site`
+    it may be left out: the site's clear-sky model gives it (`camgen.world.daylight`)."""
     azimuth_deg: float = 135.0
-    """Direction of the sun from the scene, counter-clockwise from +X, degrees."""
+    """Direction of the sun from the scene, counter-clockwise from +X, degrees. With
+    `environment.site` leave it (and elevation_deg) out: the site places the sun."""
     elevation_deg: Annotated[float, Field(gt=0, le=90)] = 45.0
     color_rgb: tuple[Fraction, Fraction, Fraction] = (1.0, 1.0, 1.0)
 
@@ -192,18 +211,75 @@ class SpotLight(Model):
 
 
 class AmbientLight(Model):
+    model_config = ConfigDict(json_schema_extra=_illuminance_from_site)
+
     type: Literal["ambient"]
     illuminance_lux: Annotated[float, Field(gt=0, le=200_000)]
-    """Uniform illuminance from the whole sky, lux (overcast day ≈ 10 000, dusk ≈ 10)."""
+    """Uniform illuminance from the whole sky, lux (overcast day ≈ 10 000, dusk ≈ 10). With
+    `environment.site` it may be left out: the sky's horizontal illuminance at the site's time."""
 
 
 Light = Annotated[SunLight | PointLight | SpotLight | AmbientLight, Field(discriminator="type")]
 
 
+class Site(Model):
+    """Where on Earth and when the scene is. The sun light's direction follows (`camgen.world.sun`,
+    NOAA's solar calculator), and so do, where the scene leaves them out, the sun light's and an ambient
+    light's illuminance and the sky's zenith luminance (`camgen.world.daylight`: the IES daylight model
+    for the scene's sky; `uniform` takes the clear sky's). The model ends at sunset: a time with the
+    sun below the horizon is refused (light a night scene with lamps, without a site)."""
+
+    latitude_deg: Annotated[float, Field(ge=-90, le=90), Why("latitudes run from −90 (south pole) to 90 (north)")]
+    """Degrees north of the equator (south negative)."""
+    longitude_deg: Annotated[
+        float, Field(ge=-180, le=180), Why("longitudes run from −180 to 180, east of Greenwich positive")
+    ]
+    """Degrees east of Greenwich (west negative)."""
+    time: datetime
+    """When the scene's first frame is, with its UTC offset (ISO 8601): '2026-06-21T14:30:00+02:00'."""
+    north_deg: Annotated[float, Field(ge=-360, le=360), Why("a direction, −360° to 360°")] = 90.0
+    """Where geographic north lies in the scene, counter-clockwise from +X, degrees; the default
+    puts north along +Y and east along +X, as on a map."""
+
+    @field_validator("time", mode="wrap")
+    @classmethod
+    def _aware_time(cls, value: Any, handler: ValidatorFunctionWrapHandler) -> datetime:
+        example = "write it as '2026-06-21T14:30:00+02:00' (Z for UTC)"
+        if isinstance(value, date) and not isinstance(value, datetime):
+            raise invalid("", f"must be a date and time, got the date {value.isoformat()} alone; {example}")
+        try:
+            time = handler(value)
+        except ValidationError:
+            raise invalid("", f"must be a date and time, got {value!r}; {example}") from None
+        if time.tzinfo is None or time.utcoffset() is None:
+            raise invalid(
+                "", f"must say its UTC offset (the sun depends on it), got {time.isoformat()} without one; {example}"
+            )
+        return time
+
+
+class Fog(Model):
+    """Fog or haze over the whole scene: Koschmieder's law on each pixel's distance (`camgen.world.fog`)."""
+
+    visibility_m: Annotated[
+        float,
+        Field(ge=1, le=200_000),
+        Why("visual ranges run from a few metres in the thickest fog to about 200 km in the cleanest air; 1 m–200 km"),
+    ]
+    """Visual range V, m: the distance at which a black object's contrast against the horizon falls to
+    2 % (Koschmieder: transmittance exp(−3.912 d / V)); the WMO's meteorological optical range (5 %) is
+    0.766 V. Fog is under 1000 m, mist and haze 1–10 km, clear air 20 km and more."""
+
+
 class Environment(Model):
     sky_luminance_cd_m2: Luminance = 0.0
     """Luminance of the background where no geometry is hit, cd/m² (clear day sky ≈ 5000); for a CIE
-    sky (`sky`), the zenith's."""
+    sky (`sky`), the zenith's. With a `site` it may be left out: the zenith luminance whose sky gives the
+    site's sky illuminance."""
+    site: Site | None = None
+    """Where and when the scene is: places the sun light and gives the daylight levels left out."""
+    fog: Fog | None = None
+    """Fog or haze by meteorological visibility; null: clear air."""
     sky: Literal["uniform", "clear", "partly_cloudy", "overcast"] = "uniform"
     """How the sky's luminance and colour vary over it: one luminance everywhere, or a CIE standard
     general sky (`camgen.world.sky`: clear, type 12; partly cloudy, type 7; overcast, type 1) whose
@@ -667,6 +743,11 @@ class Scene(Model):
     def frame_count(self) -> int:
         return max(1, math.floor(self.duration_s * self.fps + 1e-9))
 
+    @model_validator(mode="before")
+    @classmethod
+    def _daylight_from_site(cls, data: Any) -> Any:
+        return _with_site_daylight(data)
+
     @model_validator(mode="after")
     def _check(self) -> Scene:
         for key, items in (
@@ -724,6 +805,77 @@ class Scene(Model):
                 "so every frame would be black)",
             )
         return self
+
+
+SITE_SUN_MIN_LUX = 1.0
+"""A site's sun must give at least this direct illuminance (lux) to be a light: the IES model's beam
+fades to nothing in the last degree above the horizon."""
+
+
+def _with_site_daylight(data: Any) -> Any:
+    """A scene's data (as written) with what its `environment.site` gives filled in: each sun light's
+    azimuth and elevation, and, where left out, the sun's and an ambient light's illuminance and the
+    sky's zenith luminance (`Site`). Data the fields will refuse anyway is passed on unchanged, so
+    that the refusal is reported where it stands."""
+    from camgen.world.site import site_daylight
+    from camgen.world.sky import SKY_TYPES
+    from camgen.world.sun import sunrise_sunset
+
+    if not isinstance(data, dict) or not isinstance(data.get("environment"), dict):
+        return data
+    environment = data["environment"]
+    sky = environment.get("sky", "uniform")
+    lights = data.get("lights", [])
+    if environment.get("site") is None or not isinstance(lights, list) or sky not in ("uniform", *SKY_TYPES):
+        return data
+    try:
+        site = Site.model_validate(environment["site"])
+    except ValidationError:
+        return data
+    daylight = site_daylight(site.latitude_deg, site.longitude_deg, site.time, site.north_deg, sky)
+    suns = [i for i, light in enumerate(lights) if isinstance(light, dict) and light.get("type") == "sun"]
+    if daylight.elevation_deg <= 0 or (suns and daylight.sun_illuminance_lux < SITE_SUN_MIN_LUX and sky != "overcast"):
+        days = sunrise_sunset(site.latitude_deg, site.longitude_deg, site.time)
+        when = (
+            f"(that day the sun rises at {days[0]:%H:%M} and sets at {days[1]:%H:%M} there)"
+            if days
+            else "(the sun does not rise that day there)"
+        )
+        where = "below" if daylight.elevation_deg <= 0 else "above"
+        raise invalid(
+            "environment.site.time",
+            f"puts the sun {abs(daylight.elevation_deg):.2f}° {where} the horizon at {site.time.isoformat()} "
+            f"{when}; camgen's daylight model needs the sun up (above 1° with a sun light, no twilight): choose "
+            "a time in daylight, or light a night scene with lamps and no site",
+        )
+    filled = []
+    for i, light in enumerate(lights):
+        if isinstance(light, dict) and light.get("type") == "sun":
+            if sky == "overcast":
+                raise invalid(
+                    f"lights[{i}]",
+                    "is a sun light, but an overcast sky lets no direct sunlight through (IES RP-21); remove it, "
+                    "or use sky: clear or partly_cloudy",
+                )
+            site_direction = {"azimuth_deg": daylight.azimuth_deg, "elevation_deg": daylight.elevation_deg}
+            for key, value in site_direction.items():
+                given = light.get(key)
+                if given is not None and not (_is_number(given) and abs(given - value) < 1e-9):
+                    raise invalid(
+                        f"lights[{i}].{key}",
+                        f"is {show_value(given)}, but environment.site puts the sun at azimuth "
+                        f"{daylight.azimuth_deg:.2f}°, elevation {daylight.elevation_deg:.2f}°; leave out "
+                        "azimuth_deg and elevation_deg (the site places the sun), or remove the site",
+                    )
+            light = {"illuminance_lux": daylight.sun_illuminance_lux, **light, **site_direction}
+        elif isinstance(light, dict) and light.get("type") == "ambient":
+            light = {"illuminance_lux": daylight.sky_illuminance_lux, **light}
+        filled.append(light)
+    return {
+        **data,
+        "lights": filled,
+        "environment": {"sky_luminance_cd_m2": daylight.zenith_luminance_cd_m2, **environment},
+    }
 
 
 # Class-typical sizes (m) used when an actor gives no shape: a standing adult, a mid-size car, …

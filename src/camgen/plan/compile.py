@@ -518,6 +518,16 @@ def _compile_camera(
     )
     if depth_needed:
         passes.append("depth_m")
+    fog = scene.environment.fog
+    if fog is not None and needs_image:
+        decisions.append(
+            Decision(
+                stage="render.fog",
+                included=True,
+                reason=f"visual range {fog.visibility_m:g} m: Koschmieder's law on each pixel's distance, from a "
+                "depth target drawn with the radiance (no depth pass or output of its own)",
+            )
+        )
     ids_reason = ", ".join(outputs.annotations) if annotations else ""
     if motion_outputs:  # a surface's motion is its instance's
         ids_reason = ", ".join(([ids_reason] if ids_reason else []) + motion_outputs)

@@ -16,6 +16,10 @@ draw calls, and replaces what it renders into and with:
 Radiance unit: linear RGB (BT.709 primaries) scaled so that 0.2126 R + 0.7152 G + 0.0722 B is the
 luminance in cd/m² (see `camgen.render.scene_graph`); unclamped. depth_m: distance along the optical
 axis (camera z), m, +inf where no geometry is hit. instance_id: uint32, 0 for background.
+
+The sky fills the pixels no surface covers; fog (`camgen.world.fog`) then blends every radiance pixel
+towards the horizon sky by its distance, which a draw with fog renders beside the radiance even when
+depth_m is not asked for (and does not return).
 """
 
 from __future__ import annotations
@@ -421,6 +425,10 @@ class Renderer:
         unknown = set(passes) - set(PASSES)
         if unknown or not passes:
             raise ValueError(f"passes must be a non-empty subset of {PASSES}, got {passes}")
+        requested = passes
+        fog_visibility_m = getattr(graph, "fog_visibility_m", None)
+        if fog_visibility_m is not None and "radiance" in passes:
+            passes = (*passes, "depth_m")  # fog needs each pixel's distance, drawn in the same draw
         passes = tuple(name for name in PASSES if name in passes)
         self._make_current()
         scene = graph.scene
@@ -460,6 +468,10 @@ class Renderer:
         out = target.read()
         if out.radiance is not None and getattr(graph, "sky", "uniform") != "uniform" and target.sky_mask.any():
             out.radiance[target.sky_mask] = sky_view(graph, view)[target.sky_mask]
+        if out.radiance is not None and fog_visibility_m is not None:
+            out.radiance = fogged_radiance(graph, view, out.radiance, out.depth_m, fog_visibility_m)
+        if "depth_m" not in requested:
+            out.depth_m = None
         return out
 
 
@@ -470,6 +482,13 @@ SKY_STEP_PX = 8
 def sky_view(graph, view: View) -> np.ndarray:
     """(H, W, 3) radiance of the graph's CIE sky through each pixel of `view` (`camgen.world.sky`),
     evaluated on a grid every `SKY_STEP_PX` pixels and interpolated bilinearly."""
+    return _sky_on_grid(graph, view, horizontal=False)
+
+
+def _sky_on_grid(graph, view: View, *, horizontal: bool) -> np.ndarray:
+    """(H, W, 3) the graph's CIE sky radiance in the world direction of each pixel's ray (or, with
+    `horizontal`, at the horizon under or over it), evaluated every `SKY_STEP_PX` pixels and
+    interpolated bilinearly (the sky varies smoothly over degrees)."""
     import cv2
 
     from camgen.world.sky import sky_radiance
@@ -480,6 +499,10 @@ def sky_view(graph, view: View) -> np.ndarray:
     uu, vv = np.meshgrid(us, vs)
     rays_cam = np.stack([uu, vv, np.ones_like(uu)], axis=-1) @ np.linalg.inv(view.K_px).T
     rays = rays_cam @ view.T_world_from_cam[:3, :3].T
+    if horizontal:
+        rays = rays * np.array([1.0, 1.0, 0.0])
+        vertical = np.linalg.norm(rays, axis=-1, keepdims=True) < 1e-9  # straight down or up: any azimuth
+        rays = np.where(vertical, np.array([1.0, 0.0, 0.0]), rays)
     sun = graph.sun_direction if graph.sun_direction is not None else np.array([0.0, 0.0, 1.0])
     coarse = sky_radiance(rays, sun, graph.sky, graph.sky_luminance_cd_m2)
     # Interpolate onto every pixel: the grid's nodes sit at pixels us × vs.
@@ -487,6 +510,29 @@ def sky_view(graph, view: View) -> np.ndarray:
     map_v = np.interp(np.arange(h), vs, np.arange(len(vs))).astype(np.float32)
     mx, my = np.meshgrid(map_u, map_v)
     return cv2.remap(coarse, mx, my, cv2.INTER_LINEAR)
+
+
+def ray_lengths(view: View) -> np.ndarray:
+    """(H, W) length of the ray through each pixel per metre of camera z: distance = depth_m × this."""
+    u, v = np.meshgrid(np.arange(view.width_px, dtype=np.float64), np.arange(view.height_px, dtype=np.float64))
+    rays = np.stack([u, v, np.ones_like(u)], axis=-1) @ np.linalg.inv(view.K_px).T
+    return np.linalg.norm(rays, axis=-1)
+
+
+def horizon_airlight(graph, view: View) -> np.ndarray:
+    """(3,) or (H, W, 3) airlight of the graph's fog (`camgen.world.fog`): the sky's radiance at the
+    horizon in each pixel's azimuth; a uniform sky's one luminance."""
+    if getattr(graph, "sky", "uniform") == "uniform":
+        return np.full(3, graph.sky_luminance_cd_m2, np.float32)
+    return _sky_on_grid(graph, view, horizontal=True)
+
+
+def fogged_radiance(graph, view: View, radiance: np.ndarray, depth_m: np.ndarray, visibility_m: float) -> np.ndarray:
+    """`radiance` of `view` seen through the graph's fog (`camgen.world.fog.apply_fog`), the distance of
+    each pixel from its depth (camera z, +inf for the sky)."""
+    from camgen.world.fog import apply_fog
+
+    return apply_fog(radiance, depth_m * ray_lengths(view), horizon_airlight(graph, view), visibility_m)
 
 
 SHADOW_MARGIN_M = 0.5

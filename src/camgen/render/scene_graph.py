@@ -10,7 +10,9 @@ luminance in cd/m² once gamma and clamping are removed (`camgen.render.renderer
   L = ρ·E/π cd/m²; pyrender adds base_colour × ambient_light, so ambient_light = E/π;
 - emission: ``emission_cd_m2`` is added as it is (white);
 - sky: pixels that hit no geometry get ``sky_luminance_cd_m2`` (the renderer's clear value), or, for a
-  CIE sky, the luminance and colour of the sky in their direction (`camgen.world.sky`).
+  CIE sky, the luminance and colour of the sky in their direction (`camgen.world.sky`);
+- fog: the renderer blends each radiance pixel towards the horizon sky by Koschmieder's law on its
+  distance (`camgen.world.fog`), drawing the depth it needs in the same draw.
 
 Instance ids: actors take 1…A in scene order (so an actor's id is its track id), environment meshes
 A+1…A+M; 0 is the background. Ids are 32-bit, so any realistic number of instances fits.
@@ -85,6 +87,8 @@ class SceneGraph:
     """"uniform", or a CIE sky type of `camgen.world.sky` (then `sky_luminance_cd_m2` is the zenith's)."""
     sun_direction: np.ndarray | None = None
     """Unit vector towards the (first) sun light, world; None without one."""
+    fog_visibility_m: float | None = None
+    """Visual range of the scene's fog (`camgen.world.fog`), m; None in clear air."""
     actor_local_poses: list[np.ndarray] = field(default_factory=list)
     actor_routes: list[Route] = field(default_factory=list)
     """Each actor's route (its path, or its random walk resolved once), in the order of `actors`."""
@@ -454,6 +458,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         sky_luminance_cd_m2=scene.environment.sky_luminance_cd_m2,
         sky=scene.environment.sky,
         sun_direction=_sun_direction(scene.lights),
+        fog_visibility_m=scene.environment.fog.visibility_m if scene.environment.fog is not None else None,
         shadows=scene.environment.shadows,
         actor_local_poses=local_poses,
         actor_routes=[routes[actor.name] for actor in scene.actors],
