@@ -6,11 +6,12 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
+import trimesh
 
 from camgen.annotate.flow import (
     UNKNOWN_FLOW_PX,
     forward_flow_px,
-    nearest_vertex_displacement_m,
+    mesh_displacement_m,
     rigid_displacement_m,
     surface_points_m,
 )
@@ -74,15 +75,29 @@ def test_a_rotating_body_moves_its_points_about_its_own_axis():
     np.testing.assert_allclose(moved, [[2.0, 1.0, 0.5]], atol=1e-12)
 
 
-def test_nearest_vertex_motion_is_exact_at_vertices_and_follows_the_nearest_one():
-    rng = np.random.default_rng(0)
-    vertices = rng.uniform(-1, 1, (500, 3))
-    later = vertices + rng.normal(0, 0.05, (500, 3))
-    np.testing.assert_array_equal(
-        nearest_vertex_displacement_m(vertices[:50], vertices, later), (later - vertices)[:50]
-    )
-    near = vertices[:5] + 1e-4
-    np.testing.assert_array_equal(nearest_vertex_displacement_m(near, vertices, later), (later - vertices)[:5])
+def _deforming_sphere():
+    """A triangulated sphere (trimesh, independent of camgen) and its vertices after a smooth bend and
+    some noise: a limb's skin between two frames."""
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.3)
+    vertices = np.asarray(sphere.vertices) + np.array([1.0, 2.0, 1.0])
+    rng = np.random.default_rng(4)
+    bent = vertices + 0.05 * np.sin(3 * vertices[:, [2, 0, 1]]) + rng.normal(0, 0.005, vertices.shape)
+    return vertices, bent, sphere.faces
+
+
+def test_points_on_a_deforming_mesh_move_with_their_triangles_corners():
+    vertices, later, faces = _deforming_sphere()
+    rng = np.random.default_rng(5)
+    chosen = rng.integers(0, len(faces), 400)
+    weights = rng.dirichlet([1.0, 1.0, 1.0], 400)
+    points = np.einsum("nj,njk->nk", weights, vertices[faces[chosen]])
+    expected = np.einsum("nj,njk->nk", weights, (later - vertices)[faces[chosen]])
+    np.testing.assert_allclose(mesh_displacement_m(points, vertices, later, faces), expected, atol=1e-9)
+    # The corners themselves, and a point 1 mm off the surface (a neighbouring pixel's depth): its
+    # closest point's motion, within what 1 mm along the surface changes.
+    np.testing.assert_allclose(mesh_displacement_m(vertices, vertices, later, faces), later - vertices, atol=1e-9)
+    outward = points + 0.001 * (points - [1.0, 2.0, 1.0]) / np.linalg.norm(points - [1.0, 2.0, 1.0], axis=1)[:, None]
+    assert np.abs(mesh_displacement_m(outward, vertices, later, faces) - expected).max() < 1e-3
 
 
 def test_a_point_that_passes_behind_the_next_camera_has_unknown_flow():

@@ -603,6 +603,42 @@ CASES = [
     ),
     (
         "random_walk_pauses_unordered",
+    (
+        "path_motion_unknown",
+        "scene",
+        edit(SCENE, "      speed_m_s: 1.4\n", "      speed_m_s: 1.4\n      motion: curvy #<\n"),
+        "actors[0].path.motion",
+        "got 'curvy'",
+    ),
+    (
+        "vehicle_motion_for_a_person",
+        "scene",
+        edit(SCENE, "      speed_m_s: 1.4\n", "      speed_m_s: 1.4\n      motion: vehicle #<\n"),
+        "actors[0].path.motion",
+        "is vehicle, but this actor is a 'person', which has no turning circle",
+    ),
+    (
+        "vehicle_random_walk",
+        "scene",
+        edit(
+            SCENE,
+            "    class: person\n    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n      speed_m_s: 1.4\n",
+            "    class: car\n    random_walk: {region_m: [[-5, 0], [5, 10]]} #<\n",
+        ),
+        "actors[0].random_walk",
+        "is a walk for people: a car cannot turn on the spot",
+    ),
+    (
+        "vehicle_path_too_tight",
+        "scene",
+        edit(
+            edit(SCENE, "    class: person\n", "    class: car\n"),
+            "      waypoints_m: [[-3, 5], [3, 5]]\n",
+            "      waypoints_m: [[-3, 5], [3, 5], [3, 8]] #<\n",
+        ),
+        "actors[0].path.waypoints_m[2]",
+        "the leg from waypoint 1 [3, 5] to waypoint 2 [3, 8] is 3.00 m long, but rounding its turns (90° and 0°)",
+    ),
         "scene",
         edit(
             SCENE,

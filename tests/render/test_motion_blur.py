@@ -30,7 +30,7 @@ actors:
     class: car
     shape: {{type: box, name: body, size_m: [1.0, 0.5, 1.0], position_m: [0, 0, 1.5],
              material: {{color_rgb: [0.9, 0.9, 0.9]}}}}
-    path: {{waypoints_m: [[-20, {DISTANCE_M}], [20, {DISTANCE_M}]], speed_m_s: {SPEED_M_S}}}
+    path: {{waypoints_m: [[-20, {DISTANCE_M}], [20, {DISTANCE_M}]], speed_m_s: {SPEED_M_S}, motion: linear}}
 outputs: {{annotations: []}}
 cameras:
   - {{name: cam, profile: fixed, mount: {{position_m: [0, 0, 1.5], yaw_deg: 90, pitch_deg: 0}}}}

@@ -3,8 +3,8 @@ frame t is at frame t + 1.
 
 Each output pixel's ray (undistorted, normalised: the lens model's inverse at that pixel) and its
 camera z give the surface point X in the world at t (`surface_points_m`); the point moves by its
-displacement d (0 for the environment, the pose change for a rigid actor, the nearest skinned vertex's
-motion for a person, `nearest_vertex_displacement_m`) and is projected through the next frame's camera
+displacement d (0 for the environment, the pose change for a rigid actor, the barycentric blend of its
+triangle's corner motions on a skinned mesh, `mesh_displacement_m`) and is projected through the next frame's camera
 (pose, camera matrix, distortion: the lens model of the pixels and annotations, with the same
 distortion and fold radius as `camgen.optics.projection.project_points`). Forward flow = p(t + 1) − p(t),
 px, as Middlebury and Sintel define it (Baker et al. 2011, "A Database and Evaluation Methodology for
@@ -26,7 +26,7 @@ from camgen.optics.projection import fold_radius_normalized
 __all__ = [
     "UNKNOWN_FLOW_PX",
     "forward_flow_px",
-    "nearest_vertex_displacement_m",
+    "mesh_displacement_m",
     "rigid_displacement_m",
     "surface_points_m",
 ]
@@ -65,18 +65,77 @@ def rigid_displacement_m(points_m: np.ndarray, T_world_from_actor: np.ndarray, T
     return points_m @ M[:3, :3].T + M[:3, 3] - points_m
 
 
-def nearest_vertex_displacement_m(points_m: np.ndarray, vertices_m: np.ndarray, vertices_next_m: np.ndarray):
-    """Displacement (N, 3) m of surface points (N, 3) on a deforming mesh: that of the nearest vertex
-    (same vertex order at both times).
+MESH_CANDIDATES = 8
+"""Triangles (those with the nearest centroids) among which `mesh_displacement_m` finds a point's own."""
 
-    An approximation: a point between vertices moves with its nearest one instead of with the
-    barycentric blend of its triangle's corners; the error is at most the difference in motion of
-    neighbouring vertices (edges of a few cm on a person, `camgen.actors`)."""
+
+def mesh_displacement_m(
+    points_m: np.ndarray, vertices_m: np.ndarray, vertices_next_m: np.ndarray, faces: np.ndarray
+) -> np.ndarray:
+    """Displacement (N, 3) m of surface points (N, 3) on a deforming triangle mesh: the point's
+    barycentric blend of its triangle's corner motions, which is exact for a point on the mesh.
+
+    The triangle is the nearest to the point among the `MESH_CANDIDATES` whose centroids are nearest
+    (closest point on a triangle: Ericson 2004, "Real-Time Collision Detection", §5.1.5), so a point
+    sampled off the surface (a depth from the neighbouring pixel) takes its closest point's motion.
+
+    Parameters
+    ----------
+    points_m : (N, 3) float
+    vertices_m, vertices_next_m : (V, 3) float
+        The mesh's vertices at t and t + 1, same order.
+    faces : (F, 3) int
+        Vertex indices of each triangle.
+    """
     vertices = np.asarray(vertices_m, dtype=np.float64)
-    if len(points_m) == 0:
+    points = np.asarray(points_m, dtype=np.float64).reshape(-1, 3)
+    if len(points) == 0:
         return np.zeros((0, 3))
-    _, nearest = cKDTree(vertices).query(points_m)
-    return np.asarray(vertices_next_m, dtype=np.float64)[nearest] - vertices[nearest]
+    faces = np.asarray(faces).reshape(-1, 3)
+    corners = vertices[faces]  # (F, 3, 3)
+    k = min(MESH_CANDIDATES, len(faces))
+    _, candidates = cKDTree(corners.mean(axis=1)).query(points, k=k)
+    candidates = np.asarray(candidates).reshape(len(points), k)
+    a, b, c = (corners[candidates, i] for i in range(3))  # (N, k, 3) each
+    weights = _closest_barycentric(points[:, None, :], a, b, c)
+    closest = weights[..., 0:1] * a + weights[..., 1:2] * b + weights[..., 2:3] * c
+    distance2 = np.sum((closest - points[:, None, :]) ** 2, axis=-1)
+    best = np.argmin(np.where(np.isfinite(distance2), distance2, np.inf), axis=1)  # a degenerate triangle: NaN
+    rows = np.arange(len(points))
+    triangle, weight = faces[candidates[rows, best]], weights[rows, best]  # (N, 3), (N, 3)
+    motion = np.asarray(vertices_next_m, dtype=np.float64) - vertices
+    return np.einsum("nj,njk->nk", weight, motion[triangle])
+
+
+def _closest_barycentric(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Barycentric weights (..., 3) of the point of triangle abc closest to p (Ericson 2004, §5.1.5:
+    vertex, edge and face regions, in that order)."""
+
+    def dot(u, v):
+        return np.sum(u * v, axis=-1)
+
+    ab, ac = b - a, c - a
+    d1, d2 = dot(ab, p - a), dot(ac, p - a)
+    d3, d4 = dot(ab, p - b), dot(ac, p - b)
+    d5, d6 = dot(ab, p - c), dot(ac, p - c)
+    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
+    with np.errstate(divide="ignore", invalid="ignore"):  # only the chosen region's quotient is used
+        on_ab = d1 / (d1 - d3)
+        on_ac = d2 / (d2 - d6)
+        on_bc = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        v_in, w_in = vb / (va + vb + vc), vc / (va + vb + vc)
+    zero, one = np.zeros_like(d1), np.ones_like(d1)
+    regions = [
+        (d1 <= 0) & (d2 <= 0),
+        (d3 >= 0) & (d4 <= d3),
+        (vc <= 0) & (d1 >= 0) & (d3 <= 0),
+        (d6 >= 0) & (d5 <= d6),
+        (vb <= 0) & (d2 >= 0) & (d6 <= 0),
+        (va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0),
+    ]
+    v = np.select(regions, [zero, one, on_ab, zero, zero, 1 - on_bc], v_in)
+    w = np.select(regions, [zero, zero, zero, one, on_ac, on_bc], w_in)
+    return np.stack([1 - v - w, v, w], axis=-1)
 
 
 def forward_flow_px(

@@ -182,9 +182,11 @@ def load_scene(path: str | Path, profile_dirs: Sequence[Path] = ()) -> LoadedSce
             ]
     if problems:
         raise ConfigError(problems)
+    from camgen.motion.trajectory import vehicle_path_problems  # the motion package imports this one's models
+
     located = [
         Problem(p.path, p.message, doc.locate(p.path))
-        for p in check_cameras(scene, {k: v.profile for k, v in profiles.items()})
+        for p in [*check_cameras(scene, {k: v.profile for k, v in profiles.items()}), *vehicle_path_problems(scene)]
     ]
     if located:
         raise ConfigError(located)

@@ -291,7 +291,8 @@ class Environment(Model):
 
 
 class ActorPath(Model):
-    """Constant-speed motion along straight segments between ground waypoints, pausing at each."""
+    """Motion along ground waypoints, pausing at each: straight legs at constant speed, or a vehicle's
+    curve (see `motion`)."""
 
     waypoints_m: Annotated[list[Point2], Field(min_length=1)]
     """[[x, y], …] on the ground, m. One waypoint: the actor stands still."""
@@ -308,6 +309,12 @@ class ActorPath(Model):
     @field_validator("pause_s", mode="wrap")
     @classmethod
     def _one_pause_error(cls, value: Any, handler: ValidatorFunctionWrapHandler) -> float | list[float]:
+    motion: Literal["vehicle", "linear"] | None = None
+    """vehicle: drive like a vehicle (`camgen.motion.vehicle_route`): corners rounded with the class's
+    minimum turning radius, passing near the inner waypoints rather than through them, speed_m_s the
+    cruise speed, easing into turns, starting from rest and braking to a stop at pauses and at the end.
+    linear: constant speed along straight legs, the heading turning at each waypoint. null: vehicle for
+    the VEHICLE_CLASSES (car, truck, bus, motorcycle, bicycle), linear for the others."""
         # Both forms of the union would report a failure; report it once, for the form that was meant.
         try:
             return handler(value)
@@ -504,6 +511,8 @@ class Actor(Model):
             raise invalid(
                 "actions",
                 "are for a procedural person, but this actor is "
+VEHICLE_CLASSES = ("car", "truck", "bus", "motorcycle", "bicycle")
+"""Actor classes that drive along their paths by default (`ActorPath.motion`)."""
                 + (f"a {self.cls!r}" if self.cls != "person" else "given a shape")
                 + "; remove actions, or make it a person without a shape",
             )
@@ -559,6 +568,18 @@ class HeadPositions(Model):
         names: dict[str, int] = {}
         for i, preset in enumerate(self.presets):
             if preset.name in names:
+        if self.random_walk is not None and self.cls in VEHICLE_CLASSES:
+            raise invalid(
+                "random_walk",
+                f"is a walk for people: a {self.cls} cannot turn on the spot as its random legs would; give it a "
+                "path: {waypoints_m: [[x, y], …]} to drive along",
+            )
+        if self.path is not None and self.path.motion == "vehicle" and self.cls not in VEHICLE_CLASSES:
+            raise invalid(
+                "path.motion",
+                f"is vehicle, but this actor is a {self.cls!r}, which has no turning circle; use one of the classes "
+                f"{', '.join(VEHICLE_CLASSES)}, or motion: linear",
+            )
                 raise invalid(
                     f"presets[{i}].name",
                     f"must be unique, got {preset.name!r} again (first at presets[{names[preset.name]}])",

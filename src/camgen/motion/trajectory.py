@@ -3,7 +3,9 @@
 Every actor, whether it follows waypoints (`ActorPath`) or wanders (`RandomWalk`), is resolved once
 into a `Route`: waypoints, a dwell at each one, a speed, a start time and whether it loops. A route is
 a pure function of time; it never jumps (its position is continuous in time) and never moves faster
-than its speed.
+than its speed. A vehicle's path (`drives`) becomes a `camgen.motion.vehicle_route.VehicleRoute`
+instead, which offers the same interface: corners rounded by its turning circle, speed eased into
+turns and stops.
 """
 
 from __future__ import annotations
@@ -14,7 +16,9 @@ from functools import cached_property
 
 import numpy as np
 
-from camgen.config.scene import Actor, ActorPath, RandomWalk, Scene
+from camgen.config.scene import VEHICLE_CLASSES, Actor, ActorPath, RandomWalk, Scene
+from camgen.errors import ConfigError, Problem
+from camgen.motion.vehicle_route import VEHICLE_DYNAMICS, RouteTooTightError, VehicleRoute
 
 RANDOM_WALK_SPAWN_KEY = 0x7761_6C6B
 """First spawn key of the seed sequence a random walk draws from when it gives no seed of its own
@@ -90,6 +94,11 @@ class Route:
     @cached_property
     def _phases(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
         """Knot times (M+1,) s after `start_s`, and for each of the M phases (walking or standing) its
+    def leg_pad_m(self, reach_m: float) -> float:
+        """Margin by which a footprint must grow to cover the actor along `legs_until`'s pieces, m: none,
+        the pieces are the legs themselves (`VehicleRoute.leg_pad_m` has its arcs' margin)."""
+        return 0.0
+
         start point (M, 2), end point (M, 2) and heading (M,); then the heading before the start."""
         points, pauses = self.waypoints_m, self.pauses_s
         order = list(range(1, len(points))) + ([0] if self.loop else [])
@@ -304,8 +313,27 @@ def random_walk_rng(walk: RandomWalk, *, scene_seed: int, actor_index: int) -> n
     return np.random.default_rng(np.random.SeedSequence(scene_seed, spawn_key=(RANDOM_WALK_SPAWN_KEY, actor_index)))
 
 
-def actor_route(actor: Actor, *, scene_seed: int, actor_index: int, horizon_s: float) -> Route:
-    """The route of one actor of a scene; a random walk is resolved until `horizon_s`."""
+def drives(actor: Actor) -> bool:
+    """Whether an actor follows its path as a vehicle (`ActorPath.motion`; by default the VEHICLE_CLASSES)."""
+    if actor.path is None or len(actor.path.waypoints_m) == 1:  # one waypoint: it stands (parked)
+        return False
+    if actor.path.motion is None:
+        return actor.cls in VEHICLE_CLASSES
+    return actor.path.motion == "vehicle"
+
+
+def vehicle_route_from_path(path: ActorPath, cls: str) -> VehicleRoute:
+    """The route of a vehicle of class `cls` that follows waypoints (`VEHICLE_DYNAMICS[cls]`'s limits);
+    raises `RouteTooTightError` where the waypoints need turns tighter than its turning circle."""
+    route = route_from_path(path)
+    return VehicleRoute(
+        route.waypoints_m, route.pauses_s, route.speed_m_s, VEHICLE_DYNAMICS[cls], route.start_s, route.loop
+    )
+
+
+def actor_route(actor: Actor, *, scene_seed: int, actor_index: int, horizon_s: float) -> Route | VehicleRoute:
+    """The route of one actor of a scene; a random walk is resolved until `horizon_s`. A vehicle drives
+    its path (`drives`): a path it cannot drive is a ConfigError naming the waypoint to move."""
     if actor.random_walk is not None:
         rng = random_walk_rng(actor.random_walk, scene_seed=scene_seed, actor_index=actor_index)
         return random_walk_route(actor.random_walk, horizon_s, rng=rng)
@@ -314,9 +342,33 @@ def actor_route(actor: Actor, *, scene_seed: int, actor_index: int, horizon_s: f
     return route_from_path(actor.path)
 
 
-def actor_routes(scene: Scene) -> dict[str, Route]:
+def _too_tight(actor: Actor, actor_index: int, error: RouteTooTightError) -> Problem:
+    return Problem(
+        ("actors", actor_index, "path", "waypoints_m", error.waypoint),
+        f"cannot be driven by {actor.name} (a {actor.cls}): {error}; or give the path motion: linear",
+    )
+
+
+def vehicle_path_problems(scene: Scene) -> list[Problem]:
+    """Every vehicle path of `scene` that needs turns tighter than its vehicle's turning circle."""
+    problems = []
+    for i, actor in enumerate(scene.actors):
+        if drives(actor):
+            try:
+                vehicle_route_from_path(actor.path, actor.cls)
+            except RouteTooTightError as error:
+                problems.append(_too_tight(actor, i, error))
+    return problems
+
+
+def actor_routes(scene: Scene) -> dict[str, Route | VehicleRoute]:
     """Actor name → route for every actor of `scene`, covering the scene and a margin after it
     (`ROUTE_MARGIN_S`, or one frame period if that is longer)."""
+    if drives(actor):
+        try:
+            return vehicle_route_from_path(actor.path, actor.cls)
+        except RouteTooTightError as error:
+            raise ConfigError([_too_tight(actor, actor_index, error)]) from None
     horizon_s = scene.duration_s + max(ROUTE_MARGIN_S, 1.0 / scene.fps)
     return {
         actor.name: actor_route(actor, scene_seed=scene.seed, actor_index=i, horizon_s=horizon_s)

@@ -66,12 +66,16 @@ def actor_swept_boxes(actor: Actor, route: Route, file_bounds, duration_s: float
 
     Along one straight leg the actor's box slides along its heading, so the volume it sweeps is its
     box stretched by the distance covered: one oriented box per leg travelled (a loop's legs once).
-    Standing still sweeps nothing more: a pause is at a leg's end, with that leg's heading.
+    Standing still sweeps nothing more: a pause is at a leg's end, with that leg's heading. A vehicle's
+    arcs come as short chords, the box grown by the route's `leg_pad_m` so it covers the arc between.
     """
     shape = actor_shape(actor)
     low, high = local_bounds(shape, file_bounds)
     corners_local = box_corners(low, high, placement(shape))
     low, high = corners_local.min(axis=0), corners_local.max(axis=0)
+    arc_pad_m = route.leg_pad_m(float(np.max(np.hypot(corners_local[:, 0], corners_local[:, 1]))))
+    grow = np.array([arc_pad_m, arc_pad_m, 0.0])
+    low, high = low - grow, high + grow
     starts_m, headings_rad, lengths_m = route.legs_until(duration_s)
     return [
         box_corners(low, high + np.array([length, 0.0, 0.0]), T_world_from_cam((*start, 0.0), rot_z(heading)))

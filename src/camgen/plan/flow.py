@@ -8,10 +8,8 @@ of its instance id at its depth; its displacement until t + 1 is
 - the pose change of an actor whose node moves (a rigid shape: its pose at t + 1 times the inverse of
   that at t), exact;
 - for an actor whose mesh is posed in the world instead (a person or glTF character, skinned; a
-  procedural vehicle), the motion of its posed mesh's vertex nearest to the point
-  (`nearest_vertex_displacement_m`): exact at vertices and for a mesh that only translates; between
-  the vertices of a limb that turns, off by the difference in motion of neighbouring vertices (a few mm
-  on a person, whose edges are a few cm).
+  procedural vehicle), the barycentric blend of the corner motions of the posed triangle the point lies
+  on (`mesh_displacement_m`): exact for a point on the mesh.
 
 The camera at t + 1 is the plan's state of that frame: its pose (a PTZ head's pan and tilt), zoom,
 distortion and, for a virtual PTZ, the stream's camera matrix. Depth comes from the nearest render
@@ -25,7 +23,7 @@ import numpy as np
 
 from camgen.annotate.flow import (
     forward_flow_px,
-    nearest_vertex_displacement_m,
+    mesh_displacement_m,
     rigid_displacement_m,
     surface_points_m,
 )
@@ -78,6 +76,18 @@ class FlowField:
             poses.append((pose, local @ pose[:3, :3].T + pose[:3, 3]))
         return poses
 
+    @staticmethod
+    def _faces(node) -> np.ndarray:
+        """Triangles (F, 3) of a node's mesh over its primitives' concatenated vertices."""
+        faces, offset = [], 0
+        for primitive in node.mesh.primitives:
+            count = len(primitive.positions)
+            # Flat-shaded meshes are drawn unindexed: consecutive vertex triplets are the triangles.
+            indices = np.arange(count) if primitive.indices is None else np.asarray(primitive.indices, dtype=np.int64)
+            faces.append(indices.reshape(-1, 3) + offset)
+            offset += count
+        return np.concatenate(faces)
+
     def displacement_m(self, state: CameraState, next_time_s: float, passes: Passes) -> np.ndarray:
         """World displacement (H, W, 3) m of each stream pixel's surface point from the frame to
         `next_time_s`; NaN where no surface is seen. Leaves the graph's actors at `next_time_s`."""
@@ -98,7 +108,7 @@ class FlowField:
             if not np.array_equal(pose, pose_next) or len(vertices) != len(vertices_next):
                 displacement[mask] = rigid_displacement_m(points, pose, pose_next)
             else:  # a mesh posed in the world (or at rest): its vertices carry the motion
-                displacement[mask] = nearest_vertex_displacement_m(points, vertices, vertices_next)
+                displacement[mask] = mesh_displacement_m(points, vertices, vertices_next, self._faces(node))
         return displacement
 
     def flow(self, state: CameraState, next_state: CameraState, passes: Passes) -> tuple[np.ndarray, np.ndarray]:
