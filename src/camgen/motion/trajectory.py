@@ -63,6 +63,9 @@ class Route:
     speed_m_s: float
     start_s: float = 0.0
     loop: bool = False
+    heading_rad: float = 0.0
+    """Which way an actor that never moves (a single waypoint) faces, rad; one that moves faces along
+    its legs."""
 
     def __post_init__(self) -> None:
         points = np.array(self.waypoints_m, dtype=np.float64)
@@ -91,14 +94,14 @@ class Route:
         so their bounds (or any convex bound) contain every position it takes."""
         return self.waypoints_m
 
-    @cached_property
-    def _phases(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
-        """Knot times (M+1,) s after `start_s`, and for each of the M phases (walking or standing) its
     def leg_pad_m(self, reach_m: float) -> float:
         """Margin by which a footprint must grow to cover the actor along `legs_until`'s pieces, m: none,
         the pieces are the legs themselves (`VehicleRoute.leg_pad_m` has its arcs' margin)."""
         return 0.0
 
+    @cached_property
+    def _phases(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+        """Knot times (M+1,) s after `start_s`, and for each of the M phases (walking or standing) its
         start point (M, 2), end point (M, 2) and heading (M,); then the heading before the start."""
         points, pauses = self.waypoints_m, self.pauses_s
         order = list(range(1, len(points))) + ([0] if self.loop else [])
@@ -121,7 +124,7 @@ class Route:
             np.array([p[1] for p in phases], dtype=np.float64).reshape(-1, 2),
             np.array([p[2] for p in phases], dtype=np.float64).reshape(-1, 2),
             np.array([p[3] for p in phases], dtype=np.float64),
-            0.0 if first_heading is None else first_heading,
+            self.heading_rad if first_heading is None else first_heading,
         )
 
     @property
@@ -253,7 +256,10 @@ def route_from_path(path: ActorPath) -> Route:
     """The route of an actor that follows waypoints."""
     count = len(path.waypoints_m)
     pauses = np.full(count, path.pause_s) if isinstance(path.pause_s, float | int) else np.array(path.pause_s)
-    return Route(np.array(path.waypoints_m, dtype=np.float64), pauses, path.speed_m_s, path.start_s, path.loop)
+    heading_rad = 0.0 if path.heading_deg is None else math.radians(path.heading_deg)
+    return Route(
+        np.array(path.waypoints_m, dtype=np.float64), pauses, path.speed_m_s, path.start_s, path.loop, heading_rad
+    )
 
 
 def random_walk_route(walk: RandomWalk, horizon_s: float, *, rng: np.random.Generator) -> Route:
@@ -339,6 +345,11 @@ def actor_route(actor: Actor, *, scene_seed: int, actor_index: int, horizon_s: f
         return random_walk_route(actor.random_walk, horizon_s, rng=rng)
     if actor.path is None:
         raise ValueError(f"actor {actor.name!r} has neither a path nor a random_walk")
+    if drives(actor):
+        try:
+            return vehicle_route_from_path(actor.path, actor.cls)
+        except RouteTooTightError as error:
+            raise ConfigError([_too_tight(actor, actor_index, error)]) from None
     return route_from_path(actor.path)
 
 
@@ -364,11 +375,6 @@ def vehicle_path_problems(scene: Scene) -> list[Problem]:
 def actor_routes(scene: Scene) -> dict[str, Route | VehicleRoute]:
     """Actor name → route for every actor of `scene`, covering the scene and a margin after it
     (`ROUTE_MARGIN_S`, or one frame period if that is longer)."""
-    if drives(actor):
-        try:
-            return vehicle_route_from_path(actor.path, actor.cls)
-        except RouteTooTightError as error:
-            raise ConfigError([_too_tight(actor, actor_index, error)]) from None
     horizon_s = scene.duration_s + max(ROUTE_MARGIN_S, 1.0 / scene.fps)
     return {
         actor.name: actor_route(actor, scene_seed=scene.seed, actor_index=i, horizon_s=horizon_s)
