@@ -470,6 +470,41 @@ CASES = [
         "must be ≤ 2.1, got 2.5",
     ),
     (
+        "vehicle_on_a_person",
+        "scene",
+        edit(SCENE, "    class: person\n", "    class: person\n    vehicle: {colour: red} #<\n"),
+        "actors[0].vehicle",
+        "describes a procedural vehicle, but this actor is a 'person'; remove vehicle",
+    ),
+    (
+        "vehicle_body_type_of_another_class",
+        "scene",
+        edit(SCENE, "    class: person\n", "    class: car\n    vehicle: {body_type: bus} #<\n"),
+        "actors[0].vehicle.body_type",
+        "is bus, a body of class 'bus', but this actor is a 'car': use one of sedan, hatchback",
+    ),
+    (
+        "vehicle_unknown_colour",
+        "scene",
+        edit(SCENE, "    class: person\n", "    class: car\n    vehicle: {colour: teal} #<\n"),
+        "actors[0].vehicle.colour",
+        "got 'teal'",
+    ),
+    (
+        "vehicle_plate_text_lowercase",
+        "scene",
+        edit(SCENE, "    class: person\n", "    class: car\n    vehicle: {plate_text: ab12 cde} #<\n"),
+        "actors[0].vehicle.plate_text",
+        "one or two groups of 1–4 capital letters or digits",
+    ),
+    (
+        "heading_on_a_moving_path",
+        "scene",
+        edit(SCENE, "      speed_m_s: 1.4\n", "      speed_m_s: 1.4\n      heading_deg: 90 #<\n"),
+        "actors[0].path.heading_deg",
+        "sets the facing of an actor that stands on one waypoint, but this path has 2",
+    ),
+    (
         "annotation_format_typo",
         "scene",
         edit(SCENE, "duration_s: 1", "duration_s: 1\noutputs: {annotations: [mot, reidd]} #<"),
@@ -569,41 +604,6 @@ CASES = [
         "cannot be given together with path; keep one of the two",
     ),
     (
-        "random_walk_region_unordered",
-        "scene",
-        edit(
-            SCENE,
-            "    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n",
-            "    random_walk:\n      region_m: [[5, 0], [-5, 10]] #<\n",
-        ),
-        "actors[0].random_walk.region_m",
-        "with x_min < x_max and y_min < y_max, got [[5, 0], [-5, 10]]; give the lower-left corner first",
-    ),
-    (
-        "random_walk_start_outside",
-        "scene",
-        edit(
-            SCENE,
-            "    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n",
-            "    random_walk:\n      region_m: [[-5, 0], [5, 10]]\n      start_m: [8, 5] #<\n",
-        ),
-        "actors[0].random_walk.start_m",
-        "must lie inside region_m [[-5, 0], [5, 10]], got [8, 5]; move it inside",
-    ),
-    (
-        "random_walk_legs_unordered",
-        "scene",
-        edit(
-            SCENE,
-            "    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n",
-            "    random_walk:\n      region_m: [[-5, 0], [5, 10]]\n      leg_length_m: [10, 3] #<\n",
-        ),
-        "actors[0].random_walk.leg_length_m",
-        "must be ordered [min, max] with min ≤ max, got [10, 3] m; swap them",
-    ),
-    (
-        "random_walk_pauses_unordered",
-    (
         "path_motion_unknown",
         "scene",
         edit(SCENE, "      speed_m_s: 1.4\n", "      speed_m_s: 1.4\n      motion: curvy #<\n"),
@@ -639,6 +639,41 @@ CASES = [
         "actors[0].path.waypoints_m[2]",
         "the leg from waypoint 1 [3, 5] to waypoint 2 [3, 8] is 3.00 m long, but rounding its turns (90° and 0°)",
     ),
+    (
+        "random_walk_region_unordered",
+        "scene",
+        edit(
+            SCENE,
+            "    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n",
+            "    random_walk:\n      region_m: [[5, 0], [-5, 10]] #<\n",
+        ),
+        "actors[0].random_walk.region_m",
+        "with x_min < x_max and y_min < y_max, got [[5, 0], [-5, 10]]; give the lower-left corner first",
+    ),
+    (
+        "random_walk_start_outside",
+        "scene",
+        edit(
+            SCENE,
+            "    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n",
+            "    random_walk:\n      region_m: [[-5, 0], [5, 10]]\n      start_m: [8, 5] #<\n",
+        ),
+        "actors[0].random_walk.start_m",
+        "must lie inside region_m [[-5, 0], [5, 10]], got [8, 5]; move it inside",
+    ),
+    (
+        "random_walk_legs_unordered",
+        "scene",
+        edit(
+            SCENE,
+            "    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n",
+            "    random_walk:\n      region_m: [[-5, 0], [5, 10]]\n      leg_length_m: [10, 3] #<\n",
+        ),
+        "actors[0].random_walk.leg_length_m",
+        "must be ordered [min, max] with min ≤ max, got [10, 3] m; swap them",
+    ),
+    (
+        "random_walk_pauses_unordered",
         "scene",
         edit(
             SCENE,
