@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 SOURCE = Path(__file__).resolve().parents[1] / "src" / "camgen"
-LOW = ("config", "job", "motion", "optics", "sensor", "isp", "actors", "annotate", "render", "io")
+LOW = ("config", "job", "motion", "optics", "sensor", "isp", "actors", "vehicles", "annotate", "render", "io")
 """Packages (and the `camgen.job` module) below `plan`."""
 HIGH = ("plan", "batch", "cli", "sim", "fit", "bench", "preview")
 """Packages that drive the ones in LOW."""
@@ -55,3 +55,18 @@ def test_the_check_sees_lazy_and_relative_imports():
     source = "def f():\n    from camgen.plan.execute import execute\n    from .. import batch\n"
     names = imported_modules(source, ["camgen", "render"])
     assert {"camgen.plan.execute", "camgen.batch"} <= names
+
+
+GEOMETRY = ("actors", "vehicles")
+"""Pure geometry (DESIGN.md "camgen.actors"): no renderer, no OpenGL."""
+
+
+@pytest.mark.parametrize("package", GEOMETRY)
+def test_geometry_packages_draw_nothing(package):
+    drawing = {
+        f"{path.relative_to(SOURCE)} imports {name}"
+        for path in _sources(package)
+        for name in imported_modules(path.read_text(encoding="utf-8"), _package_of(path))
+        if name.split(".")[:2] == ["camgen", "render"] or name.split(".")[0] in ("pyrender", "OpenGL")
+    }
+    assert not drawing, "\n".join(sorted(drawing))

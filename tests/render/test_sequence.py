@@ -109,9 +109,10 @@ def test_margin_render_crops_back_to_the_output(workspace, renderer):
     assert (cropped_ids == plain.instance_id).mean() > 0.9995
     same = cropped_ids == plain.instance_id
     close = np.isclose(crop_to_output(framed.radiance, wide.render)[same], plain.radiance[same], rtol=1e-4)
-    # A few pixels where two surfaces intersect, or where a person's small triangles bend the
-    # interpolated normal steeply, round differently (31 values of 307 197 measured, 1.2e-4 relative).
-    assert close.mean() > 0.9998
+    # A few pixels where two surfaces intersect, or where a person's or a procedural car's small
+    # triangles bend the interpolated normal steeply (and the cars' glossy glass turns it into a
+    # highlight), round differently (210 values of 921 597 measured, 1.2e-4 relative).
+    assert close.mean() > 0.9995
 
 
 def test_box_downsample_is_the_block_mean():
@@ -121,10 +122,13 @@ def test_box_downsample_is_the_block_mean():
 
 
 def test_supersampling_antialiases_radiance_but_not_ids(workspace, renderer):
-    # People drawn as cylinders: one grey material everywhere (a procedural person has coloured clothes).
+    # People drawn as cylinders and cars as boxes: one grey material everywhere (a procedural person has
+    # coloured clothes, a procedural car paint, glass and lamps).
     cylinder = "shape: {type: cylinder, name: body, radius_m: 0.25, height_m: 1.75, position_m: [0, 0, 0.875]}, "
+    box = "shape: {type: box, name: body, size_m: [4.5, 1.8, 1.5], position_m: [0, 0, 0.75]}, "
     text = (
         SUNNY.replace("  - {type: sun, illuminance_lux: 20000, azimuth_deg: 250}\n", "")
+        .replace("class: car, ", "class: car, " + box)
         .replace("{name: inside, class: person, ", "{name: inside, class: person, " + cylinder)
         .replace("    class: person\n", "    class: person\n    " + cylinder.removesuffix(", ") + "\n")
     )

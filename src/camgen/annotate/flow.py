@@ -182,17 +182,15 @@ def forward_flow_px(
     offset = T_next[:3, :3].T @ (T[:3, 3] - T_next[:3, 3])
     z = np.where(finite, depth, 1.0)
     x, y = rays_normalized[..., 0] * z, rays_normalized[..., 1] * z
-    d = np.where(finite[..., None], displacement_m, 0.0)
-    cam = [
-        R_rel[i, 0] * x
-        + R_rel[i, 1] * y
-        + R_rel[i, 2] * z
-        + np.where(finite, offset[i], 0.0)
-        + T_next[0, i] * d[..., 0]
-        + T_next[1, i] * d[..., 1]
-        + T_next[2, i] * d[..., 2]
-        for i in range(3)
-    ]
+    cam = [R_rel[i, 0] * x + R_rel[i, 1] * y + R_rel[i, 2] * z for i in range(3)]
+    for i in range(3):
+        cam[i][finite] += offset[i]
+    # The surface's own motion, R1ᵀ·d, only where there is some (the actors' pixels).
+    moving = finite & np.any(displacement_m != 0, axis=-1)  # NaN (no surface) lies outside `finite`
+    if moving.any():
+        turned = displacement_m[moving] @ T_next[:3, :3]  # (R1ᵀ·d)ᵀ = dᵀ·R1
+        for i in range(3):
+            cam[i][moving] += turned[:, i]
     with np.errstate(divide="ignore", invalid="ignore"):
         normalized = np.stack([cam[0] / cam[2], cam[1] / cam[2]], axis=-1)
     # Imaged as `project_points` decides: in front of the camera and inside the lens's fold radius.

@@ -301,6 +301,9 @@ class ActorPath(Model):
     """When the actor leaves the first waypoint, s."""
     loop: bool = False
     """Return to the first waypoint and repeat; otherwise stop at the last one."""
+    heading_deg: Annotated[float, Field(ge=-360, le=360), Why("a direction, −360° to 360°")] | None = None
+    """Which way an actor with a single waypoint (standing or parked) faces, counter-clockwise from +X,
+    degrees; null faces +X. An actor that moves faces along its path."""
     pause_s: NonNegativeFloat | list[NonNegativeFloat] = 0.0
     """How long the actor stands at each waypoint it reaches before walking on, s: one number for every
     waypoint, or a list with one per waypoint. A loop also pauses at the first waypoint on each return;
@@ -340,6 +343,12 @@ class ActorPath(Model):
                     f"waypoints_m[{i}]",
                     f"repeats the previous waypoint {list(points[i])}; remove it (use pause_s or start_s to wait)",
                 )
+        if self.heading_deg is not None and len(points) > 1:
+            raise invalid(
+                "heading_deg",
+                f"sets the facing of an actor that stands on one waypoint, but this path has {len(points)}, along "
+                "which the actor faces; remove heading_deg, or keep a single waypoint",
+            )
         if isinstance(self.pause_s, list) and len(self.pause_s) != len(points):
             raise invalid(
                 "pause_s",
@@ -455,6 +464,55 @@ class PersonAppearance(Model):
         }
 
 
+VEHICLE_BODY_TYPES: dict[str, tuple[str, ...]] = {
+    "car": ("sedan", "hatchback", "estate", "suv", "pickup"),
+    "truck": ("van", "box_truck"),
+    "bus": ("bus",),
+}
+"""The procedural vehicle's body types of each actor class (`camgen.vehicles.look` draws among them)."""
+PLATE_CHARACTERS = "ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789"
+VehicleColour = Literal["white", "black", "grey", "silver", "blue", "red", "green", "beige", "yellow", "orange"]
+
+
+class VehicleIdentity(Model):
+    """Who a procedural vehicle (a car, truck or bus without a shape) is. Everything not given is drawn
+    from the identity seed (`camgen.vehicles.look` cites the distributions); a given value pins that
+    attribute only."""
+
+    seed: Annotated[int, Field(ge=0)] | None = None
+    """Identity seed; null derives one from the scene's seed and the actor's place in the scene."""
+    body_type: Literal["sedan", "hatchback", "estate", "suv", "pickup", "van", "box_truck", "bus"] | None = None
+    """car: sedan, hatchback, estate, suv or pickup; truck: van or box_truck; bus: bus."""
+    colour: VehicleColour | None = None
+    """Paint colour (drawn from the Axalta 2022 shares otherwise)."""
+    plate_text: str | None = None
+    """The registration on both plates; null draws one in the UK's current format, "AB12 CDE"."""
+    lights_on: bool = False
+    """Head and tail lamps lit (they emit light; brake lamps and indicators follow the driving)."""
+
+    @field_validator("plate_text")
+    @classmethod
+    def _plate(cls, value: str | None) -> str | None:
+        groups = value.split(" ") if value is not None else []
+        if value is not None and not (
+            len(groups) in (1, 2) and all(1 <= len(g) <= 4 and set(g) <= set(PLATE_CHARACTERS) for g in groups)
+        ):
+            raise invalid(
+                "",
+                f"must be one or two groups of 1–4 capital letters or digits, like the UK's 'AB12 CDE' (it must "
+                f"fit the plate), got {value!r}",
+            )
+        return value
+
+    def pinned(self) -> dict[str, Any]:
+        """The attributes this block fixes (field → value)."""
+        return {
+            key: value
+            for key, value in self.model_dump().items()
+            if key in ("body_type", "colour", "plate_text") and value is not None
+        }
+
+
 ActorClass = Literal["person", "car", "truck", "bus", "bicycle", "motorcycle", "other"]
 VEHICLE_CLASSES = ("car", "truck", "bus", "motorcycle", "bicycle")
 """Actor classes that drive along their paths by default (`ActorPath.motion`)."""
@@ -488,7 +546,8 @@ class Actor(Model):
     """Object class written to MOTChallenge and COCO."""
     shape: ActorShape | None = None
     """Geometry in the actor's frame (x forward, z up, origin on the ground): shapes are centred on their
-    position_m, so give z = height/2 to stand on the ground. null uses a class-typical size."""
+    position_m, so give z = height/2 to stand on the ground. null: a procedural person (person) or vehicle
+    (car, truck, bus), a box of a class-typical size otherwise."""
     path: ActorPath | None = None
     """Waypoints to follow; give either this or random_walk."""
     random_walk: RandomWalk | None = None
@@ -498,6 +557,9 @@ class Actor(Model):
     actions: list[PersonAction] = []
     """For a person without a shape: named actions (wave, phone, sit, fall) at given times; they must
     not overlap."""
+    vehicle: VehicleIdentity | None = None
+    """For a car, truck or bus without a shape (a procedural vehicle): its identity seed and any
+    attribute to pin (null: all drawn)."""
 
     @model_validator(mode="after")
     def _check(self) -> Actor:
@@ -538,6 +600,21 @@ class Actor(Model):
                     f"{first.start_s + first.duration_s:g} s); a person does one action at a time: start it at "
                     f"{first.start_s + first.duration_s:g} s or later",
                 )
+        if self.vehicle is not None and (self.cls not in VEHICLE_BODY_TYPES or self.shape is not None):
+            raise invalid(
+                "vehicle",
+                "describes a procedural vehicle, but this actor is "
+                + (f"a {self.cls!r}" if self.cls not in VEHICLE_BODY_TYPES else "given a shape")
+                + f"; remove vehicle, or make it a {', '.join(VEHICLE_BODY_TYPES)} without a shape",
+            )
+        body_type = self.vehicle.body_type if self.vehicle is not None else None
+        if body_type is not None and body_type not in VEHICLE_BODY_TYPES[self.cls]:
+            owner = next(cls for cls, types in VEHICLE_BODY_TYPES.items() if body_type in types)
+            raise invalid(
+                "vehicle.body_type",
+                f"is {body_type}, a body of class {owner!r}, but this actor is a {self.cls!r}: use one of "
+                f"{', '.join(VEHICLE_BODY_TYPES[self.cls])}, or make the actor class {owner}",
+            )
         if self.appearance is not None and (self.cls != "person" or self.shape is not None):
             raise invalid(
                 "appearance",
@@ -899,11 +976,8 @@ def _with_site_daylight(data: Any) -> Any:
     }
 
 
-# Class-typical sizes (m) used when an actor gives no shape: a standing adult, a mid-size car, …
+# Class-typical sizes (m) used when an actor gives no shape and is not procedural (a bicycle, …)
 _DEFAULT_BOX_SIZE_M: dict[str, tuple[float, float, float]] = {
-    "car": (4.5, 1.8, 1.5),
-    "truck": (8.0, 2.5, 3.2),
-    "bus": (12.0, 2.55, 3.2),
     "bicycle": (1.8, 0.6, 1.6),
     "motorcycle": (2.1, 0.8, 1.4),
     "other": (1.0, 1.0, 1.0),
@@ -933,6 +1007,24 @@ def _standing_cylinder(name: str, radius_m: float, height_m: float) -> CylinderM
     )
 
 
+VEHICLE_ENVELOPE_M: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
+    "car": ((-1.4, -1.2, 0.0), (4.6, 1.2, 1.95)),
+    "truck": ((-2.6, -1.6, 0.0), (6.5, 1.6, 3.75)),
+    "bus": ((-3.6, -1.6, 0.0), (8.9, 1.6, 3.2)),
+}
+"""(low, high) corners of the box, in the actor's frame, that holds every procedural vehicle of a class
+(`camgen.vehicles`): its rear axle's middle stands on the actor's ground point (as a kinematic bicycle
+model's reference point), so the box reaches from the longest rear overhang (an estate's 1.1 m, a box
+truck's 2.4 m, a city bus's 3.5 m) to the longest wheelbase and front overhang (a pickup's 4.3 m, a box
+truck's 6.2 m, a bus's 8.7 m), over the widest wheels steered to the class's lock (about 0.6 rad) and to
+the tallest roof of its body types (`camgen.vehicles.look` cites the dimensions)."""
+
+
+def is_procedural_vehicle(actor: Actor) -> bool:
+    """Whether an actor is drawn as camgen's procedural vehicle (a car, truck or bus given no shape)."""
+    return actor.cls in VEHICLE_ENVELOPE_M and actor.shape is None
+
+
 def is_procedural_person(actor: Actor) -> bool:
     """Whether an actor is drawn as camgen's procedural person (a person given no shape)."""
     return actor.cls == "person" and actor.shape is None
@@ -955,5 +1047,11 @@ def actor_shape(actor: Actor) -> BoxMesh | CylinderMesh | SphereMesh | FileMesh:
         # The procedural person's envelope (`is_procedural_person`): the tallest stature with hair and
         # shoes, and the reach of a running stride and swinging arms.
         return _standing_cylinder(actor.name, PERSON_ENVELOPE_RADIUS_M, PERSON_ENVELOPE_HEIGHT_M)
+    if is_procedural_vehicle(actor):
+        # The procedural vehicle's envelope (`VEHICLE_ENVELOPE_M`), on the actor's ground point.
+        low, high = VEHICLE_ENVELOPE_M[actor.cls]
+        centre = tuple((a + b) / 2 for a, b in zip(low, high, strict=True))
+        extent = tuple(b - a for a, b in zip(low, high, strict=True))
+        return BoxMesh(type="box", name=actor.name, size_m=extent, position_m=centre)
     size = _DEFAULT_BOX_SIZE_M[actor.cls]
     return BoxMesh(type="box", name=actor.name, size_m=size, position_m=(0.0, 0.0, size[2] / 2))

@@ -20,9 +20,11 @@ YouTube-VIS-style datasets): ``videos``, ``images`` (one per frame, with ``video
 visible pixels, ``segmentation`` as compressed RLE of the visible mask, ``area`` in pixels,
 ``track_id``, ``amodal_bbox`` (clipped to the image), ``visibility``, ``truncation``,
 ``bbox_3d_world_m`` and ``bbox_3d_cam_m`` (8 corners each); for people also COCO ``keypoints``,
-``num_keypoints`` and ``keypoints_world_m``), ``categories`` (camgen's actor classes; ``person`` with
+``num_keypoints`` and ``keypoints_world_m``; for procedural vehicles ``plates``, each plate imaged:
+``side``, ``text``, ``quad`` (its 4 corners as one reads it), ``bbox``, ``visible`` and
+``visible_share``: `camgen.annotate.plates`), ``categories`` (camgen's actor classes; ``person`` with
 COCO's 17 keypoint names and skeleton) and ``tracks`` (one per actor, TAO-style, with a person's
-attribute labels).
+attribute labels, or a procedural vehicle's body type, colour, plate text and dimensions).
 
 YOLO, as Ultralytics reads a detection data set (docs.ultralytics.com/datasets/detect): ``images/``
 (the delivered frames, named by frame index counted from 0 as camgen's other per-frame files),
@@ -155,6 +157,7 @@ class SequenceAnnotations:
                     "bbox_3d_world_m": np.round(obj.box_3d_world_m, 6).tolist(),
                     "bbox_3d_cam_m": np.round(obj.box_3d_cam_m, 6).tolist(),
                     **_keypoint_fields(obj),
+                    **({"plates": list(obj.plates)} if getattr(obj, "plates", ()) else {}),
                 }
             )
 

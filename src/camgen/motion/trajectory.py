@@ -63,6 +63,9 @@ class Route:
     speed_m_s: float
     start_s: float = 0.0
     loop: bool = False
+    heading_rad: float = 0.0
+    """Which way an actor that never moves (a single waypoint) faces, rad; one that moves faces along
+    its legs."""
 
     def __post_init__(self) -> None:
         points = np.array(self.waypoints_m, dtype=np.float64)
@@ -121,7 +124,7 @@ class Route:
             np.array([p[1] for p in phases], dtype=np.float64).reshape(-1, 2),
             np.array([p[2] for p in phases], dtype=np.float64).reshape(-1, 2),
             np.array([p[3] for p in phases], dtype=np.float64),
-            0.0 if first_heading is None else first_heading,
+            self.heading_rad if first_heading is None else first_heading,
         )
 
     @property
@@ -253,7 +256,10 @@ def route_from_path(path: ActorPath) -> Route:
     """The route of an actor that follows waypoints."""
     count = len(path.waypoints_m)
     pauses = np.full(count, path.pause_s) if isinstance(path.pause_s, float | int) else np.array(path.pause_s)
-    return Route(np.array(path.waypoints_m, dtype=np.float64), pauses, path.speed_m_s, path.start_s, path.loop)
+    heading_rad = 0.0 if path.heading_deg is None else math.radians(path.heading_deg)
+    return Route(
+        np.array(path.waypoints_m, dtype=np.float64), pauses, path.speed_m_s, path.start_s, path.loop, heading_rad
+    )
 
 
 def random_walk_route(walk: RandomWalk, horizon_s: float, *, rng: np.random.Generator) -> Route:

@@ -23,6 +23,7 @@ import numpy as np
 
 from camgen.annotate.boxes import Box, amodal_box, clip_box, mask_boxes, points_box, truncation, unique_edges
 from camgen.annotate.keypoints import keypoint_visibility
+from camgen.annotate.plates import plate_annotation
 from camgen.job import CameraState
 from camgen.plan.lens_stages import LensStages
 from camgen.plan.visibility import box_corners
@@ -56,6 +57,9 @@ class ObjectAnnotation:
     None for an actor without a skeleton."""
     keypoints_world_m: np.ndarray | None = None
     """(17, 3) the same keypoints in the world, m."""
+    plates: tuple[dict, ...] = ()
+    """A procedural vehicle's licence plates in the image (`camgen.annotate.plates.plate_annotation`, with
+    ``side`` front or rear and the plate's ``text``), those imaged inside the image."""
 
 
 @dataclass
@@ -91,7 +95,7 @@ class Annotator:
         self.camera, self.graph, self.renderer = drawer.camera, drawer.graph, drawer.renderer
         graph = self.graph
         self._geometry = [
-            None if rig else _mesh_geometry(node) for node, rig in zip(graph.actor_nodes, graph.people, strict=True)
+            None if graph.rig(index) else _mesh_geometry(node) for index, node in enumerate(graph.actor_nodes)
         ]
         self._ids = [graph.instance_ids[node] for node in graph.actor_nodes]
 
@@ -114,7 +118,7 @@ class Annotator:
         clip = None
         for index, (actor, node) in enumerate(zip(graph.actors, graph.actor_nodes, strict=True)):
             pose = graph.scene.get_pose(node)
-            rig = graph.people[index]
+            rig = graph.rig(index)
             if rig is None:
                 vertices, edges = self._geometry[index]
                 world = vertices @ pose[:3, :3].T + pose[:3, 3]
@@ -148,6 +152,11 @@ class Annotator:
                 keypoints = keypoint_visibility(
                     keypoints_world, T, K, distortion, instance, track_id, W, H, own_depth_m=own_depth
                 )
+            plates = []
+            for side, corners in (rig.plate_corners_world() if hasattr(rig, "plate_corners_world") else {}).items():
+                plate = plate_annotation(corners, T, K, distortion, instance, track_id)
+                if plate is not None:
+                    plates.append({"side": side, "text": rig.look.plate_text, **plate})
             result.objects.append(
                 ObjectAnnotation(
                     track_id=track_id,
@@ -164,6 +173,7 @@ class Annotator:
                     box_3d_cam_m=corners_world @ T_cam_from_world[:3, :3].T + T_cam_from_world[:3, 3],
                     keypoints=keypoints,
                     keypoints_world_m=keypoints_world,
+                    plates=tuple(plates),
                 )
             )
         return result

@@ -235,7 +235,8 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
             detections=detector is not None,
         )
         graph = camera_renderer.graph
-        for actor, node, rig in zip(graph.actors, graph.actor_nodes, graph.people, strict=True):
+        for index, (actor, node) in enumerate(zip(graph.actors, graph.actor_nodes, strict=True)):
+            rig = graph.rig(index)
             attributes = None if rig is None or rig.model is None else rig.model.appearance.attributes()
             sequence.describe(graph.instance_ids[node], name=actor.name, cls=actor.cls, attributes=attributes)
     radiance_files = (

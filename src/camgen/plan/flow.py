@@ -96,19 +96,29 @@ class FlowField:
         now = self._poses()
         graph.place_actors(next_time_s)
         later = self._poses()
-        depth, ids, rays = passes.depth_m, passes.instance_id, self.rays(state)
+        depth, rays = passes.depth_m, self.rays(state)
         displacement = np.zeros((*depth.shape, 3))
         displacement[~np.isfinite(depth)] = np.nan
         T = np.array(state.T_world_from_cam)
-        for node, (pose, vertices), (pose_next, vertices_next) in zip(graph.actor_nodes, now, later, strict=True):
-            mask = ids == graph.instance_ids[node]
-            if not mask.any():
+        # Each actor's pixels, found with one sort of the frame's actor pixels (not a pass per actor).
+        actor_ids = np.array([graph.instance_ids[node] for node in graph.actor_nodes], dtype=np.int64)
+        ids = passes.instance_id.ravel().astype(np.int64)
+        pixels = np.flatnonzero(np.isin(ids, actor_ids))
+        pixels = pixels[np.argsort(ids[pixels], kind="stable")]
+        starts = np.searchsorted(ids[pixels], actor_ids, side="left")
+        ends = np.searchsorted(ids[pixels], actor_ids, side="right")
+        flat_rays, flat_depth = rays.reshape(-1, 2), depth.ravel()
+        flat_displacement = displacement.reshape(-1, 3)
+        for k, node in enumerate(graph.actor_nodes):
+            seen = pixels[starts[k] : ends[k]]
+            if len(seen) == 0:
                 continue
-            points = surface_points_m(rays[mask], depth[mask], T)
+            (pose, vertices), (pose_next, vertices_next) = now[k], later[k]
+            points = surface_points_m(flat_rays[seen], flat_depth[seen], T)
             if not np.array_equal(pose, pose_next) or len(vertices) != len(vertices_next):
-                displacement[mask] = rigid_displacement_m(points, pose, pose_next)
+                flat_displacement[seen] = rigid_displacement_m(points, pose, pose_next)
             else:  # a mesh posed in the world (or at rest): its vertices carry the motion
-                displacement[mask] = mesh_displacement_m(points, vertices, vertices_next, self._faces(node))
+                flat_displacement[seen] = mesh_displacement_m(points, vertices, vertices_next, self._faces(node))
         return displacement
 
     def flow(self, state: CameraState, next_state: CameraState, passes: Passes) -> tuple[np.ndarray, np.ndarray]:

@@ -49,12 +49,15 @@ from camgen.config.scene import (
     actor_shape,
     is_character,
     is_procedural_person,
+    is_procedural_vehicle,
 )
 from camgen.errors import ConfigError
 from camgen.io.gltf import Character, load_character
 from camgen.motion.pose import T_world_from_cam, rot_z
 from camgen.motion.trajectory import Route, actor_routes
 from camgen.render.gl import pyrender
+from camgen.vehicles import LAMP_COLOUR_RGB, LAMP_LUMINANCE_CD_M2, VehicleRig, vehicle_rig
+from camgen.vehicles.plate import plate_image
 from camgen.world.textures import TYPICAL_ALBEDO_RGB, encode_srgb8, surface_maps
 
 from OpenGL.GL import GL_REPEAT  # isort: skip — after camgen.render.gl, which selects the EGL platform
@@ -98,14 +101,25 @@ class SceneGraph:
     """Primitives whose vertices changed since the renderer last uploaded them."""
     crowd: Crowd = field(default_factory=lambda: Crowd([]))
     """The people, skinned together."""
+    vehicles: list[VehicleRig | None] = field(default_factory=list)
+    """Each actor's procedural vehicle (its mesh posed in world coordinates), or None."""
+
+    def rig(self, index: int) -> PersonRig | CharacterRig | VehicleRig | None:
+        """Actor `index`'s procedural person, glTF character or procedural vehicle, or None (a shape)."""
+        person = self.people[index] if self.people else None
+        return person if person is not None else (self.vehicles[index] if self.vehicles else None)
 
     def place_actors(self, time_s: float) -> None:
         """Move every actor to where its route puts it at `time_s` (and pose every person)."""
-        for route, node, local, rig in zip(
-            self.actor_routes, self.actor_nodes, self.actor_local_poses, self.people, strict=True
+        vehicles = self.vehicles or [None] * len(self.actor_nodes)
+        for route, node, local, rig, vehicle in zip(
+            self.actor_routes, self.actor_nodes, self.actor_local_poses, self.people, vehicles, strict=True
         ):
-            if rig is None:
+            if rig is None and vehicle is None:
                 self.scene.set_pose(node, actor_pose(route, time_s) @ local)
+            elif vehicle is not None and vehicle.place(time_s):
+                _pose_vehicle_mesh(node, vehicle, self.deformed)
+                self.scene.set_pose(node, np.eye(4))
         self.crowd.place(time_s)
         for node, rig in zip(self.actor_nodes, self.people, strict=True):
             if rig is None:
@@ -309,6 +323,88 @@ def person_mesh(rig: PersonRig) -> pyrender.Mesh:
     return pyrender.Mesh(primitives=[primitive])
 
 
+GLASS_RGB = (0.012, 0.014, 0.016)
+"""Tinted glass seen from outside against a dark cabin: a near-black base, glossy (roughness 0.05), so
+the sun's and the sky's specular reflections carry its look."""
+VEHICLE_SURFACES = {
+    "glass": ((*GLASS_RGB, 1.0), 0.0, 0.05),
+    "tyre": ((0.025, 0.025, 0.025, 1.0), 0.0, 0.9),
+    "rim": ((0.45, 0.45, 0.46, 1.0), 0.6, 0.35),
+    "trim": ((0.03, 0.03, 0.03, 1.0), 0.0, 0.6),
+    "head": ((0.55, 0.56, 0.58, 1.0), 0.0, 0.15),
+    "tail": ((0.25, 0.01, 0.01, 1.0), 0.0, 0.2),
+    "brake": ((0.25, 0.01, 0.01, 1.0), 0.0, 0.2),
+    "indicator_left": ((0.45, 0.2, 0.02, 1.0), 0.0, 0.2),
+    "indicator_right": ((0.45, 0.2, 0.02, 1.0), 0.0, 0.2),
+}
+"""Base colour (linear, alpha), metallic and roughness of a vehicle's surfaces other than its paint:
+unlit lamps show their lens colour (clear, red, amber) and emit `camgen.vehicles.LAMP_LUMINANCE_CD_M2`
+when lit."""
+
+
+def _lamp(surface: str) -> str | None:
+    """The lamp a surface is (head, tail, brake, indicator_left, indicator_right), or None."""
+    return surface if surface in ("head", "tail", "brake") or surface.startswith("indicator") else None
+
+
+def _lamp_emission(surface: str, lit: bool) -> tuple[float, float, float]:
+    if not lit:
+        return (0.0, 0.0, 0.0)
+    kind = "indicator" if surface.startswith("indicator") else surface
+    luminance = LAMP_LUMINANCE_CD_M2[kind]
+    return tuple(luminance * c for c in LAMP_COLOUR_RGB[kind])
+
+
+def vehicle_mesh(rig: VehicleRig) -> pyrender.Mesh:
+    """A procedural vehicle as one primitive per part (paint, glass, tyres, rims, each lamp, plates),
+    posed in world coordinates; `SceneGraph.place_actors` moves it and lights its lamps."""
+    paint = rig.look.paint
+    primitives = []
+    for part, piece in zip(rig.model.parts, rig.parts, strict=True):
+        if part.surface == "paint":
+            material = pyrender.MetallicRoughnessMaterial(
+                baseColorFactor=(*paint.color_rgb, 1.0), metallicFactor=paint.metallic, roughnessFactor=paint.roughness
+            )
+        elif part.surface.startswith("plate_"):
+            image = plate_image(rig.look.plate_text, rear=part.surface == "plate_rear")
+            material = pyrender.MetallicRoughnessMaterial(
+                baseColorFactor=(1.0, 1.0, 1.0, 1.0),
+                baseColorTexture=pyrender.Texture(source=encode_srgb8(image), source_channels="RGB"),
+                metallicFactor=0.0,
+                roughnessFactor=0.5,
+            )
+        else:
+            colour, metallic, roughness = VEHICLE_SURFACES[part.surface]
+            material = pyrender.MetallicRoughnessMaterial(
+                baseColorFactor=colour, metallicFactor=metallic, roughnessFactor=roughness
+            )
+        lamp = _lamp(part.surface)
+        if lamp is not None:
+            material.emissiveFactor = _lamp_emission(lamp, rig.lit.get(lamp, False))
+        primitives.append(
+            pyrender.Primitive(
+                positions=rig.vertices_m[piece],
+                normals=rig.normals[piece],
+                texcoord_0=part.texcoords,
+                indices=part.faces,
+                material=material,
+            )
+        )
+    return pyrender.Mesh(primitives=primitives)
+
+
+def _pose_vehicle_mesh(node: pyrender.Node, rig: VehicleRig, deformed: set) -> None:
+    """Copy a placed vehicle's vertices into its primitives and light its lamps."""
+    for primitive, part, piece in zip(node.mesh.primitives, rig.model.parts, rig.parts, strict=True):
+        primitive.positions = rig.vertices_m[piece]
+        primitive.normals = rig.normals[piece]
+        deformed.add(primitive)
+        lamp = _lamp(part.surface)
+        if lamp is not None:
+            primitive.material.emissiveFactor = _lamp_emission(lamp, rig.lit.get(lamp, False))
+    node.mesh._bounds = None  # pyrender caches a mesh's bounds
+
+
 def character_mesh(rig: CharacterRig, override: Material | None) -> pyrender.Mesh:
     """A glTF character as one primitive per file primitive, with its PBR material and textures
     (mipmapped and filtered trilinearly: pyrender's default for a texture with an image), posed in
@@ -423,7 +519,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
     graph.add(pyrender.IntrinsicsCamera(1.0, 1.0, 0.0, 0.0), name="camera")
     instances = instance_table(scene)
     routes = actor_routes(scene)
-    actor_nodes, local_poses, environment_nodes, people = [], [], [], []
+    actor_nodes, local_poses, environment_nodes, people, vehicles = [], [], [], [], []
     characters: dict[str, Character] = {}
     for index, actor in enumerate(scene.actors):
         if is_procedural_person(actor):
@@ -431,6 +527,14 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
             actor_nodes.append(graph.add(person_mesh(rig), name=f"actor:{actor.name}"))
             local_poses.append(np.eye(4))
             people.append(rig)
+            vehicles.append(None)
+            continue
+        if is_procedural_vehicle(actor):
+            vehicle = vehicle_rig(actor, routes[actor.name], scene_seed=scene.seed, actor_index=index)
+            actor_nodes.append(graph.add(vehicle_mesh(vehicle), name=f"actor:{actor.name}"))
+            local_poses.append(np.eye(4))
+            people.append(None)
+            vehicles.append(vehicle)
             continue
         if is_character(actor):
             rig = _character_rig(actor, routes[actor.name], characters, resolve_path)
@@ -438,11 +542,13 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
             actor_nodes.append(graph.add(character_mesh(rig, override), name=f"actor:{actor.name}"))
             local_poses.append(np.eye(4))
             people.append(rig)
+            vehicles.append(None)
             continue
         shape = actor_shape(actor)
         actor_nodes.append(graph.add(build_mesh(shape, resolve_path), name=f"actor:{actor.name}"))
         local_poses.append(placement(shape))
         people.append(None)
+        vehicles.append(None)
     for mesh in scene.environment.meshes:
         node = graph.add(build_mesh(mesh, resolve_path), pose=placement(mesh), name=f"environment:{mesh.name}")
         environment_nodes.append(node)
@@ -464,6 +570,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         actor_routes=[routes[actor.name] for actor in scene.actors],
         people=people,
         crowd=Crowd([rig for rig in people if isinstance(rig, PersonRig)]),
+        vehicles=vehicles,
     )
     result.place_actors(0.0)
     return result

@@ -217,12 +217,13 @@ def _reach(graph: SceneGraph) -> tuple[np.ndarray, np.ndarray]:
     for node in graph.environment_nodes:
         points.append(box_corners(*node.mesh.bounds, graph.scene.get_pose(node)))
         radii.append(np.zeros(8))
-    for actor, route, node, local, rig in zip(
-        graph.actors, graph.actor_routes, graph.actor_nodes, graph.actor_local_poses, graph.people, strict=True
+    for index, (actor, route, node, local) in enumerate(
+        zip(graph.actors, graph.actor_routes, graph.actor_nodes, graph.actor_local_poses, strict=True)
     ):
+        rig = graph.rig(index)
         if isinstance(rig, CharacterRig):  # posed in the world: its reach over its clips bounds it
             radius = rig.envelope_radius_m()
-        elif rig is not None:  # a person's mesh is posed in the world: its envelope bounds it
+        elif rig is not None:  # a person's or a vehicle's mesh is posed in the world: its envelope bounds it
             shape = actor_shape(actor)
             radius = float(np.max(np.linalg.norm(box_corners(*local_bounds(shape), placement(shape)), axis=1)))
         else:

@@ -1,0 +1,438 @@
+"""A vehicle's shapes: a lofted body shell with glass, wheels, lamps and plates, in the vehicle's frame.
+
+The vehicle's frame: x forward, y left, z up, origin on the ground at the middle of its footprint.
+
+The shell is a loft: a side profile per body type (the roof line from the rear, u = 0, to the front,
+u = 1, as heights over the vehicle's height; `PROFILES`) sampled at stations along the length, each
+station a closed cross-section — a superellipse (exponent `SECTION_EXPONENT`: a rounded box, so
+shoulders and sills are rounded), narrowed above the beltline (the greenhouse's tumblehome) and, in
+plan, rounded at the four corners. The underside follows the ground clearance and rises in an arch
+over each wheel. Both ends are closed by ladder-triangulated caps, so the shell is one closed,
+consistently wound surface (watertight). Its faces are split by position and normal into paint and
+glass (side windows between the pillars, windscreen, rear window; a bus's and a van's glazed ends),
+one primitive each, sharing the shell's vertices: together they stay watertight.
+
+Wheels are a tyre (a closed cylinder, `WHEEL_SECTIONS` sides) and a rim (hub and five spokes standing
+proud of the tyre's sidewall, so that a turning wheel shows it) in the wheel's own frame (axle along
+y). Lamps are thin boxes half sunk into the shell's ends; plates are quads 5 mm in front of them.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+
+import numpy as np
+import trimesh
+
+from camgen.vehicles.look import VehicleLook
+from camgen.vehicles.plate import PLATE_SIZE_M
+
+SECTION_POINTS = 28
+"""Points around each cross-section (even, so the end caps pair them left and right)."""
+SECTION_EXPONENT = 5.0
+"""Superellipse exponent of the cross-section: 2 an ellipse, large a sharp box; 5 gives shoulders
+rounded over about a fifth of the half-width."""
+STATION_SPACING_M = 0.08
+WHEEL_SECTIONS = 32
+"""Sides of a tyre's cylinder: at 32 a 0.63 m tyre's outline departs from a circle by 1.5 mm."""
+ARCH_GAP_M = 0.04
+"""Clearance between a tyre and its wheel arch, m."""
+TYRE_WIDTH_SHARE = 0.115
+"""Tyre section over the vehicle's width (205 mm of a 1.8 m car; 275 mm of a 2.55 m bus)."""
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A body type's side view and where its glass is, as shares of length (u, rear 0 → front 1) and
+    height (z over the vehicle's height)."""
+
+    top: tuple[tuple[float, float], ...]
+    """(u, z) of the roof line from the rear to the front."""
+    belt: float
+    """Beltline: the lower edge of the side windows."""
+    side_glass: tuple[float, float]
+    pillars: tuple[tuple[float, float], ...] = ()
+    """u-bands of paint that interrupt the side glass (B, C pillars)."""
+    windscreen: tuple[float, float] = (0.0, 0.0)
+    rear_window: tuple[float, float] = (0.0, 0.0)
+    front_cap_glass: tuple[float, float] | None = None
+    """z-band of the front end that is glass (a bus's or a truck cab's upright windscreen)."""
+    rear_cap_glass: tuple[float, float] | None = None
+    clearance_m: float = 0.15
+    """Height of the sill above the ground, m (cars 0.13–0.2 m)."""
+    end_lift: float = 0.18
+    """Height of the bumpers' lower edge at both ends, as a share of the vehicle's height."""
+    tumblehome: float = 0.10
+    """How much narrower the roof is than the body at the beltline, as a share of the width."""
+    corner_share: float = 0.06
+    """Length of the rounded corners in plan, as a share of the length."""
+    end_width: float = 0.78
+    """Width of the flat end faces, as a share of the width."""
+
+
+PROFILES: dict[str, Profile] = {
+    "sedan": Profile(
+        top=((0, 0.50), (0.02, 0.62), (0.06, 0.66), (0.24, 0.69), (0.30, 0.73), (0.40, 0.97), (0.44, 1.0),
+             (0.62, 1.0), (0.66, 0.96), (0.76, 0.69), (0.80, 0.66), (0.97, 0.61), (1, 0.50)),
+        belt=0.66, side_glass=(0.32, 0.75), pillars=((0.52, 0.55),), windscreen=(0.64, 0.78),
+        rear_window=(0.29, 0.43),
+    ),
+    "hatchback": Profile(
+        top=((0, 0.52), (0.02, 0.70), (0.06, 0.92), (0.12, 1.0), (0.55, 1.0), (0.60, 0.95), (0.72, 0.68),
+             (0.76, 0.66), (0.97, 0.61), (1, 0.50)),
+        belt=0.64, side_glass=(0.06, 0.71), pillars=((0.06, 0.15), (0.43, 0.46)), windscreen=(0.57, 0.74),
+        rear_window=(0.015, 0.10),
+    ),
+    "estate": Profile(
+        top=((0, 0.52), (0.015, 0.70), (0.03, 0.93), (0.06, 1.0), (0.60, 1.0), (0.64, 0.95), (0.74, 0.68),
+             (0.78, 0.66), (0.97, 0.61), (1, 0.50)),
+        belt=0.64, side_glass=(0.03, 0.73), pillars=((0.03, 0.07), (0.28, 0.31), (0.50, 0.53)),
+        windscreen=(0.61, 0.76), rear_window=(0.01, 0.05),
+    ),
+    "suv": Profile(
+        top=((0, 0.52), (0.015, 0.70), (0.035, 0.94), (0.07, 1.0), (0.60, 1.0), (0.65, 0.95), (0.74, 0.70),
+             (0.78, 0.68), (0.97, 0.63), (1, 0.52)),
+        belt=0.66, side_glass=(0.035, 0.73), pillars=((0.035, 0.11), (0.46, 0.49)), windscreen=(0.62, 0.76),
+        rear_window=(0.01, 0.06), clearance_m=0.19,
+    ),
+    "pickup": Profile(
+        top=((0, 0.56), (0.02, 0.58), (0.36, 0.58), (0.375, 0.96), (0.39, 1.0), (0.62, 1.0), (0.66, 0.95),
+             (0.73, 0.68), (0.77, 0.66), (0.97, 0.62), (1, 0.52)),
+        belt=0.64, side_glass=(0.39, 0.72), pillars=((0.52, 0.55),), windscreen=(0.63, 0.76),
+        rear_window=(0.36, 0.385), clearance_m=0.22,
+    ),
+    "van": Profile(
+        top=((0, 0.96), (0.015, 1.0), (0.78, 1.0), (0.84, 0.93), (0.90, 0.62), (0.94, 0.55), (0.99, 0.50),
+             (1, 0.45)),
+        belt=0.52, side_glass=(0.73, 0.89), windscreen=(0.80, 0.91), rear_cap_glass=(0.62, 0.90),
+        clearance_m=0.18, end_lift=0.10, tumblehome=0.05, corner_share=0.03, end_width=0.85,
+    ),
+    "box_truck": Profile(
+        top=((0, 0.99), (0.005, 1.0), (0.76, 1.0), (0.765, 0.80), (0.80, 0.81), (0.95, 0.80), (0.985, 0.74),
+             (1, 0.40)),
+        belt=0.44, side_glass=(0.86, 0.975), windscreen=(0.955, 1.0), clearance_m=0.45, end_lift=0.12,
+        tumblehome=0.0, corner_share=0.01, end_width=0.92,
+    ),
+    "bus": Profile(
+        top=((0, 0.93), (0.01, 0.98), (0.02, 1.0), (0.98, 1.0), (0.99, 0.98), (1, 0.93)),
+        belt=0.37, side_glass=(0.025, 0.975), pillars=tuple((0.025 + 0.105 * k, 0.037 + 0.105 * k) for k in range(10)),
+        front_cap_glass=(0.33, 0.90), rear_cap_glass=(0.55, 0.88), clearance_m=0.30, end_lift=0.10,
+        tumblehome=0.02, corner_share=0.012, end_width=0.90,
+    ),
+}  # fmt: skip
+
+
+@dataclass
+class Part:
+    """One primitive of a vehicle: triangles in the vehicle's frame, or, for a wheel part, in the
+    frame of the wheel each vertex belongs to (`wheel`: 0 front left, 1 front right, 2 rear left,
+    3 rear right; −1 the body)."""
+
+    name: str
+    surface: str
+    """Which material draws it: paint, glass, tyre, rim, trim, head, tail, brake, indicator_left,
+    indicator_right, plate_front, plate_rear."""
+    vertices_m: np.ndarray
+    normals: np.ndarray
+    faces: np.ndarray
+    wheel: np.ndarray
+    texcoords: np.ndarray | None = None
+
+
+@dataclass
+class VehicleModel:
+    """Everything drawn of one vehicle, at rest, and where its wheels and plates are."""
+
+    look: VehicleLook
+    parts: list[Part]
+    wheel_centres_m: np.ndarray
+    """(4, 3) wheel centres in the vehicle's frame: front left, front right, rear left, rear right."""
+    plate_corners_m: dict[str, np.ndarray] = field(default_factory=dict)
+    """"front" / "rear" → (4, 3) corners of the plate in the vehicle's frame, in the plate image's
+    order: top left, top right, bottom right, bottom left (as one reads the plate)."""
+
+    @property
+    def appearance(self) -> VehicleLook:
+        """The look (named like a person model's appearance, whose `attributes()` the annotations read)."""
+        return self.look
+
+
+def _interp_top(profile: Profile, u: np.ndarray) -> np.ndarray:
+    points = np.array(profile.top, dtype=np.float64)
+    return np.interp(u, points[:, 0], points[:, 1])
+
+
+def _stations(look: VehicleLook, axles_x: tuple[float, float], arch_radius_m: float) -> np.ndarray:
+    """Station positions along x, m: even spacing, denser over the wheel arches, every profile knot."""
+    L = look.length_m
+    profile = PROFILES[look.body_type]
+    xs = [np.linspace(-L / 2, L / 2, max(8, round(L / STATION_SPACING_M)) + 1)]
+    xs.append((np.array([u for u, _ in profile.top]) - 0.5) * L)
+    c = profile.corner_share * L
+    xs.append(-L / 2 + c * (1 - np.cos(np.linspace(0, np.pi / 2, 7))))
+    xs.append(L / 2 - c * (1 - np.cos(np.linspace(0, np.pi / 2, 7))))
+    for x0 in axles_x:
+        xs.append(x0 + arch_radius_m * np.sin(np.linspace(-np.pi / 2, np.pi / 2, 17)))
+    x = np.unique(np.round(np.clip(np.concatenate(xs), -L / 2, L / 2), 6))
+    x[0], x[-1] = -L / 2, L / 2
+    return x
+
+
+def _bottom_m(look: VehicleLook, x: np.ndarray, axles_x, arch_radius_m: float) -> np.ndarray:
+    """Height of the underside at `x`: the clearance, rising to the bumpers at both ends and arching
+    over the wheels."""
+    profile = PROFILES[look.body_type]
+    L, H = look.length_m, look.height_m
+    end = profile.end_lift * H
+    ramp = 0.08 * L
+    d = np.minimum(x + L / 2, L / 2 - x)
+    bottom = profile.clearance_m + (end - profile.clearance_m) * np.clip(1 - d / ramp, 0, 1) ** 2
+    r = look.wheel_radius_m
+    for x0 in axles_x:
+        inside = np.abs(x - x0) < arch_radius_m
+        arch = r + np.sqrt(np.maximum(arch_radius_m**2 - (x - x0) ** 2, 0.0))
+        bottom = np.where(inside, np.maximum(bottom, arch), bottom)
+    return bottom
+
+
+SECTION_DENSE = 256
+"""Points of the dense superellipse each section's points are spaced evenly along."""
+
+
+def _sections(half_width_m: np.ndarray, half_height_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(y, z − centre) of each station's section points (S, N), counter-clockwise about +x from the
+    right-hand middle, evenly spaced along the superellipse's perimeter and offset half a step, so no
+    point lies on the vertical and point k's mirror image (y → −y) is point N/2 − 1 − k."""
+    phi = np.linspace(0.0, 2 * np.pi, SECTION_DENSE + 1)
+    e = 2 / SECTION_EXPONENT
+    c, s = np.cos(phi), np.sin(phi)
+    y = half_width_m[:, None] * (np.sign(c) * np.abs(c) ** e)[None, :]
+    z = half_height_m[:, None] * (np.sign(s) * np.abs(s) ** e)[None, :]
+    along = np.concatenate([np.zeros((len(y), 1)), np.cumsum(np.hypot(np.diff(y), np.diff(z)), axis=1)], axis=1)
+    wanted = (np.arange(SECTION_POINTS) + 0.5) / SECTION_POINTS
+    ys, zs = np.empty((len(y), SECTION_POINTS)), np.empty((len(y), SECTION_POINTS))
+    for i in range(len(y)):
+        target = wanted * along[i, -1]
+        ys[i], zs[i] = np.interp(target, along[i], y[i]), np.interp(target, along[i], z[i])
+    return ys, zs
+
+
+def shell(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The body shell: (vertices (V, 3) m, faces (F, 3), per-vertex normals (V, 3), face kind (F,) 0
+    paint, 1 glass), closed and wound counter-clockwise seen from outside."""
+    profile = PROFILES[look.body_type]
+    L, W, H = look.length_m, look.width_m, look.height_m
+    axles = (look.front_axle_x_m, look.rear_axle_x_m)
+    arch_radius = look.wheel_radius_m + ARCH_GAP_M
+    x = _stations(look, axles, arch_radius)
+    u = x / L + 0.5
+    top = _interp_top(profile, u) * H
+    bottom = np.minimum(_bottom_m(look, x, axles, arch_radius), top - 0.05)
+    # Plan view: flat ends `end_width` wide, quarter-ellipse corners `corner_share` long.
+    c = profile.corner_share * L
+    d = np.minimum(x + L / 2, L / 2 - x)
+    t = np.clip(d / c, 0.0, 1.0)
+    half_width = W / 2 * (profile.end_width + (1 - profile.end_width) * np.sqrt(1 - (1 - t) ** 2))
+    zc, hz = (top + bottom) / 2, (top - bottom) / 2
+    Y, Z = _sections(half_width, hz)
+    Z = Z + zc[:, None]
+    belt = profile.belt * H
+    above = np.clip((Z - belt) / np.maximum(top[:, None] - belt, 1e-6), 0.0, 1.0)
+    Y = Y * (1 - profile.tumblehome * above)
+    X = np.broadcast_to(x[:, None], Z.shape)
+    S, N = Z.shape
+    vertices = np.stack([X, Y, Z], axis=-1).reshape(-1, 3)
+    index = np.arange(S * N).reshape(S, N)
+    a, b = index[:-1], np.roll(index[:-1], -1, axis=1)
+    c_, d_ = np.roll(index[1:], -1, axis=1), index[1:]
+    # Points run counter-clockwise about +x (y then z): seen from outside, (a, c, d) turns outward.
+    tube = np.concatenate([np.stack([a, c_, d_], -1).reshape(-1, 3), np.stack([a, b, c_], -1).reshape(-1, 3)])
+    # Ends: a ladder between each point on the left (y > 0), bottom to top, and its mirror image.
+    left = sorted((k for k in range(N) if Y[0, k] > 0), key=lambda k: Z[0, k])
+    caps = []
+    for station, sign in ((0, -1), (S - 1, 1)):
+        for k0, k1 in itertools.pairwise(left):
+            m0, m1 = N // 2 - 1 - k0, N // 2 - 1 - k1
+            p = index[station]
+            quad = [(p[k0], p[k1], p[m1 % N]), (p[k0], p[m1 % N], p[m0 % N])]
+            caps += quad if sign > 0 else [tuple(reversed(f)) for f in quad]
+    faces = np.concatenate([tube, np.array(caps)])
+    normals = _vertex_normals(vertices, faces[: len(tube)], len(vertices))
+    kind = _glass(profile, look, vertices, faces, len(tube) // 2)
+    return vertices, faces, normals, kind
+
+
+def _vertex_normals(vertices: np.ndarray, faces: np.ndarray, count: int) -> np.ndarray:
+    """Area-weighted smooth normals of the tube (the caps' flat faces do not bend its rim)."""
+    cross = np.cross(vertices[faces[:, 1]] - vertices[faces[:, 0]], vertices[faces[:, 2]] - vertices[faces[:, 0]])
+    normals = np.zeros((count, 3))
+    for k in range(3):
+        np.add.at(normals, faces[:, k], cross)
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    return normals / np.where(length > 0, length, 1.0)
+
+
+def _glass(profile: Profile, look: VehicleLook, vertices, faces, quads: int) -> np.ndarray:
+    """1 for each face of glass, 0 for paint. The tube's two triangles of a quad (faces k and
+    k + `quads`) are judged together, by the quad's centre and normal."""
+    L, H = look.length_m, look.height_m
+    corners = vertices[faces]
+    centre = corners.mean(axis=1)
+    n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    pair = np.arange(2 * quads)
+    partner = np.where(pair < quads, pair + quads, pair - quads)
+    centre[: 2 * quads] = (centre[pair] + centre[partner]) / 2
+    n[: 2 * quads] = n[pair] + n[partner]
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    u = centre[:, 0] / L + 0.5
+    z = centre[:, 2] / H
+    top = _interp_top(profile, np.clip(u, 0, 1))
+    glass = np.zeros(len(faces), dtype=bool)
+    within = lambda band: (u > band[0]) & (u < band[1])  # noqa: E731
+    above_belt = (z > profile.belt + 0.02) & (z < top - 0.03)
+    side = np.abs(n[:, 1]) > 0.75
+    pillar = np.zeros(len(faces), dtype=bool)
+    for band in profile.pillars:
+        pillar |= within(band)
+    glass |= above_belt & side & within(profile.side_glass) & ~pillar
+    upper = (np.abs(n[:, 1]) < 0.45) & (z > profile.belt + 0.02)
+    glass |= upper & (within(profile.windscreen) | within(profile.rear_window))
+    cap = np.arange(len(faces)) >= 2 * quads
+    for band, front in ((profile.front_cap_glass, True), (profile.rear_cap_glass, False)):
+        if band is None:
+            continue
+        end = cap & ((centre[:, 0] > 0) == front)
+        glass |= end & (z > band[0]) & (z < band[1])
+    return glass.astype(np.int8)
+
+
+def _box(size_m, centre_m) -> trimesh.Trimesh:
+    box = trimesh.creation.box(extents=size_m)
+    box.apply_translation(centre_m)
+    return box
+
+
+def _flat(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unshared vertices and face normals (flat shading) of a mesh: (vertices, normals, faces)."""
+    vertices = np.asarray(mesh.vertices)[np.asarray(mesh.faces)].reshape(-1, 3)
+    normals = np.repeat(np.asarray(mesh.face_normals), 3, axis=0)
+    return vertices, normals, np.arange(len(vertices)).reshape(-1, 3)
+
+
+def _part(name: str, surface: str, meshes: list[tuple[trimesh.Trimesh, int]], smooth: bool = False) -> Part:
+    vertices, normals, faces, wheel, offset = [], [], [], [], 0
+    for mesh, wheel_index in meshes:
+        if smooth:
+            v, nrm, f = np.asarray(mesh.vertices), np.asarray(mesh.vertex_normals), np.asarray(mesh.faces)
+        else:
+            v, nrm, f = _flat(mesh)
+        vertices.append(v)
+        normals.append(nrm)
+        faces.append(f + offset)
+        wheel.append(np.full(len(v), wheel_index, dtype=np.int8))
+        offset += len(v)
+    return Part(
+        name, surface, np.concatenate(vertices), np.concatenate(normals), np.concatenate(faces), np.concatenate(wheel)
+    )
+
+
+def wheel_meshes(radius_m: float, width_m: float) -> tuple[trimesh.Trimesh, list[trimesh.Trimesh]]:
+    """A tyre (a closed cylinder) and its rim (hub and five spokes, 8 mm proud of both sidewalls), in
+    the wheel's frame: axle along y, centred on the origin."""
+    to_y = trimesh.transformations.rotation_matrix(np.pi / 2, (1, 0, 0))
+    tyre = trimesh.creation.cylinder(radius=radius_m, height=width_m, sections=WHEEL_SECTIONS)
+    tyre.apply_transform(to_y)
+    proud = width_m + 0.016
+    hub = trimesh.creation.cylinder(radius=0.22 * radius_m, height=proud, sections=16)
+    hub.apply_transform(to_y)
+    rim = [hub]
+    for k in range(5):
+        spoke = _box((0.62 * radius_m, proud - 0.004, 0.11 * radius_m), (0.31 * radius_m, 0.0, 0.0))
+        spoke.apply_transform(trimesh.transformations.rotation_matrix(2 * np.pi * k / 5, (0, 1, 0)))
+        rim.append(spoke)
+    return tyre, rim
+
+
+def wheel_centres(look: VehicleLook) -> np.ndarray:
+    """(4, 3): front left, front right, rear left, rear right, m."""
+    r, t = look.wheel_radius_m, look.track_m / 2
+    f, b = look.front_axle_x_m, look.rear_axle_x_m
+    return np.array([(f, t, r), (f, -t, r), (b, t, r), (b, -t, r)])
+
+
+LAMP_DEPTH_M = 0.06
+"""Lamps are boxes this deep, half sunk into the shell's end face."""
+
+
+def _end_heights(look: VehicleLook) -> tuple[tuple[float, float], tuple[float, float]]:
+    """(bottom, top) of the rear and front end faces, m."""
+    profile = PROFILES[look.body_type]
+    axles = (look.front_axle_x_m, look.rear_axle_x_m)
+    ends = np.array([-look.length_m / 2, look.length_m / 2])
+    bottom = _bottom_m(look, ends, axles, look.wheel_radius_m + ARCH_GAP_M)
+    top = _interp_top(profile, np.array([0.0, 1.0])) * look.height_m
+    return (float(bottom[0]), float(top[0])), (float(bottom[1]), float(top[1]))
+
+
+def lamps_and_plates(look: VehicleLook) -> tuple[list[Part], dict[str, np.ndarray], list[Part]]:
+    """Lamp parts (head, tail, brake, indicator), the plates' corners, and the plate parts."""
+    L, W = look.length_m, look.width_m
+    (rear_low, rear_high), (front_low, front_high) = _end_heights(look)
+    half = W / 2 * PROFILES[look.body_type].end_width
+    head_z = float(np.clip(front_high - 0.10, front_low + 0.12, 1.0))
+    tail_z = float(np.clip(rear_high - 0.12, rear_low + 0.25, 1.2))
+    xf, xr = L / 2, -L / 2
+    lamp = lambda x, y, z, w, h: _box((LAMP_DEPTH_M, w, h), (x, y, z))  # noqa: E731
+    head = [(lamp(xf, s * (half - 0.19), head_z, 0.26, 0.09), -1) for s in (1, -1)]
+    tail = [(lamp(xr, s * (half - 0.13), tail_z, 0.22, 0.10), -1) for s in (1, -1)]
+    brake = [(lamp(xr, s * (half - 0.33), tail_z, 0.16, 0.07), -1) for s in (1, -1)]
+    lamps = [
+        _part("head_lamps", "head", head),
+        _part("tail_lamps", "tail", tail),
+        _part("brake_lamps", "brake", brake),
+    ]
+    for name, s in (("left", 1), ("right", -1)):  # each side flashes on its own
+        front = lamp(xf, s * (half - 0.035), head_z, 0.05, 0.07)
+        rear = lamp(xr, s * (half - 0.13), tail_z - 0.09, 0.14, 0.05)
+        lamps.append(_part(f"indicators_{name}", f"indicator_{name}", [(front, -1), (rear, -1)]))
+    pw, ph = PLATE_SIZE_M
+    plates, corners = [], {}
+    for side, x, z, sign in (
+        ("front", xf + 0.005 + LAMP_DEPTH_M / 2, front_low + 0.10 + ph / 2, 1.0),
+        ("rear", xr - 0.005 - LAMP_DEPTH_M / 2, max(rear_low + 0.12 + ph / 2, 0.45), -1.0),
+    ):
+        # Read from outside: a viewer facing the front plate looks along −x, its left is −y; behind the
+        # vehicle the viewer's left is +y.
+        left = -sign * pw / 2
+        quad = np.array([(x, left, z + ph / 2), (x, -left, z + ph / 2), (x, -left, z - ph / 2), (x, left, z - ph / 2)])
+        corners[side] = quad
+        # pyrender flips the image on upload: OpenGL's t = 1 is the image's row 0 (its top).
+        texcoords = np.array([(0.0, 1.0), (1.0, 1.0), (1.0, 0.0), (0.0, 0.0)])
+        faces = np.array([(0, 3, 2), (0, 2, 1)])  # counter-clockwise seen from outside (normal ±x)
+        normals = np.tile((sign, 0.0, 0.0), (4, 1))
+        plates.append(Part(f"plate_{side}", f"plate_{side}", quad, normals, faces, np.full(4, -1, np.int8), texcoords))
+        backing = _box((LAMP_DEPTH_M / 2, pw + 0.02, ph + 0.02), (x - sign * LAMP_DEPTH_M / 4 - sign * 0.002, 0, z))
+        plates.append(_part(f"plate_{side}_backing", "trim", [(backing, -1)]))
+    return lamps, corners, plates
+
+
+def build_vehicle(look: VehicleLook) -> VehicleModel:
+    """The vehicle of `look`, at rest in its own frame."""
+    vertices, faces, normals, kind = shell(look)
+    parts = []
+    for surface, k in (("paint", 0), ("glass", 1)):
+        chosen = faces[kind == k]
+        if len(chosen) == 0:
+            continue
+        used, remapped = np.unique(chosen, return_inverse=True)
+        parts.append(
+            Part(f"body_{surface}", surface, vertices[used], normals[used], remapped.reshape(-1, 3),
+                 np.full(len(used), -1, np.int8))
+        )  # fmt: skip
+    tyre, rim = wheel_meshes(look.wheel_radius_m, TYRE_WIDTH_SHARE * look.width_m)
+    parts.append(_part("tyres", "tyre", [(tyre, w) for w in range(4)], smooth=True))
+    parts.append(_part("rims", "rim", [(piece, w) for w in range(4) for piece in rim]))
+    lamps, plate_corners, plates = lamps_and_plates(look)
+    parts += lamps + plates
+    return VehicleModel(look=look, parts=parts, wheel_centres_m=wheel_centres(look), plate_corners_m=plate_corners)
