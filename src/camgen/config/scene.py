@@ -760,8 +760,9 @@ class Outputs(Model):
     (BT.709 primaries, scaled so that 0.2126 R + 0.7152 G + 0.0722 B is the luminance in cd/m²) seen
     through each output pixel (the lens's distortion places it, as depth and ids), before the lens's
     blurs, lateral CA and vignetting and before the sensor. png16 and tiff16 store DN = radiance / scale
-    with one scale per camera in radiance/radiance.json; exr stores float32 cd/m². frames: exr is the
-    image-plane radiance instead, after the lens's blurs and vignetting (`camgen.io.radiance`)."""
+    with one scale per camera in radiance/radiance.json; exr stores float32 cd/m². With motion blur
+    planned it is the exposure's mean, as the renderer integrates it. frames: exr is the image-plane
+    radiance instead, after the lens's blurs and vignetting (`camgen.io.radiance`)."""
     flow: Literal["flo"] | None = None
     """Also write the forward optical flow of each frame but the last under flow/: where the surface
     point seen at each output pixel is in the next frame, px, through the same camera model as the

@@ -2,7 +2,8 @@
 scale per camera, or float32 OpenEXR.
 
 Samples are the renderer's linear RGB (BT.709 primaries, scaled so that 0.2126 R + 0.7152 G + 0.0722 B
-is the luminance in cd/m², `camgen.render.renderer`). 16-bit files store DN = round(radiance / scale),
+is the luminance in cd/m², `camgen.render.renderer`; with motion blur planned, the mean over the
+exposure). 16-bit files store DN = round(radiance / scale),
 clipped to 0…65535, with ``scale_cd_m2_per_dn`` in ``radiance.json`` beside them; a reader recovers
 radiance = DN · scale within half a step. The scale is a power of two chosen on the camera's first
 frame so that its brightest sample uses at most 1 / `HEADROOM` of the range; later, brighter samples

@@ -497,7 +497,7 @@ def _compile_camera(
     if needs_image:
         passes.append("radiance")
         decisions.append(
-            Decision(stage="pass.radiance", included=True, reason="video, frames, raw or annotation images")
+            Decision(stage="pass.radiance", included=True, reason="video, frames, raw, radiance or annotation images")
         )
     else:
         decisions.append(Decision(stage="pass.radiance", included=False, reason="no image output requested"))
