@@ -1253,6 +1253,16 @@ CASES = [
         "must be ≤ 360, got 400",
     ),
     (
+        "site_sequence_past_sunset",
+        "scene",
+        edit(SCENE, "duration_s: 1\n", "duration_s: 3600 #<\n").replace(
+            "environment:\n",
+            "environment:\n  site: {latitude_deg: 53.55, longitude_deg: 9.99, time: '2026-10-15T18:00:00+02:00'}\n",
+        ),
+        "duration_s",
+        "ends the sequence at 2026-10-15T19:00:00+02:00, when the sun stands 6.09° below the horizon (sunset at 18:22)",
+    ),
+    (
         "fog_visibility_under_a_metre",
         "scene",
         edit(SCENE, "environment:\n", "environment:\n  fog: {visibility_m: 0.2} #<\n"),

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from datetime import date, datetime
+from datetime import date, datetime, timedelta
 from typing import Annotated, Any, Literal
 
 from pydantic import (
@@ -226,8 +226,12 @@ class Site(Model):
     """Where on Earth and when the scene is. The sun light's direction follows (`camgen.world.sun`,
     NOAA's solar calculator), and so do, where the scene leaves them out, the sun light's and an ambient
     light's illuminance and the sky's zenith luminance (`camgen.world.daylight`: the IES daylight model
-    for the scene's sky; `uniform` takes the clear sky's). The model ends at sunset: a time with the
-    sun below the horizon is refused (light a night scene with lamps, without a site)."""
+    for the scene's sky; `uniform` takes the clear sky's). The values are the first frame's; the sun
+    moves on with the sequence's time, and when daylight changes over it by more than 0.5° or 1 %
+    (`camgen.world.site.daylight_change`) each frame is lit for its own time, every light and the sky
+    scaled as the model's value (an illuminance the scene gives itself sets the level). The model ends
+    at sunset: a sequence that starts or ends with the sun below the horizon is refused (light a night
+    scene with lamps, without a site)."""
 
     latitude_deg: Annotated[float, Field(ge=-90, le=90), Why("latitudes run from −90 (south pole) to 90 (north)")]
     """Degrees north of the equator (south negative)."""
@@ -947,6 +951,20 @@ def _with_site_daylight(data: Any) -> Any:
             f"{when}; camgen's daylight model needs the sun up (above 1° with a sun light, no twilight): choose "
             "a time in daylight, or light a night scene with lamps and no site",
         )
+    duration_s = data.get("duration_s")
+    if _is_number(duration_s) and duration_s > 0:
+        end = site.time + timedelta(seconds=duration_s)
+        last = site_daylight(site.latitude_deg, site.longitude_deg, end, site.north_deg, sky)
+        if last.elevation_deg <= 0 or (suns and last.sun_illuminance_lux < SITE_SUN_MIN_LUX and sky != "overcast"):
+            days = sunrise_sunset(site.latitude_deg, site.longitude_deg, end)
+            sunset = f" (sunset at {days[1]:%H:%M})" if days else ""
+            raise invalid(
+                "duration_s",
+                f"ends the sequence at {end.isoformat()}, when the sun stands {abs(last.elevation_deg):.2f}° "
+                f"{'below' if last.elevation_deg <= 0 else 'above'} the horizon{sunset}; camgen's daylight model "
+                "needs the sun up (above 1° with a sun light, no twilight) to the last frame: start earlier "
+                "(environment.site.time) or shorten duration_s",
+            )
     filled = []
     for i, light in enumerate(lights):
         if isinstance(light, dict) and light.get("type") == "sun":

@@ -548,12 +548,17 @@ def _compile_camera(
     still_frames = sum(1 for k in range(1, frames) if view_keys[k] == view_keys[k - 1]) + 1
     still = still_frames >= frames / 2
     shadow_lights = scene.environment.shadows and any(light.type in ("sun", "spot") for light in scene.lights)
-    static_background = still and bool(scene.actors) and needs_image and not shadow_lights
+    daylight_moves = _daylight_moves(scene, decisions) and needs_image
+    static_background = still and bool(scene.actors) and needs_image and not shadow_lights and not daylight_moves
     if static_background:
         static_reason = (
             "camera and environment are static; actors are composited per frame"
             if len(pose_of) == 1
             else f"the camera rests in {still_frames} of {frames} frames; the environment is redrawn when it moves"
+        )
+    elif daylight_moves:
+        static_reason = (
+            "the site's daylight changes over the sequence (world.daylight), so every frame is drawn in full"
         )
     elif scene.actors and needs_image and not shadow_lights:
         static_reason = (
@@ -703,6 +708,28 @@ def _compile_camera(
         decisions=tuple(decisions),
         states=states,
     )
+
+
+def _daylight_moves(scene, decisions: list[Decision]) -> bool:
+    """Whether a site's daylight changes over the sequence enough for each frame to be lit on its own
+    (`camgen.world.site.daylight_change`); the decision is recorded when the scene has a site."""
+    from camgen.world.site import DIRECTION_CHANGE_DEG, ILLUMINANCE_CHANGE_REL, daylight_change
+
+    site = scene.environment.site
+    if site is None:
+        return False
+    change = daylight_change(site.latitude_deg, site.longitude_deg, site.time, scene.environment.sky, scene.duration_s)
+    decisions.append(
+        Decision(
+            stage="world.daylight",
+            included=change.varies,
+            reason=f"over {scene.duration_s:g} s the sun turns {change.direction_deg:.3g}° (threshold "
+            f"{DIRECTION_CHANGE_DEG:g}°) and daylight changes by {100 * change.illuminance_rel:.3g} % (threshold "
+            f"{100 * ILLUMINANCE_CHANGE_REL:g} %): "
+            + ("each frame is lit for its own time" if change.varies else "the first frame's daylight is held"),
+        )
+    )
+    return change.varies
 
 
 def _sensor_and_isp(profile, outputs, needs_isp, mono, force, stages, decisions) -> None:

@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from datetime import timedelta
 from pathlib import Path
 from typing import Literal
 
@@ -43,6 +44,7 @@ from camgen.config.scene import (
     PlaneMesh,
     PointLight,
     Scene,
+    Site,
     SphereMesh,
     SpotLight,
     SunLight,
@@ -58,6 +60,7 @@ from camgen.motion.trajectory import Route, actor_routes
 from camgen.render.gl import pyrender
 from camgen.vehicles import LAMP_COLOUR_RGB, LAMP_LUMINANCE_CD_M2, VehicleRig, vehicle_rig
 from camgen.vehicles.plate import plate_image
+from camgen.world.site import SiteDaylight, daylight_change, site_daylight
 from camgen.world.textures import TYPICAL_ALBEDO_RGB, encode_srgb8, surface_maps
 
 from OpenGL.GL import GL_REPEAT  # isort: skip — after camgen.render.gl, which selects the EGL platform
@@ -92,6 +95,8 @@ class SceneGraph:
     """Unit vector towards the (first) sun light, world; None without one."""
     fog_visibility_m: float | None = None
     """Visual range of the scene's fog (`camgen.world.fog`), m; None in clear air."""
+    daylight: SiteDaylightTrack | None = None
+    """The site's daylight through the sequence, when it changes (`set_daylight`); None: held."""
     actor_local_poses: list[np.ndarray] = field(default_factory=list)
     actor_routes: list[Route] = field(default_factory=list)
     """Each actor's route (its path, or its random walk resolved once), in the order of `actors`."""
@@ -108,6 +113,26 @@ class SceneGraph:
         """Actor `index`'s procedural person, glTF character or procedural vehicle, or None (a shape)."""
         person = self.people[index] if self.people else None
         return person if person is not None else (self.vehicles[index] if self.vehicles else None)
+
+    def set_daylight(self, time_s: float) -> None:
+        """Light the scene as the site's sky does `time_s` after its first frame (sun lights' direction
+        and illuminance, the ambient light and the sky); nothing when the daylight is held."""
+        if self.daylight is None:
+            return
+        track = self.daylight
+        now = track.at(time_s)
+        towards_sun = _towards(now.azimuth_deg, now.elevation_deg)
+        for node, illuminance_lux in track.suns:
+            node.light.intensity = illuminance_lux * track.ratio(
+                now.sun_illuminance_lux, track.start.sun_illuminance_lux
+            )
+            self.scene.set_pose(node, _look_along(-towards_sun))
+        sky_ratio = track.ratio(now.sky_illuminance_lux, track.start.sky_illuminance_lux)
+        self.scene.ambient_light = np.full(3, track.ambient_lux * sky_ratio / math.pi)
+        self.sky_luminance_cd_m2 = track.sky_luminance_cd_m2 * track.ratio(
+            now.zenith_luminance_cd_m2, track.start.zenith_luminance_cd_m2
+        )
+        self.sun_direction = towards_sun if track.suns else self.sun_direction
 
     def place_actors(self, time_s: float) -> None:
         """Move every actor to where its route puts it at `time_s` (and pose every person)."""
@@ -460,8 +485,57 @@ def _look_along(direction: np.ndarray, position=(0.0, 0.0, 0.0)) -> np.ndarray:
 
 
 def _towards_sun(light: SunLight) -> np.ndarray:
-    az, el = math.radians(light.azimuth_deg), math.radians(light.elevation_deg)
+    return _towards(light.azimuth_deg, light.elevation_deg)
+
+
+def _towards(azimuth_deg: float, elevation_deg: float) -> np.ndarray:
+    """Unit vector of a scene azimuth (counter-clockwise from +X) and elevation."""
+    az, el = math.radians(azimuth_deg), math.radians(elevation_deg)
     return np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+
+
+@dataclass
+class SiteDaylightTrack:
+    """A site's daylight through a sequence (`camgen.world.site`): the sun moves as the site's sun does,
+    and each light the scene resolved for its first frame, and the sky, scales as the model's value does
+    (so an illuminance the scene gave itself is the model's shape through its own level)."""
+
+    site: Site
+    sky: str
+    start: SiteDaylight
+    """The model's daylight at the first frame."""
+    suns: list[tuple[pyrender.Node, float]]
+    """Each sun light's node and its illuminance at the first frame, lux."""
+    ambient_lux: float
+    sky_luminance_cd_m2: float
+
+    def at(self, time_s: float) -> SiteDaylight:
+        site = self.site
+        time = site.time + timedelta(seconds=time_s)
+        return site_daylight(site.latitude_deg, site.longitude_deg, time, site.north_deg, self.sky)
+
+    @staticmethod
+    def ratio(now: float, start: float) -> float:
+        return now / start if start > 0 else 0.0
+
+
+def site_daylight_track(scene: Scene, graph: pyrender.Scene, ambient_lux: float) -> SiteDaylightTrack | None:
+    """The daylight track of a scene whose site's daylight changes over the sequence (beyond
+    `camgen.world.site.DIRECTION_CHANGE_DEG` or `ILLUMINANCE_CHANGE_REL`); None for a held one."""
+    site, sky = scene.environment.site, scene.environment.sky
+    if (
+        site is None
+        or not daylight_change(site.latitude_deg, site.longitude_deg, site.time, sky, scene.duration_s).varies
+    ):
+        return None
+    return SiteDaylightTrack(
+        site=site,
+        sky=sky,
+        start=site_daylight(site.latitude_deg, site.longitude_deg, site.time, site.north_deg, sky),
+        suns=[(node, float(node.light.intensity)) for node in graph.directional_light_nodes],
+        ambient_lux=ambient_lux,
+        sky_luminance_cd_m2=scene.environment.sky_luminance_cd_m2,
+    )
 
 
 def _sun_direction(lights) -> np.ndarray | None:
@@ -565,6 +639,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         sky=scene.environment.sky,
         sun_direction=_sun_direction(scene.lights),
         fog_visibility_m=scene.environment.fog.visibility_m if scene.environment.fog is not None else None,
+        daylight=site_daylight_track(scene, graph, ambient_lux),
         shadows=scene.environment.shadows,
         actor_local_poses=local_poses,
         actor_routes=[routes[actor.name] for actor in scene.actors],

@@ -171,6 +171,7 @@ class CameraRenderer:
         `state`: the frame's camera state with the exposure actually used (auto-exposure decides it
         while rendering); default the plan's state of frame `index`."""
         state = self.camera.states[index] if state is None else state
+        self.graph.set_daylight(state.time_s)
         spec = self.spec
         view = render_view(state, spec)
         passes = spec.passes

@@ -47,3 +47,49 @@ def site_daylight(
         sky_illuminance_lux=sky_lux,
         zenith_luminance_cd_m2=zenith_luminance_cd_m2(sky_lux, elevation, sky),
     )
+
+
+DIRECTION_CHANGE_DEG = 0.5
+"""A sequence's daylight is held at its first frame's unless the sun turns by more than this (a 10 m
+wall's shadow edge 15 m away moves under 15 cm)…"""
+ILLUMINANCE_CHANGE_REL = 0.01
+"""…or the sun's or the sky's illuminance changes by more than this fraction (under the shot noise an
+auto-exposed frame shows, and under auto-exposure's own tolerance)."""
+
+
+@dataclass(frozen=True)
+class DaylightChange:
+    """How far daylight moves over a sequence, relative to its first frame."""
+
+    direction_deg: float
+    """Largest angle between the sun's direction then and at any later time, degrees."""
+    illuminance_rel: float
+    """Largest relative change of the direct or the sky illuminance."""
+
+    @property
+    def varies(self) -> bool:
+        """Whether the frames need their own daylight (above `DIRECTION_CHANGE_DEG` or `ILLUMINANCE_CHANGE_REL`)."""
+        return self.direction_deg > DIRECTION_CHANGE_DEG or self.illuminance_rel > ILLUMINANCE_CHANGE_REL
+
+
+def daylight_change(
+    latitude_deg: float, longitude_deg: float, time: datetime, sky: str, duration_s: float
+) -> DaylightChange:
+    """The change of daylight over [time, time + duration_s], sampled every minute (at most 1000 times)."""
+    import numpy as np
+
+    count = int(min(1000, max(2, duration_s // 60 + 2)))
+    unix_s = unix_time_s(time) + np.linspace(0.0, duration_s, count)
+    position = solar_position(latitude_deg, longitude_deg, unix_s)
+    el, az = np.radians(position.elevation_deg), np.radians(position.azimuth_deg)
+    towards = np.stack([np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), np.sin(el)], axis=-1)
+    direction = np.degrees(np.arccos(np.clip(towards @ towards[0], -1.0, 1.0)))
+    day_of_year = time.timetuple().tm_yday
+    changes = [0.0]
+    for values in (
+        direct_normal_illuminance_lux(position.elevation_deg, day_of_year, sky),
+        sky_horizontal_illuminance_lux(position.elevation_deg, sky),
+    ):
+        if values[0] > 0:
+            changes.append(float(np.max(np.abs(values / values[0] - 1.0))))
+    return DaylightChange(direction_deg=float(direction.max()), illuminance_rel=max(changes))
