@@ -124,3 +124,12 @@ def test_fog_under_a_cie_sky_takes_the_horizon_in_each_azimuth(renderer):
     rays[:, 2] = 0.0
     expected = sky_radiance(rays, graph.sun_direction, "clear", SKY_CD_M2)
     np.testing.assert_allclose(passes.radiance[row, u], expected, rtol=0.01)
+
+
+def test_ray_lengths_are_the_norm_of_the_back_projected_pixel():
+    from camgen.render.renderer import ray_lengths
+
+    K = np.array([[300.0, 2.0, 80.3], [0.0, 310.0, 59.1], [0.0, 0.0, 1.0]])  # with skew
+    u, v = np.meshgrid(np.arange(160.0), np.arange(120.0))
+    expected = np.linalg.norm(np.stack([u, v, np.ones_like(u)], -1) @ np.linalg.inv(K).T, axis=-1)
+    np.testing.assert_allclose(ray_lengths(View(K, np.eye(4), 160, 120)), expected, rtol=1e-6)

@@ -513,10 +513,12 @@ def _sky_on_grid(graph, view: View, *, horizontal: bool) -> np.ndarray:
 
 
 def ray_lengths(view: View) -> np.ndarray:
-    """(H, W) length of the ray through each pixel per metre of camera z: distance = depth_m × this."""
-    u, v = np.meshgrid(np.arange(view.width_px, dtype=np.float64), np.arange(view.height_px, dtype=np.float64))
-    rays = np.stack([u, v, np.ones_like(u)], axis=-1) @ np.linalg.inv(view.K_px).T
-    return np.linalg.norm(rays, axis=-1)
+    """(H, W) float32 length of the ray through each pixel per metre of camera z, |K⁻¹(u, v, 1)|:
+    distance = depth_m × this."""
+    K = view.K_px
+    y = ((np.arange(view.height_px) - K[1, 2]) / K[1, 1])[:, None]
+    x = (np.arange(view.width_px)[None, :] - K[0, 2] - K[0, 1] * y) / K[0, 0]
+    return np.sqrt(x * x + (y * y + 1.0)).astype(np.float32)
 
 
 def horizon_airlight(graph, view: View) -> np.ndarray:

@@ -36,6 +36,10 @@ def transmittance(distance_m: np.ndarray, visibility_m: float) -> np.ndarray:
 def apply_fog(radiance: np.ndarray, distance_m: np.ndarray, airlight: np.ndarray, visibility_m: float) -> np.ndarray:
     """L0 t + L_air (1 − t): `radiance` (H, W, 3) seen through `distance_m` (H, W) of fog, with the
     airlight `airlight` (3,) or (H, W, 3) in the same units; float32 out."""
-    t = transmittance(distance_m, visibility_m).astype(np.float32)[..., None]
-    seen = np.where(t > 0, radiance * t, 0.0)  # the sky's radiance is not defined behind infinite fog
-    return (seen + np.asarray(airlight, dtype=np.float32) * (1.0 - t)).astype(np.float32)
+    t = np.exp(np.float32(-KOSCHMIEDER_CONSTANT / visibility_m) * np.asarray(distance_m, dtype=np.float32))
+    airlight = np.asarray(airlight, dtype=np.float32)
+    # L0 t + L_air (1 − t) = L_air + (L0 − L_air) t, in place; the sky (d = ∞, t = 0) becomes L_air.
+    out = np.subtract(radiance, airlight, dtype=np.float32)
+    out *= t[..., None]
+    out += airlight
+    return out
