@@ -272,6 +272,12 @@ class Simulation:
     def camera_job(self, camera: str) -> CameraJob:
         return self.job.cameras[self._index(camera)]
 
+    def stage_seconds(self, camera: str) -> list[dict[str, float]]:
+        """Per delivered frame since `reset`, the wall time of each stage of `camera`'s frame, s
+        (`render`, the lens, sensor and ISP stages of `camgen.plan.camera_pipeline`, `annotate`)."""
+        index = self._index(camera)
+        return list(self._pipelines[index].clock.frames) if index in self._pipelines else []
+
     def reset(self, seed: int | None = None) -> Observations:
         """Start over at time 0 (heads at their start, auto-exposure settled on the first view) and
         deliver frame 0. `seed`: the noise seed (default the scene's)."""
@@ -525,7 +531,9 @@ class Simulation:
                 camera_job.height_px,
             )
             blur_px[self.frame] = round(speed_px_s * longest_s, 3)
-        frame = drawer.frame(self.frame, state)
+        clock = pipeline.clock
+        with clock("render"):
+            frame = drawer.frame(self.frame, state)
         if (
             self.frame == 0
             and camera_job.exposure_mode == "auto"
@@ -538,12 +546,14 @@ class Simulation:
             )
             blurred = drawer.motion_samples(state) > 1 or drawer.motion_samples(settled) > 1
             if settled.exposure_time_s != state.exposure_time_s and blurred:
-                frame = drawer.frame(self.frame, settled)  # the blur spans the settled exposure
+                with clock("render"):
+                    frame = drawer.frame(self.frame, settled)  # the blur spans the settled exposure
             state = settled
         captured = pipeline.process(state, frame.passes, rng=frame_rng(self.seed, index, self.frame))
         rgb8 = captured.rgb8
         if state.window_px is not None:
-            rgb8 = crop_and_scale(rgb8, state.window_px, camera_job.output_size_px)
+            with clock("isp.eptz"):
+                rgb8 = crop_and_scale(rgb8, state.window_px, camera_job.output_size_px)
         truth = None
         annotator = self._annotators[index]
         if annotator is not None:
@@ -554,8 +564,10 @@ class Simulation:
                     image if window is None else crop_and_scale(image, window, camera_job.output_size_px, nearest=True)
                 )
 
-            lensed = pipeline.lens.apply(state, Passes(instance_id=frame.passes.instance_id))
-            truth = annotator.annotate(state, Passes(instance_id=to_stream(lensed.instance_id)), post=to_stream)
+            with clock("annotate"):
+                lensed = pipeline.lens.apply(state, Passes(instance_id=frame.passes.instance_id))
+                truth = annotator.annotate(state, Passes(instance_id=to_stream(lensed.instance_id)), post=to_stream)
+        clock.end_frame()
         return CameraObservation(
             name=camera_job.name,
             frame=self.frame,
