@@ -4,6 +4,7 @@ metrics on hand-made boxes."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -120,3 +121,42 @@ def test_control_metrics_on_hand_made_boxes():
     assert scores.height_frac == pytest.approx(20 / 50)
     assert scores.resolution_px_per_m == pytest.approx(10.0)
     assert (scores.losses, scores.reacquire_s) == (1, pytest.approx(0.3))
+
+
+def _write_mot(path, rows, columns):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("".join(",".join(f"{v:g}" for v in row[:columns]) + "\n" for row in rows))
+    return path
+
+
+def test_camgen_evaluate_scores_a_tracker_file(tmp_path, capsys):
+    from camgen.cli.main import main
+
+    gt = ground_truth()
+    _write_mot(tmp_path / "seq" / "gt" / "gt.txt", gt, 9)
+    (tmp_path / "seq" / "seqinfo.ini").write_text(
+        "[Sequence]\nname=seq\nimDir=img1\nframeRate=10\nseqLength=20\nimWidth=400\nimHeight=400\nimExt=.png\n"
+    )
+    pred = tracker_copy(gt)
+    pred = pred[pred[:, 1] != 3]
+    pred[:, 7:9] = -1
+    tracker = _write_mot(tmp_path / "tracker.txt", np.c_[pred[:, :7], -np.ones((len(pred), 3))], 10)
+    out = tmp_path / "scores.json"
+    assert main(["evaluate", str(tmp_path / "seq"), str(tracker), "--target-id", "3", "--json", str(out)]) == 0
+    scores = json.loads(out.read_text())
+    assert scores["tracking"]["mota"] == pytest.approx(1 - 12 / 52) and scores["tracking"]["misses"] == 12
+    # Track 3 is seen on frames 1-12 of 20 and never lost in between.
+    assert scores["control"]["in_frame_frac"] == pytest.approx(12 / 20) and scores["control"]["losses"] == 1
+    assert "MOTA" in capsys.readouterr().out
+
+
+def test_camgen_evaluate_names_a_bad_line(tmp_path, capsys):
+    from camgen.cli.main import main
+
+    gt = _write_mot(tmp_path / "gt" / "gt.txt", ground_truth(), 9)
+    bad = tmp_path / "tracker.txt"
+    bad.write_text("1,1,10,10,5,5,1,-1,-1,-1\n2,1,ten,10,5,5,1,-1,-1,-1\n")
+    assert main(["evaluate", str(gt), str(bad)]) == 2
+    assert "tracker.txt:2: not numbers" in capsys.readouterr().err
+    assert main(["evaluate", str(gt)]) == 2
+    assert "nothing to evaluate" in capsys.readouterr().err
