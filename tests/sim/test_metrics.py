@@ -160,3 +160,20 @@ def test_camgen_evaluate_names_a_bad_line(tmp_path, capsys):
     assert "tracker.txt:2: not numbers" in capsys.readouterr().err
     assert main(["evaluate", str(gt)]) == 2
     assert "nothing to evaluate" in capsys.readouterr().err
+
+
+def test_network_metrics_find_handoffs_and_gaps():
+    from camgen.sim.metrics import network_metrics
+
+    a, b, none = {"a": ["p"], "b": []}, {"a": [], "b": ["p"]}, {"a": [], "b": []}
+    both = {"a": ["p"], "b": ["p"]}
+    # Frames: unseen, a, a+b (hand-off to b, overlap), b, gap ×2, a (hand-off back after 0.2 s), a,
+    # gap, a again (a reacquisition, not a hand-off).
+    frames = [none, a, both, b, none, none, a, a, none, a]
+    (scores,) = network_metrics(frames, ["p"], fps=10.0)
+    assert scores.held_frac == pytest.approx(6 / 9)
+    assert (scores.gaps, scores.mean_gap_s) == (2, pytest.approx((0.2 + 0.1) / 2))
+    assert [(h.frame, h.from_cameras, h.to_camera, h.gap_s) for h in scores.handoffs] == [
+        (2, ("a",), "b", 0.0),
+        (6, ("b",), "a", pytest.approx(0.2)),
+    ]

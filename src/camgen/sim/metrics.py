@@ -21,8 +21,11 @@ IoU ≥ 0.5) is removed rather than counted a false positive.
 
 Active tracking by a PTZ camera (`control_metrics`): the fraction of frames the target is in frame,
 the centring error (px and as a fraction of the half-diagonal), the target's height in the frame and
-its resolution in px/m, and the time to reacquire it after a loss (Chen et al. 2011, "A survey of
-active object tracking..." lists these; the names follow the issue).
+its resolution in px/m, and the time to reacquire it after a loss (the measures of active-tracking
+papers; the names follow issue 21).
+
+A camera network (`network_metrics`): per target, the share of frames some camera holds it, the gaps
+no camera does, and the hand-offs between cameras with the gap each left.
 """
 
 from __future__ import annotations
@@ -269,3 +272,70 @@ def target_boxes(observations, camera: str, target: str) -> tuple[list, list]:
         boxes.append(box)
         heights_m.append(None if box is None else float(np.ptp(np.asarray(obj.box_3d_world_m)[:, 2])))
     return boxes, heights_m
+
+
+@dataclass(frozen=True)
+class Handoff:
+    """A target taken over by a camera that was not holding it: `gap_s` after the last holder lost it
+    (0 when the two held it at once)."""
+
+    frame: int
+    target: str
+    from_cameras: tuple[str, ...]
+    to_camera: str
+    gap_s: float
+
+
+@dataclass(frozen=True)
+class NetworkScores:
+    """How a camera network kept one target (see `network_metrics`)."""
+
+    target: str
+    held_frac: float
+    """Frames some camera held the target, from the first frame any did, as a fraction of them."""
+    gaps: int
+    """Runs of frames no camera held it, after the first held frame (a run still open at the end counts)."""
+    mean_gap_s: float
+    handoffs: tuple[Handoff, ...]
+
+
+def network_metrics(
+    held: Sequence[dict[str, Sequence[str] | set[str]]], targets: Sequence[str], fps: float
+) -> list[NetworkScores]:
+    """Hand-offs and gaps of a camera network: `held`, per frame, camera → the targets it holds (as
+    `camgen.sim.multi_env.CameraNetworkEnv`'s ``infos[camera]["held"]``).
+
+    A hand-off is camera B starting to hold a target that another camera held on the frame before
+    (gap 0) or, after a gap, that other cameras held last and B did not (gap = the frames between,
+    in s); a camera taking back what it held last is a reacquisition, not a hand-off."""
+    scores = []
+    for target in targets:
+        holders = [{camera for camera, names in frame.items() if target in names} for frame in held]
+        first = next((k for k, h in enumerate(holders) if h), None)
+        if first is None:
+            scores.append(NetworkScores(target, 0.0, 0, math.nan, ()))
+            continue
+        handoffs, gaps, run, last, last_frame = [], [], 0, holders[first], first
+        for k in range(first + 1, len(holders)):
+            now, before = holders[k], holders[k - 1]
+            if not now:
+                run += 1
+                continue
+            if run:
+                gaps.append(run / fps)
+            for camera in sorted(now - before):
+                if before:
+                    handoffs.append(Handoff(k, target, tuple(sorted(before)), camera, 0.0))
+                elif camera not in last:
+                    handoffs.append(Handoff(k, target, tuple(sorted(last)), camera, (k - last_frame - 1) / fps))
+            run, last, last_frame = 0, now, k
+        if run:
+            gaps.append(run / fps)
+        span = len(holders) - first
+        held_frames = sum(1 for h in holders[first:] if h)
+        scores.append(
+            NetworkScores(
+                target, held_frames / span, len(gaps), float(np.mean(gaps)) if gaps else math.nan, tuple(handoffs)
+            )
+        )
+    return scores
