@@ -137,15 +137,21 @@ def reference(truth: Profile) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def png_frames(reference: np.ndarray, tmp_path_factory: pytest.TempPathFactory) -> list[np.ndarray]:
-    """The reference through PNG files and back (lossless)."""
+def png_directory(reference: np.ndarray, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The reference as a folder of PNG files (lossless), as a camera's exported frames."""
     directory = tmp_path_factory.mktemp("png")
-    frames = []
     for index, frame in enumerate(reference):
-        path = directory / f"{index:03d}.png"
-        write_frame(path, frame, format="png")
-        frames.append(cv2.cvtColor(cv2.imread(str(path), cv2.IMREAD_UNCHANGED), cv2.COLOR_BGR2RGB))
-    return frames
+        write_frame(directory / f"{index:03d}.png", frame, format="png")
+    return directory
+
+
+@pytest.fixture(scope="module")
+def png_frames(png_directory: Path) -> list[np.ndarray]:
+    """The reference through PNG files and back."""
+    return [
+        cv2.cvtColor(cv2.imread(str(path), cv2.IMREAD_UNCHANGED), cv2.COLOR_BGR2RGB)
+        for path in sorted(png_directory.glob("*.png"))
+    ]
 
 
 @pytest.fixture(scope="module")
@@ -502,19 +508,51 @@ def test_report_png(png_fit: MatchFit, tmp_path: Path) -> None:
 
 
 def test_camgen_fit_match_writes_a_profile_that_reproduces_the_reference(
-    reference_video: Path, base: Profile, truth: Profile, tmp_path: Path, capsys: pytest.CaptureFixture
+    png_directory: Path, base: Profile, truth: Profile, tmp_path: Path, capsys: pytest.CaptureFixture
 ) -> None:
-    """The command end to end: the base profile as YAML (its codec the reference's), the video, and a
-    fitted profile that extends the base and loads."""
+    """The command end to end on a folder of frames: the base profile as YAML, and a fitted profile that
+    extends the base and loads. (The video round trip is `video_fit`'s; the command's video wiring is
+    checked by the next test without a second 30-s fit.)"""
     base_path = tmp_path / "base.yaml"
     document = base.model_copy(update={"codec": VIDEO_CODEC}).model_dump(mode="json")
     base_path.write_text(yaml.safe_dump(document), encoding="utf-8")
     output = tmp_path / "fitted.yaml"
-    argv = ["fit", "match", "--reference", str(reference_video), "--profile", str(base_path), "-o", str(output)]
+    argv = ["fit", "match", "--reference", str(png_directory), "--profile", str(base_path), "-o", str(output)]
     assert main([*argv, "--seed", "3"]) == 0
     printed = capsys.readouterr().out
     fitted = load_profile(output).profile
     assert fitted.sensor.full_well_e == pytest.approx(truth.sensor.full_well_e, rel=0.10)
     assert fitted.codec == VIDEO_CODEC  # from the base
-    assert "worst NLF bin" in printed
+    assert f"fitted to {FRAMES} reference frames" in printed and "worst NLF bin" in printed
     assert output.with_suffix(".png").stat().st_size > 10_000
+
+
+class _FitCalledError(Exception):
+    pass
+
+
+@pytest.mark.parametrize("no_codec", [False, True])
+def test_camgen_fit_match_simulates_a_video_reference_through_the_base_codec(
+    reference_video: Path, base: Profile, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, no_codec: bool
+) -> None:
+    """A video reference: the fit's simulation goes through the base profile's codec at the stream's frame
+    rate (25 Hz here), unless --no-codec; the frames it is given are the decoded video's."""
+    import camgen.fit.match
+
+    seen = {}
+
+    def spy(frames, profile, **options):
+        seen.update(options, frames=list(frames), profile=profile)
+        raise _FitCalledError
+
+    monkeypatch.setattr(camgen.fit.match, "fit_match", spy)
+    base_path = tmp_path / "base.yaml"
+    base_path.write_text(yaml.safe_dump(base.model_copy(update={"codec": VIDEO_CODEC}).model_dump(mode="json")))
+    argv = ["fit", "match", "--reference", str(reference_video), "--profile", str(base_path)]
+    argv += ["-o", str(tmp_path / "fitted.yaml"), "--max-frames", "5", *(["--no-codec"] if no_codec else [])]
+    with pytest.raises(_FitCalledError):
+        main(argv)
+    assert seen["codec"] == (None if no_codec else VIDEO_CODEC)
+    assert seen["codec_fps"] == (None if no_codec else pytest.approx(25.0))
+    assert len(seen["frames"]) == 5 and seen["frames"][0].shape == (HEIGHT_PX, WIDTH_PX, 3)
+    assert not (tmp_path / "fitted.yaml").exists()
