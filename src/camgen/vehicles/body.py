@@ -397,7 +397,7 @@ def lamps_and_plates(look: VehicleLook) -> tuple[list[Part], dict[str, np.ndarra
         rear = lamp(xr, s * (half - 0.13), tail_z - 0.09, 0.14, 0.05)
         lamps.append(_part(f"indicators_{name}", f"indicator_{name}", [(front, -1), (rear, -1)]))
     pw, ph = PLATE_SIZE_M
-    plates, corners = [], {}
+    plates, corners, backings = [], {}, []
     for side, x, z, sign in (
         ("front", xf + 0.005 + LAMP_DEPTH_M / 2, front_low + 0.10 + ph / 2, 1.0),
         ("rear", xr - 0.005 - LAMP_DEPTH_M / 2, max(rear_low + 0.12 + ph / 2, 0.45), -1.0),
@@ -413,7 +413,8 @@ def lamps_and_plates(look: VehicleLook) -> tuple[list[Part], dict[str, np.ndarra
         normals = np.tile((sign, 0.0, 0.0), (4, 1))
         plates.append(Part(f"plate_{side}", f"plate_{side}", quad, normals, faces, np.full(4, -1, np.int8), texcoords))
         backing = _box((LAMP_DEPTH_M / 2, pw + 0.02, ph + 0.02), (x - sign * LAMP_DEPTH_M / 4 - sign * 0.002, 0, z))
-        plates.append(_part(f"plate_{side}_backing", "trim", [(backing, -1)]))
+        backings.append((backing, -1))
+    plates.append(_part("plate_backings", "trim", backings))  # one primitive: one draw for both
     return lamps, corners, plates
 
 
