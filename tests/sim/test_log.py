@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import cv2
 import numpy as np
@@ -15,7 +16,7 @@ from camgen.errors import ConfigError
 from camgen.sim import AbsoluteMove, ContinuousMove, GotoPreset, SetPreset, Simulation
 from camgen.sim.log import command_log, load_command_log, replay, save_command_log
 from tests.conftest import write
-from tests.sim.scenes import PTZ_PROFILE, write_world
+from tests.sim.scenes import FIXED_PROFILE, PTZ_PROFILE, write_world
 
 pytestmark = pytest.mark.opengl
 
@@ -112,3 +113,23 @@ def test_a_bad_log_line_is_named(tmp_path, line, message):
     path = write(tmp_path, "log.jsonl", header + "\n" + line + "\n")
     with pytest.raises(ConfigError, match=message):
         load_command_log(path)
+
+
+def test_replay_names_what_does_not_fit_the_scene(episode, renderer, tmp_path):
+    world, path, log, _ = episode
+    records = path.read_text().splitlines()
+    renamed = write(tmp_path, "renamed.jsonl", "\n".join([records[0], records[1].replace('"dome"', '"gate_cam"')]))
+    with pytest.raises(ConfigError, match=r"the log commands camera 'gate_cam', which .*world.yaml does not have"):
+        next(replay(load_command_log(renamed), world, renderer=renderer))
+    edited = write(
+        tmp_path, "edited.jsonl", "\n".join([records[0], re.sub(r'"pan": [-\d.e]+', '"pan": 3.0', records[1])])
+    )
+    replayed = replay(load_command_log(edited), world, renderer=renderer)
+    next(replayed)  # frame 0 renders; the edited command is refused at the first step
+    with pytest.raises(
+        ConfigError, match=r"the log's commands at frame 0: dome: command 0 \(ContinuousMove\): pan must"
+    ):
+        next(replayed)
+    fixed = write(tmp_path, "fixed.yaml", FIXED_PROFILE)
+    with pytest.raises(ConfigError, match=r"with the profiles dome=.*fixed.yaml .*cameras\[0\]\.ptz is set"):
+        next(replay(log, world, profiles={"dome": fixed}, renderer=renderer))

@@ -34,7 +34,7 @@ from camgen.config.loader import LoadedScene, check_cameras, find_profile, load_
 from camgen.errors import ConfigError
 from camgen.io.command_log import read_json_lines, write_json_lines
 from camgen.render.renderer import Renderer
-from camgen.sim.commands import COMMAND_TYPES, Command
+from camgen.sim.commands import COMMAND_TYPES, Command, CommandError
 from camgen.sim.simulation import LoggedCommand, Observations, Simulation
 
 LOG_FORMAT = "camgen-command-log"
@@ -184,7 +184,10 @@ def with_profiles(
             replaced[name] = profile
     problems = check_cameras(loaded.scene, {name: p.profile for name, p in replaced.items()})
     if problems:
-        raise ConfigError(problems)
+        given = ", ".join(f"{camera}={reference}" for camera, reference in profiles.items())
+        raise ConfigError(
+            [f"with the profiles {given} (the scene's are named below): {problem}" for problem in problems]
+        )
     return dataclasses.replace(loaded, profiles=replaced)
 
 
@@ -210,6 +213,14 @@ def replay(
     by_frame: dict[int, list[LoggedCommand]] = {}
     for entry in log.commands:
         by_frame.setdefault(entry.frame, []).append(entry)
+    cameras = [camera.name for camera in loaded.scene.cameras]
+    unknown = sorted({entry.camera for entry in log.commands} - set(cameras))
+    if unknown:
+        raise ConfigError(
+            f"the log commands camera {unknown[0]!r}, which {loaded.path} does not have "
+            f"(cameras: {', '.join(cameras)}); replay it on the scene it was recorded on, "
+            "or rename the camera in the log"
+        )
     with Simulation(loaded, ground_truth=ground_truth, raw=raw, resolution_px=size, renderer=renderer) as sim:
         if log.steps >= sim.frame_count:
             raise ConfigError(
@@ -221,4 +232,8 @@ def replay(
             commands: dict[str, list[Command]] = {}
             for entry in by_frame.get(frame, ()):
                 commands.setdefault(entry.camera, []).append(entry.command)
-            yield sim.step(commands)
+            try:
+                observed = sim.step(commands)
+            except CommandError as exc:  # an edited log's command the head refuses
+                raise ConfigError(f"the log's commands at frame {frame}: {exc}") from None
+            yield observed
