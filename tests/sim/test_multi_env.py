@@ -79,3 +79,21 @@ def test_bad_arguments_name_the_fix(world, renderer):
         CameraNetworkEnv(world, targets=["ghost"], renderer=renderer)
     with pytest.raises(ConfigError, match="min_height_frac must be in"):
         CameraNetworkEnv(world, min_height_frac=0.0, renderer=renderer)
+
+
+def test_bad_actions_are_clear_errors_and_the_world_keeps_running(world, renderer):
+    from camgen.sim import CommandError
+
+    env = CameraNetworkEnv(world, resolution_px=RESOLUTION_PX, renderer=renderer)
+    try:
+        env.reset(seed=1)
+        with pytest.raises(CommandError, match="dome: action: pan must be a finite number, got nan"):
+            env.step({"dome": np.array([np.nan, 0, 0]), "overview": 0})
+        with pytest.raises(CommandError, match=r"dome: action: the action must be three numbers .* got 2"):
+            env.step({"dome": [0.5, 0.1], "overview": 0})
+        with pytest.raises(CommandError, match=r"dome: action: tilt must lie in ONVIF's normalised space"):
+            env.step({"dome": [0.0, -1.5, 0.0], "overview": 0})
+        _, _, _, _, infos = env.step({"dome": np.zeros(3, np.float32), "overview": 0})
+        assert infos["dome"]["frame"] == 1
+    finally:
+        env.close()

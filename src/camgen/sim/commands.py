@@ -20,6 +20,8 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
+import numpy as np
+
 MoveStatus = Literal["IDLE", "MOVING"]
 """ONVIF's tt:MoveStatus (a device may also answer UNKNOWN; a simulated head always knows)."""
 
@@ -154,3 +156,17 @@ class PtzStatus:
     pan_deg_s: float = 0.0
     tilt_deg_s: float = 0.0
     log_zoom_per_s: float = 0.0
+
+
+def velocity_action(action, where: str) -> ContinuousMove:
+    """A gymnasium action ``(pan, tilt, zoom)`` as a ContinuousMove, checked (`CommandError` names the
+    problem: not three numbers, not finite, outside [−1, 1])."""
+    try:
+        values = [float(v) for v in np.asarray(action, dtype=np.float64).reshape(-1)]
+    except (TypeError, ValueError):
+        raise CommandError(f"{where}: the action must be three numbers (pan, tilt, zoom), got {action!r}") from None
+    if len(values) != 3:
+        raise CommandError(f"{where}: the action must be three numbers (pan, tilt, zoom), got {len(values)}: {values}")
+    move = ContinuousMove(pan=values[0], tilt=values[1], zoom=values[2])
+    move.check(where)
+    return move

@@ -17,7 +17,7 @@ from gymnasium import spaces
 
 from camgen.errors import ConfigError
 from camgen.plan.annotations import ObjectAnnotation
-from camgen.sim.commands import ContinuousMove
+from camgen.sim.commands import velocity_action
 from camgen.sim.simulation import Observations, Simulation, stream_size_px
 
 DEFAULT_SCENE = Path(__file__).resolve().parents[3] / "scenes" / "ptz_follow.yaml"
@@ -121,8 +121,8 @@ class ActiveTrackingEnv(gymnasium.Env):
         return observation, info
 
     def step(self, action):
-        pan, tilt, zoom = (float(v) for v in np.asarray(action, dtype=np.float64).reshape(3))
-        observations = self.sim.step({self.camera_name: ContinuousMove(pan=pan, tilt=tilt, zoom=zoom)})
+        move = velocity_action(action, f"{self.camera_name}: action")
+        observations = self.sim.step({self.camera_name: move})
         return self._result(observations)
 
     def _result(self, observations: Observations):

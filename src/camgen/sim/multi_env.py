@@ -14,7 +14,7 @@ from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
 from camgen.errors import ConfigError
-from camgen.sim.commands import ContinuousMove
+from camgen.sim.commands import velocity_action
 from camgen.sim.simulation import Observations, Simulation, stream_size_px
 
 RESOLUTION_PX = (128, 96)
@@ -120,8 +120,7 @@ class CameraNetworkEnv(ParallelEnv):
             if agent not in self.agents:
                 raise ConfigError(f"action for {agent!r}, which is not a live agent (agents: {', '.join(self.agents)})")
             if agent in self.ptz_agents:
-                pan, tilt, zoom = (float(v) for v in np.asarray(action, dtype=np.float64).reshape(3))
-                commands[agent] = ContinuousMove(pan=pan, tilt=tilt, zoom=zoom)
+                commands[agent] = velocity_action(action, f"{agent}: action")
         observations, rewards, infos = self._result(self.sim.step(commands))
         truncated = self.sim.frame >= self.sim.frame_count - 1
         terminations = dict.fromkeys(self.agents, False)
