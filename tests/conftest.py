@@ -96,27 +96,65 @@ def renderer():
         yield instance
 
 
+def shared_directory(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory, name: str) -> Path:
+    """A directory every test process of this run sees: under pytest-xdist, one beside the workers' own
+    base directories, named by the run's id (so no earlier run's files are reused); otherwise a fresh one."""
+    workerinput = getattr(request.config, "workerinput", None)
+    if workerinput is None:
+        return tmp_path_factory.mktemp(name)
+    directory = tmp_path_factory.getbasetemp().parent / f"{name}-{workerinput['testrunuid']}"
+    directory.mkdir(exist_ok=True)
+    return directory
+
+
 @pytest.fixture(scope="session")
-def board_views(renderer, tmp_path_factory):
+def board_views(request, renderer, tmp_path_factory):
     """name → (directory, job, 8-bit grey views) of the board scene through a `tests.fit.boards.DISTORTIONS`
-    lens, rendered once per session: tests/fit/test_lens.py fits them as a person would (the PNGs in
-    directory/images), tests/render/test_lens_calibration.py calibrates them with OpenCV alone."""
+    lens, rendered once per test run: tests/fit/test_lens.py fits them as a person would (the PNGs in
+    directory/images), tests/render/test_lens_calibration.py calibrates them with OpenCV alone.
+
+    The two files usually run in different test processes (`make test`'s --dist loadfile): the first to
+    ask renders the views under a file lock, the other waits for them and reads the PNGs back (8-bit,
+    lossless: the same arrays) and plans the same scene file again. That saves two of the suite's
+    costliest renders (12 views at 1920 × 1080, supersampled)."""
     import cv2
+    from filelock import FileLock
 
+    from camgen.config import load_scene
     from camgen.fit.checkerboard import gray8_from_radiance
-    from tests.fit.boards import CALIBRATION_VIEWS, DISTORTIONS, lens_output, lens_profile, write_board_scene
+    from camgen.plan import PlanSettings, compile_scene
+    from tests.fit.boards import (
+        CALIBRATION_VIEWS,
+        DISTORTIONS,
+        SUPERSAMPLING,
+        lens_output,
+        lens_profile,
+        write_board_scene,
+    )
 
+    root = shared_directory(request, tmp_path_factory, "boards")
     cache = {}
 
     def views(name: str):
         if name not in cache:
-            directory = tmp_path_factory.mktemp(f"board_{name}")
-            job = write_board_scene(directory, name, lens_profile(distortion=DISTORTIONS[name]), CALIBRATION_VIEWS)
-            (directory / "images").mkdir()
-            grays = []
-            for camera, radiance in lens_output(renderer, job):
-                grays.append(gray8_from_radiance(radiance))
-                cv2.imwrite(str(directory / "images" / f"{camera.name}.png"), grays[-1])
+            directory = root / f"board_{name}"
+            done = directory / "rendered"
+            with FileLock(str(root / f"board_{name}.lock")):
+                if done.exists():
+                    scene = directory / f"scenes/board_{name}.yaml"
+                    job = compile_scene(load_scene(scene), PlanSettings(supersampling=SUPERSAMPLING))
+                    paths = [directory / "images" / f"{camera.name}.png" for camera in job.cameras]
+                    grays = [cv2.imread(str(path), cv2.IMREAD_GRAYSCALE) for path in paths]
+                else:
+                    directory.mkdir()
+                    profile = lens_profile(distortion=DISTORTIONS[name])
+                    job = write_board_scene(directory, name, profile, CALIBRATION_VIEWS)
+                    (directory / "images").mkdir()
+                    grays = []
+                    for camera, radiance in lens_output(renderer, job):
+                        grays.append(gray8_from_radiance(radiance))
+                        cv2.imwrite(str(directory / "images" / f"{camera.name}.png"), grays[-1])
+                    done.touch()
             cache[name] = directory, job, grays
         return cache[name]
 

@@ -72,10 +72,12 @@ CA_CORNERS_AVERAGED = 12
 # --- 1. calibration through distorting lenses ------------------------------------------------------
 
 
-@pytest.fixture(scope="module", params=list(DISTORTIONS))
+# The other order than tests/fit/test_lens.py's (barrel, mustache): when both files start together, each renders
+# a different lens first and then finds the other's views made (`board_views`), instead of waiting on one.
+@pytest.fixture(scope="module", params=list(reversed(DISTORTIONS)))
 def lens_calibration(request, board_views):
     """(job, corners found per view, calibration) of one distortion profile, rendered once a session
-    (`board_views`, shared with tests/fit/test_lens.py)."""
+    (`board_views`, shared with tests/fit/test_lens.py, across test processes)."""
     _, job, views = board_views(request.param)
     board = the_board(job)
     found = [find_corners(gray8, inner_corners(board)) for gray8 in views]
