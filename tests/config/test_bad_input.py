@@ -1269,6 +1269,77 @@ CASES = [
         "environment.fog.visibility_m",
         "must be ≥ 1, got 0.2; visual ranges run from a few metres",
     ),
+    (
+        "lamp_flux_negative",
+        "scene",
+        edit(
+            SCENE,
+            "  - {type: ambient, illuminance_lux: 1000}\n",
+            "  - {type: ambient, illuminance_lux: 1000}\n  - {type: lamp, position_m: [0, 0, 6], flux_lm: -5000} #<\n",
+        ),
+        "lights[1].flux_lm",
+        "must be > 0, got -5000; street and area lights emit about 1 000–60 000 lm",
+    ),
+    (
+        "lamp_beam_a_hemisphere",
+        "scene",
+        edit(
+            SCENE,
+            "  - {type: ambient, illuminance_lux: 1000}\n",
+            "  - {type: ambient, illuminance_lux: 1000}\n"
+            "  - {type: lamp, position_m: [0, 0, 6], flux_lm: 5000, cone_half_angle_deg: 90} #<\n",
+        ),
+        "lights[1].cone_half_angle_deg",
+        "a lamp lighting a hemisphere is a point light",
+    ),
+    (
+        "lamp_on_the_ground_without_target",
+        "scene",
+        edit(
+            SCENE,
+            "  - {type: ambient, illuminance_lux: 1000}\n",
+            "  - {type: ambient, illuminance_lux: 1000}\n  - {type: lamp, position_m: [0, 0, 0], flux_lm: 5000} #<\n",
+        ),
+        "lights[1].position_m",
+        "leaves the beam no direction",
+    ),
+    (
+        "night_sky_unknown",
+        "scene",
+        edit(SCENE, "environment:\n", "environment:\n  night_sky: moonlit #<\n"),
+        "environment.night_sky",
+        "'natural', 'rural', 'suburban' or 'urban'",
+    ),
+    (
+        "night_sky_with_a_sun",
+        "scene",
+        edit(
+            SCENE,
+            "  - {type: ambient, illuminance_lux: 1000}\n",
+            "  - {type: ambient}\n  - {type: sun, illuminance_lux: 1000} #<\n",
+        ).replace("environment:\n", "environment:\n  night_sky: urban\n"),
+        "lights[1]",
+        "is a sun light, but environment.night_sky makes this a night scene",
+    ),
+    (
+        "night_sky_with_a_clear_sky",
+        "scene",
+        edit(SCENE, "environment:\n", "environment:\n  night_sky: urban\n  sky: clear #<\n"),
+        "environment.sky",
+        "whose skyglow camgen draws uniform",
+    ),
+    (
+        "night_sky_in_twilight",
+        "scene",
+        edit(
+            SCENE,
+            "environment:\n",
+            "environment:\n  night_sky: urban\n"
+            "  site: {latitude_deg: 48, longitude_deg: 2, time: 2026-06-21T22:30:00+02:00} #<\n",
+        ),
+        "environment.site.time",
+        "a night sky needs it 12° or more below (after nautical dusk",
+    ),
 ]
 
 

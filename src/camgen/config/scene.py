@@ -28,6 +28,7 @@ from camgen.config.world import WORLD_EXTENT_M, Length, Point2, Point3
 # Lights the renderer shades per type. Sun and spot lights each need a shadow-map texture unit;
 # OpenGL 3.3 guarantees 16 units, of which pyrender reserves 6, so 4 of each fit anywhere.
 MAX_LIGHTS = {"sun": 4, "spot": 4, "point": 16}
+"""Lamps are spot lights to the renderer: `spot` counts spot and lamp lights together."""
 
 PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegativeFloat = Annotated[float, Field(ge=0)]
@@ -78,6 +79,10 @@ class Material(Model):
     """Luminance the surface emits by itself (signs, screens, lamps), cd/m²."""
     texture: SurfaceTexture | None = None
     """A procedural texture (planes and boxes; other shapes keep the plain colour)."""
+    nir_reflectance: Fraction | None = None
+    """Reflectance at 850 nm, what a camera in IR night mode sees (vegetation ≈ 0.45, skin ≈ 0.6,
+    asphalt ≈ 0.14, carbon-black paint ≈ 0.05); null: the texture type's (`camgen.world.night.
+    NIR_REFLECTANCE_BY_TEXTURE`), or else the colour's red reflectance (`default_nir_reflectance`)."""
 
 
 class Placement(Model):
@@ -210,6 +215,47 @@ class SpotLight(Model):
     color_rgb: tuple[Fraction, Fraction, Fraction] = (1.0, 1.0, 1.0)
 
 
+class LampLight(Model):
+    """A street lamp by its luminous flux: a round beam of the spot light's shape whose peak intensity
+    carries `flux_lm` lumens (`camgen.world.night.peak_intensity_cd`); casts shadows like a spot."""
+
+    type: Literal["lamp"]
+    position_m: Point3
+    """The lamp head's light centre (a street lantern: 4–12 m up)."""
+    target_m: Point3 | None = None
+    """Where the beam's axis points; null: straight down, to the ground under the head."""
+    flux_lm: Annotated[
+        float,
+        Field(gt=0, le=2e6),
+        Why("street and area lights emit about 1 000–60 000 lm, stadium floodlights up to about 2e5; at most 2e6 lm"),
+    ]
+    """Luminous flux leaving the luminaire, lm (a residential LED lantern ≈ 3000–6000, a main road 10 000–20 000)."""
+    cone_half_angle_deg: Annotated[
+        float,
+        Field(gt=1, lt=89),
+        Why("a beam's half angle lies between 1° and 89° (a lamp lighting a hemisphere is a point light)"),
+    ] = 70.0
+    """Where the beam ends; full intensity within 80 % of it. 70°: a street lantern (EN 13201-2 G-classes
+    limit the intensity above 70°)."""
+    color_rgb: tuple[Fraction, Fraction, Fraction] = (1.0, 1.0, 1.0)
+
+    @property
+    def direction(self) -> tuple[float, float, float]:
+        """Unit-free vector along the beam's axis, world."""
+        target = self.target_m if self.target_m is not None else (self.position_m[0], self.position_m[1], 0.0)
+        return tuple(t - p for t, p in zip(target, self.position_m, strict=True))
+
+    @model_validator(mode="after")
+    def _check(self) -> LampLight:
+        if all(abs(c) < 1e-9 for c in self.direction):
+            raise invalid(
+                "target_m" if self.target_m is not None else "position_m",
+                "leaves the beam no direction (the target is the lamp's own position, or the lamp stands on "
+                "the ground with no target): give a target_m away from position_m, or raise the lamp",
+            )
+        return self
+
+
 class AmbientLight(Model):
     model_config = ConfigDict(json_schema_extra=_illuminance_from_site)
 
@@ -219,7 +265,7 @@ class AmbientLight(Model):
     `environment.site` it may be left out: the sky's horizontal illuminance at the site's time."""
 
 
-Light = Annotated[SunLight | PointLight | SpotLight | AmbientLight, Field(discriminator="type")]
+Light = Annotated[SunLight | PointLight | SpotLight | LampLight | AmbientLight, Field(discriminator="type")]
 
 
 class Site(Model):
@@ -289,6 +335,12 @@ class Environment(Model):
     general sky (`camgen.world.sky`: clear, type 12; partly cloudy, type 7; overcast, type 1) whose
     sun is the scene's sun light."""
     meshes: list[Mesh] = []
+    night_sky: Literal["natural", "rural", "suburban", "urban"] | None = None
+    """A night scene: the moonless sky's luminance for its setting (`camgen.world.night.
+    NIGHT_SKY_LUMINANCE_CD_M2`: 0.17 mcd/m² natural to 10 mcd/m² urban skyglow) fills in
+    sky_luminance_cd_m2 and an ambient light's illuminance (π·L) where they are left out, and a `site`
+    is then allowed after dusk: its sun must stay 12° or more below the horizon through the sequence.
+    null: a day scene."""
     shadows: bool = True
     """Sun and spot lights cast shadows (shadow maps); point lights never do. Shadows of moving actors
     fall on the environment, so a static camera then renders every frame in full."""
@@ -890,12 +942,12 @@ class Scene(Model):
                 "add a {type: sun, …} light, or use sky: overcast or uniform",
             )
         for kind, limit in MAX_LIGHTS.items():
-            indices = [i for i, light in enumerate(self.lights) if light.type == kind]
+            indices = [i for i, light in enumerate(self.lights) if _renderer_kind(light.type) == kind]
             if len(indices) > limit:
                 raise invalid(
                     f"lights[{indices[limit]}]",
                     f"is {kind} light number {limit + 1}; the renderer shades at most {limit} {kind} lights: "
-                    "merge or remove some",
+                    "merge or remove some" + (" (a lamp is a spot light to the renderer)" if kind == "spot" else ""),
                 )
         if (
             not self.lights
@@ -908,6 +960,11 @@ class Scene(Model):
                 "so every frame would be black)",
             )
         return self
+
+
+def _renderer_kind(light_type: str) -> str:
+    """The renderer's light a scene's light type becomes (a lamp is a spot)."""
+    return "spot" if light_type == "lamp" else light_type
 
 
 SITE_SUN_MIN_LUX = 1.0
@@ -927,6 +984,8 @@ def _with_site_daylight(data: Any) -> Any:
     if not isinstance(data, dict) or not isinstance(data.get("environment"), dict):
         return data
     environment = data["environment"]
+    if environment.get("night_sky") is not None:
+        return _with_night_sky(data)
     sky = environment.get("sky", "uniform")
     lights = data.get("lights", [])
     if environment.get("site") is None or not isinstance(lights, list) or sky not in ("uniform", *SKY_TYPES):
@@ -993,6 +1052,61 @@ def _with_site_daylight(data: Any) -> Any:
         "lights": filled,
         "environment": {"sky_luminance_cd_m2": daylight.zenith_luminance_cd_m2, **environment},
     }
+
+
+def _with_night_sky(data: dict) -> dict:
+    """A night scene's data (`Environment.night_sky`) with the sky's luminance and each ambient light's
+    illuminance (π·L) filled in where left out; a site's sun must stay below
+    `camgen.world.night.NIGHT_SUN_MAX_ELEVATION_DEG` to the last frame, and no light may be a sun."""
+    from camgen.world.night import NIGHT_SKY_LUMINANCE_CD_M2, NIGHT_SUN_MAX_ELEVATION_DEG, night_sky_illuminance_lux
+    from camgen.world.sun import solar_position, unix_time_s
+
+    environment = data["environment"]
+    level = environment["night_sky"]
+    lights = data.get("lights", [])
+    if level not in NIGHT_SKY_LUMINANCE_CD_M2 or not isinstance(lights, list):
+        return data  # the field refuses it
+    if environment.get("sky", "uniform") != "uniform":
+        raise invalid(
+            "environment.sky",
+            f"is {environment['sky']}, a daylight sky, but environment.night_sky makes this a night scene, whose "
+            "skyglow camgen draws uniform: use sky: uniform (or leave it out), or remove night_sky",
+        )
+    for i, light in enumerate(lights):
+        if isinstance(light, dict) and light.get("type") == "sun":
+            raise invalid(
+                f"lights[{i}]",
+                "is a sun light, but environment.night_sky makes this a night scene (the sun is down): remove it "
+                "and light the scene with lamps, or remove night_sky",
+            )
+    site = environment.get("site")
+    if site is not None:
+        try:
+            site = Site.model_validate(site)
+        except ValidationError:
+            return data
+        duration_s = data.get("duration_s")
+        checks = [("environment.site.time", site.time)]
+        if _is_number(duration_s) and duration_s > 0:
+            checks.append(("duration_s", site.time + timedelta(seconds=duration_s)))
+        for key, time in checks:
+            elevation = float(solar_position(site.latitude_deg, site.longitude_deg, unix_time_s(time)).elevation_deg)
+            if elevation > NIGHT_SUN_MAX_ELEVATION_DEG:
+                what = "starts" if key == "environment.site.time" else "ends"
+                raise invalid(
+                    key,
+                    f"{what} the night scene at {time.isoformat()}, when the sun stands {elevation:.2f}° from the "
+                    f"horizon; a night sky needs it {-NIGHT_SUN_MAX_ELEVATION_DEG:g}° or more below (after nautical "
+                    "dusk: camgen does not model twilight): choose a later time, or remove night_sky for a day scene",
+                )
+    luminance_cd_m2 = NIGHT_SKY_LUMINANCE_CD_M2[level]
+    filled = [
+        {"illuminance_lux": night_sky_illuminance_lux(luminance_cd_m2), **light}
+        if isinstance(light, dict) and light.get("type") == "ambient"
+        else light
+        for light in lights
+    ]
+    return {**data, "lights": filled, "environment": {"sky_luminance_cd_m2": luminance_cd_m2, **environment}}
 
 
 # Class-typical sizes (m) used when an actor gives no shape and is not procedural (a bicycle, …)

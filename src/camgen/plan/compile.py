@@ -547,7 +547,7 @@ def _compile_camera(
     # The kept background is redrawn whenever the view changes: worth it while the camera mostly rests.
     still_frames = sum(1 for k in range(1, frames) if view_keys[k] == view_keys[k - 1]) + 1
     still = still_frames >= frames / 2
-    shadow_lights = scene.environment.shadows and any(light.type in ("sun", "spot") for light in scene.lights)
+    shadow_lights = scene.environment.shadows and any(light.type in ("sun", "spot", "lamp") for light in scene.lights)
     daylight_moves = _daylight_moves(scene, decisions) and needs_image
     static_background = still and bool(scene.actors) and needs_image and not shadow_lights and not daylight_moves
     if static_background:
@@ -716,7 +716,7 @@ def _daylight_moves(scene, decisions: list[Decision]) -> bool:
     from camgen.world.site import DIRECTION_CHANGE_DEG, ILLUMINANCE_CHANGE_REL, daylight_change
 
     site = scene.environment.site
-    if site is None:
+    if site is None or scene.environment.night_sky is not None:  # a night sky holds its level
         return False
     change = daylight_change(site.latitude_deg, site.longitude_deg, site.time, scene.environment.sky, scene.duration_s)
     decisions.append(

@@ -40,6 +40,7 @@ from camgen.config.scene import (
     CheckerboardMesh,
     CylinderMesh,
     FileMesh,
+    LampLight,
     Material,
     PlaneMesh,
     PointLight,
@@ -60,6 +61,7 @@ from camgen.motion.trajectory import Route, actor_routes
 from camgen.render.gl import pyrender
 from camgen.vehicles import LAMP_COLOUR_RGB, LAMP_LUMINANCE_CD_M2, VehicleRig, vehicle_rig
 from camgen.vehicles.plate import plate_image
+from camgen.world.night import SPOT_FULL_INTENSITY_FRACTION, peak_intensity_cd
 from camgen.world.site import SiteDaylight, daylight_change, site_daylight
 from camgen.world.textures import TYPICAL_ALBEDO_RGB, encode_srgb8, surface_maps
 
@@ -67,7 +69,6 @@ from OpenGL.GL import GL_REPEAT  # isort: skip — after camgen.render.gl, which
 
 CYLINDER_SECTIONS = 48
 SPHERE_SUBDIVISIONS = 3
-SPOT_FULL_INTENSITY_FRACTION = 0.8
 
 
 @dataclass(frozen=True)
@@ -525,6 +526,7 @@ def site_daylight_track(scene: Scene, graph: pyrender.Scene, ambient_lux: float)
     site, sky = scene.environment.site, scene.environment.sky
     if (
         site is None
+        or scene.environment.night_sky is not None  # a night sky holds its level (`Environment.night_sky`)
         or not daylight_change(site.latitude_deg, site.longitude_deg, site.time, sky, scene.duration_s).varies
     ):
         return None
@@ -562,6 +564,15 @@ def _add_lights(scene: pyrender.Scene, lights) -> None:
             )
             direction = np.subtract(light.target_m, light.position_m)
             scene.add(node_light, pose=_look_along(direction, light.position_m))
+        elif isinstance(light, LampLight):
+            outer = math.radians(light.cone_half_angle_deg)
+            node_light = pyrender.SpotLight(
+                color=light.color_rgb,
+                intensity=peak_intensity_cd(light.flux_lm, outer),
+                innerConeAngle=SPOT_FULL_INTENSITY_FRACTION * outer,
+                outerConeAngle=outer,
+            )
+            scene.add(node_light, pose=_look_along(np.asarray(light.direction), light.position_m))
         elif not isinstance(light, AmbientLight):
             raise TypeError(f"unknown light {type(light).__name__}")
 
