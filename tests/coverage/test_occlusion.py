@@ -77,3 +77,17 @@ def test_a_plane_hides_from_its_front_only_and_a_camera_inside_a_solid_sees_out(
         scene_with([{"type": "sphere", "name": "dome", "radius_m": 0.3, "position_m": [0, 0, 3]}])
     )
     assert not sight_blocked(np.array([0.0, 0.0, 3.0]), np.array([[5.0, 0.0, 0.0]]), housing)[0]
+
+
+def test_a_road_laid_over_the_ground_does_not_hide_it_and_a_plate_above_it_does():
+    # intersection_two_cameras lays its roads 1 cm over the ground plane: the camera sees the road at those
+    # ground points. A plate 10 or 50 cm up (more than SURFACE_LAYER_M: something above the ground) hides
+    # them: it covers every sight line's last 2 m.
+    ground = {"type": "plane", "name": "ground", "size_m": [40, 40]}
+    view = pinhole_view(CAMERA_M, pitch_deg=look_at_pitch_deg(3.0, 12.0))
+    grid = make_grid((-1.0, 9.0, -4.0, 4.0), 0.5, 0.0)
+    for over_m, hides in ((0.01, False), (0.1, True), (0.5, True)):
+        road = {"type": "plane", "name": "road", "size_m": [16, 40], "position_m": [4, 0, over_m]}
+        coverage = camera_coverage(grid, view, scene_occluders(scene_with([ground, road])))
+        assert coverage.in_view.sum() > 100
+        assert np.array_equal(coverage.visible, coverage.in_view & (not hides))

@@ -6,8 +6,10 @@ A sight line is the segment from the camera centre to a point; it is blocked whe
 before it reaches the point (less `END_MARGIN_M`, so a point lying on a surface — the ground on its
 plane — is not hidden by that surface). Entering only: a camera inside a closed solid sees through it,
 as the renderer does (its faces are culled from inside, `camgen.config.placement`). Planes and
-checkerboards block from their front (+Z) side only, as they are drawn. Cylinders are exact circles
-(the renderer's facets lie inside them by at most r·(1 − cos(π/sections))).
+checkerboards block from their front (+Z) side only, as they are drawn, and not a point lying up to
+`SURFACE_LAYER_M` under their face inside their outline: such a point is on that surface (a road laid
+1 cm over the ground plane). Cylinders are exact circles (the renderer's facets lie inside them by at
+most r·(1 − cos(π/sections))).
 """
 
 from __future__ import annotations
@@ -22,6 +24,12 @@ from camgen.config.scene import BoxMesh, CheckerboardMesh, CylinderMesh, FileMes
 
 END_MARGIN_M = 1e-3
 """A hit this close to the point itself does not hide it, m."""
+SURFACE_LAYER_M = 0.05
+"""A point at most this far under a plane's face, inside its outline, lies on that surface and is not
+hidden by it, m: roads and markings are drawn a little above the ground they cover (intersection_two_
+cameras: 1.0 and 1.1 cm) to keep the depth test from mixing them, and a camera sees the road at those
+points (the render's depth there is 1 cm / sin(elevation) short of the ground's, the point's own
+surface). 5 cm: more than such layers, less than a kerb (15 cm) or anything one stands under."""
 INSIDE_TOLERANCE_M = 1e-6
 """A point this close to a solid's face counts as inside it (the ground under a box), m."""
 TRIANGLE_CHUNK = 2_000_000
@@ -157,7 +165,26 @@ def sight_blocked(origin_m: np.ndarray, targets_m: np.ndarray, occluders: Sequen
     length = np.linalg.norm(targets - np.asarray(origin_m, dtype=np.float64), axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
         s_end = 1.0 - END_MARGIN_M / length
-    return first_hit_s(origin_m, targets, occluders) < s_end
+    blocked = np.zeros(len(targets), dtype=bool)
+    for occluder in occluders:
+        hit = first_hit_s(origin_m, targets, [occluder]) < s_end
+        if occluder.kind == "plane":
+            hit &= ~lies_under_face(targets, occluder)
+        blocked |= hit
+    return blocked
+
+
+def lies_under_face(points_m: np.ndarray, plane: Occluder) -> np.ndarray:
+    """Whether each point (N, 3) lies within `SURFACE_LAYER_M` under a plane's face (or on it), inside its
+    outline: bool (N,)."""
+    local = points_m @ plane.T_mesh_from_world[:3, :3].T + plane.T_mesh_from_world[:3, 3]
+    half = plane.half_extent_m
+    return (
+        (local[:, 2] <= 0.0)
+        & (local[:, 2] >= -SURFACE_LAYER_M)
+        & (np.abs(local[:, 0]) <= half[0])
+        & (np.abs(local[:, 1]) <= half[1])
+    )
 
 
 def inside_solids(points_m: np.ndarray, occluders: Sequence[Occluder]) -> np.ndarray:
