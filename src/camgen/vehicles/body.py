@@ -28,8 +28,9 @@ import trimesh
 from camgen.vehicles.look import VehicleLook
 from camgen.vehicles.plate import PLATE_SIZE_M
 
-SECTION_POINTS = 28
-"""Points around each cross-section (even, so the end caps pair them left and right)."""
+UPPER_POINTS = 15
+LOWER_POINTS = 15
+"""Points of each cross-section above and below its beltline (odd: see `_sections`)."""
 SECTION_EXPONENT = 5.0
 """Superellipse exponent of the cross-section: 2 an ellipse, large a sharp box; 5 gives shoulders
 rounded over about a fifth of the half-width."""
@@ -196,26 +197,43 @@ def _bottom_m(look: VehicleLook, x: np.ndarray, axles_x, arch_radius_m: float) -
     return bottom
 
 
-SECTION_DENSE = 256
-"""Points of the dense superellipse each section's points are spaced evenly along."""
+SECTION_DENSE = 128
+"""Points of each arc of the dense superellipse that a section's points are spaced evenly along."""
+BELT_REACH = (-0.95, 0.85)
+"""Where a section's belt points may lie, as heights over its half height about its centre: a station
+whose roof is below the beltline (a bonnet) keeps an upper arc at its top."""
 
 
-def _sections(half_width_m: np.ndarray, half_height_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(y, z − centre) of each station's section points (S, N), counter-clockwise about +x from the
-    right-hand middle, evenly spaced along the superellipse's perimeter and offset half a step, so no
-    point lies on the vertical and point k's mirror image (y → −y) is point N/2 − 1 − k."""
-    phi = np.linspace(0.0, 2 * np.pi, SECTION_DENSE + 1)
+def _sections(half_width_m: np.ndarray, half_height_m: np.ndarray, belt_rel: np.ndarray):
+    """(y, z − centre) of each station's section points (S, N) and each point's mirror image (N,).
+
+    The points run counter-clockwise about +x: `UPPER_POINTS` from the belt on the +y side over the roof
+    (the first exactly at the belt), then `LOWER_POINTS` from the belt on the −y side under the floor,
+    each arc's points evenly spaced along it. So every station has a row of points on its beltline
+    (`belt_rel`: the belt's height over the half height, about the centre), where the windows end. Both
+    counts are odd, so no point lies on the vertical; point k's mirror image (y → −y) is `mirror[k]`."""
     e = 2 / SECTION_EXPONENT
-    c, s = np.cos(phi), np.sin(phi)
-    y = half_width_m[:, None] * (np.sign(c) * np.abs(c) ** e)[None, :]
-    z = half_height_m[:, None] * (np.sign(s) * np.abs(s) ** e)[None, :]
-    along = np.concatenate([np.zeros((len(y), 1)), np.cumsum(np.hypot(np.diff(y), np.diff(z)), axis=1)], axis=1)
-    wanted = (np.arange(SECTION_POINTS) + 0.5) / SECTION_POINTS
-    ys, zs = np.empty((len(y), SECTION_POINTS)), np.empty((len(y), SECTION_POINTS))
-    for i in range(len(y)):
-        target = wanted * along[i, -1]
-        ys[i], zs[i] = np.interp(target, along[i], y[i]), np.interp(target, along[i], z[i])
-    return ys, zs
+    b = np.clip(belt_rel, *BELT_REACH)
+    phi_belt = np.arcsin(np.sign(b) * np.abs(b) ** (1 / e))
+    ys, zs = [], []
+    arcs = ((phi_belt, np.pi - phi_belt, UPPER_POINTS), (np.pi - phi_belt, 2 * np.pi + phi_belt, LOWER_POINTS))
+    for lo, hi, count in arcs:
+        phi = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, SECTION_DENSE + 1)[None, :]
+        c, s = np.cos(phi), np.sin(phi)
+        y = half_width_m[:, None] * np.sign(c) * np.abs(c) ** e
+        z = half_height_m[:, None] * np.sign(s) * np.abs(s) ** e
+        along = np.concatenate([np.zeros((len(y), 1)), np.cumsum(np.hypot(np.diff(y), np.diff(z)), axis=1)], axis=1)
+        wanted = np.arange(count) / count
+        arc_y, arc_z = np.empty((len(y), count)), np.empty((len(y), count))
+        for i in range(len(y)):
+            arc_y[i] = np.interp(wanted * along[i, -1], along[i], y[i])
+            arc_z[i] = np.interp(wanted * along[i, -1], along[i], z[i])
+        ys.append(arc_y)
+        zs.append(arc_z)
+    upper, lower = np.arange(UPPER_POINTS), np.arange(LOWER_POINTS)
+    mirror = np.concatenate([np.where(upper == 0, UPPER_POINTS, (UPPER_POINTS - upper) % UPPER_POINTS),
+                             UPPER_POINTS + np.where(lower == 0, -UPPER_POINTS, LOWER_POINTS - lower)])  # fmt: skip
+    return np.concatenate(ys, axis=1), np.concatenate(zs, axis=1), mirror
 
 
 def shell(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -235,9 +253,9 @@ def shell(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nda
     t = np.clip(d / c, 0.0, 1.0)
     half_width = W / 2 * (profile.end_width + (1 - profile.end_width) * np.sqrt(1 - (1 - t) ** 2))
     zc, hz = (top + bottom) / 2, (top - bottom) / 2
-    Y, Z = _sections(half_width, hz)
-    Z = Z + zc[:, None]
     belt = profile.belt * H
+    Y, Z, mirror = _sections(half_width, hz, (belt - zc) / hz)
+    Z = Z + zc[:, None]
     above = np.clip((Z - belt) / np.maximum(top[:, None] - belt, 1e-6), 0.0, 1.0)
     Y = Y * (1 - profile.tumblehome * above)
     X = np.broadcast_to(x[:, None], Z.shape)
@@ -253,9 +271,9 @@ def shell(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nda
     caps = []
     for station, sign in ((0, -1), (S - 1, 1)):
         for k0, k1 in itertools.pairwise(left):
-            m0, m1 = N // 2 - 1 - k0, N // 2 - 1 - k1
+            m0, m1 = mirror[k0], mirror[k1]
             p = index[station]
-            quad = [(p[k0], p[k1], p[m1 % N]), (p[k0], p[m1 % N], p[m0 % N])]
+            quad = [(p[k0], p[k1], p[m1]), (p[k0], p[m1], p[m0])]
             caps += quad if sign > 0 else [tuple(reversed(f)) for f in quad]
     faces = np.concatenate([tube, np.array(caps)])
     normals = _vertex_normals(vertices, faces[: len(tube)], len(vertices))
