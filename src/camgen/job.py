@@ -95,6 +95,9 @@ class CameraState(Frozen):
     """Virtual PTZ: the sensor window (x0, y0, width, height) the stream shows, px."""
     output_K_px: Matrix3 | None = None
     """Virtual PTZ: the camera matrix of the stream (the scaled window); K_px is the sensor's."""
+    night_mode: bool = False
+    """The camera is in IR night mode (`camgen.world.night`): IR-cut filter out, illuminator on,
+    monochrome stream."""
 
 
 class Decision(Frozen):

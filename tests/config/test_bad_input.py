@@ -1340,6 +1340,48 @@ CASES = [
         "environment.site.time",
         "a night sky needs it 12° or more below (after nautical dusk",
     ),
+    (
+        "night_mode_switch_negative",
+        "profile",
+        FIXED_PROFILE + "night_mode:\n  switch_lux: -2 #<\n",
+        "night_mode.switch_lux",
+        "cameras switch to night mode between about 0.1 and 50 lx",
+    ),
+    (
+        "ir_illuminator_at_940nm",
+        "profile",
+        FIXED_PROFILE + "night_mode:\n  ir_illuminator: {wavelength_nm: 940} #<\n",
+        "night_mode.ir_illuminator.wavelength_nm",
+        "must be one of 850, got 940",
+    ),
+    (
+        "ir_illuminator_searchlight",
+        "profile",
+        FIXED_PROFILE + "night_mode:\n  ir_illuminator: {radiant_intensity_mw_sr: 1e9} #<\n",
+        "night_mode.ir_illuminator.radiant_intensity_mw_sr",
+        "camera IR illuminators give about 100–20 000 mW/sr",
+    ),
+    (
+        "ir_illuminator_beam_flat",
+        "profile",
+        FIXED_PROFILE + "night_mode:\n  ir_illuminator: {half_angle_deg: 95} #<\n",
+        "night_mode.ir_illuminator.half_angle_deg",
+        "a beam's half angle lies between 1° and 89°",
+    ),
+    (
+        "qe_850_above_twice_visible",
+        "profile",
+        edit(FIXED_PROFILE, "  bit_depth: 12\n", "  bit_depth: 12\n  qe_850nm_rel: 5 #<\n"),
+        "sensor.qe_850nm_rel",
+        "a silicon sensor's QE at 850 nm is 0–2 times its visible QE",
+    ),
+    (
+        "camera_night_mode_sometimes",
+        "scene",
+        edit(SCENE, "      pitch_deg: -20\n", "      pitch_deg: -20\n    night_mode: sometimes #<\n"),
+        "cameras[0].night_mode",
+        "got 'sometimes'",
+    ),
 ]
 
 

@@ -121,6 +121,16 @@ class Noise(Model):
 class Sensor(Model):
     """The image sensor: geometry, colour filter array and the electron → DN chain."""
 
+    qe_850nm_rel: Annotated[
+        float,
+        Field(ge=0, le=2),
+        Why("a silicon sensor's QE at 850 nm is 0–2 times its visible QE (front-illuminated 0.2, NIR-enhanced 1.5)"),
+    ] = 0.35
+    """Quantum efficiency at 850 nm relative to the visible QE of `quantum_efficiency`, with the IR-cut
+    filter out (night mode, `Profile.night_mode`). 0.35: Sony STARVIS sensors' published spectral
+    response (IMX291/IMX327 datasheets' figure: R, G and B meet at about 30–40 % of the green peak near
+    850 nm); NIR-enhanced parts (STARVIS 2, "NIR+") reach 0.6–1.0."""
+
     model: str = ""
     """Sensor part number, for people (not used in computation)."""
     format: str = ""
@@ -697,6 +707,45 @@ def _validation_points_px(width_px: int, height_px: int, per_edge: int = 33) -> 
     return np.stack([u.ravel(), v.ravel()], axis=-1)
 
 
+class IrIlluminator(Model):
+    """The camera's built-in infrared LEDs, on in night mode: a round beam from the lens, intensity
+    I_e·cos-weighted like the renderer's spot (`camgen.world.night`), falling off as 1/d²."""
+
+    wavelength_nm: Literal[850] = 850
+    """The LEDs' peak wavelength, nm: camgen models 850 nm illuminators (the sensor's QE is given
+    there, `Sensor.qe_850nm_rel`); 940 nm ones are not modelled."""
+    radiant_intensity_mw_sr: Annotated[
+        float,
+        Field(gt=0, le=1e5),
+        Why("camera IR illuminators give about 100–20 000 mW/sr (a few LEDs to a long-range array); at most 1e5"),
+    ] = 2000.0
+    """On-axis radiant intensity, mW/sr. 2000: about a bullet camera's "30 m IR" array of 2–4
+    high-power 850 nm LEDs of 0.5–1 W/sr each (e.g. OSRAM Oslon Black SFH 4715AS class, ±45° lens);
+    an estimate: take the figure from the illuminator's datasheet."""
+    half_angle_deg: Annotated[float, Field(gt=1, lt=89), Why("a beam's half angle lies between 1° and 89°")] = 40.0
+    """Where the beam ends (full intensity within 80 % of it): about the lens's widest half field of view."""
+
+
+class NightMode(Model):
+    """Day/night switching: below `switch_lux` the IR-cut filter comes out, the stream turns monochrome
+    and the IR illuminator lights the scene (`camgen.world.night`)."""
+
+    switch_lux: Annotated[
+        float,
+        Field(gt=0, le=1000),
+        Why("cameras switch to night mode between about 0.1 and 50 lx; at most 1000 lx"),
+    ] = 2.0
+    """Scene illuminance below which the camera is in night mode, lux: the sky's horizontal illuminance
+    (ambient plus sun) the camera's light sensor reads; lamps, which light only their pools, do not
+    count. 2 lx: manufacturers' day/night thresholds lie at about 1–5 lx (deep dusk; civil dusk is 3 lx);
+    an estimate."""
+    ir_cut_filter: bool = True
+    """Whether the camera has a switchable IR-cut filter (true: it is removed in night mode, and the
+    850 nm light reaches the sensor; false: a camera without one never switches)."""
+    ir_illuminator: IrIlluminator | None = IrIlluminator()
+    """The built-in IR LEDs; null: none (the camera relies on the scene's light)."""
+
+
 class Profile(Model):
     """A camera model as sold: everything that does not depend on where it is installed."""
 
@@ -710,6 +759,8 @@ class Profile(Model):
     codec: Codec = Codec()
     ptz: Ptz | None = None
     """The PTZ head, absent for a fixed camera."""
+    night_mode: NightMode | None = None
+    """Day/night switching with an IR illuminator; null: a day-only camera (always colour)."""
 
     @property
     def coc_mm(self) -> float:

@@ -784,6 +784,9 @@ class Camera(Model):
     """Installed focal length of a varifocal (non-PTZ) lens, mm; null uses the wide end."""
     focus_distance_m: PositiveFloat | None = None
     """Overrides the profile's focus distance, m."""
+    night_mode: Literal["auto"] | bool = "auto"
+    """IR night mode (the profile's `night_mode`): auto switches below its `switch_lux`; true (YAML's on)
+    and false (off) force it."""
 
     @model_validator(mode="after")
     def _check_heads(self) -> Camera:

@@ -51,6 +51,7 @@ from camgen.sensor.capture import SensorModel
 from camgen.sensor.cfa import cfa_channel_index, mosaic
 from camgen.sensor.characteristics import saturation_e
 from camgen.sensor.exposure import gain_linear, photons_per_cd_m2_s
+from camgen.world.night import monochrome
 
 
 def frame_rng(seed: int, camera_index: int, frame_index: int) -> np.random.Generator:
@@ -251,6 +252,8 @@ class CameraPipeline:
             level = self._meter_and_adapt(state, raw)
         with self.clock("isp"):
             rgb8 = None if self.isp is None else self.isp.process(raw, state.gain_db)
+            if rgb8 is not None and state.night_mode:  # the camera sends grey in night mode
+                rgb8 = monochrome(rgb8)
         white_balance = None if self.isp is None or self.mono else tuple(self.isp.white_balance_gains.tolist())
         return CapturedFrame(
             raw_dn=raw, rgb8=rgb8, state=state, metered_level_frac=level, white_balance_rgb=white_balance

@@ -686,6 +686,8 @@ def _compile_camera(
         )
 
     states = tuple(frame_state(k, ls) for k, ls in enumerate(frame_lens))
+    if _night_mode(scene, camera, profile, decisions):
+        states = tuple(state.model_copy(update={"night_mode": True}) for state in states)
     render = RenderSpec(
         width_px=W + margin[0] + margin[2],
         height_px=H + margin[1] + margin[3],
@@ -708,6 +710,55 @@ def _compile_camera(
         decisions=tuple(decisions),
         states=states,
     )
+
+
+def scene_sky_illuminance_lux(scene) -> float:
+    """The horizontal illuminance the sky gives the scene, lux: its ambient lights plus each sun light's
+    illuminance times the sine of its elevation (lamps light only their pools and are left out), at the
+    first frame."""
+    total = 0.0
+    for light in scene.lights:
+        if light.type == "ambient":
+            total += light.illuminance_lux
+        elif light.type == "sun":
+            total += light.illuminance_lux * math.sin(math.radians(light.elevation_deg))
+    return total
+
+
+def _night_mode(scene, camera, profile, decisions: list[Decision]) -> bool:
+    """Whether the camera films the sequence in IR night mode (`camgen.world.night`): the scene camera's
+    `night_mode` (on/off), or, for auto, whether the sky's illuminance (`scene_sky_illuminance_lux`) is
+    below the profile's `night_mode.switch_lux`. A site's daylight is above any switch level (it ends
+    at sunset), so the mode holds for the whole sequence."""
+    night = profile.night_mode
+    if night is None or not night.ir_cut_filter:
+        if camera.night_mode is True:
+            raise ConfigError(
+                f"camera {camera.name!r}: night_mode is on, but its profile has no night mode with a removable "
+                "IR-cut filter (profile key night_mode); give the profile one, or use night_mode: auto or false"
+            )
+        return False
+    illuminance_lux = scene_sky_illuminance_lux(scene)
+    if camera.night_mode == "auto":
+        on = illuminance_lux < night.switch_lux
+        reason = (
+            f"the sky gives {illuminance_lux:.3g} lx, {'below' if on else 'not below'} the profile's switch level "
+            f"{night.switch_lux:g} lx"
+        )
+    else:
+        on = camera.night_mode
+        reason = f"the scene's camera sets night_mode: {'on' if on else 'off'}"
+    decisions.append(
+        Decision(
+            stage="camera.night_mode",
+            included=on,
+            reason=reason + ("; IR-cut filter out, IR illuminator on, monochrome stream" if on else "; colour"),
+            effect=illuminance_lux,
+            threshold=night.switch_lux,
+            unit="lx",
+        )
+    )
+    return on
 
 
 def _daylight_moves(scene, decisions: list[Decision]) -> bool:

@@ -109,6 +109,9 @@ class SceneGraph:
     """The people, skinned together."""
     vehicles: list[VehicleRig | None] = field(default_factory=list)
     """Each actor's procedural vehicle (its mesh posed in world coordinates), or None."""
+    source: tuple[Scene, Callable[[str], Path] | None] | None = None
+    """The scene it was built from and its path resolver (a night-mode camera builds its NIR graph
+    from them: `camgen.render.nir`)."""
 
     def rig(self, index: int) -> PersonRig | CharacterRig | VehicleRig | None:
         """Actor `index`'s procedural person, glTF character or procedural vehicle, or None (a shape)."""
@@ -657,6 +660,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         people=people,
         crowd=Crowd([rig for rig in people if isinstance(rig, PersonRig)]),
         vehicles=vehicles,
+        source=(scene, resolve_path),
     )
     result.place_actors(0.0)
     return result

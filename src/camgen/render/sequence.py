@@ -116,6 +116,8 @@ class CameraRenderer:
         self._reach_points_m, self._reach_radius_m = _reach(graph)
         motion = [stage.params for stage in camera.stages if stage.name == "optics.motion_blur"]
         self._motion = motion[0] if motion else None
+        self._nir: SceneGraph | None = None
+        """The NIR graph of a night-mode camera (`camgen.render.nir`), built at its first night frame."""
         spec = self.spec
         s = spec.supersampling if "radiance" in spec.passes else 1
         largest = max(spec.width_px, spec.height_px)
@@ -179,7 +181,10 @@ class CameraRenderer:
         samples = self.motion_samples(state)
         if s == 1 and samples == 1:
             self.graph.place_actors(state.time_s)
-            return Frame(index, state.time_s, self._draw(view, passes, "shared"))
+            drawn = self._draw(view, passes, "shared")
+            if "radiance" in passes and state.night_mode:
+                drawn.radiance = drawn.radiance + self._nir_radiance(view, state)
+            return Frame(index, state.time_s, drawn)
         result = Passes()
         if "radiance" in passes:
             # (time offset, sub-pixel shift, draw factor, kept-background key) of each sub-frame.
@@ -201,12 +206,37 @@ class CameraRenderer:
                 result.radiance = radiance if result.radiance is None else result.radiance + radiance
             if len(draws) > 1:
                 result.radiance /= len(draws)
+        if "radiance" in passes and state.night_mode:
+            result.radiance = result.radiance + self._nir_radiance(view, state)
         geometric = tuple(p for p in passes if p != "radiance")
         if geometric:
             self.graph.place_actors(state.time_s)
             coarse = self._draw(view, geometric, "geometric")
             result.depth_m, result.instance_id = coarse.depth_m, coarse.instance_id
         return Frame(index, state.time_s, result)
+
+    def _nir_radiance(self, view: View, state: CameraState) -> np.ndarray:
+        """The IR illuminator's light returned by the scene at the frame time, in the visible pass's
+        units (`camgen.render.nir`), drawn supersampled as the radiance is; (H, W, 3)."""
+        from camgen.render.nir import aim_illuminator, build_nir_graph
+
+        if self._nir is None:
+            if self.graph.source is None:
+                raise ValueError(
+                    f"camera {self.camera.name!r} is in night mode, but its scene graph has no source scene"
+                )
+            scene, resolve_path = self.graph.source
+            self._nir = build_nir_graph(scene, self.camera.profile, resolve_path)
+            if self._nir is None:
+                raise ValueError(f"camera {self.camera.name!r} is in night mode, but its profile has no IR illuminator")
+        graph = self._nir
+        graph.place_actors(state.time_s)
+        aim_illuminator(graph, view.T_world_from_cam)
+        s = self.spec.supersampling
+        drawn = self.renderer.draw(
+            graph, view.scaled(s) if s > 1 else view, ("radiance",), clip_range_m=self.clip_range_m(view)
+        )
+        return box_downsample(drawn.radiance, s)
 
 
 def _reach(graph: SceneGraph) -> tuple[np.ndarray, np.ndarray]:
