@@ -163,3 +163,35 @@ def test_camera_jsonl_records_the_mode(night_frames):
     for lux, expected in ((0.05, True), (1000.0, False)):
         records = [json.loads(line) for line in (night_frames[lux] / "camera.jsonl").read_text().splitlines()]
         assert [r["night_mode"] for r in records] == [expected]
+
+
+def test_textured_surfaces_and_people_take_their_nir_reflectance():
+    """In the NIR graph a grass texture's mean linear albedo is its 850 nm reflectance, 0.45, and an
+    asphalt one's 0.14, within 2 % (the texture's own variation is kept; their visible means are 0.06
+    and 0.11), grey in R, G and B; a procedural person's vertex colours turn grey by the red-reflectance
+    rule; emission is off."""
+    from camgen.render.nir import _decode_srgb8, build_nir_graph
+    from camgen.world.night import NIR_REFLECTANCE_BY_TEXTURE
+    from tests.render.conftest import scene_from
+
+    profile = Profile.model_validate({**_profile_dict(), "night_mode": {}})
+    scene = scene_from(
+        environment={
+            "meshes": [
+                {"type": "plane", "name": "grass", "size_m": [4, 8], "material": {"texture": {"type": "grass"}}},
+                {"type": "plane", "name": "asphalt", "size_m": [4, 8], "material": {"texture": {"type": "asphalt"}}},
+                {"type": "box", "name": "sign", "size_m": [1, 1, 1], "material": {"emission_cd_m2": 500}},
+            ]
+        },
+        lights=[{"type": "ambient", "illuminance_lux": 100.0}],
+        actors=[{"name": "walker", "class": "person", "path": {"waypoints_m": [[0, 5]]}}],
+    )
+    graph = build_nir_graph(scene, profile)
+    for node, name in zip(graph.environment_nodes[:2], ("grass", "asphalt"), strict=True):
+        texture = _decode_srgb8(node.mesh.primitives[0].material.baseColorTexture.source)
+        assert np.allclose(texture[..., 0], texture[..., 1]) and np.allclose(texture[..., 1], texture[..., 2])
+        assert float(texture.mean()) == pytest.approx(NIR_REFLECTANCE_BY_TEXTURE[name], rel=0.02)
+    assert tuple(graph.environment_nodes[2].mesh.primitives[0].material.emissiveFactor) == (0.0, 0.0, 0.0)
+    person = graph.actor_nodes[0].mesh.primitives[0].color_0
+    assert np.allclose(person[:, 0], person[:, 1]) and np.allclose(person[:, 1], person[:, 2])
+    assert 0.02 < float(person[:, 0].mean()) < 0.9
