@@ -56,9 +56,15 @@ def test_the_night_sky_levels_span_rural_to_urban_illuminance():
 
 
 def test_850nm_counts_as_1046_lumens_per_watt():
-    """λ/(hc) / (1/(683 h·540 THz)) = 683 · 540e12 · 850e-9 / c = 1046.4 lm/W."""
+    """λ/(hc) / (1/(683 h·540 THz)) = 683 · 540e12 · 850e-9 / c = 1045.7 lm/W."""
     assert NIR_LM_EQUIVALENT_PER_W == pytest.approx(683 * 540e12 * 850e-9 / 299_792_458.0, rel=1e-12)
-    assert NIR_LM_EQUIVALENT_PER_W == pytest.approx(1046.0, abs=1.0)
+    assert NIR_LM_EQUIVALENT_PER_W == pytest.approx(1045.7, abs=0.1)
+    # The same count as the sensor's photons: (λ/hc) per joule over its photons per lumen-second.
+    from camgen.sensor.exposure import PHOTONS_PER_LUMEN_S, PLANCK_J_S
+
+    assert NIR_LM_EQUIVALENT_PER_W == pytest.approx(
+        850e-9 / (PLANCK_J_S * 299_792_458.0) / PHOTONS_PER_LUMEN_S, rel=1e-12
+    )
 
 
 def test_night_mode_switches_below_its_level_and_back_above_the_hysteresis():

@@ -40,12 +40,13 @@ import math
 
 import numpy as np
 
-from camgen.sensor.exposure import PHOTONS_PER_LUMEN_S, PLANCK_J_S
-
 SPOT_FULL_INTENSITY_FRACTION = 0.8
 """θᵢ / θₒ of the renderer's spot and lamp beams (full intensity within 80 % of the cone)."""
 
 SPEED_OF_LIGHT_M_S = 299_792_458.0
+LUMINOUS_EFFICACY_LM_PER_W = 683.0
+CANDELA_FREQUENCY_HZ = 540e12
+"""The candela's definition: 683 lm/W at 540 THz, the photons `camgen.sensor.exposure` counts."""
 
 
 def beam_solid_angle_sr(cone_half_angle_rad: float, inner_fraction: float = SPOT_FULL_INTENSITY_FRACTION) -> float:
@@ -108,8 +109,11 @@ def night_sky_illuminance_lux(sky_luminance_cd_m2: float) -> float:
 
 
 NIR_WAVELENGTH_NM = 850.0
-NIR_LM_EQUIVALENT_PER_W = NIR_WAVELENGTH_NM * 1e-9 / (PLANCK_J_S * SPEED_OF_LIGHT_M_S) / PHOTONS_PER_LUMEN_S
-"""Lumens of 555 nm light that give a sensor as many photons as one watt of 850 nm light (≈ 1046)."""
+NIR_LM_EQUIVALENT_PER_W = (
+    LUMINOUS_EFFICACY_LM_PER_W * CANDELA_FREQUENCY_HZ * NIR_WAVELENGTH_NM * 1e-9 / SPEED_OF_LIGHT_M_S
+)
+"""Lumens of 540 THz light that give a sensor as many photons as one watt of 850 nm light (≈ 1046):
+(λ/hc) / (1/(683 lm/W · h · 540 THz)) = 683 · 540 THz · λ / c; Planck's constant cancels."""
 
 
 def nir_equivalent_intensity_cd(radiant_intensity_mw_sr: float, qe_850nm_rel: float) -> float:
