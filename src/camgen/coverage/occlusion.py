@@ -30,6 +30,8 @@ hidden by it, m: roads and markings are drawn a little above the ground they cov
 cameras: 1.0 and 1.1 cm) to keep the depth test from mixing them, and a camera sees the road at those
 points (the render's depth there is 1 cm / sin(elevation) short of the ground's, the point's own
 surface). 5 cm: more than such layers, less than a kerb (15 cm) or anything one stands under."""
+BOUNDS_MARGIN_M = 1e-6
+"""Slack of the bounding-box test that picks the segments to test against a mesh, m."""
 INSIDE_TOLERANCE_M = 1e-6
 """A point this close to a solid's face counts as inside it (the ground under a box), m."""
 TRIANGLE_CHUNK = 2_000_000
@@ -141,21 +143,55 @@ def _triangles_s(triangles: np.ndarray, o: np.ndarray, d: np.ndarray) -> np.ndar
     return best
 
 
-def first_hit_s(origin_m: np.ndarray, targets_m: np.ndarray, occluders: Sequence[Occluder]) -> np.ndarray:
-    """Segment parameter s ≥ 0 (N,) of the first mesh the segments origin → target enter (s = 1 at the
-    target; beyond 1 counts too); inf where none is entered along the whole line."""
+def world_bounds_m(occluder: Occluder) -> tuple[np.ndarray, np.ndarray]:
+    """The world axis-aligned box (lo (3,), hi (3,)) holding the occluder: its local box's (or its
+    triangles') corners carried into the world."""
+    if occluder.kind == "triangles":
+        local = occluder.triangles_m.reshape(-1, 3)
+    else:
+        half = occluder.half_extent_m
+        local = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half
+    T_world_from_mesh = np.linalg.inv(occluder.T_mesh_from_world)
+    world = local @ T_world_from_mesh[:3, :3].T + T_world_from_mesh[:3, 3]
+    return world.min(axis=0), world.max(axis=0)
+
+
+def _entries(origin_m: np.ndarray, targets_m: np.ndarray, occluders: Sequence[Occluder]):
+    """For each occluder: (it, the indices of the segments origin → target whose bounding box meets its
+    world bounding box, s in [0, 1] where each of those first enters it, inf where it does not)."""
     origin = np.asarray(origin_m, dtype=np.float64)
     targets = np.asarray(targets_m, dtype=np.float64).reshape(-1, 3)
-    best = np.full(len(targets), np.inf)
+    columns = [np.ascontiguousarray(targets[:, axis]) for axis in range(3)]
+    lows = [np.minimum(c, origin[axis]) for axis, c in enumerate(columns)]
+    highs = [np.maximum(c, origin[axis]) for axis, c in enumerate(columns)]
     for occluder in occluders:
+        lo, hi = world_bounds_m(occluder)
+        meets = np.ones(len(targets), dtype=bool)
+        for axis in range(3):
+            meets &= highs[axis] >= lo[axis] - BOUNDS_MARGIN_M
+            meets &= lows[axis] <= hi[axis] + BOUNDS_MARGIN_M
+        near = np.flatnonzero(meets)
+        if len(near) == 0:
+            continue
         R, t = occluder.T_mesh_from_world[:3, :3], occluder.T_mesh_from_world[:3, 3]
         o = R @ origin + t
-        d = (targets - origin) @ R.T
+        d = (targets[near] - origin) @ R.T
         if occluder.kind == "triangles":
             s = _triangles_s(occluder.triangles_m, o, d)
         else:
             s = _entering_s(occluder.kind, occluder.half_extent_m, o, d)
-        best = np.minimum(best, s)
+        yield occluder, near, np.where(s <= 1.0, s, np.inf)
+
+
+def first_hit_s(origin_m: np.ndarray, targets_m: np.ndarray, occluders: Sequence[Occluder]) -> np.ndarray:
+    """Segment parameter s in [0, 1] (N,) where the segments origin → target (s = 1 at the target) first
+    enter a mesh; inf where they enter none.
+
+    Only the segments whose bounding box meets a mesh's world bounding box are tested against it (on a
+    100 × 100 m site, a building's box meets a few per cent of the sight lines)."""
+    best = np.full(len(np.asarray(targets_m).reshape(-1, 3)), np.inf)
+    for _, near, s in _entries(origin_m, targets_m, occluders):
+        best[near] = np.minimum(best[near], s)
     return best
 
 
@@ -166,11 +202,11 @@ def sight_blocked(origin_m: np.ndarray, targets_m: np.ndarray, occluders: Sequen
     with np.errstate(divide="ignore", invalid="ignore"):
         s_end = 1.0 - END_MARGIN_M / length
     blocked = np.zeros(len(targets), dtype=bool)
-    for occluder in occluders:
-        hit = first_hit_s(origin_m, targets, [occluder]) < s_end
+    for occluder, near, s in _entries(origin_m, targets, occluders):
+        hit = s < s_end[near]
         if occluder.kind == "plane":
-            hit &= ~lies_under_face(targets, occluder)
-        blocked |= hit
+            hit &= ~lies_under_face(targets[near], occluder)
+        blocked[near] |= hit
     return blocked
 
 
