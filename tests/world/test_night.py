@@ -15,7 +15,6 @@ from camgen.world.night import (
     beam_solid_angle_sr,
     ground_illuminance_lux,
     monochrome,
-    night_mode_on,
     peak_intensity_cd,
 )
 
@@ -65,13 +64,6 @@ def test_850nm_counts_as_1046_lumens_per_watt():
     assert NIR_LM_EQUIVALENT_PER_W == pytest.approx(
         850e-9 / (PLANCK_J_S * 299_792_458.0) / PHOTONS_PER_LUMEN_S, rel=1e-12
     )
-
-
-def test_night_mode_switches_below_its_level_and_back_above_the_hysteresis():
-    assert night_mode_on(0.5, 1.0, was_on=False, hysteresis=3.0)
-    assert not night_mode_on(1.5, 1.0, was_on=False, hysteresis=3.0)
-    assert night_mode_on(2.0, 1.0, was_on=True, hysteresis=3.0)
-    assert not night_mode_on(3.5, 1.0, was_on=True, hysteresis=3.0)
 
 
 def test_monochrome_is_bt601_luma_in_every_channel():

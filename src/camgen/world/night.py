@@ -153,15 +153,6 @@ def default_nir_reflectance(color_rgb) -> np.ndarray:
     return rgb[..., 0]
 
 
-def night_mode_on(illuminance_lux: float, switch_lux: float, was_on: bool, hysteresis: float) -> bool:
-    """Whether the IR night mode is on at a scene illuminance: it switches on below `switch_lux` and
-    back off only above `switch_lux · hysteresis` (cameras switch back at a higher level, so a lamp the
-    illuminator itself brightens does not make them flicker between modes)."""
-    if was_on:
-        return illuminance_lux < switch_lux * hysteresis
-    return illuminance_lux < switch_lux
-
-
 def monochrome(rgb: np.ndarray) -> np.ndarray:
     """The stream of a camera in night mode: each pixel's BT.601 luma Y = 0.299 R + 0.587 G + 0.114 B in
     all three channels (what a camera's ISP sends with its saturation at zero), same dtype and shape."""
