@@ -276,8 +276,8 @@ class Site(Model):
     moves on with the sequence's time, and when daylight changes over it by more than 0.5° or 1 %
     (`camgen.world.site.daylight_change`) each frame is lit for its own time, every light and the sky
     scaled as the model's value (an illuminance the scene gives itself sets the level). The model ends
-    at sunset: a sequence that starts or ends with the sun below the horizon is refused (light a night
-    scene with lamps, without a site)."""
+    at sunset: a sequence that starts or ends with the sun below the horizon is refused, unless the
+    scene is a night scene (`Environment.night_sky`), whose sun must then stay 12° or more below it."""
 
     latitude_deg: Annotated[float, Field(ge=-90, le=90), Why("latitudes run from −90 (south pole) to 90 (north)")]
     """Degrees north of the equator (south negative)."""
@@ -1011,7 +1011,8 @@ def _with_site_daylight(data: Any) -> Any:
             "environment.site.time",
             f"puts the sun {abs(daylight.elevation_deg):.2f}° {where} the horizon at {site.time.isoformat()} "
             f"{when}; camgen's daylight model needs the sun up (above 1° with a sun light, no twilight): choose "
-            "a time in daylight, or light a night scene with lamps and no site",
+            "a time in daylight, or make it a night scene (environment.night_sky, with lamps; the sun then "
+            "12° or more below the horizon)",
         )
     duration_s = data.get("duration_s")
     if _is_number(duration_s) and duration_s > 0:
