@@ -11,8 +11,9 @@ import numpy as np
 import yaml
 
 from camgen.cli.main import main
+from camgen.config.layout import LayoutCandidates
 from camgen.config.scene import Scene
-from camgen.coverage.layout import _gains, greedy, objective_m2, swap_search
+from camgen.coverage.layout import _gains, enumerate_options, evenly_spaced, greedy, objective_m2, swap_search
 from tests.conftest import SCENE, write
 
 
@@ -63,7 +64,26 @@ def test_layout_cli_writes_a_scene_fragment_that_validates(workspace: Path, caps
     assert len(fragment["cameras"]) == 2
     document = yaml.safe_load(scene.read_text()) | fragment
     assert len(Scene.model_validate(document).cameras) == 2
-    assert (out / "layout.json").exists() and (out / "site_layout.png").exists()
+    assert (
+        (out / "layout.json").exists() and (out / "site_layout.png").exists() and (out / "site_baseline.png").exists()
+    )
     assert "baseline" in capsys.readouterr().out
     assert main(["layout", str(scene), "--candidates", str(candidates), "--budget", "0", "-o", str(out)]) == 2
     assert "--budget must be ≥ 1 camera, got 0" in capsys.readouterr().err
+
+
+def test_the_baseline_turns_each_camera_towards_the_regions_within_its_heading_range():
+    candidates = LayoutCandidates.model_validate(
+        {
+            "mounts": [
+                {"name": "pole", "position_m": [10, 10, 5]},  # any heading: towards the origin, -135°
+                # towards the origin is -16.7°, out of range: its nearer end, 260° (83° away; 100° is 117° away)
+                {"name": "wall", "position_m": [-10, 3, 5], "yaw_deg_range": [100, 260]},
+            ],
+            "profiles": ["fixed"],
+            "yaw_step_deg": 5,
+        }
+    )
+    options = enumerate_options(candidates)
+    chosen = [options[i] for i in evenly_spaced(options, candidates, 2, np.zeros(3))]
+    assert [(o.mount, o.yaw_deg, o.pitch_deg) for o in chosen] == [("pole", -135.0, -25.0), ("wall", 260.0, -25.0)]

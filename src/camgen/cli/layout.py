@@ -82,18 +82,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     models = {name: p.profile for name, p in profiles.items()}
     result = optimise_layout(candidates, cells, models, occluders, args.budget)
 
-    cameras = [
-        Camera(
-            name=f"{result.options[i].mount}_{k}",
-            profile=result.options[i].profile,
-            mount=Mount(
-                position_m=result.options[i].position_m,
-                yaw_deg=result.options[i].yaw_deg,
-                pitch_deg=result.options[i].pitch_deg,
-            ),
-        )
-        for k, i in enumerate(result.chosen, 1)
-    ]
+    cameras = _cameras(result, result.chosen)
     args.out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(args.out / "layout.yaml", _fragment(cameras, result))
     report = {
@@ -106,22 +95,24 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         "total_region_weight_m2": result.total_weight_m2,
         "guarantee": result.guarantee,
         "baseline": {
-            "rule": "evenly spaced mounts, each aimed at the middle of its ranges, first profile",
+            "rule": "evenly spaced mounts, each turned towards the regions' weighted centroid (within its "
+            "heading range) at the middle of its pitch range, first profile",
             "objective_m2": result.baseline_objective_m2,
             "cameras": [vars(result.options[i]) for i in result.baseline],
         },
         "cameras": [vars(result.options[i]) for i in result.chosen],
     }
     write_text_atomic(args.out / "layout.json", json.dumps(report, indent=2, ensure_ascii=False) + "\n")
-    laid_out = scene.model_copy(update={"cameras": cameras})
-    coverage = scene_coverage(
-        laid_out,
-        {c.name: models[c.profile] for c in cameras},
-        cell_m=args.cell_m,
-        file_bounds=loaded.file_bounds,
-        file_triangles_m=file_triangles_m(loaded),
-    )
-    plot_site(coverage, 0, args.out / "site_layout.png")
+    for name, chosen in (("site_layout.png", cameras), ("site_baseline.png", _cameras(result, result.baseline))):
+        laid_out = scene.model_copy(update={"cameras": chosen})
+        coverage = scene_coverage(
+            laid_out,
+            {c.name: models[c.profile] for c in chosen},
+            cell_m=args.cell_m,
+            file_bounds=loaded.file_bounds,
+            file_triangles_m=file_triangles_m(loaded),
+        )
+        plot_site(coverage, 0, args.out / name)
     bound = f", bound {result.upper_bound_m2:.1f} m²" if result.upper_bound_m2 is not None else ""
     out.print(
         f"objective {result.objective_m2:.1f} of {result.total_weight_m2:.1f} weighted m² (greedy "
@@ -131,8 +122,24 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     for camera in cameras:
         m = camera.mount
         out.print(f"  {camera.name}: {camera.profile} yaw {m.yaw_deg:g}° pitch {m.pitch_deg:g}°", markup=False)
-    out.print(f"wrote layout.yaml, layout.json, site_layout.png to {args.out}", markup=False)
+    out.print(f"wrote layout.yaml, layout.json, site_layout.png, site_baseline.png to {args.out}", markup=False)
     return 0
+
+
+def _cameras(result, indices) -> list[Camera]:
+    """The scene cameras of the options `indices`, named after their mounts."""
+    return [
+        Camera(
+            name=f"{result.options[i].mount}_{k}",
+            profile=result.options[i].profile,
+            mount=Mount(
+                position_m=result.options[i].position_m,
+                yaw_deg=result.options[i].yaw_deg,
+                pitch_deg=result.options[i].pitch_deg,
+            ),
+        )
+        for k, i in enumerate(indices, 1)
+    ]
 
 
 _NO_REGIONS = "must list at least one region of interest ({name, polygon_m, required_class}) for camgen layout to cover"

@@ -177,22 +177,38 @@ def swap_search(meets: np.ndarray, chosen: list[int], weight_m2: np.ndarray, han
     return chosen
 
 
-def evenly_spaced(options: Sequence[Option], candidates: LayoutCandidates, budget: int) -> list[int]:
-    """The naive baseline: `budget` mounts spread evenly through the candidate list, each aimed at the middle
-    of its ranges, with the first profile."""
+def evenly_spaced(
+    options: Sequence[Option], candidates: LayoutCandidates, budget: int, aim_m: np.ndarray | None = None
+) -> list[int]:
+    """The naive baseline, as a 2-D planning tool would set it up: `budget` mounts spread evenly through the
+    candidate list, each turned towards `aim_m` (the regions' weighted centroid; its heading brought into the
+    mount's range, the middle of the range without an aim) at the middle of its pitch range, with the first
+    profile."""
     mounts = candidates.mounts
     picks = [mounts[int(i) % len(mounts)] for i in np.linspace(0, len(mounts) - 1, budget).round()] if budget else []
     chosen = []
     for mount in picks:
         yaw, pitch = np.mean(mount.yaw_deg_range), np.mean(mount.pitch_deg_range)
+        if aim_m is not None:
+            towards = np.degrees(np.arctan2(aim_m[1] - mount.position_m[1], aim_m[0] - mount.position_m[0]))
+            low, high = mount.yaw_deg_range
+            towards = (towards - low) % 360 + low  # the same heading, ≥ the range's start
+            if towards > high:  # outside the range: its nearer end
+                towards = high if towards - high < (low + 360) - towards else low
+            yaw = towards
         scores = [
-            (abs(o.yaw_deg - yaw) + abs(o.pitch_deg - pitch), i)
+            (_angle_deg(o.yaw_deg - yaw) + abs(o.pitch_deg - pitch), i)
             for i, o in enumerate(options)
             if o.mount == mount.name and o.profile == candidates.profiles[0] and i not in chosen
         ]
         if scores:
             chosen.append(min(scores)[1])
     return chosen
+
+
+def _angle_deg(difference_deg: float) -> float:
+    """|difference| wrapped to [0, 180], degrees."""
+    return abs((difference_deg + 180.0) % 360.0 - 180.0)
 
 
 def optimise_layout(
@@ -224,7 +240,8 @@ def optimise_layout(
             "none: with handoff_weight > 0 the overlap term is not submodular, so the (1 − 1/e) guarantee and the "
             "bound do not hold"
         )
-    baseline = evenly_spaced(options, candidates, budget)
+    aim = (cells.weight_m2 @ cells.points_m) / cells.weight_m2.sum() if cells.weight_m2.sum() > 0 else None
+    baseline = evenly_spaced(options, candidates, budget, aim)
     return LayoutResult(
         chosen=tuple(chosen),
         objective_m2=value,
