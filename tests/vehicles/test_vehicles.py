@@ -16,7 +16,7 @@ from camgen.config.placement import box_corners, local_bounds, placement
 from camgen.config.scene import VEHICLE_BODY_TYPES, VEHICLE_ENVELOPE_M, Actor, actor_shape
 from camgen.motion.trajectory import Route
 from camgen.vehicles import VehicleRig, ackermann_rad, vehicle_look, vehicle_rig
-from camgen.vehicles.body import PROFILES, build_vehicle, shell
+from camgen.vehicles.body import PROFILES, build_vehicle, shell, wheel_meshes
 from camgen.vehicles.look import BODY_TYPES, CLASS_BODY_TYPES, PAINT_SHARES, SIZE_JITTER, draw_look
 from camgen.vehicles.plate import PLATE_SIZE_M, UK_PLATE_PATTERN, draw_plate_text, plate_image
 
@@ -111,12 +111,10 @@ def test_the_shell_is_closed_and_its_glass_sits_above_the_beltline(body):
     union = trimesh.util.concatenate([trimesh.Trimesh(p.vertices_m, p.faces, process=False) for p in body_parts])
     union.merge_vertices()
     assert union.is_watertight
-    tyres = parts["tyres"]
-    for wheel in range(4):  # each tyre a closed cylinder
-        chosen = tyres.wheel[tyres.faces[:, 0]] == wheel
-        tyre = trimesh.Trimesh(tyres.vertices_m, tyres.faces[chosen])
-        tyre.remove_unreferenced_vertices()
-        assert tyre.is_watertight
+    tyre, _ = wheel_meshes(look.wheel_radius_m, 0.2)  # each tyre a closed cylinder
+    assert tyre.is_watertight and tyre.is_winding_consistent
+    gear = parts["running_gear"]
+    assert {int(w) for w in gear.wheel} == {-1, 0, 1, 2, 3}  # four wheels and the plate backings
 
 
 def test_every_vehicle_fits_its_class_envelope():
@@ -172,13 +170,13 @@ def _straight() -> Route:
 def test_wheels_roll_without_slipping():
     look = draw_look(2, "car", pinned={"body_type": "sedan"})
     rig = VehicleRig(build_vehicle(look), _straight())
-    tyres = rig.parts[[p.name for p in rig.model.parts].index("tyres")]
+    tyres = rig.parts[[p.name for p in rig.model.parts].index("running_gear")]
     wheel = rig._wheel[tyres]
     for t in (0.3, 1.1, 2.6):
         rig.place(t)
         world = rig.vertices_m[tyres].copy()
         # The angle a marker of the rear-left tyre has turned about its axle equals distance / radius.
-        rest = rig.model.parts[[p.name for p in rig.model.parts].index("tyres")].vertices_m
+        rest = rig.model.parts[[p.name for p in rig.model.parts].index("running_gear")].vertices_m
         k = int(np.flatnonzero((wheel == 2) & (np.abs(rest[:, 1]) > 0.01) & (np.abs(rest[:, 0]) > 0.1))[0])
         centre = rig.model.wheel_centres_m[2]
         now = world[k] - (rig.T_world_from_vehicle[:3, :3] @ centre + rig.T_world_from_vehicle[:3, 3])

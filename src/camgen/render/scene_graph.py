@@ -357,9 +357,7 @@ GLASS_RGB = (0.012, 0.014, 0.016)
 the sun's and the sky's specular reflections carry its look."""
 VEHICLE_SURFACES = {
     "glass": ((*GLASS_RGB, 1.0), 0.0, 0.05),
-    "tyre": ((0.025, 0.025, 0.025, 1.0), 0.0, 0.9),
-    "rim": ((0.45, 0.45, 0.46, 1.0), 0.6, 0.35),
-    "trim": ((0.03, 0.03, 0.03, 1.0), 0.0, 0.6),
+    "gear": ((1.0, 1.0, 1.0, 1.0), 0.3, 0.6),
     "head": ((0.55, 0.56, 0.58, 1.0), 0.0, 0.15),
     "tail": ((0.25, 0.01, 0.01, 1.0), 0.0, 0.2),
     "brake": ((0.25, 0.01, 0.01, 1.0), 0.0, 0.2),
@@ -367,8 +365,9 @@ VEHICLE_SURFACES = {
     "indicator_right": ((0.45, 0.2, 0.02, 1.0), 0.0, 0.2),
 }
 """Base colour (linear, alpha), metallic and roughness of a vehicle's surfaces other than its paint:
-unlit lamps show their lens colour (clear, red, amber) and emit `camgen.vehicles.LAMP_LUMINANCE_CD_M2`
-when lit."""
+the running gear (tyres, rims, plate backings) takes its colours per vertex and one compromise between
+rubber (dielectric, roughness ≈ 0.9) and alloy (metallic, ≈ 0.35), so that it is one draw; unlit lamps
+show their lens colour (clear, red, amber) and emit `camgen.vehicles.LAMP_LUMINANCE_CD_M2` when lit."""
 
 
 def _lamp(surface: str) -> str | None:
@@ -385,7 +384,7 @@ def _lamp_emission(surface: str, lit: bool) -> tuple[float, float, float]:
 
 
 def vehicle_mesh(rig: VehicleRig) -> pyrender.Mesh:
-    """A procedural vehicle as one primitive per part (paint, glass, tyres, rims, each lamp, plates),
+    """A procedural vehicle as one primitive per part (paint, glass, running gear, each lamp, plates),
     posed in world coordinates; `SceneGraph.place_actors` moves it and lights its lamps."""
     paint = rig.look.paint
     primitives = []
@@ -394,8 +393,8 @@ def vehicle_mesh(rig: VehicleRig) -> pyrender.Mesh:
             material = pyrender.MetallicRoughnessMaterial(
                 baseColorFactor=(*paint.color_rgb, 1.0), metallicFactor=paint.metallic, roughnessFactor=paint.roughness
             )
-        elif part.surface.startswith("plate_"):
-            image = plate_image(rig.look.plate_text, rear=part.surface == "plate_rear")
+        elif part.surface == "plates":  # the front plate over the rear one
+            image = np.concatenate([plate_image(rig.look.plate_text, rear=rear) for rear in (False, True)])
             material = pyrender.MetallicRoughnessMaterial(
                 baseColorFactor=(1.0, 1.0, 1.0, 1.0),
                 baseColorTexture=pyrender.Texture(source=encode_srgb8(image), source_channels="RGB"),
@@ -415,6 +414,7 @@ def vehicle_mesh(rig: VehicleRig) -> pyrender.Mesh:
                 positions=rig.vertices_m[piece],
                 normals=rig.normals[piece],
                 texcoord_0=part.texcoords,
+                color_0=part.colours,
                 indices=part.faces,
                 material=material,
             )

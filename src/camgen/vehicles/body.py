@@ -132,13 +132,15 @@ class Part:
 
     name: str
     surface: str
-    """Which material draws it: paint, glass, tyre, rim, trim, head, tail, brake, indicator_left,
-    indicator_right, plate_front, plate_rear."""
+    """Which material draws it: paint, glass, gear (tyres, rims and plate backings, coloured per vertex),
+    plates (the front plate's image over the rear's), head, tail, brake, indicator_left, indicator_right."""
     vertices_m: np.ndarray
     normals: np.ndarray
     faces: np.ndarray
     wheel: np.ndarray
     texcoords: np.ndarray | None = None
+    colours: np.ndarray | None = None
+    """(V, 3) linear albedo per vertex (the gear's rubber, alloy and black plastic)."""
 
 
 @dataclass
@@ -355,6 +357,32 @@ def _part(name: str, surface: str, meshes: list[tuple[trimesh.Trimesh, int]], sm
     )
 
 
+def _merge(name: str, surface: str, parts: list[Part]) -> Part:
+    """Parts concatenated into one (their vertices in order, faces renumbered)."""
+    offsets = np.cumsum([0] + [len(p.vertices_m) for p in parts[:-1]])
+    optional = lambda key: (  # noqa: E731
+        None if getattr(parts[0], key) is None else np.concatenate([getattr(p, key) for p in parts])
+    )
+    return Part(
+        name,
+        surface,
+        np.concatenate([p.vertices_m for p in parts]),
+        np.concatenate([p.normals for p in parts]),
+        np.concatenate([p.faces + o for p, o in zip(parts, offsets, strict=True)]),
+        np.concatenate([p.wheel for p in parts]),
+        optional("texcoords"),
+        optional("colours"),
+    )
+
+
+TYRE_RGB = (0.025, 0.025, 0.025)
+"""Linear albedo of tyre rubber (carbon-black filled: about 2–3 %)."""
+RIM_RGB = (0.45, 0.45, 0.46)
+"""Linear albedo of a painted alloy wheel (silver)."""
+TRIM_RGB = (0.03, 0.03, 0.03)
+"""Linear albedo of black plastic trim."""
+
+
 def wheel_meshes(radius_m: float, width_m: float) -> tuple[trimesh.Trimesh, list[trimesh.Trimesh]]:
     """A tyre (a closed cylinder) and its rim (hub and five spokes, 8 mm proud of both sidewalls), in
     the wheel's frame: axle along y, centred on the origin."""
@@ -393,8 +421,9 @@ def _end_heights(look: VehicleLook) -> tuple[tuple[float, float], tuple[float, f
     return (float(bottom[0]), float(top[0])), (float(bottom[1]), float(top[1]))
 
 
-def lamps_and_plates(look: VehicleLook) -> tuple[list[Part], dict[str, np.ndarray], list[Part]]:
-    """Lamp parts (head, tail, brake, indicator), the plates' corners, and the plate parts."""
+def lamps_and_plates(look: VehicleLook) -> tuple[list[Part], dict[str, np.ndarray], list[Part], Part]:
+    """Lamp parts (head, tail, brake, indicators), the plates' corners, the plates' part and the plates'
+    backings."""
     L, W = look.length_m, look.width_m
     (rear_low, rear_high), (front_low, front_high) = _end_heights(look)
     half = W / 2 * PROFILES[look.body_type].end_width
@@ -429,11 +458,15 @@ def lamps_and_plates(look: VehicleLook) -> tuple[list[Part], dict[str, np.ndarra
         texcoords = np.array([(0.0, 1.0), (1.0, 1.0), (1.0, 0.0), (0.0, 0.0)])
         faces = np.array([(0, 3, 2), (0, 2, 1)])  # counter-clockwise seen from outside (normal ±x)
         normals = np.tile((sign, 0.0, 0.0), (4, 1))
-        plates.append(Part(f"plate_{side}", f"plate_{side}", quad, normals, faces, np.full(4, -1, np.int8), texcoords))
+        plates.append(Part(f"plate_{side}", "plates", quad, normals, faces, np.full(4, -1, np.int8), texcoords))
         backing = _box((LAMP_DEPTH_M / 2, pw + 0.02, ph + 0.02), (x - sign * LAMP_DEPTH_M / 4 - sign * 0.002, 0, z))
         backings.append((backing, -1))
-    plates.append(_part("plate_backings", "trim", backings))  # one primitive: one draw for both
-    return lamps, corners, plates
+    # One primitive for both plates: the front plate's image is the top half of the texture, the rear's
+    # the bottom half (OpenGL's t runs up from the image's last row).
+    front, rear = plates
+    front.texcoords = front.texcoords * [1.0, 0.5] + [0.0, 0.5]
+    rear.texcoords = rear.texcoords * [1.0, 0.5]
+    return lamps, corners, [_merge("plates", "plates", [front, rear])], _part("plate_backings", "trim", backings)
 
 
 def build_vehicle(look: VehicleLook) -> VehicleModel:
@@ -450,8 +483,13 @@ def build_vehicle(look: VehicleLook) -> VehicleModel:
                  np.full(len(used), -1, np.int8))
         )  # fmt: skip
     tyre, rim = wheel_meshes(look.wheel_radius_m, TYRE_WIDTH_SHARE * look.width_m)
-    parts.append(_part("tyres", "tyre", [(tyre, w) for w in range(4)], smooth=True))
-    parts.append(_part("rims", "rim", [(piece, w) for w in range(4) for piece in rim]))
-    lamps, plate_corners, plates = lamps_and_plates(look)
+    tyres = _part("tyres", "gear", [(tyre, w) for w in range(4)], smooth=True)
+    rims = _part("rims", "gear", [(piece, w) for w in range(4) for piece in rim])
+    lamps, plate_corners, plates, backings = lamps_and_plates(look)
+    for piece, rgb in ((tyres, TYRE_RGB), (rims, RIM_RGB), (backings, TRIM_RGB)):
+        piece.colours = np.tile(rgb, (len(piece.vertices_m), 1))
+    # Each primitive costs a draw call per pass (the renderer's per-draw overhead dominates a vehicle's):
+    # tyres, rims and plate backings share one.
+    parts.append(_merge("running_gear", "gear", [tyres, rims, backings]))
     parts += lamps + plates
     return VehicleModel(look=look, parts=parts, wheel_centres_m=wheel_centres(look), plate_corners_m=plate_corners)
