@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from camgen.coverage.frustum import image_plane_density
 from camgen.coverage.grid import make_grid
 from camgen.coverage.network import camera_coverage
 from camgen.coverage.occlusion import inside_solids, scene_occluders, sight_blocked
@@ -86,8 +87,13 @@ def test_a_road_laid_over_the_ground_does_not_hide_it_and_a_plate_above_it_does(
     ground = {"type": "plane", "name": "ground", "size_m": [40, 40]}
     view = pinhole_view(CAMERA_M, pitch_deg=look_at_pitch_deg(3.0, 12.0))
     grid = make_grid((-1.0, 9.0, -4.0, 4.0), 0.5, 0.0)
+    sky_and_ground_hidden = image_plane_density(view, scene_occluders(scene_with([ground])), 0.0)[3].sum()
     for over_m, hides in ((0.01, False), (0.1, True), (0.5, True)):
         road = {"type": "plane", "name": "road", "size_m": [16, 40], "position_m": [4, 0, over_m]}
-        coverage = camera_coverage(grid, view, scene_occluders(scene_with([ground, road])))
+        occluders = scene_occluders(scene_with([ground, road]))
+        coverage = camera_coverage(grid, view, occluders)
         assert coverage.in_view.sum() > 100
         assert np.array_equal(coverage.visible, coverage.in_view & (not hides))
+        # The image-plane plot's rays agree: they hide more than the ground alone (the sky) only for a plate.
+        hidden = image_plane_density(view, occluders, 0.0)[3]
+        assert (hidden.sum() > sky_and_ground_hidden) == hides

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from camgen.coverage.density import densities
-from camgen.coverage.occlusion import Occluder, first_hit_s
+from camgen.coverage.occlusion import Occluder, sight_blocked
 from camgen.coverage.views import CameraView
 from camgen.optics.projection import undistort_points
 
@@ -73,6 +73,6 @@ def image_plane_density(
     points = centre + np.where(meets, s, 1.0)[:, None] * rays
     _, dens = densities(points, plane_height_m, view)
     person = np.where(meets, dens.person_px_m, np.nan)
-    hidden = meets & (first_hit_s(centre, points, occluders) < 1.0 - 1e-6)
-    hidden |= ~meets
+    hidden = ~meets
+    hidden[meets] = sight_blocked(centre, points[meets], occluders)
     return u, v, person.reshape(uu.shape), hidden.reshape(uu.shape)

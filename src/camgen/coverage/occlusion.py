@@ -7,8 +7,8 @@ before it reaches the point (less `END_MARGIN_M`, so a point lying on a surface 
 plane — is not hidden by that surface). Entering only: a camera inside a closed solid sees through it,
 as the renderer does (its faces are culled from inside, `camgen.config.placement`). Planes and
 checkerboards block from their front (+Z) side only, as they are drawn, and not a point lying up to
-`SURFACE_LAYER_M` under their face inside their outline: such a point is on that surface (a road laid
-1 cm over the ground plane). Cylinders are exact circles (the renderer's facets lie inside them by at
+`SURFACE_LAYER_M` under the plane of their face: such a point is on that surface (a road laid 1 cm over
+the ground plane) or just beside its edge. Cylinders are exact circles (the renderer's facets lie inside them by at
 most r·(1 − cos(π/sections))).
 """
 
@@ -25,8 +25,8 @@ from camgen.config.scene import BoxMesh, CheckerboardMesh, CylinderMesh, FileMes
 END_MARGIN_M = 1e-3
 """A hit this close to the point itself does not hide it, m."""
 SURFACE_LAYER_M = 0.05
-"""A point at most this far under a plane's face, inside its outline, lies on that surface and is not
-hidden by it, m: roads and markings are drawn a little above the ground they cover (intersection_two_
+"""A point at most this far under the plane of a face lies on that surface (or beside its edge) and is
+not hidden by it, m: roads and markings are drawn a little above the ground they cover (intersection_two_
 cameras: 1.0 and 1.1 cm) to keep the depth test from mixing them, and a camera sees the road at those
 points (the render's depth there is 1 cm / sin(elevation) short of the ground's, the point's own
 surface). 5 cm: more than such layers, less than a kerb (15 cm) or anything one stands under."""
@@ -183,18 +183,6 @@ def _entries(origin_m: np.ndarray, targets_m: np.ndarray, occluders: Sequence[Oc
         yield occluder, near, np.where(s <= 1.0, s, np.inf)
 
 
-def first_hit_s(origin_m: np.ndarray, targets_m: np.ndarray, occluders: Sequence[Occluder]) -> np.ndarray:
-    """Segment parameter s in [0, 1] (N,) where the segments origin → target (s = 1 at the target) first
-    enter a mesh; inf where they enter none.
-
-    Only the segments whose bounding box meets a mesh's world bounding box are tested against it (on a
-    100 × 100 m site, a building's box meets a few per cent of the sight lines)."""
-    best = np.full(len(np.asarray(targets_m).reshape(-1, 3)), np.inf)
-    for _, near, s in _entries(origin_m, targets_m, occluders):
-        best[near] = np.minimum(best[near], s)
-    return best
-
-
 def sight_blocked(origin_m: np.ndarray, targets_m: np.ndarray, occluders: Sequence[Occluder]) -> np.ndarray:
     """Whether a mesh hides each target (N, 3) from `origin_m` (3,): bool (N,)."""
     targets = np.asarray(targets_m, dtype=np.float64).reshape(-1, 3)
@@ -211,16 +199,11 @@ def sight_blocked(origin_m: np.ndarray, targets_m: np.ndarray, occluders: Sequen
 
 
 def lies_under_face(points_m: np.ndarray, plane: Occluder) -> np.ndarray:
-    """Whether each point (N, 3) lies within `SURFACE_LAYER_M` under a plane's face (or on it), inside its
-    outline: bool (N,)."""
-    local = points_m @ plane.T_mesh_from_world[:3, :3].T + plane.T_mesh_from_world[:3, 3]
-    half = plane.half_extent_m
-    return (
-        (local[:, 2] <= 0.0)
-        & (local[:, 2] >= -SURFACE_LAYER_M)
-        & (np.abs(local[:, 0]) <= half[0])
-        & (np.abs(local[:, 1]) <= half[1])
-    )
+    """Whether each point (N, 3) lies within `SURFACE_LAYER_M` under the plane of a face (or on it): bool (N,).
+    Inside the face's outline the point is on that surface; just beside it, a sight line can cross the
+    layer's edge only in its last few centimetres (1 cm / tan(elevation)), which is no occlusion either."""
+    z = points_m @ plane.T_mesh_from_world[2, :3] + plane.T_mesh_from_world[2, 3]
+    return (z <= 0.0) & (z >= -SURFACE_LAYER_M)
 
 
 def inside_solids(points_m: np.ndarray, occluders: Sequence[Occluder]) -> np.ndarray:
