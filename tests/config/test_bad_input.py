@@ -488,7 +488,7 @@ CASES = [
         "scene",
         edit(SCENE, "    class: person\n", "    class: car\n    vehicle: {colour: teal} #<\n"),
         "actors[0].vehicle.colour",
-        "got 'teal'",
+        "'silver', 'blue', 'red', 'green', 'beige', 'yellow' or 'orange', got 'teal'",
     ),
     (
         "vehicle_plate_text_lowercase",
