@@ -6,6 +6,7 @@ read back from a close view.
 - The plate: the annotated quad, used to warp the plate's own image into the frame, matches the
   rendered plate (normalised cross-correlation), and a plate with another text matches far worse; the
   rendered plate's yellow pixels lie inside the annotated plate box and fill most of it.
+- Lamps: lit tail lamps add exactly their emission to their pixels and change nothing else.
 """
 
 from __future__ import annotations
@@ -180,3 +181,33 @@ def test_the_plate_reads_back_where_it_is_annotated(rendered):
     x, y, w, h = plate["bbox"]
     assert cols.min() >= x - 1 and cols.max() + 1 <= x + w + 1 and rows.min() >= y - 1 and rows.max() + 1 <= y + h + 1
     assert (cols.max() + 1 - cols.min()) * (rows.max() + 1 - rows.min()) > 0.8 * w * h
+
+
+def test_lit_lamps_add_their_luminance_and_nothing_else(renderer):
+    """The same parked sedan seen from behind with its lamps off and on: the difference is the tail
+    lamps' emission, exactly (the renderer adds emission as it is), at their pixels and nowhere else."""
+    from camgen.render.renderer import View
+    from camgen.render.scene_graph import build_scene_graph
+    from camgen.vehicles import LAMP_COLOUR_RGB, LAMP_LUMINANCE_CD_M2
+    from tests.render.conftest import camera_matrix, look_at, scene_from
+
+    def draw(lights_on: bool) -> np.ndarray:
+        scene = scene_from(
+            lights=[{"type": "ambient", "illuminance_lux": 1000}],
+            actors=[
+                {
+                    "name": "sedan",
+                    "class": "car",
+                    "vehicle": {"seed": 3, "body_type": "sedan", "lights_on": lights_on},
+                    "path": {"waypoints_m": [[0, 0]]},
+                }
+            ],
+        )
+        view = View(camera_matrix(200, 200, 79.5, 59.5), look_at([-6.0, 0.3, 1.2], [0.0, 0.0, 0.7]), 160, 120)
+        return renderer.draw(build_scene_graph(scene), view, ("radiance",)).radiance
+
+    added = draw(True) - draw(False)
+    expected = LAMP_LUMINANCE_CD_M2["tail"] * np.array(LAMP_COLOUR_RGB["tail"])
+    lit = np.any(added != 0, axis=-1)
+    assert lit.sum() > 20  # both tail lamps, several pixels each
+    np.testing.assert_allclose(added[lit], np.broadcast_to(expected, added[lit].shape), rtol=1e-4)
