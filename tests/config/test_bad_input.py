@@ -498,6 +498,20 @@ CASES = [
         "one or two groups of 1–4 capital letters or digits",
     ),
     (
+        "vehicle_seed_negative",
+        "scene",
+        edit(SCENE, "    class: person\n", "    class: bus\n    vehicle: {seed: -3} #<\n"),
+        "actors[0].vehicle.seed",
+        "must be ≥ 0, got -3",
+    ),
+    (
+        "vehicle_lights_on_not_a_boolean",
+        "scene",
+        edit(SCENE, "    class: person\n", "    class: truck\n    vehicle: {lights_on: bright} #<\n"),
+        "actors[0].vehicle.lights_on",
+        "must be true or false, got 'bright'",
+    ),
+    (
         "heading_on_a_moving_path",
         "scene",
         edit(SCENE, "      speed_m_s: 1.4\n", "      speed_m_s: 1.4\n      heading_deg: 90 #<\n"),
