@@ -1112,6 +1112,14 @@ CASES = [
         "must be one of 'detect', 'observe', 'recognise' or 'identify', got 'identity'",
     ),
     (
+        "scene_without_cameras",
+        "scene",
+        SCENE[: SCENE.index("cameras:")] + "cameras: [] #<\n",
+        "cameras",
+        "must have at least 1 item, got 0: []; a scene is seen through its cameras ({name, profile, mount}); "
+        "camgen layout, which chooses them, replaces the scene's cameras",
+    ),
+    (
         "texture_unknown_type",
         "scene",
         edit(SCENE, "      size_m: [20, 20]", "      size_m: [20, 20]\n      material: {texture: {type: cobbles}} #<"),

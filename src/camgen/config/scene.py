@@ -892,7 +892,14 @@ class Scene(Model):
     environment: Environment = Environment()
     lights: list[Light] = []
     actors: list[Actor] = []
-    cameras: Annotated[list[Camera], Field(min_length=1)]
+    cameras: Annotated[
+        list[Camera],
+        Field(min_length=1),
+        Why(
+            "a scene is seen through its cameras ({name, profile, mount}); camgen layout, which chooses them, "
+            "replaces the scene's cameras, so any one will do there"
+        ),
+    ]
     outputs: Outputs = Outputs()
     regions: list[Region] = []
     """Areas of interest with the class they must be seen at (`camgen coverage`, `camgen layout`)."""

@@ -216,7 +216,10 @@ def _phrase(error: dict, root: type[BaseModel], path: KeyPath, data: Any) -> str
         expected = ctx.get("min_length") if kind == "too_short" else ctx.get("max_length")
         actual = ctx.get("actual_length")
         word = "at least" if kind == "too_short" else "at most"
-        return f"must have {word} {expected} item{'s' if expected != 1 else ''}, got {actual}: {show_value(value)}"
+        why = _why(root, path, data)
+        return f"must have {word} {expected} item{'s' if expected != 1 else ''}, got {actual}: {show_value(value)}" + (
+            f"; {why}" if why else ""
+        )
     if kind in ("string_too_short", "string_too_long"):
         return f"must be {'non-empty' if kind == 'string_too_short' else 'shorter'} text{got}"
     if kind == "string_pattern_mismatch":
