@@ -1326,6 +1326,29 @@ CASES = [
         "leaves the beam no direction",
     ),
     (
+        "lamp_without_flux_or_file",
+        "scene",
+        edit(
+            SCENE,
+            "  - {type: ambient, illuminance_lux: 1000}\n",
+            "  - {type: ambient, illuminance_lux: 1000}\n  - {type: lamp, position_m: [0, 0, 6]} #<\n",
+        ),
+        "lights[1].flux_lm",
+        "is missing: give the lamp's luminous flux in lumens, or an ies_file",
+    ),
+    (
+        "lamp_c0_beyond_a_turn",
+        "scene",
+        edit(
+            SCENE,
+            "  - {type: ambient, illuminance_lux: 1000}\n",
+            "  - {type: ambient, illuminance_lux: 1000}\n"
+            "  - {type: lamp, position_m: [0, 0, 6], ies_file: a.ies, c0_azimuth_deg: 400} #<\n",
+        ),
+        "lights[1].c0_azimuth_deg",
+        "must be ≤ 360, got 400",
+    ),
+    (
         "night_sky_unknown",
         "scene",
         edit(SCENE, "environment:\n", "environment:\n  night_sky: moonlit #<\n"),

@@ -224,19 +224,32 @@ class LampLight(Model):
     """The lamp head's light centre (a street lantern: 4–12 m up)."""
     target_m: Point3 | None = None
     """Where the beam's axis points; null: straight down, to the ground under the head."""
-    flux_lm: Annotated[
-        float,
-        Field(gt=0, le=2e6),
-        Why("street and area lights emit about 1 000–60 000 lm, stadium floodlights up to about 2e5; at most 2e6 lm"),
-    ]
-    """Luminous flux leaving the luminaire, lm (a residential LED lantern ≈ 3000–6000, a main road 10 000–20 000)."""
+    flux_lm: (
+        Annotated[
+            float,
+            Field(gt=0, le=2e6),
+            Why(
+                "street and area lights emit about 1 000–60 000 lm, stadium floodlights up to about 2e5; at most 2e6 lm"
+            ),
+        ]
+        | None
+    ) = None
+    """Luminous flux leaving the luminaire, lm (a residential LED lantern ≈ 3000–6000, a main road 10 000–20 000).
+    With `ies_file` it rescales the file's table to this flux; null: the file's own."""
+    ies_file: Annotated[str, Field(min_length=1)] | None = None
+    """An IES LM-63 photometric file (type C, TILT=NONE; `camgen.world.ies`), relative to the scene's
+    directory: the lamp's intensity I(γ, C) is the file's table (γ from the beam axis, C about it), in
+    place of the round cone. Shadows are cast within 85° of the axis (the shadow map's field of view)."""
+    c0_azimuth_deg: Annotated[float, Field(ge=-360, le=360), Why("a direction, −360° to 360°")] = 0.0
+    """Where the file's C = 0° plane points (a street lantern's: along the road), counter-clockwise
+    from +X, degrees; C grows counter-clockwise seen from above (C = 90°: the street side)."""
     cone_half_angle_deg: Annotated[
         float,
         Field(gt=1, lt=89),
         Why("a beam's half angle lies between 1° and 89° (a lamp lighting a hemisphere is a point light)"),
     ] = 70.0
     """Where the beam ends; full intensity within 80 % of it. 70°: a street lantern (EN 13201-2 G-classes
-    limit the intensity above 70°)."""
+    limit the intensity above 70°). Unused with `ies_file` (the table shapes the beam)."""
     color_rgb: tuple[Fraction, Fraction, Fraction] = (1.0, 1.0, 1.0)
 
     @property
@@ -247,6 +260,10 @@ class LampLight(Model):
 
     @model_validator(mode="after")
     def _check(self) -> LampLight:
+        if self.flux_lm is None and self.ies_file is None:
+            raise invalid(
+                "flux_lm", "is missing: give the lamp's luminous flux in lumens, or an ies_file whose table gives it"
+            )
         if all(abs(c) < 1e-9 for c in self.direction):
             raise invalid(
                 "target_m" if self.target_m is not None else "position_m",

@@ -225,6 +225,8 @@ class _PassRenderer(pyrender.Renderer):
     def __init__(self):
         super().__init__(1, 1)
         self._program_cache = _LinearProgramCache()
+        self._profile_textures: dict[int, tuple[weakref.ref, int]] = {}
+        """Per scene (by id, with a weak reference to tell a reused id): its spot-light table texture."""
         self.shadow_focus_m: np.ndarray | None = None
         """(N, 3) world points the current draw sees (its view frustum's corners); a sun's shadow map
         covers only the part of the scene whose shadows can fall among them."""
@@ -279,6 +281,49 @@ class _PassRenderer(pyrender.Renderer):
             ):
                 self._shadow_mapping_pass(scene, node, flags)
 
+    def _bind_spot_profiles(self, scene, program) -> None:
+        """Each spot light's `intensity_profile` (`SpotProfile`: an IES lamp's table) for the lit
+        shader, in the order pyrender binds the spot lights; row 0 (the glTF cone) for the others."""
+        spots = [node for node in scene.light_nodes if isinstance(node.light, SpotLight)]
+        profiled = [getattr(node.light, "intensity_profile", None) for node in spots]
+        for k, profile in enumerate(profiled):
+            program.set_uniform(f"spot_profile_row[{k}]", 0 if profile is None else k + 1)
+        if not any(profile is not None for profile in profiled):
+            return
+        for k, (node, profile) in enumerate(zip(spots, profiled, strict=True)):
+            if profile is not None:
+                # Directly: pyrender's set_uniform sends a 3×3 matrix through glUniformMatrix4fv.
+                location = GL.glGetUniformLocation(program._program_id, f"spot_profile_axes[{k}]")
+                axes = np.ascontiguousarray(profile.axes(scene.get_pose(node)), dtype=np.float32)
+                GL.glUniformMatrix3fv(location, 1, GL.GL_TRUE, axes)
+        unit = self._get_next_active_texture()
+        GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
+        GL.glBindTexture(GL.GL_TEXTURE_2D, self._spot_profile_texture(scene, profiled))
+        program.set_uniform("spot_profile", unit)
+
+    def _spot_profile_texture(self, scene, profiled) -> int:
+        """The float texture of a scene's spot-light tables, one band of rows per spot light (zeros for
+        lights without one); made once per scene and context."""
+        cached = self._profile_textures.get(id(scene))
+        if cached is not None and cached[0]() is scene:
+            return cached[1]
+        bands = [
+            np.zeros_like(next(p for p in profiled if p is not None).relative) if p is None else p.relative
+            for p in profiled
+        ]
+        table = np.ascontiguousarray(np.concatenate(bands, axis=0), dtype=np.float32)
+        texture = int(GL.glGenTextures(1))
+        GL.glBindTexture(GL.GL_TEXTURE_2D, texture)
+        GL.glTexImage2D(
+            GL.GL_TEXTURE_2D, 0, GL.GL_R32F, table.shape[1], table.shape[0], 0, GL.GL_RED, GL.GL_FLOAT, table
+        )
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_LINEAR)
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, GL.GL_REPEAT)
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE)
+        self._profile_textures[id(scene)] = (weakref.ref(scene), texture)
+        return texture
+
     def forward(self, scene, nodes, instance_ids, V, P, cam_position, flags: int, lit: bool) -> None:
         GL.glEnable(GL.GL_DEPTH_TEST)
         GL.glDepthMask(GL.GL_TRUE)
@@ -301,6 +346,7 @@ class _PassRenderer(pyrender.Renderer):
                 if lit:
                     program.set_uniform("cam_pos", cam_position)
                     self._bind_lighting(scene, program, node, flags)
+                    self._bind_spot_profiles(scene, program)
                     self._bind_and_draw_primitive(primitive, scene.get_pose(node), program, draw_flags)
                 else:
                     _draw_geometry(primitive, scene.get_pose(node), program)

@@ -56,11 +56,14 @@ from camgen.config.scene import (
 )
 from camgen.errors import ConfigError
 from camgen.io.gltf import Character, load_character
+from camgen.io.ies import read_ies
 from camgen.motion.pose import T_world_from_cam, rot_z
 from camgen.motion.trajectory import Route, actor_routes
 from camgen.render.gl import pyrender
 from camgen.vehicles import LAMP_COLOUR_RGB, LAMP_LUMINANCE_CD_M2, VehicleRig, vehicle_rig
 from camgen.vehicles.plate import plate_image
+from camgen.world.ies import flux_lm as ies_flux_lm
+from camgen.world.ies import intensity_grid_cd
 from camgen.world.night import SPOT_FULL_INTENSITY_FRACTION, peak_intensity_cd
 from camgen.world.site import SiteDaylight, daylight_change, site_daylight
 from camgen.world.textures import TYPICAL_ALBEDO_RGB, encode_srgb8, surface_maps
@@ -548,7 +551,52 @@ def _sun_direction(lights) -> np.ndarray | None:
     return _towards_sun(suns[0]) if suns else None
 
 
-def _add_lights(scene: pyrender.Scene, lights) -> None:
+@dataclass(frozen=True)
+class SpotProfile:
+    """An IES lamp's intensity table as the renderer's lit shader looks it up (`camgen.render.renderer`)."""
+
+    relative: np.ndarray
+    """I(γ, C) / I_max on `camgen.world.ies.grid_angles_deg`'s grid, (181, 72) float32."""
+    c0_direction: np.ndarray
+    """World vector of the C = 0° plane."""
+
+    def axes(self, pose: np.ndarray) -> np.ndarray:
+        """Rows: the C = 0° and C = 90° directions and the beam axis (γ = 0) of a light at `pose`."""
+        axis = -np.asarray(pose, dtype=np.float64)[:3, 2]
+        c0 = self.c0_direction - (self.c0_direction @ axis) * axis
+        if np.linalg.norm(c0) < 1e-9:  # C = 0 along the axis: any perpendicular will do
+            c0 = np.cross(axis, [0.0, 1.0, 0.0] if abs(axis[1]) < 0.9 else [1.0, 0.0, 0.0])
+        c0 /= np.linalg.norm(c0)
+        return np.stack([c0, np.cross(c0, axis), axis])
+
+
+IES_CONE_DEG = 70.0
+"""An IES lamp's spot cone, degrees from its axis, which sets only its shadow map's field of view
+(pyrender's: 2·cone + 30° = 170°, which must stay under 180°); the table alone shapes the light."""
+
+
+def _ies_lamp(light: LampLight, resolve_path: Callable[[str], Path] | None) -> pyrender.SpotLight:
+    if resolve_path is None:
+        raise ConfigError(f"IES file {light.ies_file!r} needs the scene's directory to be found")
+    grid = intensity_grid_cd(read_ies(resolve_path(light.ies_file)))
+    peak_cd = float(grid.max())
+    if peak_cd <= 0:
+        raise ConfigError(f"IES file {light.ies_file!r} holds no light (every candela value is 0)")
+    scale = 1.0 if light.flux_lm is None else light.flux_lm / ies_flux_lm(grid)
+    node_light = pyrender.SpotLight(
+        color=light.color_rgb,
+        intensity=peak_cd * scale,
+        innerConeAngle=math.radians(IES_CONE_DEG) - 1e-3,
+        outerConeAngle=math.radians(IES_CONE_DEG),
+    )
+    az = math.radians(light.c0_azimuth_deg)
+    node_light.intensity_profile = SpotProfile(
+        relative=(grid / peak_cd).astype(np.float32), c0_direction=np.array([math.cos(az), math.sin(az), 0.0])
+    )
+    return node_light
+
+
+def _add_lights(scene: pyrender.Scene, lights, resolve_path: Callable[[str], Path] | None = None) -> None:
     for light in lights:
         if isinstance(light, SunLight):
             towards_sun = _towards_sun(light)
@@ -569,11 +617,15 @@ def _add_lights(scene: pyrender.Scene, lights) -> None:
             scene.add(node_light, pose=_look_along(direction, light.position_m))
         elif isinstance(light, LampLight):
             outer = math.radians(light.cone_half_angle_deg)
-            node_light = pyrender.SpotLight(
-                color=light.color_rgb,
-                intensity=peak_intensity_cd(light.flux_lm, outer),
-                innerConeAngle=SPOT_FULL_INTENSITY_FRACTION * outer,
-                outerConeAngle=outer,
+            node_light = (
+                _ies_lamp(light, resolve_path)
+                if light.ies_file is not None
+                else pyrender.SpotLight(
+                    color=light.color_rgb,
+                    intensity=peak_intensity_cd(light.flux_lm, outer),
+                    innerConeAngle=SPOT_FULL_INTENSITY_FRACTION * outer,
+                    outerConeAngle=outer,
+                )
             )
             scene.add(node_light, pose=_look_along(np.asarray(light.direction), light.position_m))
         elif not isinstance(light, AmbientLight):
@@ -602,7 +654,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
     """Meshes, actors (at t = 0) and lights of `scene` as a pyrender scene; no camera yet."""
     ambient_lux = sum(light.illuminance_lux for light in scene.lights if isinstance(light, AmbientLight))
     graph = pyrender.Scene(bg_color=(0.0, 0.0, 0.0, 0.0), ambient_light=np.full(3, ambient_lux / math.pi))
-    _add_lights(graph, scene.lights)
+    _add_lights(graph, scene.lights, resolve_path)
     # pyrender's shadow passes sort meshes by distance to the main camera; draws set its pose.
     graph.add(pyrender.IntrinsicsCamera(1.0, 1.0, 0.0, 0.0), name="camera")
     instances = instance_table(scene)

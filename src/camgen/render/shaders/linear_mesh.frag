@@ -106,6 +106,13 @@ uniform DirectionalLight directional_lights[MAX_DIRECTIONAL_LIGHTS];
 uniform int n_directional_lights;
 uniform SpotLight spot_lights[MAX_SPOT_LIGHTS];
 uniform int n_spot_lights;
+// camgen: a spot light's tabulated intensity (an IES file, camgen.world.ies). Row k > 0: the light's
+// I(gamma, C) / I_max is band k - 1 of spot_profile (C every 5 deg across, gamma every 1 deg up each
+// band of 181 texels), looked up in its axes (rows: the C = 0 direction, C = 90, the gamma = 0 axis);
+// 0: the glTF cone of light_angle_scale and light_angle_offset.
+uniform int spot_profile_row[MAX_SPOT_LIGHTS];
+uniform mat3 spot_profile_axes[MAX_SPOT_LIGHTS];
+uniform sampler2D spot_profile;
 uniform vec3 cam_pos;
 uniform vec3 ambient_light;
 uniform uint instance_id;
@@ -427,7 +434,18 @@ void main()
         float dist = length(position - frag_position);
         float cd = clamp(dot(direction, -l), 0.0, 1.0);
         float attenuation = clamp(cd * las + lao, 0.0, 1.0);
-        attenuation = attenuation * attenuation * spot_lights[i].intensity;
+        attenuation = attenuation * attenuation;
+        if (spot_profile_row[i] > 0) {
+            vec3 d = spot_profile_axes[i] * (-l);
+            float gamma_deg = degrees(acos(clamp(d.z, -1.0, 1.0)));
+            float c_deg = degrees(atan(d.y, d.x));
+            c_deg = c_deg < 0.0 ? c_deg + 360.0 : c_deg;
+            ivec2 size = textureSize(spot_profile, 0);
+            vec2 uv = vec2((c_deg / 5.0 + 0.5) / float(size.x),
+                           (float(spot_profile_row[i] - 1) * 181.0 + gamma_deg + 0.5) / float(size.y));
+            attenuation = texture(spot_profile, uv).r;
+        }
+        attenuation = attenuation * spot_lights[i].intensity;
         attenuation = attenuation / (dist * dist);
         vec3 radiance = attenuation * spot_lights[i].color;
 
