@@ -87,3 +87,21 @@ def test_the_baseline_turns_each_camera_towards_the_regions_within_its_heading_r
     options = enumerate_options(candidates)
     chosen = [options[i] for i in evenly_spaced(options, candidates, 2, np.zeros(3))]
     assert [(o.mount, o.yaw_deg, o.pitch_deg) for o in chosen] == [("pole", -135.0, -25.0), ("wall", 260.0, -25.0)]
+
+
+def test_a_region_no_candidate_reaches_at_its_class_is_a_located_error(workspace: Path, capsys):
+    far = "  - {name: far_corner, polygon_m: [[7, 7], [9, 7], [9, 9], [7, 9]], required_class: identify}\n"
+    scene = write(workspace, "scenes/lot.yaml", SCENE + REGION + far)
+    candidates = write(workspace, "candidates.yaml", CANDIDATES)
+    args = ["layout", str(scene), "--candidates", str(candidates), "--budget", "2", "-o", str(workspace / "out")]
+    assert main([*args, "--cell-m", "1"]) != 0
+    err = capsys.readouterr().err
+    line = len((SCENE + REGION).splitlines()) + 1
+    assert f"{scene}:{line}:" in err
+    assert (
+        "regions[1].required_class is 'identify', which no candidate camera (mount, heading, pitch and profile)" in err
+    )
+    # the east wall faces away from it (headings 150–210°); the south pole sees it only from 18 m away
+    assert "region 'far_corner': the best is 'observe'; lower the required class" in err
+    assert "gate" not in err  # reachable at observe: no problem
+    assert not (workspace / "out").exists()

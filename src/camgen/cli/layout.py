@@ -80,7 +80,10 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     occluders = scene_occluders(scene, file_triangles_m(loaded))
     cells = region_cells(scene.regions, masks, grid, candidates.region_weights, occluders)
     models = {name: p.profile for name, p in profiles.items()}
-    result = optimise_layout(candidates, cells, models, occluders, args.budget)
+    try:
+        result = optimise_layout(candidates, cells, models, occluders, args.budget)
+    except ConfigError as error:
+        raise located(loaded, error) from None
 
     cameras = _cameras(result, result.chosen)
     args.out.mkdir(parents=True, exist_ok=True)

@@ -37,10 +37,11 @@ from camgen.config.layout import LayoutCandidates
 from camgen.config.profile import Profile
 from camgen.config.scene import Mount, Region
 from camgen.coverage.density import densities, in_image
-from camgen.coverage.dori import class_index, dori_class
+from camgen.coverage.dori import class_index, class_name, dori_class
 from camgen.coverage.grid import Grid
 from camgen.coverage.occlusion import Occluder, inside_solids, sight_blocked
 from camgen.coverage.views import view_at
+from camgen.errors import ConfigError, Problem
 
 LOCAL_SEARCH_ROUNDS_MAX = 50
 
@@ -63,6 +64,9 @@ class RegionCells:
     points_m: np.ndarray
     weight_m2: np.ndarray
     required: np.ndarray
+    regions: tuple[Region, ...] = ()
+    membership: np.ndarray | None = None
+    """(N, regions) bool: the cell lies in the region."""
 
 
 @dataclass(frozen=True)
@@ -92,7 +96,8 @@ def region_cells(
         required[cells] = np.maximum(required[cells], class_index(region.required_class))
         weight[cells] = np.maximum(weight[cells], weights.get(region.name, 1.0) * grid.cell_area_m2)
     keep = required > 0
-    return RegionCells(points[keep], weight[keep], required[keep])
+    membership = np.stack([mask.ravel() & site for mask in masks], 1) if masks else np.zeros((len(points), 0), bool)
+    return RegionCells(points[keep], weight[keep], required[keep], tuple(regions), membership[keep])
 
 
 def _angles(low: float, high: float, step: float) -> np.ndarray:
@@ -110,6 +115,29 @@ def enumerate_options(candidates: LayoutCandidates) -> tuple[Option, ...]:
     )
 
 
+def option_classes(
+    options: Sequence[Option],
+    points_m: np.ndarray,
+    profiles: Mapping[str, Profile],
+    occluders: Sequence[Occluder],
+    plane_height_m: float = 0.0,
+) -> np.ndarray:
+    """(options, points) int8: the DORI class index (`camgen.coverage.dori`) each option sees each point at,
+    unhidden; 0 where it does not see it."""
+    blocked_at: dict[tuple, np.ndarray] = {}
+    classes = np.zeros((len(options), len(points_m)), dtype=np.int8)
+    for i, option in enumerate(options):
+        if option.position_m not in blocked_at:
+            blocked_at[option.position_m] = sight_blocked(np.array(option.position_m), points_m, occluders)
+        profile = profiles[option.profile]
+        mount = Mount(position_m=option.position_m, yaw_deg=option.yaw_deg, pitch_deg=option.pitch_deg)
+        view = view_at(option.mount, profile, mount, profile.lens.focal_length_min_mm)
+        uv, dens = densities(points_m, plane_height_m, view)
+        seen = in_image(uv, view.width_px, view.height_px) & ~blocked_at[option.position_m]
+        classes[i] = np.where(seen, dori_class(dens.person_px_m), 0)
+    return classes
+
+
 def option_meets(
     options: Sequence[Option],
     cells: RegionCells,
@@ -118,18 +146,29 @@ def option_meets(
     plane_height_m: float = 0.0,
 ) -> np.ndarray:
     """(options, cells) bool: the option sees the cell, unhidden, at its required class or better."""
-    blocked_at: dict[tuple, np.ndarray] = {}
-    meets = np.zeros((len(options), len(cells.required)), dtype=bool)
-    for i, option in enumerate(options):
-        if option.position_m not in blocked_at:
-            blocked_at[option.position_m] = sight_blocked(np.array(option.position_m), cells.points_m, occluders)
-        profile = profiles[option.profile]
-        mount = Mount(position_m=option.position_m, yaw_deg=option.yaw_deg, pitch_deg=option.pitch_deg)
-        view = view_at(option.mount, profile, mount, profile.lens.focal_length_min_mm)
-        uv, dens = densities(cells.points_m, plane_height_m, view)
-        seen = in_image(uv, view.width_px, view.height_px) & ~blocked_at[option.position_m]
-        meets[i] = seen & (dori_class(dens.person_px_m) >= cells.required)
-    return meets
+    return option_classes(options, cells.points_m, profiles, occluders, plane_height_m) >= cells.required
+
+
+def unreachable_regions(best_class: np.ndarray, cells: RegionCells) -> list[Problem]:
+    """A located problem for each region whose required class no option reaches on any of its cells
+    (`best_class` (cells,): the best class any option sees each cell at)."""
+    problems = []
+    for r, region in enumerate(cells.regions):
+        member = cells.membership[:, r]
+        if not member.any():
+            continue
+        best = int(best_class[member].max())
+        if best >= class_index(region.required_class):
+            continue
+        problems.append(
+            Problem(
+                ("regions", r, "required_class"),
+                f"is {region.required_class!r}, which no candidate camera (mount, heading, pitch and profile) reaches "
+                f"on any point of region {region.name!r}: the best is {class_name(best)!r}; lower the required "
+                "class, or add mounts nearer the region or a profile with a longer lens",
+            )
+        )
+    return problems
 
 
 def objective_m2(meets: np.ndarray, chosen: Sequence[int], weight_m2: np.ndarray, handoff_weight: float) -> float:
@@ -218,9 +257,14 @@ def optimise_layout(
     occluders: Sequence[Occluder],
     budget: int,
 ) -> LayoutResult:
-    """Greedy selection and swap local search over the candidates' options (see the module docstring)."""
+    """Greedy selection and swap local search over the candidates' options (see the module docstring).
+    Raises ConfigError for a region whose required class no option reaches on any of its cells (key paths
+    from the scene, to be located by the caller)."""
     options = enumerate_options(candidates)
-    meets = option_meets(options, cells, profiles, occluders)
+    classes = option_classes(options, cells.points_m, profiles, occluders)
+    if cells.membership is not None and (problems := unreachable_regions(classes.max(axis=0, initial=0), cells)):
+        raise ConfigError(problems)
+    meets = classes >= cells.required
     w, lam = cells.weight_m2, candidates.handoff_weight
     first = greedy(meets, budget, w, lam)
     chosen = swap_search(meets, first, w, lam)
