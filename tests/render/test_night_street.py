@@ -1,7 +1,7 @@
 """scenes/night_street.yaml at 160 × 90: its IR camera films in night mode, monochrome, with the hedge
 (ρ₈₅₀ 0.5) brighter than the asphalt (0.14) around it, while the same camera forced to colour sees the
 hedge (visible ρ about 0.06) darker than the road; camera.jsonl says which mode each frame was in.
-Measured (8-bit stream means): hedge 208, road 127 in IR; hedge 49, road 129 in colour."""
+Measured (8-bit stream means): hedge 211, road 128 in IR; hedge 59, road 131 in colour."""
 
 from __future__ import annotations
 
@@ -29,6 +29,8 @@ sensor: {{width_px: 160, height_px: 90, pixel_pitch_um: 48.72}}
 def night_street(renderer, tmp_path_factory):
     root = tmp_path_factory.mktemp("night_street")
     write(root, "profiles/small_ir.yaml", SMALL)
+    ies = REPO / "scenes" / "ies" / "street_lantern_synthetic.ies"
+    write(root, "scenes/ies/street_lantern_synthetic.ies", ies.read_text(encoding="latin-1"))
     text = (REPO / "scenes" / "night_street.yaml").read_text(encoding="utf-8")
     text = text.replace("profile: bullet_4mp_ir", "profile: small_ir")
     out = {}
@@ -36,8 +38,11 @@ def night_street(renderer, tmp_path_factory):
         ("ir", text),
         ("colour", text.replace("    profile: small_ir\n", "    profile: small_ir\n    night_mode: false\n")),
     ):
-        job = compile_scene(load_scene(write(root, f"scenes/{mode}.yaml", scene_text)), PlanSettings(supersampling=1))
-        (result,) = execute(job, root / mode, renderer=renderer, frames=[0], save_passes=True)
+        loaded = load_scene(write(root, f"scenes/{mode}.yaml", scene_text))
+        job = compile_scene(loaded, PlanSettings(supersampling=1))
+        (result,) = execute(
+            job, root / mode, renderer=renderer, frames=[0], save_passes=True, resolve_path=loaded.path.parent.joinpath
+        )
         ids = np.load(result.directory / "passes" / "000000.npz")["instance_id"]
         image = cv2.imread(str(result.directory / "frames" / "000000.png"))[..., ::-1]
         records = [json.loads(line) for line in (result.directory / "camera.jsonl").read_text().splitlines()]
