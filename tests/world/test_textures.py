@@ -3,6 +3,8 @@ seed the same surface, and a textured surface as bright on average as its plain 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -77,13 +79,23 @@ def test_srgb_encoding_round_trips():
     assert np.abs(decoded - linear).max() < 0.01
 
 
+SUN_ELEVATION_DEG = 35.0
+
+
 @pytest.mark.opengl
-def test_a_textured_surface_reflects_its_mean_colour(renderer):
-    """An overhead view of asphalt, textured and plain, of the same colour: equal mean radiance."""
+@pytest.mark.parametrize("sunlit", [False, True], ids=["sky", "sun-and-sky"])
+def test_a_textured_surface_reflects_its_mean_colour(renderer, sunlit):
+    """An overhead view of asphalt, textured and plain, of the same colour: equal mean radiance, and both
+    the Lambertian ρ/π·(E_sun·sin h + E_sky) plus a rough dielectric's small specular lobe. Under the sun
+    this catches a metallic-roughness map read from the wrong channels (glTF: roughness G, metalness B):
+    read as pyrender reads it, the asphalt was a polished metal at 0.30 of its radiance."""
     from camgen.render.renderer import View
     from camgen.render.scene_graph import build_scene_graph
     from tests.render.conftest import camera_matrix, look_at, scene_from
 
+    lights = [{"type": "ambient", "illuminance_lux": 10000}]
+    if sunlit:
+        lights.append({"type": "sun", "illuminance_lux": 60000, "elevation_deg": SUN_ELEVATION_DEG})
     means = []
     for texture in (None, {"type": "asphalt", "seed": 3}):
         material = {"color_rgb": [0.12, 0.12, 0.12], "roughness": 0.9}
@@ -91,10 +103,15 @@ def test_a_textured_surface_reflects_its_mean_colour(renderer):
             material["texture"] = texture
         graph = build_scene_graph(
             scene_from(
-                environment={"meshes": [{"type": "plane", "name": "g", "size_m": [16, 16], "material": material}]},
-                lights=[{"type": "ambient", "illuminance_lux": 10000}],
+                environment={
+                    "meshes": [{"type": "plane", "name": "g", "size_m": [16, 16], "material": material}],
+                    "shadows": False,
+                },
+                lights=lights,
             )
         )
         view = View(camera_matrix(400, 400, 199.5, 199.5), look_at((0, 0, 8), (0, 0, 0)), 400, 400)
         means.append(renderer.draw(graph, view, ("radiance",)).radiance.mean())
     assert means[1] == pytest.approx(means[0], rel=0.03)
+    lambert = 0.12 / math.pi * (10000 + (60000 * math.sin(math.radians(SUN_ELEVATION_DEG)) if sunlit else 0))
+    assert lambert <= means[0] <= 1.15 * lambert

@@ -354,7 +354,9 @@ void main()
     float roughness = material.roughness_factor;
     float metallic = material.metallic_factor;
 #ifdef HAS_METALLIC_ROUGHNESS_TEX
-    vec2 mr = texture(material.metallic_roughness_texture, uv_0).rg;
+    // glTF 2.0 (3.9.2): roughness in the G channel, metalness in B. pyrender's shader reads R and G,
+    // which made every textured surface a polished metal (R = 0, G = roughness ≈ 0.9 as metalness).
+    vec2 mr = texture(material.metallic_roughness_texture, uv_0).gb;
     roughness = roughness * mr.r;
     metallic = metallic * mr.g;
 #endif
