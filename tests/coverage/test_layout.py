@@ -105,3 +105,40 @@ def test_a_region_no_candidate_reaches_at_its_class_is_a_located_error(workspace
     assert "region 'far_corner': the best is 'observe'; lower the required class" in err
     assert "gate" not in err  # reachable at observe: no problem
     assert not (workspace / "out").exists()
+
+
+def test_zoom_lenses_are_tried_at_focal_lengths_in_equal_ratios_and_the_fragment_sets_them(workspace: Path, capsys):
+    from camgen.config import load_profile
+    from camgen.coverage.layout import focal_lengths_mm
+
+    ptz = load_profile(workspace / "profiles/ptz.yaml").profile  # 4–40 mm
+    fixed = load_profile(workspace / "profiles/fixed.yaml").profile
+    np.testing.assert_allclose(focal_lengths_mm(ptz, 3), [4.0, 4.0 * math.sqrt(10), 40.0])
+    assert focal_lengths_mm(ptz, 1) == [4.0] and focal_lengths_mm(fixed, 3) == [None]
+    # A far region at recognise: the wide ends (4 mm) reach it nowhere, so the layout zooms the PTZ in.
+    far = "regions:\n  - {name: far, polygon_m: [[-1, 9], [1, 9], [1, 11], [-1, 11]], required_class: recognise}\n"
+    scene = write(workspace, "scenes/lot.yaml", SCENE.replace("[20, 20]", "[30, 30]") + far)
+    candidates = write(
+        workspace,
+        "candidates.yaml",
+        "mounts:\n  - {name: south, position_m: [0, -9, 4], yaw_deg_range: [90, 90], pitch_deg_range: [-10, -10]}\n"
+        "profiles: [ptz, fixed]\nfocal_length_steps: 3\n",
+    )
+    out = workspace / "layout"
+    assert main(["layout", str(scene), "--candidates", str(candidates), "--budget", "1", "-o", str(out)]) == 0
+    (camera,) = yaml.safe_load((out / "layout.yaml").read_text())["cameras"]
+    assert camera["profile"] == "ptz" and camera["ptz"] == {"pan_deg": 0, "tilt_deg": 0, "zoom_x": 3.162}
+    assert len(Scene.model_validate(yaml.safe_load(scene.read_text()) | {"cameras": [camera]}).cameras) == 1
+    candidates.write_text(candidates.read_text().replace("focal_length_steps: 3", "focal_length_steps: 1"))
+    assert main(["layout", str(scene), "--candidates", str(candidates), "--budget", "1", "-o", str(out) + "1"]) != 0
+    assert "reaches on any point of region 'far'" in capsys.readouterr().err
+
+
+def test_a_bad_focal_length_steps_is_located(workspace: Path, capsys):
+    scene = write(workspace, "scenes/lot.yaml", SCENE + REGION)
+    candidates = write(workspace, "candidates.yaml", CANDIDATES + "focal_length_steps: 0\n")
+    assert main(["layout", str(scene), "--candidates", str(candidates), "--budget", "1"]) != 0
+    line = len(CANDIDATES.splitlines()) + 1
+    assert f"{candidates}:{line}:1: focal_length_steps must be ≥ 1, got 0; 1 tries the wide end only" in (
+        capsys.readouterr().err
+    )

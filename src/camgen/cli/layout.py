@@ -14,7 +14,7 @@ from camgen.cli.coverage import file_triangles_m, located
 from camgen.config import load_scene
 from camgen.config.layout import LayoutCandidates
 from camgen.config.loader import find_profile, load_profile
-from camgen.config.scene import Camera, Mount
+from camgen.config.scene import Camera, Mount, PtzPosition
 from camgen.config.validation import validate
 from camgen.config.yaml_source import load_yaml
 from camgen.coverage.grid import make_grid, region_masks, region_problems, site_extent_m
@@ -85,7 +85,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     except ConfigError as error:
         raise located(loaded, error) from None
 
-    cameras = _cameras(result, result.chosen)
+    cameras = _cameras(result, result.chosen, models)
     args.out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(args.out / "layout.yaml", _fragment(cameras, result))
     report = {
@@ -99,14 +99,17 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         "guarantee": result.guarantee,
         "baseline": {
             "rule": "evenly spaced mounts, each turned towards the regions' weighted centroid (within its "
-            "heading range) at the middle of its pitch range, first profile",
+            "heading range) at the middle of its pitch range, first profile at its wide end",
             "objective_m2": result.baseline_objective_m2,
             "cameras": [vars(result.options[i]) for i in result.baseline],
         },
         "cameras": [vars(result.options[i]) for i in result.chosen],
     }
     write_text_atomic(args.out / "layout.json", json.dumps(report, indent=2, ensure_ascii=False) + "\n")
-    for name, chosen in (("site_layout.png", cameras), ("site_baseline.png", _cameras(result, result.baseline))):
+    for name, chosen in (
+        ("site_layout.png", cameras),
+        ("site_baseline.png", _cameras(result, result.baseline, models)),
+    ):
         laid_out = scene.model_copy(update={"cameras": chosen})
         coverage = scene_coverage(
             laid_out,
@@ -124,25 +127,37 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     )
     for camera in cameras:
         m = camera.mount
-        out.print(f"  {camera.name}: {camera.profile} yaw {m.yaw_deg:g}° pitch {m.pitch_deg:g}°", markup=False)
+        focal = f" at {camera.focal_length_mm:.3g} mm" if camera.focal_length_mm is not None else ""
+        zoom = f" at zoom {camera.ptz.zoom_x:.3g}×" if camera.ptz is not None else ""
+        out.print(
+            f"  {camera.name}: {camera.profile}{focal}{zoom} yaw {m.yaw_deg:g}° pitch {m.pitch_deg:g}°", markup=False
+        )
     out.print(f"wrote layout.yaml, layout.json, site_layout.png, site_baseline.png to {args.out}", markup=False)
     return 0
 
 
-def _cameras(result, indices) -> list[Camera]:
-    """The scene cameras of the options `indices`, named after their mounts."""
-    return [
-        Camera(
-            name=f"{result.options[i].mount}_{k}",
-            profile=result.options[i].profile,
-            mount=Mount(
-                position_m=result.options[i].position_m,
-                yaw_deg=result.options[i].yaw_deg,
-                pitch_deg=result.options[i].pitch_deg,
-            ),
+def _cameras(result, indices, models) -> list[Camera]:
+    """The scene cameras of the options `indices`, named after their mounts: a varifocal lens set to the
+    option's focal length, a PTZ head at pan 0, tilt 0 and the option's zoom (the mount aims it)."""
+    cameras = []
+    for k, i in enumerate(indices, 1):
+        option = result.options[i]
+        extra = {}
+        if option.focal_length_mm is not None:
+            profile = models[option.profile]
+            if profile.ptz is not None:
+                extra["ptz"] = PtzPosition(zoom_x=option.focal_length_mm / profile.lens.focal_length_min_mm)
+            else:
+                extra["focal_length_mm"] = option.focal_length_mm
+        cameras.append(
+            Camera(
+                name=f"{option.mount}_{k}",
+                profile=option.profile,
+                mount=Mount(position_m=option.position_m, yaw_deg=option.yaw_deg, pitch_deg=option.pitch_deg),
+                **extra,
+            )
         )
-        for k, i in enumerate(indices, 1)
-    ]
+    return cameras
 
 
 _NO_REGIONS = "must list at least one region of interest ({name, polygon_m, required_class}) for camgen layout to cover"
@@ -163,4 +178,8 @@ def _fragment(cameras: list[Camera], result) -> str:
             f"    profile: {camera.profile}",
             f"    mount: {{position_m: [{position}], yaw_deg: {m.yaw_deg:g}, pitch_deg: {m.pitch_deg:g}}}",
         ]
+        if camera.focal_length_mm is not None:
+            lines.append(f"    focal_length_mm: {camera.focal_length_mm:.4g}")
+        if camera.ptz is not None:
+            lines.append(f"    ptz: {{pan_deg: 0, tilt_deg: 0, zoom_x: {camera.ptz.zoom_x:.4g}}}")
     return "\n".join(lines) + "\n"

@@ -7,7 +7,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from camgen.config.base import Model, invalid
+from camgen.config.base import Model, Why, invalid
 from camgen.config.scene import Name
 from camgen.config.world import Point3
 
@@ -47,6 +47,14 @@ class LayoutCandidates(Model):
     yaw_step_deg: Annotated[float, Field(gt=0, le=360)] = 15.0
     """Spacing of the headings tried within each mount's range, degrees."""
     pitch_step_deg: Annotated[float, Field(gt=0, le=180)] = 10.0
+    focal_length_steps: Annotated[
+        int,
+        Field(ge=1, le=12),
+        Why("1 tries the wide end only; each step multiplies the options a zoom profile adds, so at most 12"),
+    ] = 1
+    """Focal lengths a varifocal or zoom profile is tried at: this many, spaced evenly in log from its wide
+    to its tele end (1: the wide end only). A PTZ profile is placed with its head at pan 0, tilt 0 and that
+    zoom; a fixed lens has one."""
     region_weights: dict[str, Annotated[float, Field(ge=0)]] = {}
     """Weight of each region's area in the objective (by region name; 1 for a region not listed)."""
     handoff_weight: Annotated[float, Field(ge=0, le=10)] = 0.0

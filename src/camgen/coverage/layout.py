@@ -10,7 +10,10 @@ The first term is weighted maximum coverage; the second (λ = `handoff_weight`) 
 hand-off between cameras, i.e. penalises region area that only one camera sees.
 
 Search. Every candidate mount is tried at headings and pitches on a grid over its ranges (`yaw_step_deg`,
-`pitch_step_deg`) with every candidate profile at its wide end; these options form a finite ground set.
+`pitch_step_deg`) with every candidate profile; a varifocal or zoom lens at `focal_length_steps` focal
+lengths spaced evenly in log from its wide to its tele end (the wide end alone by default; a PTZ profile
+is set up with its head at pan 0, tilt 0 and that zoom, so the mount aims it). These options form a
+finite ground set.
 Greedy selection adds the option of largest marginal gain until the budget is spent; then a swap local
 search replaces one chosen option by any other while that raises F.
 
@@ -55,6 +58,8 @@ class Option:
     yaw_deg: float
     pitch_deg: float
     profile: str
+    focal_length_mm: float | None = None
+    """Where a varifocal or zoom lens is set, mm; None: a fixed lens (or the wide end)."""
 
 
 @dataclass(frozen=True)
@@ -105,13 +110,31 @@ def _angles(low: float, high: float, step: float) -> np.ndarray:
     return low + step * np.arange(count) if high > low else np.array([low])
 
 
-def enumerate_options(candidates: LayoutCandidates) -> tuple[Option, ...]:
+def focal_lengths_mm(profile: Profile, steps: int) -> list[float | None]:
+    """The focal lengths a candidate profile is tried at: None for a fixed lens, else `steps` spaced evenly
+    in log from the wide to the tele end (equal ratios: equal steps in field of view and in px/m)."""
+    low, high = profile.lens.focal_length_min_mm, profile.lens.focal_length_max_mm
+    if high <= low:
+        return [None]
+    return [float(f) for f in np.geomspace(low, high, steps)] if steps > 1 else [float(low)]
+
+
+def enumerate_options(
+    candidates: LayoutCandidates, profiles: Mapping[str, Profile] | None = None
+) -> tuple[Option, ...]:
+    """Every (mount, heading, pitch, profile, focal length) the search may choose; without `profiles`, every
+    lens at its wide end."""
+    focal = {
+        name: focal_lengths_mm(profiles[name], candidates.focal_length_steps) if profiles else [None]
+        for name in candidates.profiles
+    }
     return tuple(
-        Option(m.name, tuple(m.position_m), float(yaw), float(pitch), profile)
+        Option(m.name, tuple(m.position_m), float(yaw), float(pitch), profile, focal_length_mm)
         for m in candidates.mounts
         for yaw in _angles(*m.yaw_deg_range, candidates.yaw_step_deg)
         for pitch in _angles(*m.pitch_deg_range, candidates.pitch_step_deg)
         for profile in candidates.profiles
+        for focal_length_mm in focal[profile]
     )
 
 
@@ -131,7 +154,8 @@ def option_classes(
             blocked_at[option.position_m] = sight_blocked(np.array(option.position_m), points_m, occluders)
         profile = profiles[option.profile]
         mount = Mount(position_m=option.position_m, yaw_deg=option.yaw_deg, pitch_deg=option.pitch_deg)
-        view = view_at(option.mount, profile, mount, profile.lens.focal_length_min_mm)
+        focal_length_mm = option.focal_length_mm or profile.lens.focal_length_min_mm
+        view = view_at(option.mount, profile, mount, focal_length_mm)
         uv, dens = densities(points_m, plane_height_m, view)
         seen = in_image(uv, view.width_px, view.height_px) & ~blocked_at[option.position_m]
         classes[i] = np.where(seen, dori_class(dens.person_px_m), 0)
@@ -222,8 +246,10 @@ def evenly_spaced(
     """The naive baseline, as a 2-D planning tool would set it up: `budget` mounts spread evenly through the
     candidate list, each turned towards `aim_m` (the regions' weighted centroid; its heading brought into the
     mount's range, the middle of the range without an aim) at the middle of its pitch range, with the first
-    profile."""
+    profile at its wide end."""
     mounts = candidates.mounts
+    first = candidates.profiles[0]
+    wide = min((o.focal_length_mm for o in options if o.profile == first and o.focal_length_mm), default=None)
     picks = [mounts[int(i) % len(mounts)] for i in np.linspace(0, len(mounts) - 1, budget).round()] if budget else []
     chosen = []
     for mount in picks:
@@ -238,7 +264,7 @@ def evenly_spaced(
         scores = [
             (_angle_deg(o.yaw_deg - yaw) + abs(o.pitch_deg - pitch), i)
             for i, o in enumerate(options)
-            if o.mount == mount.name and o.profile == candidates.profiles[0] and i not in chosen
+            if o.mount == mount.name and o.profile == first and o.focal_length_mm == wide and i not in chosen
         ]
         if scores:
             chosen.append(min(scores)[1])
@@ -260,7 +286,7 @@ def optimise_layout(
     """Greedy selection and swap local search over the candidates' options (see the module docstring).
     Raises ConfigError for a region whose required class no option reaches on any of its cells (key paths
     from the scene, to be located by the caller)."""
-    options = enumerate_options(candidates)
+    options = enumerate_options(candidates, profiles)
     classes = option_classes(options, cells.points_m, profiles, occluders)
     if cells.membership is not None and (problems := unreachable_regions(classes.max(axis=0, initial=0), cells)):
         raise ConfigError(problems)
