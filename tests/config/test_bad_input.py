@@ -1343,10 +1343,10 @@ CASES = [
             SCENE,
             "  - {type: ambient, illuminance_lux: 1000}\n",
             "  - {type: ambient, illuminance_lux: 1000}\n"
-            "  - {type: lamp, position_m: [0, 0, 6], ies_file: a.ies, c0_azimuth_deg: 400} #<\n",
+            "  - {type: lamp, position_m: [0, 0, 6], ies_file: a.ies, c0_azimuth_deg: 500} #<\n",
         ),
         "lights[1].c0_azimuth_deg",
-        "must be ≤ 360, got 400",
+        "must be ≤ 360, got 500",
     ),
     (
         "night_sky_unknown",
