@@ -384,6 +384,13 @@ CASES = [
         "must be true or false, got 'sometimes'",
     ),
     (
+        "ground_to_horizon_not_bool",
+        "scene",
+        edit(SCENE, "environment:\n", "environment:\n  ground_to_horizon: nowhere #<\n"),
+        "environment.ground_to_horizon",
+        "must be true or false, got 'nowhere'",
+    ),
+    (
         "checkerboard_negative_border",
         "scene",
         edit(

@@ -128,6 +128,7 @@ def test_supersampling_antialiases_radiance_but_not_ids(workspace, renderer):
     box = "shape: {type: box, name: body, size_m: [4.5, 1.8, 1.5], position_m: [0, 0, 0.75]}, "
     text = (
         SUNNY.replace("  - {type: sun, illuminance_lux: 20000, azimuth_deg: 250}\n", "")
+        .replace("  shadows: false", "  shadows: false\n  ground_to_horizon: false")
         .replace("class: car, ", "class: car, " + box)
         .replace("{name: inside, class: person, ", "{name: inside, class: person, " + cylinder)
         .replace("    class: person\n", "    class: person\n    " + cylinder.removesuffix(", ") + "\n")
@@ -137,8 +138,9 @@ def test_supersampling_antialiases_radiance_but_not_ids(workspace, renderer):
     sharp = next(render_camera(renderer, job, camera, frames=[0])).passes
     smooth = next(render_camera(renderer, job, _with_render(camera, supersampling=4), frames=[0])).passes
     np.testing.assert_array_equal(smooth.instance_id, sharp.instance_id)
-    # Ambient light on one grey material: every surface has the same radiance L, so 1× shows 0 (sky)
-    # and L only, and 4× shows the 17 coverage fractions k/16 of L at edges.
+    # Ambient light on one grey material: every surface has the same radiance L, so 1× shows 0 (the sky,
+    # with no far ground under the horizon: ground_to_horizon is off) and L only, and 4× shows the 17
+    # coverage fractions k/16 of L at edges.
     radiance = sharp.radiance[..., 1].max()
     np.testing.assert_array_equal(np.unique(sharp.radiance), [0.0, radiance])
     fractions = smooth.radiance[..., 1] / radiance * 16

@@ -358,6 +358,10 @@ class Environment(Model):
     sky_luminance_cd_m2 and an ambient light's illuminance (π·L) where they are left out, and a `site`
     is then allowed after dusk: its sun must stay 12° or more below the horizon through the sequence.
     null: a day scene."""
+    ground_to_horizon: bool = True
+    """Continue the scene's largest level ground plane (facing up, at least 10 × 10 m) to the horizon as a
+    uniform backdrop of its mean reflectance (`camgen.render.scene_graph.FarGround`), so that no camera
+    sees the plane's edge against the sky; false leaves the sky under the horizon (a stage, a platform)."""
     shadows: bool = True
     """Sun and spot lights cast shadows (shadow maps); point lights never do. Shadows of moving actors
     fall on the environment, so a static camera then renders every frame in full."""

@@ -17,13 +17,15 @@ Radiance unit: linear RGB (BT.709 primaries) scaled so that 0.2126 R + 0.7152 G 
 luminance in cd/m² (see `camgen.render.scene_graph`); unclamped. depth_m: distance along the optical
 axis (camera z), m, +inf where no geometry is hit. instance_id: uint32, 0 for background.
 
-The sky fills the pixels no surface covers; fog (`camgen.world.fog`) then blends every radiance pixel
-towards the horizon sky by its distance, which a draw with fog renders beside the radiance even when
-depth_m is not asked for (and does not return).
+The sky fills the pixels no surface covers, except where their ray goes down to the scene's far ground
+(`camgen.render.scene_graph.FarGround`: the ground plane continued to the horizon), which fills those;
+fog (`camgen.world.fog`) then blends every radiance pixel towards the horizon sky by its distance, which
+a draw with fog renders beside the radiance even when depth_m is not asked for (and does not return).
 """
 
 from __future__ import annotations
 
+import math
 import weakref
 from dataclasses import dataclass
 from pathlib import Path
@@ -514,8 +516,16 @@ class Renderer:
         out = target.read()
         if out.radiance is not None and getattr(graph, "sky", "uniform") != "uniform" and target.sky_mask.any():
             out.radiance[target.sky_mask] = sky_view(graph, view)[target.sky_mask]
+        ground_depth_m = None
+        if out.radiance is not None and getattr(graph, "far_ground", None) is not None and target.sky_mask.any():
+            ground_depth_m = far_ground_depth_m(graph.far_ground, view)
+            ground_depth_m[~target.sky_mask] = np.inf
+            below = np.isfinite(ground_depth_m)
+            if below.any():
+                out.radiance[below] = far_ground_radiance(graph)
         if out.radiance is not None and fog_visibility_m is not None:
-            out.radiance = fogged_radiance(graph, view, out.radiance, out.depth_m, fog_visibility_m)
+            depth_m = out.depth_m if ground_depth_m is None else np.minimum(out.depth_m, ground_depth_m)
+            out.radiance = fogged_radiance(graph, view, out.radiance, depth_m, fog_visibility_m)
         if "depth_m" not in requested:
             out.depth_m = None
         return out
@@ -556,6 +566,34 @@ def _sky_on_grid(graph, view: View, *, horizontal: bool) -> np.ndarray:
     map_v = np.interp(np.arange(h), vs, np.arange(len(vs))).astype(np.float32)
     mx, my = np.meshgrid(map_u, map_v)
     return cv2.remap(coarse, mx, my, cv2.INTER_LINEAR)
+
+
+def far_ground_depth_m(ground, view: View) -> np.ndarray:
+    """(H, W) float32 camera-z depth at which each pixel's ray meets the far ground's level plane
+    (`camgen.render.scene_graph.FarGround`), +inf where the ray does not go down to it (or the camera is
+    not above it)."""
+    K_inv = np.linalg.inv(view.K_px)
+    R = view.T_world_from_cam[:3, :3]
+    height_m = float(view.T_world_from_cam[2, 3]) - ground.height_m
+    # The world z of the ray (u, v, 1) through K⁻¹ is linear in u and v.
+    a, b, c = R[2] @ K_inv
+    u = np.arange(view.width_px, dtype=np.float64)
+    v = np.arange(view.height_px, dtype=np.float64)
+    dz = (a * u[None, :] + (b * v[:, None] + c)).astype(np.float32)
+    with np.errstate(divide="ignore"):
+        depth_m = np.where(dz < 0, np.float32(height_m) / -dz, np.float32(np.inf))
+    return depth_m if height_m > 0 else np.full_like(depth_m, np.inf)
+
+
+def far_ground_radiance(graph) -> np.ndarray:
+    """(3,) radiance of the far ground: ρ ⊙ (ambient + Σ_sun colour·E·max(0, cos θ_sun)/π), with the sun
+    lights as they are now in the graph (a site's dusk moves them, `SceneGraph.set_daylight`)."""
+    scene = graph.scene
+    irradiance = np.asarray(scene.ambient_light, np.float64) * math.pi  # ambient_light is E/π
+    for node in scene.directional_light_nodes:
+        towards_sun_z = scene.get_pose(node)[2, 2]  # a light shines along its node's −Z
+        irradiance = irradiance + np.asarray(node.light.color) * node.light.intensity * max(0.0, towards_sun_z)
+    return (np.asarray(graph.far_ground.reflectance_rgb) * irradiance / math.pi).astype(np.float32)
 
 
 def ray_lengths(view: View) -> np.ndarray:

@@ -81,6 +81,47 @@ class Instance:
     kind: Literal["actor", "environment"]
 
 
+@dataclass(frozen=True)
+class FarGround:
+    """The scene's ground continued to the horizon: a level, uniform, Lambertian plane that the renderer
+    draws where a ray goes down past every mesh (`camgen.render.renderer.far_ground_view`), so that a
+    camera looking over the edge of the modelled site sees ground, not the sky under the horizon.
+
+    It is a backdrop, not geometry: no shadows, no instance id, depth +inf (like the sky). Its reflectance
+    is the ground plane's mean (a texture's typical albedo: far away, the mipmaps average the texture to
+    it); it is lit by the sun lights (Lambert) and the ambient term, as the plane itself is, without the
+    specular lobe (≤ 2 % of a rough ground's radiance)."""
+
+    height_m: float
+    reflectance_rgb: tuple[float, float, float]
+
+
+FAR_GROUND_MIN_AREA_M2 = 100.0
+"""The smallest level plane taken for the site's ground (10 × 10 m); a smaller one is a prop (a mat, a board)."""
+
+
+def far_ground(scene: Scene) -> FarGround | None:
+    """The largest level plane of the environment, facing up and at least `FAR_GROUND_MIN_AREA_M2`, as the
+    ground that continues to the horizon; None when the scene has none or `environment.ground_to_horizon`
+    is off."""
+    if not scene.environment.ground_to_horizon:
+        return None
+    level = []
+    for mesh in scene.environment.meshes:
+        if not isinstance(mesh, PlaneMesh) or mesh.size_m[0] * mesh.size_m[1] < FAR_GROUND_MIN_AREA_M2:
+            continue
+        rx, ry, _ = (math.remainder(angle, 360.0) for angle in mesh.rotation_deg)
+        if abs(rx) < 1e-6 and abs(ry) < 1e-6:  # local +Z stays world +Z: level and facing up
+            level.append(mesh)
+    if not level:
+        return None
+    ground = max(level, key=lambda mesh: mesh.size_m[0] * mesh.size_m[1])
+    material = ground.material
+    textured = material.texture is not None and "color_rgb" not in material.model_fields_set
+    rgb = TYPICAL_ALBEDO_RGB[material.texture.type] if textured else material.color_rgb
+    return FarGround(float(ground.position_m[2]), tuple(float(c) for c in rgb))
+
+
 @dataclass
 class SceneGraph:
     """A pyrender scene built from a camgen scene; actor nodes are moved with `place_actors`."""
@@ -99,6 +140,8 @@ class SceneGraph:
     """Unit vector towards the (first) sun light, world; None without one."""
     fog_visibility_m: float | None = None
     """Visual range of the scene's fog (`camgen.world.fog`), m; None in clear air."""
+    far_ground: FarGround | None = None
+    """The ground continued beyond the scene's ground plane to the horizon (`far_ground`); None without one."""
     daylight: SiteDaylightTrack | None = None
     """The site's daylight through the sequence, when it changes (`set_daylight`); None: held."""
     actor_local_poses: list[np.ndarray] = field(default_factory=list)
@@ -705,6 +748,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         sky=scene.environment.sky,
         sun_direction=_sun_direction(scene.lights),
         fog_visibility_m=scene.environment.fog.visibility_m if scene.environment.fog is not None else None,
+        far_ground=far_ground(scene),
         daylight=site_daylight_track(scene, graph, ambient_lux),
         shadows=scene.environment.shadows,
         actor_local_poses=local_poses,
