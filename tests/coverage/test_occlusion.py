@@ -97,3 +97,14 @@ def test_a_road_laid_over_the_ground_does_not_hide_it_and_a_plate_above_it_does(
         # The image-plane plot's rays agree: they hide more than the ground alone (the sky) only for a plate.
         hidden = image_plane_density(view, occluders, 0.0)[3]
         assert (hidden.sum() > sky_and_ground_hidden) == hides
+
+
+def test_a_camera_mounted_on_a_box_sees_what_lies_away_from_it():
+    # A wall camera on the corner of a building (scenes/eptz_follow.yaml's box camera): its sight lines run
+    # along the faces they leave, touching the box without entering it; the ones into the box are hidden.
+    building = {"type": "box", "name": "building", "size_m": [30, 8, 10], "position_m": [0, 24, 5]}
+    occluders = scene_occluders(scene_with([building]))
+    camera = np.array([-15.0, 20.0, 9.0])
+    away = np.array([[-15.0, 5.0, 0.0], [-20.0, 20.0, 0.0], [-5.0, 10.0, 0.0], [-18.0, 0.0, 0.0]])
+    assert not sight_blocked(camera, away, occluders).any()
+    assert sight_blocked(camera, np.array([[5.0, 30.0, 0.0], [0.0, 26.0, 11.0]]), occluders).all()

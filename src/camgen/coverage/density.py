@@ -120,11 +120,12 @@ def person_probe_m(points_m: np.ndarray, plane_height_m: float) -> np.ndarray:
 
 
 def densities(points_m: np.ndarray, plane_height_m: float, view: CameraView) -> tuple[np.ndarray, Densities]:
-    """Distorted pixels of the points (N, 2) and their densities through `view`."""
+    """Distorted pixels of the points (N, 2) and their densities through `view` (times its `detail_scale`)."""
     points = np.asarray(points_m, dtype=np.float64).reshape(-1, 3)
     uv, J = projection_jacobian(points, view)
     probe = person_probe_m(points, plane_height_m)
     _, J_probe = projection_jacobian(probe, view)
+    J, J_probe = J * view.detail_scale, J_probe * view.detail_scale  # a scaled-up ePTZ window adds no detail
     t = across_direction(probe, view.centre_m)
     return uv, Densities(
         ground_px_m=ground_density_px_m(J),

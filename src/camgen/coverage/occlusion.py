@@ -87,7 +87,9 @@ def _entering_s(kind: str, half: np.ndarray, o: np.ndarray, d: np.ndarray) -> np
             far = np.nanmin(np.maximum(t1, t2), axis=1)
             # A ray parallel to a slab outside it never enters.
             outside_parallel = np.any((d == 0) & (np.abs(o) > half), axis=1)
-            hit = (near <= far) & ~outside_parallel & (near >= 0)
+            # near < far: a segment that only touches the box (a camera mounted on its face, looking away
+            # along it) does not enter it.
+            hit = (near < far) & ~outside_parallel & (near >= 0)
             return np.where(hit, near, np.inf)
         if kind == "sphere":
             a = np.einsum("ij,ij->i", d, d)

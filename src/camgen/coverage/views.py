@@ -4,12 +4,13 @@ and a PTZ head's reach, built with the functions the plan uses (`camgen.plan.com
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from camgen.config.profile import Profile
 from camgen.config.scene import Camera
+from camgen.isp.eptz import eptz_window_px, output_camera_matrix, window_centre_px
 from camgen.motion.pose import R_HEAD_FROM_CV, R_world_from_cam, R_world_from_mount, T_world_from_cam
 from camgen.plan.ptz import installed_focal_length_mm
 
@@ -28,6 +29,9 @@ class CameraView:
     width_px: int
     height_px: int
     focal_length_mm: float
+    detail_scale: float = 1.0
+    """Share of the image's px/m that carries detail: a virtual PTZ's window scaled up to a larger stream
+    (the scaler interpolates) has window width / stream width; else 1."""
 
     @property
     def centre_m(self) -> np.ndarray:
@@ -54,13 +58,36 @@ def view_at(
 
 def home_view(camera: Camera, profile: Profile) -> CameraView:
     """A camera's view at its home position: a fixed camera at its installed focal length; a PTZ at its
-    `ptz` pan, tilt and zoom (focal length = wide end × zoom_x, as the plan sets it); a virtual PTZ as its
-    full sensor (every window it crops lies inside it)."""
+    `ptz` pan, tilt and zoom (focal length = wide end × zoom_x, as the plan sets it); a virtual PTZ as the
+    stream of its home window (`eptz_view`)."""
     if camera.ptz is not None and profile.ptz is not None:
         ptz = camera.ptz
         focal_length_mm = profile.lens.focal_length_min_mm * ptz.zoom_x
         return view_at(camera.name, profile, camera.mount, focal_length_mm, ptz.pan_deg, ptz.tilt_deg)
-    return view_at(camera.name, profile, camera.mount, installed_focal_length_mm(camera, profile))
+    sensor = view_at(camera.name, profile, camera.mount, installed_focal_length_mm(camera, profile))
+    if camera.eptz is not None:
+        eptz = camera.eptz
+        return eptz_view(sensor, eptz.pan_deg, eptz.tilt_deg, eptz.zoom_x, eptz.output_size_px)
+    return sensor
+
+
+def eptz_view(
+    sensor: CameraView, pan_deg: float, tilt_deg: float, zoom_x: float, output_size_px: tuple[int, int]
+) -> CameraView:
+    """The stream of a virtual PTZ's window as a camera of its own, as `camgen.plan` builds a frame's state:
+    the sensor window (`camgen.isp.eptz.eptz_window_px`) centred where the lens images (pan, tilt), scaled
+    to the stream; its camera matrix K' (`output_camera_matrix`) with the lens's distortion projects onto
+    the stream's pixels exactly. Its px/m counts detail only up to the sensor's own: a window narrower
+    than the stream is scaled up, so `detail_scale` = window width / stream width there."""
+    centre = window_centre_px(pan_deg, tilt_deg, sensor.K_px, sensor.distortion)
+    window = eptz_window_px(centre, zoom_x, (sensor.width_px, sensor.height_px), output_size_px)
+    return replace(
+        sensor,
+        K_px=output_camera_matrix(sensor.K_px, window, output_size_px),
+        width_px=int(output_size_px[0]),
+        height_px=int(output_size_px[1]),
+        detail_scale=min(1.0, window[2] / output_size_px[0]),
+    )
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,43 @@
+"""A virtual PTZ's coverage is its stream's: the window the plan crops (its camera matrix K' from
+`camgen.plan`), and px/m that count the sensor's detail only (a window scaled up to a larger stream adds
+none)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from camgen.config import load_scene
+from camgen.coverage.density import densities
+from camgen.coverage.views import home_view, view_at
+from camgen.plan import PlanSettings, compile_scene
+from tests.conftest import SCENE, write
+
+POINT_M = np.array([[0.5, 4.0, 0.0]])  # in front of the camera, seen in every window below
+
+
+def eptz_scene(workspace: Path, pan_deg: float, tilt_deg: float, zoom_x: float) -> Path:
+    head = f"pan_deg: {pan_deg}, tilt_deg: {tilt_deg}, zoom_x: {zoom_x}"
+    eptz = f"    eptz: {{output_size_px: [320, 240], zoom_max_x: 8, {head}}}\n"
+    return write(workspace, f"scenes/eptz_{zoom_x:g}.yaml", SCENE + eptz)
+
+
+@pytest.mark.parametrize(("pan_deg", "tilt_deg", "zoom_x"), [(0, 0, 1), (5, -3, 2), (-4, 2, 4)])
+def test_the_home_view_is_the_stream_the_plan_delivers(workspace: Path, pan_deg, tilt_deg, zoom_x):
+    loaded = load_scene(eptz_scene(workspace, pan_deg, tilt_deg, zoom_x))
+    camera, profile = loaded.scene.cameras[0], loaded.profile_models["cam"]
+    view = home_view(camera, profile)
+    (camera_job,) = compile_scene(loaded, PlanSettings()).cameras
+    state = camera_job.states[0]
+    np.testing.assert_allclose(view.K_px, np.array(state.output_K_px), rtol=1e-12)
+    np.testing.assert_allclose(view.T_world_from_cam, np.array(state.T_world_from_cam), atol=1e-12)
+    assert (view.width_px, view.height_px) == (320, 240)
+    # px/m against the sensor's own at the same point: the stream scales them by 320 / window width, and
+    # above the sensor's resolution (a window narrower than the stream) no further.
+    sensor = view_at("cam", profile, camera.mount, profile.lens.focal_length_mm)
+    window_width_px = state.window_px[2]
+    ratio = densities(POINT_M, 0.0, view)[1].vertical_px_m / densities(POINT_M, 0.0, sensor)[1].vertical_px_m
+    assert ratio[0] == pytest.approx(min(1.0, 320 / window_width_px), rel=1e-6)
+    assert window_width_px == round(640 / zoom_x)
