@@ -13,12 +13,16 @@ from camgen.config import load_scene
 from camgen.coverage.density import densities
 from camgen.coverage.views import home_view, view_at
 from camgen.plan import PlanSettings, compile_scene
-from tests.conftest import SCENE, write
+from tests.conftest import FIXED_PROFILE, SCENE, write
 
 POINT_M = np.array([[0.5, 4.0, 0.0]])  # in front of the camera, seen in every window below
 
 
 def eptz_scene(workspace: Path, pan_deg: float, tilt_deg: float, zoom_x: float) -> Path:
+    """The test scene's camera as a virtual PTZ (a 320 × 240 stream of the 640 × 480 sensor) behind a
+    barrel lens."""
+    barrel = FIXED_PROFILE.replace("  focal_length_mm: 4.0\n", "  focal_length_mm: 4.0\n  distortion: {k1: -0.1}\n")
+    write(workspace, "profiles/fixed.yaml", barrel)
     head = f"pan_deg: {pan_deg}, tilt_deg: {tilt_deg}, zoom_x: {zoom_x}"
     eptz = f"    eptz: {{output_size_px: [320, 240], zoom_max_x: 8, {head}}}\n"
     return write(workspace, f"scenes/eptz_{zoom_x:g}.yaml", SCENE + eptz)
@@ -41,3 +45,18 @@ def test_the_home_view_is_the_stream_the_plan_delivers(workspace: Path, pan_deg,
     ratio = densities(POINT_M, 0.0, view)[1].vertical_px_m / densities(POINT_M, 0.0, sensor)[1].vertical_px_m
     assert ratio[0] == pytest.approx(min(1.0, 320 / window_width_px), rel=1e-6)
     assert window_width_px == round(640 / zoom_x)
+
+
+def test_the_simulation_sees_a_virtual_ptz_frame_as_coverage_sees_its_home_view(workspace: Path):
+    from types import SimpleNamespace
+
+    from camgen.sim.ground_coverage import delivered_view
+
+    loaded = load_scene(eptz_scene(workspace, 5, -3, 4))
+    home = home_view(loaded.scene.cameras[0], loaded.profile_models["cam"])
+    state = compile_scene(loaded, PlanSettings()).cameras[0].states[0]
+    delivered = delivered_view("cam", SimpleNamespace(state=state, rgb8=np.zeros((240, 320, 3), np.uint8)))
+    for key in ("K_px", "distortion", "T_world_from_cam"):
+        np.testing.assert_allclose(getattr(delivered, key), getattr(home, key), atol=1e-12)
+    assert delivered.detail_scale == home.detail_scale == 0.5  # a 160 px window in a 320 px stream
+    assert home.distortion[0] == -0.1

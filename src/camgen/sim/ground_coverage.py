@@ -27,19 +27,22 @@ CELL_M = 1.0
 
 
 def delivered_view(name: str, observation) -> CameraView:
-    """A camera's view as it delivered `observation` (a virtual PTZ: its stream's camera matrix)."""
+    """A camera's view as it delivered `observation`: a virtual PTZ as its stream (the window's camera
+    matrix with the lens's distortion, px/m up to the sensor's own detail, as `camgen.coverage.views.
+    eptz_view`)."""
     state = observation.state
     height_px, width_px = observation.rgb8.shape[:2]
-    K = np.array(state.output_K_px if state.output_K_px is not None else state.K_px, dtype=np.float64)
-    distortion = np.zeros(8) if state.output_K_px is not None else np.array(state.distortion, dtype=np.float64)
+    eptz = state.output_K_px is not None
+    K = np.array(state.output_K_px if eptz else state.K_px, dtype=np.float64)
     return CameraView(
         name=name,
         K_px=K,
-        distortion=distortion,
+        distortion=np.array(state.distortion, dtype=np.float64),
         T_world_from_cam=np.array(state.T_world_from_cam, dtype=np.float64),
         width_px=width_px,
         height_px=height_px,
         focal_length_mm=state.focal_length_mm,
+        detail_scale=min(1.0, state.window_px[2] / width_px) if eptz else 1.0,
     )
 
 
