@@ -60,3 +60,29 @@ def test_the_simulation_sees_a_virtual_ptz_frame_as_coverage_sees_its_home_view(
         np.testing.assert_allclose(getattr(delivered, key), getattr(home, key), atol=1e-12)
     assert delivered.detail_scale == home.detail_scale == 0.5  # a 160 px window in a 320 px stream
     assert home.distortion[0] == -0.1
+
+
+def test_a_virtual_ptz_reaches_what_its_sensor_sees_at_up_to_the_sensors_detail(workspace: Path):
+    from camgen.coverage.dori import DORI_THRESHOLDS_PX_M
+    from camgen.coverage.report import scene_coverage
+
+    loaded = load_scene(eptz_scene(workspace, 0, 0, 1))
+    camera, profile = loaded.scene.cameras[0], loaded.profile_models["cam"]
+    coverage = scene_coverage(loaded.scene, loaded.profile_models, cell_m=0.5, with_ptz_reach=True)
+    (reach,) = coverage.planes[0].reaches
+    sensor = view_at("cam", profile, camera.mount, profile.lens.focal_length_mm)
+    points = coverage.planes[0].grid.points_m()
+    _, dens = densities(points, 0.0, sensor)
+    native = dens.person_px_m.reshape(reach.reached.shape)
+    assert reach.reached.sum() > 100 and np.all(np.isfinite(native[reach.reached]))
+    # The 320 px stream of a 640 px wide zoom-1 window: half the sensor's px/m; at 8× (an 80 px window)
+    # the sensor's own, not 4× them.
+    np.testing.assert_allclose(reach.person_wide_px_m[reach.reached], native[reach.reached] / 2, rtol=1e-12)
+    np.testing.assert_allclose(reach.person_tele_px_m[reach.reached], native[reach.reached], rtol=1e-12)
+    # observe (t px/m) needs zoom 2·t/native where the sensor has the detail, none elsewhere.
+    t, seen = DORI_THRESHOLDS_PX_M[1], native[reach.reached]
+    needed = reach.zoom_needed_x[1][reach.reached]
+    np.testing.assert_allclose(needed, np.where(seen >= t, np.maximum(2 * t / seen, 1), np.nan), rtol=1e-12)
+    assert (needed > 1).any() and (needed == 1).any()
+    identify = reach.zoom_needed_x[3][reach.reached]  # 250 px/m: beyond the sensor's detail somewhere
+    assert np.array_equal(np.isnan(identify), seen < DORI_THRESHOLDS_PX_M[3]) and np.isnan(identify).any()

@@ -40,7 +40,8 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "--ptz-reach",
         action="store_true",
-        help="also what each PTZ head reaches over its pan/tilt range, at wide and at tele zoom",
+        help="also what each PTZ head reaches over its pan/tilt range (a virtual PTZ: any window of its sensor), "
+        "at wide and at tele zoom",
     )
     parser.add_argument("--no-plots", action="store_true", help="write the report and arrays only")
     add_profile_dirs_option(parser)

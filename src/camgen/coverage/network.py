@@ -14,7 +14,7 @@ from camgen.coverage.density import centred_densities, densities, in_image
 from camgen.coverage.dori import DORI_CLASSES, DORI_THRESHOLDS_PX_M, NOT_SEEN, class_index, class_name, dori_class
 from camgen.coverage.grid import Grid
 from camgen.coverage.occlusion import Occluder, inside_solids, on_ground, sight_blocked
-from camgen.coverage.views import CameraView, PtzReach
+from camgen.coverage.views import CameraView, EptzReach, PtzReach
 
 BLIND_SPOTS_LISTED = 10
 """The largest blind spots are listed in the report."""
@@ -39,6 +39,17 @@ class CameraCoverage:
     """int8 class index (0 below detect or not seen … 4 identify)."""
 
 
+PTZ_REACH_RULE = (
+    "a point is reached when the head can centre it (pan and tilt within range) and no mesh hides it; wide is "
+    "the lens at 1×, tele at zoom_max_x, both with the point at the image centre"
+)
+EPTZ_REACH_RULE = (
+    "virtual PTZ: a point is reached when the sensor images it and no mesh hides it (some window holds it); "
+    "wide is the stream at zoom 1, tele at zoom_max_x: the sensor's px/m × stream width / window width, at "
+    "most the sensor's own"
+)
+
+
 @dataclass(frozen=True)
 class ReachCoverage:
     """Where a PTZ head can centre a point (unhidden), and the class it sees it at at wide and tele zoom."""
@@ -53,6 +64,8 @@ class ReachCoverage:
     zoom_needed_x: np.ndarray
     """(4, ny, nx): the zoom each class needs there (threshold / density at wide, at least 1); NaN where
     the lens cannot reach it or the head cannot aim there."""
+    rule: str = ""
+    """How reached and the zooms are judged (the report's words)."""
 
 
 @dataclass(frozen=True)
@@ -111,13 +124,43 @@ def reach_coverage(grid: Grid, reach: PtzReach, occluders: Sequence[Occluder]) -
         dori_wide=dori_class(person_wide).reshape(shape),
         dori_tele=dori_class(person_tele).reshape(shape),
         zoom_needed_x=needed.reshape(len(DORI_CLASSES), *shape),
+        rule=PTZ_REACH_RULE,
+    )
+
+
+def eptz_reach_coverage(grid: Grid, reach: EptzReach, occluders: Sequence[Occluder]) -> ReachCoverage:
+    """Where a virtual PTZ reaches on the grid: every point its sensor sees, unhidden; the stream's
+    densities there at zoom 1 (wide) and zoom_max_x (tele), and the digital zoom each class needs (none
+    where even the sensor's own px/m fall short: zooming further only interpolates)."""
+    sensor = camera_coverage(grid, reach.sensor, occluders)
+    native = sensor.person_px_m.ravel()
+    person_wide = native * reach.detail_scale(1.0)
+    person_tele = native * reach.detail_scale(reach.zoom_max_x)
+    thresholds = np.array(DORI_THRESHOLDS_PX_M)[:, None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        needed = np.maximum(thresholds * reach.full_window_width_px / (reach.output_width_px * native[None]), 1.0)
+        needed = np.where((native[None] >= thresholds) & (needed <= reach.zoom_max_x * (1 + 1e-12)), needed, np.nan)
+    shape = grid.shape
+    return ReachCoverage(
+        name=reach.name,
+        zoom_max_x=reach.zoom_max_x,
+        reached=sensor.visible,
+        person_wide_px_m=person_wide.reshape(shape),
+        person_tele_px_m=person_tele.reshape(shape),
+        dori_wide=dori_class(person_wide).reshape(shape),
+        dori_tele=dori_class(person_tele).reshape(shape),
+        zoom_needed_x=needed.reshape(len(DORI_CLASSES), *shape),
+        rule=EPTZ_REACH_RULE,
     )
 
 
 def plane_coverage(
-    grid: Grid, views: Sequence[CameraView], reaches: Sequence[PtzReach], occluders: Sequence[Occluder]
+    grid: Grid,
+    views: Sequence[CameraView],
+    reaches: Sequence[PtzReach | EptzReach],
+    occluders: Sequence[Occluder],
 ) -> PlaneCoverage:
-    """Every camera's coverage of one plane, and (for PTZ heads) its reach."""
+    """Every camera's coverage of one plane, and (for PTZ heads, mechanical or virtual) its reach."""
     points = grid.points_m()
     ground = on_ground(points, occluders)
     site = ~inside_solids(points, occluders) & (True if ground is None else ground)
@@ -126,7 +169,12 @@ def plane_coverage(
         grid=grid,
         site=site,
         cameras=tuple(camera_coverage(grid, view, occluders) for view in views),
-        reaches=tuple(reach_coverage(grid, reach, occluders) for reach in reaches),
+        reaches=tuple(
+            eptz_reach_coverage(grid, reach, occluders)
+            if isinstance(reach, EptzReach)
+            else reach_coverage(grid, reach, occluders)
+            for reach in reaches
+        ),
     )
 
 
@@ -266,8 +314,7 @@ def reach_figures(reach: ReachCoverage, site: np.ndarray, grid: Grid) -> dict:
             zoom: {name: float((cells & (dori >= k)).sum() * area) for k, name in enumerate(DORI_CLASSES, 1)}
             for zoom, dori in (("wide", reach.dori_wide), ("tele", reach.dori_tele))
         },
-        "rule": "a point is reached when the head can centre it (pan and tilt within range) and no mesh hides "
-        "it; wide is the lens at 1×, tele at zoom_max_x, both with the point at the image centre",
+        "rule": reach.rule,
     }
 
 

@@ -22,7 +22,7 @@ from camgen.coverage.network import (
     region_figures,
 )
 from camgen.coverage.occlusion import Occluder, scene_occluders
-from camgen.coverage.views import CameraView, home_view, ptz_reach
+from camgen.coverage.views import CameraView, eptz_reach, home_view, ptz_reach
 from camgen.errors import ConfigError, Problem
 
 FACE_HEIGHT_M = 1.6
@@ -72,7 +72,11 @@ def scene_coverage(
         raise ConfigError(problems)
     views = tuple(home_view(camera, profiles[camera.name]) for camera in scene.cameras)
     reaches = (
-        tuple(r for camera in scene.cameras if (r := ptz_reach(camera, profiles[camera.name])) is not None)
+        tuple(
+            r
+            for camera in scene.cameras
+            if (r := ptz_reach(camera, profiles[camera.name]) or eptz_reach(camera, profiles[camera.name])) is not None
+        )
         if with_ptz_reach
         else ()
     )

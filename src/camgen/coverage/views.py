@@ -10,7 +10,7 @@ import numpy as np
 
 from camgen.config.profile import Profile
 from camgen.config.scene import Camera
-from camgen.isp.eptz import eptz_window_px, output_camera_matrix, window_centre_px
+from camgen.isp.eptz import eptz_window_px, full_window_size_px, output_camera_matrix, window_centre_px
 from camgen.motion.pose import R_HEAD_FROM_CV, R_world_from_cam, R_world_from_mount, T_world_from_cam
 from camgen.plan.ptz import installed_focal_length_mm
 
@@ -145,3 +145,31 @@ def centring_axes(reach: PtzReach, points_m: np.ndarray) -> tuple[np.ndarray, np
     heads = np.stack([head_x, head_y, head_z], -1)  # (N, 3, 3) R_mount_from_head
     R_world_from_cam_ = reach.R_world_from_mount @ heads @ R_HEAD_FROM_CV
     return ok, R_world_from_cam_[:, :, 0], R_world_from_cam_[:, :, 1]
+
+
+@dataclass(frozen=True)
+class EptzReach:
+    """Where a virtual PTZ can look: any window inside its sensor, so every point the sensor images; the
+    stream's px/m there at zoom z are the sensor's × min(1, stream width · z / full window width)."""
+
+    name: str
+    sensor: CameraView
+    """The whole sensor through the lens."""
+    full_window_width_px: float
+    """Width of the zoom-1 window (the largest of the stream's aspect ratio on the sensor), px."""
+    output_width_px: int
+    zoom_max_x: float
+
+    def detail_scale(self, zoom_x: float) -> float:
+        """The stream's px/m over the sensor's at `zoom_x`, capped at the sensor's own detail."""
+        return min(1.0, self.output_width_px * zoom_x / self.full_window_width_px)
+
+
+def eptz_reach(camera: Camera, profile: Profile) -> EptzReach | None:
+    """The reach of a camera's virtual PTZ; None for other cameras."""
+    if camera.eptz is None:
+        return None
+    sensor = view_at(camera.name, profile, camera.mount, installed_focal_length_mm(camera, profile))
+    eptz = camera.eptz
+    full_width, _ = full_window_size_px((sensor.width_px, sensor.height_px), eptz.output_size_px)
+    return EptzReach(camera.name, sensor, full_width, int(eptz.output_size_px[0]), eptz.zoom_max_x)
