@@ -12,9 +12,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from camgen.actors.character import character_rig
+from camgen.actors.character import character_rig, coco_joint_nodes
+from camgen.annotate.keypoints import COCO_KEYPOINTS
 from camgen.errors import ConfigError
-from camgen.io.gltf import CAMGEN_FROM_GLTF, load_character, pose_character, posed_bounds
+from camgen.io.gltf import CAMGEN_FROM_GLTF, global_transforms, load_character, pose_character, posed_bounds
 from camgen.motion.trajectory import Route
 
 DATA = Path(__file__).parent.parent / "data" / "characters"
@@ -174,6 +175,73 @@ def test_blender_export_skins_as_blender_does():
         assert np.abs(posed - rest).max() > 0.01, f"{key} should move the mesh"
 
 
+# Joint lists as the rigs' authors publish them: Mixamo's skeleton (mixamorig: prefix), SMPL's 24 joints
+# (Loper et al. 2015), Blender's Rigify metarig (whose shoulder.L is the collarbone).
+MIXAMO = ["Hips", "Spine", "Spine1", "Spine2", "Neck", "Head", "HeadTop_End", "LeftEye", "RightEye"] + [
+    f"{side}{part}"
+    for side in ("Left", "Right")
+    for part in ("Shoulder", "Arm", "ForeArm", "Hand", "UpLeg", "Leg", "Foot", "ToeBase")
+]
+SMPL = ["Pelvis", "Spine1", "Spine2", "Spine3", "Neck", "Head", "Jaw"] + [
+    f"{side}_{part}"
+    for side in "LR"
+    for part in ("Hip", "Knee", "Ankle", "Foot", "Collar", "Shoulder", "Elbow", "Wrist", "Hand")
+]
+RIGIFY = ["spine", "spine.001", "spine.006"] + [
+    f"{part}.{side}" for side in "LR" for part in ("shoulder", "upper_arm", "forearm", "hand", "thigh", "shin", "foot")
+]
+COCO_JOINTS = {  # keypoint → joint for side left (right mirrors it)
+    "mixamo": {"eye": "mixamorig:LeftEye", "shoulder": "mixamorig:LeftArm", "elbow": "mixamorig:LeftForeArm",
+               "wrist": "mixamorig:LeftHand", "hip": "mixamorig:LeftUpLeg", "knee": "mixamorig:LeftLeg",
+               "ankle": "mixamorig:LeftFoot"},
+    "smpl": {"shoulder": "L_Shoulder", "elbow": "L_Elbow", "wrist": "L_Wrist", "hip": "L_Hip", "knee": "L_Knee",
+             "ankle": "L_Ankle"},
+    "rigify": {"shoulder": "upper_arm.L", "elbow": "forearm.L", "wrist": "hand.L", "hip": "thigh.L",
+               "knee": "shin.L", "ankle": "foot.L"},
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("rig", ["mixamo", "smpl", "rigify"])
+def test_coco_keypoints_come_from_the_joints_each_rig_names(rig):
+    names = {"mixamo": [f"mixamorig:{n}" for n in MIXAMO], "smpl": SMPL, "rigify": RIGIFY}[rig]
+    found = {
+        k: (names[n] if n is not None else None) for k, n in zip(COCO_KEYPOINTS, coco_joint_nodes(names), strict=True)
+    }
+    for keypoint, joint in found.items():
+        side, _, part = keypoint.rpartition("_")
+        expected = COCO_JOINTS[rig].get(part)
+        if expected is not None and side == "right":
+            expected = expected.replace("Left", "Right").replace("L_", "R_").replace(".L", ".R")
+        assert joint == expected, keypoint
+
+
+def test_a_characters_keypoints_are_its_joints_where_blender_put_them():
+    """walker.glb's rig (tests/data/characters/make_walker.py) has thighs, shins and one-bone arms: the
+    shoulders, hips and knees are the heads of arm_*, thigh_* and shin_* as the script placed them in
+    Blender (z up, −y front); the other 11 keypoints are not labelled (NaN)."""
+    character = load_character(WALKER)
+    nodes = coco_joint_nodes(character.names)
+    labelled = {k: n for k, n in zip(COCO_KEYPOINTS, nodes, strict=True) if n is not None}
+    heads_blender = {"left_shoulder": (0.22, 0, 1.48), "right_shoulder": (-0.22, 0, 1.48),
+                     "left_hip": (0.09, 0, 0.93), "right_hip": (-0.09, 0, 0.93),
+                     "left_knee": (0.09, 0, 0.51), "right_knee": (-0.09, 0, 0.51)}  # fmt: skip
+    assert set(labelled) == set(heads_blender)
+    G = global_transforms(character, None, 0.0)
+    blender_to_gltf = np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]], float)
+    for keypoint, node in labelled.items():
+        np.testing.assert_allclose(G[node][:3, 3], blender_to_gltf @ heads_blender[keypoint], atol=1e-5)
+    # On the route, in the world: the rig's keypoints move with it, NaN rows where it has no joint.
+    route = Route(np.array([[3.0, 1.0]]), np.zeros(1), speed_m_s=1.0)
+    rig = character_rig(character, route, T_actor_from_mesh=np.eye(4), scale=1.0, clip="Walk",
+                        idle_clip="Idle", clip_speed_m_s=1.0)  # fmt: skip
+    assert rig.keypoints_m.shape == (17, 3)
+    assert np.isnan(rig.keypoints_m).any(axis=1).sum() == 11
+    knees = rig.keypoints_m[[COCO_KEYPOINTS.index("left_knee"), COCO_KEYPOINTS.index("right_knee")]]
+    assert np.all(np.abs(knees[:, :2] - [3.0, 1.0]).max(axis=1) < 0.3) and np.all(
+        (knees[:, 2] > 0.3) & (knees[:, 2] < 0.7)
+    )
+
+
 def test_walk_plays_by_distance_and_keeps_the_actor_on_its_route():
     character = load_character(WALKER)
     route = Route(np.array([[0.0, 0.0], [10.0, 0.0]]), np.zeros(2), speed_m_s=2.0)
@@ -268,7 +336,14 @@ def test_a_character_renders_textured_moving_and_boxed(character_render):
         # Unoccluded and whole in view: the box of the posed mesh is the tight box of its mask.
         assert a["visibility"] == pytest.approx(1.0, abs=0.01)
         assert np.abs(np.subtract(a["amodal_bbox"], a["bbox"])).max() <= 1.0
-        assert a.get("keypoints") is None  # a user's character has no COCO skeleton
+        # The keypoints its rig has joints for (shoulders, hips, knees), inside the figure's box; the rest 0.
+        keypoints = np.reshape(a["keypoints"], (17, 3))
+        assert 4 <= a["num_keypoints"] <= 6 and np.count_nonzero(keypoints[:, 2]) == a["num_keypoints"]
+        x, y, w, h = a["bbox"]
+        shown = keypoints[keypoints[:, 2] > 0]
+        assert np.all((shown[:, 0] >= x - 2) & (shown[:, 0] <= x + w + 2) & (shown[:, 1] >= y) & (shown[:, 1] <= y + h))
+        assert np.all(keypoints[keypoints[:, 2] == 0, :2] == 0)
+        assert sum(point is None for point in a["keypoints_world_m"]) == 11
     # The cloth texture's red and blue stripes both show inside the figure's mask.
     a = annotations[3]
     image = cv2.imread(str(camera / coco["images"][a["image_id"] - 1]["file_name"]))[..., ::-1].astype(int)

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from camgen.annotate.keypoints import COCO_KEYPOINTS
 from camgen.errors import ConfigError
 from camgen.io.gltf import (
     CAMGEN_FROM_GLTF,
@@ -34,8 +35,9 @@ class CharacterRig:
     """A glTF character moved along its route, posed in world coordinates each `place`.
 
     Same interface as the procedural person's rig where the renderer and the annotations read it:
-    `vertices_m`, `normals`, `keypoints_m` (None: a user's character has no COCO keypoints),
-    `heading_box()`, `place(time_s)`; and `parts` (per primitive slices) for a multi-material mesh.
+    `vertices_m`, `normals`, `keypoints_m` (the COCO keypoints the rig's joints give, `coco_joint_nodes`;
+    NaN rows for those it lacks; None when it has none), `heading_box()`, `place(time_s)`; and `parts`
+    (per primitive slices) for a multi-material mesh.
     """
 
     character: Character
@@ -48,7 +50,8 @@ class CharacterRig:
     """Distance walked per loop of the walk clip, m (0 when it does not loop by distance)."""
     travel_per_cycle: np.ndarray
     """The walk clip's own ground travel over one loop (glTF axes), taken out as it plays."""
-    keypoints_m: None = None
+    keypoints_m: np.ndarray | None = field(default=None, init=False)
+    """(17, 3) COCO keypoints in the world at the last `place`, m; NaN where the rig has no such joint."""
     model: None = None
     vertices_m: np.ndarray = field(init=False)
     normals: np.ndarray = field(init=False)
@@ -59,6 +62,7 @@ class CharacterRig:
         sizes = [len(p.positions) for p in self.character.primitives]
         ends = np.cumsum(sizes)
         self.parts = [slice(int(e - n), int(e)) for n, e in zip(sizes, ends, strict=True)]
+        self._keypoint_nodes = coco_joint_nodes(self.character.names)
         self.place(0.0)
 
     def clip_time(self, time_s: float) -> tuple[Clip | None, float, float]:
@@ -92,6 +96,11 @@ class CharacterRig:
         turned = n @ T[:3, :3].T
         self.normals = (turned / np.maximum(np.linalg.norm(turned, axis=1, keepdims=True), 1e-12)).astype(np.float32)
         self._heading = float(heading)
+        if any(node is not None for node in self._keypoint_nodes):
+            joints = np.array(
+                [G[node][:3, 3] + shift if node is not None else np.full(3, np.nan) for node in self._keypoint_nodes]
+            )
+            self.keypoints_m = joints @ T[:3, :3].T + T[:3, 3]
 
     def heading_box(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(low, high, T_world_from_box): the posed mesh's box in a frame turned with the heading."""
@@ -117,6 +126,55 @@ class CharacterRig:
                 local = p @ self.T_actor_from_file[:3, :3].T + self.T_actor_from_file[:3, 3]
                 reach = max(reach, float(np.max(np.linalg.norm(local, axis=1))))
         return reach + float(np.linalg.norm(self.travel_per_cycle))
+
+
+# COCO keypoints from a rig's joint names. A joint node's origin is the joint (a bone's head in Blender,
+# a joint in Mixamo, SMPL and Rigify exports); names are compared lower-cased, without a namespace
+# ("mixamorig:"), a "mixamorig" prefix, or any character other than letters and digits, with the side as
+# "left"/"l" before or after the part ("LeftArm", "arm_l", "upper_arm.L", "L_Elbow"). The shoulder is
+# the upper arm's origin ("Arm" in Mixamo, whose "LeftShoulder" is the collarbone, as Rigify's
+# "shoulder.L" is); a joint named "shoulder" counts only in a rig that also has a collarbone ("collar",
+# "clavicle"), as SMPL's L_Shoulder beside L_Collar. Face points come only from joints named for them
+# (eyes, ears, nose), which most body rigs lack.
+KEYPOINT_PARTS = {
+    "nose": ("nose", "nosetip"),
+    "eye": ("eye",),
+    "ear": ("ear",),
+    "shoulder": ("arm", "upperarm", "uparm"),
+    "elbow": ("elbow", "forearm", "lowerarm", "loarm"),
+    "wrist": ("wrist", "hand"),
+    "hip": ("hip", "upleg", "upperleg", "thigh"),
+    "knee": ("knee", "leg", "lowerleg", "loleg", "shin", "calf"),
+    "ankle": ("ankle", "foot"),
+}
+"""COCO part → joint names, the joint's own name first (SMPL's L_Wrist before its L_Hand, the knuckles),
+then the bone that starts there (Mixamo's LeftHand starts at the wrist, LeftFoot at the ankle)."""
+COLLARBONE_PARTS = ("collar", "clavicle")
+
+
+def _normalised_name(name: str) -> str:
+    name = name.rsplit(":", 1)[-1].lower()
+    name = "".join(c for c in name if c.isalnum())
+    return name.removeprefix("mixamorig")
+
+
+def coco_joint_nodes(names) -> tuple[int | None, ...]:
+    """For each of the 17 COCO keypoints (`COCO_KEYPOINTS` order), the node whose origin is that joint,
+    found by name (`KEYPOINT_PARTS`), or None where the rig has no such joint."""
+    index = {}
+    for node, name in enumerate(names):
+        index.setdefault(_normalised_name(name), node)
+    has_collarbone = any(part in key for key in index for part in COLLARBONE_PARTS)
+    nodes = []
+    for keypoint in COCO_KEYPOINTS:
+        side, _, part = keypoint.rpartition("_")
+        bases = KEYPOINT_PARTS[part] + (("shoulder",) if part == "shoulder" and has_collarbone else ())
+        sides = ("",) if not side else (side, side[0])
+        candidates = [
+            f"{s}{base}" if first else f"{base}{s}" for base in bases for s in sides for first in (True, False)
+        ]
+        nodes.append(next((index[c] for c in candidates if c in index), None))
+    return tuple(nodes)
 
 
 def _actor_pose(x: float, y: float, heading_rad: float) -> np.ndarray:

@@ -121,7 +121,7 @@ class SequenceAnnotations:
             {
                 "track_id": obj.track_id,
                 "keypoints": np.round(obj.keypoints, 3).tolist(),
-                "keypoints_world_m": np.round(obj.keypoints_world_m, 5).tolist(),
+                "keypoints_world_m": _world_points(obj.keypoints_world_m),
             }
             for obj in frame.objects
             if obj.keypoints is not None
@@ -310,6 +310,15 @@ def _category(category_id: int, name: str) -> dict:
     return category
 
 
+def _world_points(points_m: np.ndarray) -> list:
+    """[[x, y, z], …] in m, 5 decimals; null for a keypoint the person's rig has no joint for (a glTF
+    character's rig may lack some of COCO's 17, `camgen.actors.character.coco_joint_nodes`)."""
+    return [
+        [round(float(v), 5) for v in point] if np.all(np.isfinite(point)) else None
+        for point in np.asarray(points_m, dtype=np.float64)
+    ]
+
+
 def _keypoint_fields(obj) -> dict:
     """COCO `keypoints` (x, y, v triplets, x and y 0 where v = 0), `num_keypoints` (labelled ones,
     v > 0) and the 3-D keypoints in the world, for an annotated person."""
@@ -320,7 +329,7 @@ def _keypoint_fields(obj) -> dict:
     return {
         "keypoints": [round(float(v), 3) if i % 3 != 2 else int(v) for i, v in enumerate(keypoints.ravel())],
         "num_keypoints": int(np.count_nonzero(keypoints[:, 2] > 0)),
-        "keypoints_world_m": np.round(obj.keypoints_world_m, 5).tolist(),
+        "keypoints_world_m": _world_points(obj.keypoints_world_m),
     }
 
 

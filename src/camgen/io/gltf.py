@@ -131,6 +131,8 @@ class Character:
     clips: tuple[Clip, ...]
     scene_nodes: frozenset[int] = field(default_factory=frozenset)
     """The nodes of the file's default scene (and their descendants)."""
+    names: tuple[str, ...] = ()
+    """Each node's name ("" where the file gives none): joints are found by name (`camgen.actors.character`)."""
 
     def clip(self, name: str | None) -> Clip | None:
         """The clip of that name; None names the file's first clip (None when it has none)."""
@@ -238,6 +240,7 @@ def load_character(path: str | Path) -> Character:
         skins=tuple(skins),
         clips=tuple(clips),
         scene_nodes=frozenset(in_scene),
+        names=tuple(str(node.name or "") for node in gltf.nodes),
     )
 
 
