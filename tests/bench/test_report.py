@@ -88,7 +88,17 @@ def test_bad_options_are_refused_before_anything_runs(tmp_path, capsys, args, me
 def test_list_names_every_section(capsys):
     assert main(["bench", "--list"]) == 0
     listed = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
-    assert listed == ["end_to_end", "camera_model", "skipping", "tradeoffs", "growth", "people", "sim", "coverage", "other"]
+    assert listed == [
+        "end_to_end",
+        "camera_model",
+        "skipping",
+        "tradeoffs",
+        "growth",
+        "people",
+        "sim",
+        "coverage",
+        "other",
+    ]
 
 
 def test_a_failing_section_is_reported_and_the_others_still_written(tmp_path):
