@@ -304,6 +304,8 @@ def dataset_statistics(merged: Mapping) -> DatasetStatistics:
     }
     per_video: dict[int, int] = {video["id"]: 0 for video in merged["videos"]}
     for annotation in merged["annotations"]:
+        if annotation.get("iscrowd"):  # a region over several people, not one box (`crowd_groups`)
+            continue
         column = columns[names[annotation["category_id"]]]
         column["height"].append(annotation["bbox"][3])
         column["visibility"].append(annotation.get("visibility", 1.0))

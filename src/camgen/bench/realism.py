@@ -87,6 +87,10 @@ def score_sequence(directory: Path, hog) -> tuple[int, int, int, int]:
         for ann in coco["annotations"]:
             if ann["image_id"] != image["id"] or ann["category_id"] != person_id:
                 continue
+            if ann.get("iscrowd"):  # people too small to separate: detections there are not false alarms
+                x, y, w, h = ann["bbox"]
+                ignored.append((x, y, x + w, y + h))
+                continue
             x, y, w, h = ann["amodal_bbox"]
             box = (x, y, x + w, y + h)
             tall = h >= MIN_HEIGHT_PX and ann["truncation"] < 0.1

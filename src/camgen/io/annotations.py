@@ -24,7 +24,10 @@ visible pixels, ``segmentation`` as compressed RLE of the visible mask, ``area``
 ``side``, ``text``, ``quad`` (its 4 corners as one reads it), ``bbox``, ``visible`` and
 ``visible_share``: `camgen.annotate.plates`), ``categories`` (camgen's actor classes; ``person`` with
 COCO's 17 keypoint names and skeleton) and ``tracks`` (one per actor, TAO-style, with a person's
-attribute labels, or a procedural vehicle's body type, colour, plate text and dimensions).
+attribute labels, or a procedural vehicle's body type, colour, plate text and dimensions). People too
+small to separate, three or more under `CROWD_MAX_HEIGHT_PX` whose visible pixels touch, are one crowd
+annotation instead (``iscrowd`` 1, the union's mask and box, ``crowd_track_ids``; `crowd_groups`), which
+COCO's evaluation ignores; MOT's gt.txt, YOLO and ``tracks`` keep every person.
 
 YOLO, as Ultralytics reads a detection data set (docs.ultralytics.com/datasets/detect): ``images/``
 (the delivered frames, named by frame index counted from 0 as camgen's other per-frame files),
@@ -128,6 +131,10 @@ class SequenceAnnotations:
         ]
         if people:
             self.keypoint_lines.append(json.dumps({"frame": frame.frame + 1, "people": people}, separators=(",", ":")))
+        crowds = crowd_groups(frame.objects, frame.instance_id)
+        crowded = {track_id for group in crowds for track_id in group}
+        for group in crowds:
+            self._add_crowd(image_id, frame.instance_id, group)
         for obj in frame.objects:
             u0, v0, u1, v1 = (round(v, 4) for v in obj.unclipped_box)  # the same digits on every machine
             self.mot.append(
@@ -136,7 +143,7 @@ class SequenceAnnotations:
                 f"{obj.visibility * (1.0 - obj.truncation):.4f}"
             )
             x0, y0, x1, y1 = (round(v, 4) for v in obj.amodal_box)
-            if obj.visible_box is None:
+            if obj.visible_box is None or obj.track_id in crowded:
                 continue
             vx0, vy0, vx1, vy1 = obj.visible_box
             self.annotations.append(
@@ -160,6 +167,26 @@ class SequenceAnnotations:
                     **({"plates": list(obj.plates)} if getattr(obj, "plates", ()) else {}),
                 }
             )
+
+    def _add_crowd(self, image_id: int, instance_id: np.ndarray, track_ids: list[int]) -> None:
+        """One COCO crowd annotation (iscrowd 1) over the union of a group's visible pixels; its members
+        stay in MOT's gt.txt and in `tracks`, and are listed in ``crowd_track_ids``."""
+        mask = np.isin(instance_id, track_ids)
+        rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
+        x0, x1, y0, y1 = int(cols[0]), int(cols[-1]) + 1, int(rows[0]), int(rows[-1]) + 1
+        self.annotations.append(
+            {
+                "id": len(self.annotations) + 1,
+                "image_id": image_id,
+                "video_id": 1,
+                "category_id": COCO_CATEGORIES.index("person") + 1,
+                "bbox": [x0, y0, x1 - x0, y1 - y0],
+                "area": int(np.count_nonzero(mask)),
+                "segmentation": rle(mask),
+                "iscrowd": 1,
+                "crowd_track_ids": sorted(track_ids),
+            }
+        )
 
     def add_detections(self, frame_index: int, boxes) -> None:
         """A frame's detections, (x0, y0, x1, y1, score) in pixel edges
@@ -308,6 +335,60 @@ def _category(category_id: int, name: str) -> dict:
         category["keypoints"] = list(COCO_KEYPOINTS)
         category["skeleton"] = [list(pair) for pair in COCO_SKELETON]
     return category
+
+
+CROWD_MAX_HEIGHT_PX = 20
+"""A person whose visible box is shorter than this, px, may be part of a crowd. At under 20 px a person
+is some 6 × 20 px, below the smallest anchors of COCO-trained detectors (Faster R-CNN's 32 px, YOLO's
+stride-8 cells), which cannot split touching figures that small."""
+CROWD_MIN_MEMBERS = 3
+"""Fewest small people whose visible pixels touch (8-connected) that COCO gets as one crowd region."""
+
+
+def crowd_groups(objects, instance_id: np.ndarray | None) -> list[list[int]]:
+    """Groups (track ids) of at least `CROWD_MIN_MEMBERS` people, each visible but under
+    `CROWD_MAX_HEIGHT_PX` tall, whose visible pixels touch one another (a chain of 8-neighbours): the
+    groups too small to separate, which COCO marks ``iscrowd`` (evaluation then ignores detections in
+    them instead of counting each unmatched one as a false positive)."""
+    if instance_id is None:
+        return []
+    small = [
+        obj
+        for obj in objects
+        if obj.cls == "person"
+        and obj.visible_box is not None
+        and obj.visible_box[3] - obj.visible_box[1] < CROWD_MAX_HEIGHT_PX
+    ]
+    if len(small) < CROWD_MIN_MEMBERS:
+        return []
+    import cv2
+
+    parent = list(range(len(small)))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    height, width = instance_id.shape
+    kernel = np.ones((3, 3), np.uint8)
+    for i, a in enumerate(small):
+        ax0, ay0, ax1, ay1 = a.visible_box
+        for j in range(i + 1, len(small)):
+            bx0, by0, bx1, by1 = small[j].visible_box
+            if bx0 > ax1 + 1 or ax0 > bx1 + 1 or by0 > ay1 + 1 or ay0 > by1 + 1:
+                continue  # boxes more than a pixel apart: the masks cannot touch
+            c0, r0 = max(int(min(ax0, bx0)) - 1, 0), max(int(min(ay0, by0)) - 1, 0)
+            c1, r1 = min(int(max(ax1, bx1)) + 2, width), min(int(max(ay1, by1)) + 2, height)
+            window = instance_id[r0:r1, c0:c1]
+            grown = cv2.dilate((window == a.track_id).astype(np.uint8), kernel)
+            if np.any(grown.astype(bool) & (window == small[j].track_id)):
+                parent[root(i)] = root(j)
+    groups: dict[int, list[int]] = {}
+    for i, obj in enumerate(small):
+        groups.setdefault(root(i), []).append(obj.track_id)
+    return [sorted(group) for group in groups.values() if len(group) >= CROWD_MIN_MEMBERS]
 
 
 def _world_points(points_m: np.ndarray) -> list:

@@ -134,6 +134,8 @@ def load_sequence(output: CameraOutput) -> RenderedSequence:
         categories = {category["id"]: category for category in coco["categories"]}
         annotations: dict[int, list[dict]] = {image["frame_index"]: [] for image in images.values()}
         for annotation in coco["annotations"]:
+            if annotation.get("iscrowd"):  # a crowd region: its members are drawn from MOT's view, not here
+                continue
             annotations[images[annotation["image_id"]]["frame_index"]].append(annotation)
         tracks = {track["id"]: track for track in coco.get("tracks", [])}
         size = next(iter(images.values()), None) or next(iter(coco.get("videos", [])), None)
