@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 SOURCE = Path(__file__).resolve().parents[1] / "src" / "camgen"
-LOW = ("config", "job", "motion", "optics", "sensor", "isp", "actors", "vehicles", "annotate", "render", "io")
+LOW = ("config", "job", "motion", "optics", "sensor", "isp", "actors", "vehicles", "props", "annotate", "render", "io")
 """Packages (and the `camgen.job` module) below `plan`."""
 HIGH = ("plan", "batch", "cli", "sim", "fit", "bench", "preview")
 """Packages that drive the ones in LOW."""
@@ -57,7 +57,7 @@ def test_the_check_sees_lazy_and_relative_imports():
     assert {"camgen.plan.execute", "camgen.batch"} <= names
 
 
-GEOMETRY = ("actors", "vehicles")
+GEOMETRY = ("actors", "vehicles", "props")
 """Pure geometry (DESIGN.md "camgen.actors"): no renderer, no OpenGL."""
 
 

@@ -1434,6 +1434,75 @@ CASES = [
         "cameras[0].night_mode",
         "got 'sometimes'",
     ),
+    (
+        "prop_form_on_a_bench",
+        "scene",
+        edit(
+            SCENE,
+            "      size_m: [20, 20]\n",
+            "      size_m: [20, 20]\n  props:\n    - {type: bench, position_m: [1, 2], form: conifer} #<\n",
+        ),
+        "environment.props[0].form",
+        "shapes a tree, but this prop is a 'bench'; remove form",
+    ),
+    (
+        "prop_unknown_type",
+        "scene",
+        edit(
+            SCENE,
+            "      size_m: [20, 20]\n",
+            "      size_m: [20, 20]\n  props:\n    - {type: statue, position_m: [1, 2]} #<\n",
+        ),
+        "environment.props[0].type",
+        "got 'statue'",
+    ),
+    (
+        "prop_height_outside_its_range",
+        "scene",
+        edit(
+            SCENE,
+            "      size_m: [20, 20]\n",
+            "      size_m: [20, 20]\n  props:\n    - {type: bollard, position_m: [1, 2], height_m: 3} #<\n",
+        ),
+        "environment.props[0].height_m",
+        "must lie within a bollard's 0.9–1 m",
+    ),
+    (
+        "scatter_line_and_region",
+        "scene",
+        edit(
+            SCENE,
+            "      size_m: [20, 20]\n",
+            "      size_m: [20, 20]\n  scatter:\n"
+            "    - {type: tree, along: [[0, 0], [5, 0]], spacing_m: 2, region_m: [[0, 0], [5, 5]]} #<\n",
+        ),
+        "environment.scatter[0]",
+        "needs exactly one of along (a polyline, with spacing_m) or region_m",
+    ),
+    (
+        "scatter_count_beyond_packing",
+        "scene",
+        edit(
+            SCENE,
+            "      size_m: [20, 20]\n",
+            "      size_m: [20, 20]\n  scatter:\n"
+            "    - {type: bush, region_m: [[0, 0], [4, 5]], count: 30, min_gap_m: 1} #<\n",
+        ),
+        "environment.scatter[0].count",
+        "at most 12 props 1 m apart fit at random in 20 m²",
+    ),
+    (
+        "scatter_spacing_under_gap",
+        "scene",
+        edit(
+            SCENE,
+            "      size_m: [20, 20]\n",
+            "      size_m: [20, 20]\n  scatter:\n"
+            "    - {type: bollard, along: [[0, 0], [5, 0]], spacing_m: 1, min_gap_m: 2} #<\n",
+        ),
+        "environment.scatter[0].spacing_m",
+        "must be ≥ min_gap_m (2), got 1",
+    ),
 ]
 
 

@@ -21,6 +21,7 @@ from pydantic import (
 
 from camgen.config.base import Model, Why, invalid
 from camgen.config.profile import ZoomSweepTime
+from camgen.config.props import Prop, ScatterRule
 from camgen.config.ptz_program import FollowProgram, PtzPreset, PtzProgram, program_presets
 from camgen.config.validation import show_value
 from camgen.config.world import WORLD_EXTENT_M, Length, Point2, Point3
@@ -352,6 +353,14 @@ class Environment(Model):
     general sky (`camgen.world.sky`: clear, type 12; partly cloudy, type 7; overcast, type 1) whose
     sun is the scene's sun light."""
     meshes: list[Mesh] = []
+    props: list[Prop] = []
+    """Trees, bushes, benches, bins, bollards, lamp posts, signs and fences (`camgen.config.props`), each
+    ``{type, position_m, heading_deg, seed, …}``: static environment geometry that casts and receives
+    shadows, with instance ids after the meshes' (not annotated)."""
+    scatter: list[ScatterRule] = []
+    """Props placed by rule (`camgen.props.scatter`): ``{type, along: [[x, y], …], spacing_m}`` or
+    ``{type, region_m: [[x0, y0], [x1, y1]], count}``, with ``seed`` and ``min_gap_m``; the same seed
+    places the same props. Their instance ids follow the props'."""
     night_sky: Literal["natural", "rural", "suburban", "urban"] | None = None
     """A night scene: the moonless sky's luminance for its setting (`camgen.world.night.
     NIGHT_SKY_LUMINANCE_CD_M2`: 0.17 mcd/m² natural to 10 mcd/m² urban skyglow) fills in

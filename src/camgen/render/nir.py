@@ -11,7 +11,8 @@ units, is added to every colour channel: without the IR-cut filter the colour fi
 about equally.
 
 NIR reflectance of each surface: the scene material's `nir_reflectance`; else, for a procedural
-texture, its type's (`NIR_REFLECTANCE_BY_TEXTURE`, the texture's own variation kept); else the rule
+texture, its type's (`NIR_REFLECTANCE_BY_TEXTURE`, the texture's own variation kept); a procedural
+prop's, per vertex (`camgen.props`: leaves 0.45–0.5); else the rule
 `default_nir_reflectance` on the base colour (vertex colours and textures included: people, vehicles,
 plates, glTF characters).
 """
@@ -85,7 +86,8 @@ def build_nir_graph(
         return None
     graph = build_scene_graph(scene, resolve_path)
     known: dict[int, float] = {}
-    for node, mesh in zip(graph.environment_nodes, scene.environment.meshes, strict=True):
+    meshes = scene.environment.meshes  # the props' nodes follow the meshes' (`graph.prop_nir`)
+    for node, mesh in zip(graph.environment_nodes[: len(meshes)], meshes, strict=True):
         known[id(node)] = material_nir_reflectance(mesh.material)
     for index, (node, actor) in enumerate(zip(graph.actor_nodes, graph.actors, strict=True)):
         if graph.rig(index) is None:
@@ -95,7 +97,8 @@ def build_nir_graph(
             _nir_material(primitive.material, known.get(id(node)))
             if primitive.color_0 is not None:
                 colours = np.asarray(primitive.color_0, dtype=np.float64)
-                grey = np.clip(default_nir_reflectance(colours[:, :3]), 0, 1)
+                prop_nir = graph.prop_nir.get(id(primitive))
+                grey = np.clip(default_nir_reflectance(colours[:, :3]) if prop_nir is None else prop_nir, 0, 1)
                 converted = np.repeat(grey[:, None], colours.shape[1], axis=1)
                 if colours.shape[1] == 4:
                     converted[:, 3] = colours[:, 3]

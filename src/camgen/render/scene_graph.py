@@ -59,6 +59,7 @@ from camgen.io.gltf import Character, load_character
 from camgen.io.ies import read_ies
 from camgen.motion.pose import T_world_from_cam, rot_z
 from camgen.motion.trajectory import Route, actor_routes
+from camgen.props import PropModel, placed_props, prop_names
 from camgen.render.gl import pyrender
 from camgen.vehicles import LAMP_COLOUR_RGB, LAMP_LUMINANCE_CD_M2, VehicleRig, vehicle_rig
 from camgen.vehicles.plate import plate_image
@@ -155,6 +156,8 @@ class SceneGraph:
     """The people, skinned together."""
     vehicles: list[VehicleRig | None] = field(default_factory=list)
     """Each actor's procedural vehicle (its mesh posed in world coordinates), or None."""
+    prop_nir: dict[int, np.ndarray] = field(default_factory=dict)
+    """id() of each prop's primitive → its vertices' reflectance at 850 nm (`camgen.render.nir`)."""
     source: tuple[Scene, Callable[[str], Path] | None] | None = None
     """The scene it was built from and its path resolver (a night-mode camera builds its NIR graph
     from them: `camgen.render.nir`)."""
@@ -210,10 +213,12 @@ class SceneGraph:
 
 
 def instance_table(scene: Scene) -> tuple[Instance, ...]:
-    """Every instance id the render assigns: actors 1…A in scene order, then environment meshes."""
-    named = [(actor.name, "actor") for actor in scene.actors] + [
-        (m.name, "environment") for m in scene.environment.meshes
-    ]
+    """Every instance id the render assigns: actors 1…A in scene order, then environment meshes, then props."""
+    named = (
+        [(actor.name, "actor") for actor in scene.actors]
+        + [(m.name, "environment") for m in scene.environment.meshes]
+        + [(name, "environment") for name in prop_names(scene.environment)]
+    )
     return tuple(Instance(i, name, kind) for i, (name, kind) in enumerate(named, start=1))
 
 
@@ -373,6 +378,25 @@ def build_mesh(shape, resolve_path: Callable[[str], Path] | None = None) -> pyre
             primitive.material.alphaMode = "OPAQUE"
         return mesh
     raise TypeError(f"unknown shape {type(shape).__name__}")
+
+
+def prop_mesh(model: PropModel) -> pyrender.Mesh:
+    """A procedural prop (`camgen.props`) as one primitive with per-vertex albedo (COLOR_0) and the prop's
+    roughness and metalness, in its own frame: one draw per prop (the renderer's per-draw cost dominates)."""
+    vertices, normals, faces, colours, _ = model.arrays()
+    primitive = pyrender.Primitive(
+        positions=vertices,
+        normals=normals,
+        color_0=colours,
+        indices=faces,
+        material=pyrender.MetallicRoughnessMaterial(
+            baseColorFactor=(1.0, 1.0, 1.0, 1.0),
+            metallicFactor=model.metallic,
+            roughnessFactor=model.roughness,
+            doubleSided=False,
+        ),
+    )
+    return pyrender.Mesh(primitives=[primitive])
 
 
 PERSON_ROUGHNESS = 0.75
@@ -735,6 +759,11 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
     for mesh in scene.environment.meshes:
         node = graph.add(build_mesh(mesh, resolve_path), pose=placement(mesh), name=f"environment:{mesh.name}")
         environment_nodes.append(node)
+    prop_nir = {}
+    for prop in placed_props(scene.environment, scene_seed=scene.seed):
+        mesh = prop_mesh(prop.model)
+        prop_nir[id(mesh.primitives[0])] = prop.model.arrays()[4]
+        environment_nodes.append(graph.add(mesh, pose=prop.T_world_from_prop, name=f"environment:{prop.name}"))
     nodes = actor_nodes + environment_nodes
     instance_ids = {node: instance.instance_id for node, instance in zip(nodes, instances, strict=True)}
     result = SceneGraph(
@@ -756,6 +785,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         people=people,
         crowd=Crowd([rig for rig in people if isinstance(rig, PersonRig)]),
         vehicles=vehicles,
+        prop_nir=prop_nir,
         source=(scene, resolve_path),
     )
     result.place_actors(0.0)
