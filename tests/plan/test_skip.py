@@ -59,6 +59,18 @@ def test_zero_distortion_plans_no_remap_and_no_margin(workspace):
     assert camera.states[0].distortion == (0.0,) * 8
 
 
+def test_a_depth_output_alone_still_goes_through_the_lens(workspace):
+    """Only a depth output asked for (no frames, no annotations): the depth map is placed by the
+    distortion as the frames and masks would be, not left a pinhole image."""
+    camera = plan(
+        workspace,
+        SCENE + "outputs: {video: false, annotations: [], depth: exr}\n",
+        profile_edit="  distortion: {k1: -0.3}\n",
+    )
+    assert decision(camera, "optics.distortion").included
+    assert "optics.remap" in stage_names(camera)
+
+
 def test_distortion_plans_remap_and_a_margin_that_covers_the_source(workspace):
     # A short exposure keeps motion blur out, so the margin is the lens's (plus < 1 px of diffraction).
     camera = plan(

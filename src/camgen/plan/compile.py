@@ -293,7 +293,8 @@ def _compile_camera(
     # --- geometric lens effects: one remap ------------------------------------------------------
     distortion_px = max(max_displacement_px(ls.distortion, ls.K, W, H) for ls in states_lens)
     no_distortion = all(not np.any(ls.distortion) for ls in states_lens)
-    use_distortion = needs_image or annotations or bool(motion_outputs)
+    # The depth output is through the lens too (README: every pass is placed by the distortion).
+    use_distortion = needs_image or annotations or bool(motion_outputs) or outputs.depth is not None
     decisions.append(
         _decision(
             "optics.distortion",
