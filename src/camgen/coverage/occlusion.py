@@ -1,6 +1,6 @@
 """Occlusion of a sight line by the scene's environment meshes: exact ray tests against boxes,
 cylinders, spheres and one-sided planes in each mesh's own frame, Möller–Trumbore against the
-triangles of mesh files.
+triangles of mesh files and of procedural props (`camgen.props`).
 
 A sight line is the segment from the camera centre to a point; it is blocked when it enters a mesh
 before it reaches the point (less `END_MARGIN_M`, so a point lying on a surface — the ground on its
@@ -21,6 +21,7 @@ import numpy as np
 
 from camgen.config.placement import local_bounds, placement
 from camgen.config.scene import BoxMesh, CheckerboardMesh, CylinderMesh, FileMesh, PlaneMesh, Scene, SphereMesh
+from camgen.props import placed_props
 
 END_MARGIN_M = 1e-3
 """A hit this close to the point itself does not hide it, m."""
@@ -73,6 +74,10 @@ def scene_occluders(scene: Scene, file_triangles_m: Mapping[str, np.ndarray] | N
             CheckerboardMesh: "plane",
         }[type(mesh)]
         occluders.append(Occluder(mesh.name, kind, T, local_bounds(mesh)[1]))
+    for prop in placed_props(scene.environment, scene_seed=scene.seed):  # props: their own triangles
+        vertices, _, faces, _, _ = prop.model.arrays()
+        T = np.linalg.inv(prop.T_world_from_prop)
+        occluders.append(Occluder(prop.name, "triangles", T, np.zeros(3), vertices[faces]))
     return occluders
 
 
