@@ -1503,6 +1503,17 @@ CASES = [
         "environment.scatter[0].spacing_m",
         "must be ≥ min_gap_m (2), got 1",
     ),
+    (
+        "prop_name_of_a_mesh",
+        "scene",
+        edit(
+            SCENE,
+            "      size_m: [20, 20]\n",
+            "      size_m: [20, 20]\n  props:\n    - {type: bin, position_m: [1, 2], name: ground} #<\n",
+        ),
+        "environment.props[0].name",
+        "is the instance 'ground', a name environment.meshes[0] has already; give the prop another name",
+    ),
 ]
 
 

@@ -959,6 +959,15 @@ class Scene(Model):
                         f"must be unique, got {item.name!r} again (first at {key}[{seen[item.name]}])",
                     )
                 seen[item.name] = i
+        instance_names = {mesh.name: f"environment.meshes[{i}]" for i, mesh in enumerate(self.environment.meshes)}
+        for i, prop in enumerate(self.environment.props):  # a prop's instance name: its own or <type>_<index>
+            name = prop.name or f"{prop.type}_{i}"
+            if name in instance_names:
+                raise invalid(
+                    f"environment.props[{i}]" + (".name" if prop.name else ""),
+                    f"is the instance {name!r}, a name {instance_names[name]} has already; give the prop another name",
+                )
+            instance_names[name] = f"environment.props[{i}]"
         for i, mesh in enumerate(self.environment.meshes):
             if isinstance(mesh, FileMesh) and mesh.animation is not None:
                 raise invalid(
