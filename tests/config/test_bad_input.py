@@ -1299,6 +1299,41 @@ CASES = [
         "must be ≥ 1, got 0.2; visual ranges run from a few metres",
     ),
     (
+        "rain_rate_zero",
+        "scene",
+        edit(SCENE, "environment:\n", "environment:\n  rain: {rate_mm_h: 0} #<\n"),
+        "environment.rain.rate_mm_h",
+        "must be > 0, got 0; rain rates run from a drizzle's 0.1 mm/h",
+    ),
+    (
+        "rain_rate_beyond_records",
+        "scene",
+        edit(SCENE, "environment:\n", "environment:\n  rain: {rate_mm_h: 2000} #<\n"),
+        "environment.rain.rate_mm_h",
+        "must be ≤ 500, got 2000",
+    ),
+    (
+        "rain_seed_negative",
+        "scene",
+        edit(SCENE, "environment:\n", "environment:\n  rain: {rate_mm_h: 5, seed: -1} #<\n"),
+        "environment.rain.seed",
+        "must be ≥ 0, got -1",
+    ),
+    (
+        "rain_without_rate",
+        "scene",
+        edit(SCENE, "environment:\n", "environment:\n  rain: {seed: 4} #<\n"),
+        "environment.rain.rate_mm_h",
+        "environment.rain.rate_mm_h is required",
+    ),
+    (
+        "wet_not_bool",
+        "scene",
+        edit(SCENE, "environment:\n", "environment:\n  wet: soaked #<\n"),
+        "environment.wet",
+        "must be true or false, got 'soaked'",
+    ),
+    (
         "lamp_flux_negative",
         "scene",
         edit(

@@ -339,6 +339,20 @@ class Fog(Model):
     0.766 V. Fog is under 1000 m, mist and haze 1–10 km, clear air 20 km and more."""
 
 
+class Rain(Model):
+    """Rain over the whole scene (`camgen.world.rain`): Marshall–Palmer drops falling at their terminal
+    speed, drawn as streaks in each frame's exposure near the camera and as haze beyond; the ground is wet."""
+
+    rate_mm_h: Annotated[
+        float,
+        Field(gt=0, le=500),
+        Why("rain rates run from a drizzle's 0.1 mm/h to about 300 mm/h in the heaviest hourly downpours; 0–500"),
+    ]
+    """Rain rate R, mm/h: light up to 2.5, moderate 2.5–7.6, heavy above 7.6 (AMS Glossary; WMO-No. 8 §14.2.1)."""
+    seed: Annotated[int, Field(ge=0)] = 0
+    """Draws the drops; the same seed gives the same rain."""
+
+
 class Environment(Model):
     sky_luminance_cd_m2: Luminance = 0.0
     """Luminance of the background where no geometry is hit, cd/m² (clear day sky ≈ 5000); for a CIE
@@ -348,6 +362,11 @@ class Environment(Model):
     """Where and when the scene is: places the sun light and gives the daylight levels left out."""
     fog: Fog | None = None
     """Fog or haze by meteorological visibility; null: clear air."""
+    rain: Rain | None = None
+    """Rain by its rate (`camgen.world.rain`); null: dry."""
+    wet: bool | None = None
+    """Wet ground: level planes facing up darken and get smoother (`camgen.world.rain.WET_ALBEDO_FACTOR`,
+    `WET_ROUGHNESS_FACTOR`); null: wet while it rains."""
     sky: Literal["uniform", "clear", "partly_cloudy", "overcast"] = "uniform"
     """How the sky's luminance and colour vary over it: one luminance everywhere, or a CIE standard
     general sky (`camgen.world.sky`: clear, type 12; partly cloudy, type 7; overcast, type 1) whose

@@ -48,6 +48,7 @@ from camgen.plan.ptz import head_track, holding_track, installed_focal_length_mm
 from camgen.plan.visibility import Bounds, box_corners, local_bounds, placement, visible_depth_range_m
 from camgen.props import placed_props
 from camgen.sensor.capture import NOISE_TERM_OFF, NOISE_TERMS, noise_term_is_on
+from camgen.world.rain import STREAK_RANGE_M
 
 WAVELENGTH_UM = 0.55  # mid-visible, for the diffraction estimate
 MOTION_SAMPLE_STEP_PX = 1.0
@@ -509,6 +510,7 @@ def _compile_camera(
             ("depth of field", include["optics.depth_of_field"]),
             ("depth output", outputs.depth is not None),
             (" and ".join(motion_outputs) + " output", bool(motion_outputs)),
+            ("rain's depth test", scene.environment.rain is not None and needs_image),
         )
         if use
     ]
@@ -532,6 +534,16 @@ def _compile_camera(
                 included=True,
                 reason=f"visual range {fog.visibility_m:g} m: Koschmieder's law on each pixel's distance, from a "
                 "depth target drawn with the radiance (no depth pass or output of its own)",
+            )
+        )
+    rain = scene.environment.rain
+    if rain is not None and needs_image:
+        decisions.append(
+            Decision(
+                stage="render.rain",
+                included=True,
+                reason=f"{rain.rate_mm_h:g} mm/h: drop streaks over each frame's exposure within "
+                f"{STREAK_RANGE_M:g} m, depth-tested, and haze beyond (camgen.world.rain)",
             )
         )
     ids_reason = ", ".join(outputs.annotations) if annotations else ""

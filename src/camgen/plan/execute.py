@@ -258,7 +258,11 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                 converge = False
                 pipeline.converge_exposure(state, frame.passes)
                 settled = pipeline.state_for(index)
-                blurred = camera_renderer.motion_samples(state) > 1 or camera_renderer.motion_samples(settled) > 1
+                blurred = (
+                    camera_renderer.motion_samples(state) > 1
+                    or camera_renderer.motion_samples(settled) > 1
+                    or camera_renderer.graph.rain_rate_mm_h is not None  # rain streaks span the exposure
+                )
                 if settled.exposure_time_s != state.exposure_time_s and blurred:
                     with clock("render"):
                         frame = camera_renderer.frame(index, settled)  # the blur spans the settled exposure

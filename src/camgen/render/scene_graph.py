@@ -66,6 +66,7 @@ from camgen.vehicles.plate import plate_image
 from camgen.world.ies import flux_lm as ies_flux_lm
 from camgen.world.ies import intensity_grid_cd
 from camgen.world.night import SPOT_FULL_INTENSITY_FRACTION, peak_intensity_cd
+from camgen.world.rain import WET_ALBEDO_FACTOR, WET_ROUGHNESS_FACTOR
 from camgen.world.site import SiteDaylight, daylight_change, site_daylight
 from camgen.world.textures import TYPICAL_ALBEDO_RGB, encode_srgb8, surface_maps
 
@@ -120,6 +121,8 @@ def far_ground(scene: Scene) -> FarGround | None:
     material = ground.material
     textured = material.texture is not None and "color_rgb" not in material.model_fields_set
     rgb = TYPICAL_ALBEDO_RGB[material.texture.type] if textured else material.color_rgb
+    if is_wet(scene):
+        rgb = tuple(WET_ALBEDO_FACTOR * c for c in rgb)
     return FarGround(float(ground.position_m[2]), tuple(float(c) for c in rgb))
 
 
@@ -141,6 +144,10 @@ class SceneGraph:
     """Unit vector towards the (first) sun light, world; None without one."""
     fog_visibility_m: float | None = None
     """Visual range of the scene's fog (`camgen.world.fog`), m; None in clear air."""
+    rain_rate_mm_h: float | None = None
+    """Rain rate of the scene's rain (`camgen.world.rain`), mm/h; None when dry."""
+    rain_seed: int = 0
+    """Seed of the rain's drops."""
     far_ground: FarGround | None = None
     """The ground continued beyond the scene's ground plane to the horizon (`far_ground`); None without one."""
     daylight: SiteDaylightTrack | None = None
@@ -717,6 +724,28 @@ def _character_rig(actor: Actor, route: Route, characters: dict[str, Character],
     )
 
 
+def is_wet(scene: Scene) -> bool:
+    """Whether the scene's ground is wet: `environment.wet`, or while it rains when that is left out."""
+    wet = scene.environment.wet
+    return scene.environment.rain is not None if wet is None else wet
+
+
+def wet_ground(mesh, node_mesh: pyrender.Mesh) -> None:
+    """Wet a level plane facing up (`camgen.world.rain`): its base colour × WET_ALBEDO_FACTOR and its
+    roughness × WET_ROUGHNESS_FACTOR (a texture's maps are scaled by the material's factors); other meshes
+    stay dry (walls shed water, and the renderer knows no puddles)."""
+    if not isinstance(mesh, PlaneMesh):
+        return
+    rx, ry, _ = (math.remainder(angle, 360.0) for angle in mesh.rotation_deg)
+    if abs(rx) > 1e-6 or abs(ry) > 1e-6:
+        return
+    for primitive in node_mesh.primitives:
+        material = primitive.material
+        rgb = np.asarray(material.baseColorFactor, np.float64)
+        material.baseColorFactor = np.array([*(WET_ALBEDO_FACTOR * rgb[:3]), rgb[3]])
+        material.roughnessFactor = WET_ROUGHNESS_FACTOR * material.roughnessFactor
+
+
 def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None = None) -> SceneGraph:
     """Meshes, actors (at t = 0) and lights of `scene` as a pyrender scene; no camera yet."""
     ambient_lux = sum(light.illuminance_lux for light in scene.lights if isinstance(light, AmbientLight))
@@ -756,8 +785,12 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         local_poses.append(placement(shape))
         people.append(None)
         vehicles.append(None)
+    wet = is_wet(scene)
     for mesh in scene.environment.meshes:
-        node = graph.add(build_mesh(mesh, resolve_path), pose=placement(mesh), name=f"environment:{mesh.name}")
+        pyrender_mesh = build_mesh(mesh, resolve_path)
+        if wet:
+            wet_ground(mesh, pyrender_mesh)
+        node = graph.add(pyrender_mesh, pose=placement(mesh), name=f"environment:{mesh.name}")
         environment_nodes.append(node)
     prop_nir = {}
     for prop in placed_props(scene.environment, scene_seed=scene.seed):
@@ -777,6 +810,8 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         sky=scene.environment.sky,
         sun_direction=_sun_direction(scene.lights),
         fog_visibility_m=scene.environment.fog.visibility_m if scene.environment.fog is not None else None,
+        rain_rate_mm_h=scene.environment.rain.rate_mm_h if scene.environment.rain is not None else None,
+        rain_seed=scene.environment.rain.seed if scene.environment.rain is not None else 0,
         far_ground=far_ground(scene),
         daylight=site_daylight_track(scene, graph, ambient_lux),
         shadows=scene.environment.shadows,

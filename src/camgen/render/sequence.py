@@ -184,6 +184,8 @@ class CameraRenderer:
             drawn = self._draw(view, passes, "shared")
             if "radiance" in passes and state.night_mode:
                 drawn.radiance = drawn.radiance + self._nir_radiance(view, state)
+            if "radiance" in passes and self.graph.rain_rate_mm_h is not None:
+                drawn.radiance = self._rain(view, state, drawn.radiance, drawn.depth_m)
             return Frame(index, state.time_s, drawn)
         result = Passes()
         if "radiance" in passes:
@@ -213,7 +215,19 @@ class CameraRenderer:
             self.graph.place_actors(state.time_s)
             coarse = self._draw(view, geometric, "geometric")
             result.depth_m, result.instance_id = coarse.depth_m, coarse.instance_id
+        if "radiance" in passes and self.graph.rain_rate_mm_h is not None:
+            result.radiance = self._rain(view, state, result.radiance, result.depth_m)
         return Frame(index, state.time_s, result)
+
+    def _rain(self, view: View, state: CameraState, radiance: np.ndarray, depth_m: np.ndarray | None) -> np.ndarray:
+        """The frame's radiance in the scene's rain (`camgen.render.rain`): streaks over the exposure the
+        frame is taken with (`state.exposure_time_s`, what auto-exposure decided), depth-tested against the
+        planned depth pass (the plan draws one for rain)."""
+        from camgen.render.rain import rainy_radiance
+
+        if depth_m is None:
+            raise ValueError(f"camera {self.camera.name!r}: rain needs the depth pass, which the plan did not draw")
+        return rainy_radiance(self.graph, view, radiance, depth_m, state.time_s, state.exposure_time_s)
 
     def _nir_radiance(self, view: View, state: CameraState) -> np.ndarray:
         """The IR illuminator's light returned by the scene at the frame time, in the visible pass's

@@ -544,7 +544,11 @@ class Simulation:
             settled = planned.model_copy(
                 update={"exposure_time_s": pipeline.setting.exposure_time_s, "gain_db": pipeline.setting.gain_db}
             )
-            blurred = drawer.motion_samples(state) > 1 or drawer.motion_samples(settled) > 1
+            blurred = (
+                drawer.motion_samples(state) > 1
+                or drawer.motion_samples(settled) > 1
+                or drawer.graph.rain_rate_mm_h is not None  # rain streaks span the exposure
+            )
             if settled.exposure_time_s != state.exposure_time_s and blurred:
                 with clock("render"):
                     frame = drawer.frame(self.frame, settled)  # the blur spans the settled exposure

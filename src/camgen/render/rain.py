@@ -1,0 +1,53 @@
+"""Rain over a rendered frame (`camgen.world.rain`): the haze of the far drops, then the streaks of the
+near ones in the frame's exposure, depth-tested against the surfaces.
+
+The exposure is the one the frame is actually taken with: `CameraRenderer.frame` receives the camera
+state whose `exposure_time_s` auto-exposure has decided (the same source motion blur integrates over),
+and the streaks span it, centred on the frame time as the motion-blur sub-frames are.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from camgen.render.renderer import View, frustum_corners_m, horizon_airlight, ray_lengths
+from camgen.world.fog import apply_fog
+from camgen.world.rain import (
+    NEAR_M,
+    STREAK_RANGE_M,
+    apply_rain,
+    drop_radiance,
+    drops_in_box,
+    rain_visibility_m,
+    streak_coverage,
+)
+
+
+def rain_coverage(view: View, depth_m: np.ndarray, time_s: float, exposure_time_s: float, rate_mm_h: float, seed: int):
+    """(H, W) α of the streaks of the seeded drops within `STREAK_RANGE_M` of the view's camera at
+    `time_s`, each falling over `exposure_time_s` (`camgen.world.rain.streak_coverage`)."""
+    corners = frustum_corners_m(view, NEAR_M, STREAK_RANGE_M)
+    positions, diameters_mm, speeds_m_s = drops_in_box(
+        corners.min(axis=0), corners.max(axis=0), time_s, rate_mm_h, seed
+    )
+    T = view.T_world_from_cam
+    offset = positions - T[:3, 3]
+    near = np.linalg.norm(offset, axis=1) <= STREAK_RANGE_M
+    R = T[:3, :3]
+    positions_cam = offset[near] @ R
+    fall_world = np.zeros((int(near.sum()), 3))
+    fall_world[:, 2] = -speeds_m_s[near] * exposure_time_s
+    return streak_coverage(positions_cam, diameters_mm[near], fall_world @ R, view.K_px, depth_m)
+
+
+def rainy_radiance(
+    graph, view: View, radiance: np.ndarray, depth_m: np.ndarray, time_s: float, exposure_time_s: float
+) -> np.ndarray:
+    """`radiance` (H, W, 3) of `view` in the graph's rain: Koschmieder haze of the rain's visual range
+    over each pixel's distance beyond STREAK_RANGE_M, then the near drops' streaks."""
+    rate_mm_h, seed = graph.rain_rate_mm_h, graph.rain_seed
+    airlight = horizon_airlight(graph, view)
+    beyond_m = np.maximum(depth_m * ray_lengths(view) - np.float32(STREAK_RANGE_M), 0.0)
+    hazy = apply_fog(radiance, beyond_m, airlight, rain_visibility_m(rate_mm_h))
+    coverage = rain_coverage(view, depth_m, time_s, exposure_time_s, rate_mm_h, seed)
+    return apply_rain(hazy, coverage, drop_radiance(airlight, hazy))

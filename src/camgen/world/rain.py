@@ -1,0 +1,258 @@
+"""Rain: a seeded population of falling drops, their streaks in the exposure, the haze of the far ones,
+and wet ground.
+
+Drop sizes follow Marshall & Palmer (1948, "The distribution of raindrops with size", J. Meteor. 5,
+165–166):
+
+    N(D) = N0 exp(−Λ D),   N0 = 8000 m⁻³ mm⁻¹,   Λ = 4.1 R^−0.21 mm⁻¹     (R the rain rate, mm/h)
+
+so a cubic metre holds N0/Λ (e^−Λ·D_lo − e^−Λ·D_hi) drops of diameter D_lo…D_hi. Drops fall at their
+terminal speed, measured by Gunn & Kinzer (1949, "The terminal velocity of fall for water droplets in
+stagnant air", J. Meteor. 6, 243–248) and fitted by Atlas, Srivastava & Sekhon (1973, "Doppler radar
+characteristics of precipitation at vertical incidence", Rev. Geophys. 11, 1–35):
+
+    v(D) = 9.65 − 10.3 exp(−0.6 D)   m/s   (D in mm; 4.0 m/s at 1 mm, 8.1 m/s at 3 mm)
+
+Rain rates by intensity (AMS Glossary of Meteorology, "rain"; WMO-No. 8 (2018) Vol. I §14.2.1):
+light up to 2.5 mm/h, moderate 2.5–7.6 mm/h, heavy above 7.6 mm/h.
+
+**Streaks.** A drop moves during the exposure T and smears into a streak v·T long, which a camera
+images as v·T·f/z pixels for a drop z metres ahead falling across the view. Garg & Nayar (2004,
+"Detection and removal of rain from videos", CVPR; 2007, "Vision and rain", IJCV 75, 3–27) show that a
+pixel the streak crosses sees the drop for only τ of the exposure (τ ≈ D_px / v_px, the time the drop's
+image takes to pass the pixel) and its background the rest:
+
+    L = (1 − α) L_background + α L_drop,    α = (area the drop's image covers in the pixel) × τ / T
+
+Summed along a streak α carries the drop's whole image area, π/4·(D f/z)² px², spread over its
+length: `streak_coverage` splats exactly that along each projected streak. A drop, a wide-angle lens,
+refracts the light of about 165° of the environment (Garg & Nayar 2007, §3), so its radiance L_drop is
+the environment's mean over a wide field, not its background's: camgen takes the mean of the horizon
+sky and of the frame (`drop_radiance`).
+
+**Population.** Drops live in a frame of their own: a drop of speed v at height z at time t has the
+fall-invariant height s = z + v t. Space (x, y, s) is cut into cubic cells CELL_M on a side; each
+cell and diameter class draws its drops (Poisson count, uniform positions) from a generator seeded by
+(seed, class, cell), so any region at any time is reproduced exactly, a drop keeps its x, y and s from
+frame to frame (it falls by v·Δt between frames) and no drop is stored. Diameters are binned into
+classes of DIAMETER_STEP_MM; a class's drops share its Marshall–Palmer mean diameter and that
+diameter's speed.
+
+**Haze.** Drops beyond STREAK_RANGE_M are not drawn: their streaks are faint (at 15 m a 3 mm drop
+covers α ≈ 0.004 of a pixel for T = 20 ms, f = 1500 px) and many per pixel, so they act as a uniform
+extinction. For drops much larger than the wavelength the extinction efficiency is 2 (van de Hulst 1957,
+*Light scattering by small particles*, §8.22), so β = (π/2)∫D² N(D) dD = π N0 / Λ³ (in mm² per m³),
+which under Marshall–Palmer is
+
+    β = 3.65·10⁻⁴ R^0.63 m⁻¹,   V = 3.912 / β ≈ 10.7 km · R^−0.63
+
+(3.9 km at 5 mm/h, 1.4 km at 25 mm/h) — Koschmieder's law (`camgen.world.fog`) with this visual
+range, over the part of each pixel's distance beyond STREAK_RANGE_M.
+
+**Wet ground.** A water film darkens a rough surface (light that the film reflects back inside is
+absorbed again: Lekner & Dorf 1988, "Why some things are darker when wet", Appl. Opt. 27, 1278–1280;
+Twomey, Bohren & Mergenthaler 1986, Appl. Opt. 25, 431–437 measure 0.5–0.7 of the dry reflectance for
+soils, sand and asphalt-like materials) and smooths it: WET_ALBEDO_FACTOR and WET_ROUGHNESS_FACTOR.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+MARSHALL_PALMER_N0_PER_M3_MM = 8000.0
+"""N0 of Marshall & Palmer (1948), m⁻³ mm⁻¹."""
+
+RAIN_RATE_LIGHT_MAX_MM_H = 2.5
+RAIN_RATE_MODERATE_MAX_MM_H = 7.6
+"""AMS Glossary of Meteorology ("rain"), WMO-No. 8 §14.2.1: light < 2.5, moderate 2.5–7.6, heavy > 7.6 mm/h."""
+
+DIAMETER_MIN_MM = 1.0
+"""Smaller drops are not drawn as streaks: a 0.5 mm drop (v = 2.1 m/s) covers α ≈ 0.014/z of a pixel at z m
+(T = 1/50 s, f = 1500 px), invisible beyond a metre or so; they are in the haze beyond STREAK_RANGE_M."""
+DIAMETER_MAX_MM = 6.0
+"""Larger drops break up (Pruppacher & Klett 1997, §10.3.5); Marshall–Palmer gives them ≪ 1 % of drops."""
+DIAMETER_STEP_MM = 0.5
+"""Width of a diameter class; its drops share one speed (v varies by ≤ 1.2 m/s across a class above 1 mm)."""
+CELL_M = 4.0
+"""Edge of a population cell in (x, y, s), m."""
+STREAK_RANGE_M = 15.0
+"""Drops are drawn as streaks up to this distance from the camera, m; the rest is haze."""
+NEAR_M = 0.3
+"""Drops nearer than this are not drawn (out of focus for a surveillance camera), m."""
+DROP_IMAGE_MAX_PX = 3.0
+"""Drops whose image is wider than this (very near, out of focus, blurred over many pixels) are not drawn."""
+SAMPLE_ALPHA_MAX = 0.01
+"""Most coverage one sample of a streak may put on a pixel: a faint streak (a small or far drop) is sampled
+more sparsely than one sample per pixel, down to one sample at its middle, so that a frame's cost follows
+the rain's light rather than its number of drops (hundreds of thousands within 15 m); at full contrast
+1 % is 2.5 steps of 8 bits, and a drop's contrast against its background is usually well under full."""
+SAMPLES_MAX = 256
+"""Most samples along one streak (a streak longer than this many pixels is sampled more sparsely)."""
+
+WET_ALBEDO_FACTOR = 0.6
+"""Wet over dry reflectance of a rough ground (0.5–0.7: Twomey et al. 1986; Lekner & Dorf 1988)."""
+WET_ROUGHNESS_FACTOR = 0.35
+"""Wet over dry roughness: a dry asphalt's 0.8–0.9 becomes 0.28–0.32, the 0.2–0.4 of a wet road's glossy
+lobe (measured wet-asphalt BRDFs are far sharper than dry ones; a film of standing water would be a mirror,
+which this renderer, without screen-space reflections, cannot show)."""
+
+
+def marshall_palmer_lambda_per_mm(rate_mm_h: float) -> float:
+    """Λ = 4.1 R^−0.21 mm⁻¹ of Marshall & Palmer (1948) for a rain rate R in mm/h."""
+    return 4.1 * rate_mm_h**-0.21
+
+
+def drop_density_per_m3(rate_mm_h: float, diameter_lo_mm: float, diameter_hi_mm: float) -> float:
+    """Drops per m³ with diameters in [lo, hi] mm: N0/Λ (e^−Λ·lo − e^−Λ·hi) (Marshall & Palmer 1948)."""
+    lam = marshall_palmer_lambda_per_mm(rate_mm_h)
+    return MARSHALL_PALMER_N0_PER_M3_MM / lam * (math.exp(-lam * diameter_lo_mm) - math.exp(-lam * diameter_hi_mm))
+
+
+def terminal_speed_m_s(diameter_mm):
+    """v = 9.65 − 10.3 exp(−0.6 D) m/s for a drop of diameter D mm (Atlas et al. 1973's fit to Gunn &
+    Kinzer 1949); any shape."""
+    return 9.65 - 10.3 * np.exp(-0.6 * np.asarray(diameter_mm, dtype=np.float64))
+
+
+def rain_extinction_per_m(rate_mm_h: float) -> float:
+    """β = π N0 / Λ³ ·10⁻⁶ m⁻¹: the geometric-optics extinction (efficiency 2) of a Marshall–Palmer rain."""
+    return math.pi * MARSHALL_PALMER_N0_PER_M3_MM / marshall_palmer_lambda_per_mm(rate_mm_h) ** 3 * 1e-6
+
+
+def rain_visibility_m(rate_mm_h: float) -> float:
+    """Koschmieder visual range 3.912/β of a rain of `rate_mm_h` alone (≈ 10.7 km · R^−0.63), m."""
+    return math.log(50.0) / rain_extinction_per_m(rate_mm_h)
+
+
+def diameter_classes(rate_mm_h: float) -> tuple[np.ndarray, np.ndarray]:
+    """(diameters_mm, densities_per_m3) of the classes DIAMETER_MIN_MM…DIAMETER_MAX_MM in steps of
+    DIAMETER_STEP_MM: each class's Marshall–Palmer mean diameter and its number of drops per m³."""
+    edges = np.arange(DIAMETER_MIN_MM, DIAMETER_MAX_MM + 1e-9, DIAMETER_STEP_MM)
+    lam = marshall_palmer_lambda_per_mm(rate_mm_h)
+    lo, hi = edges[:-1], edges[1:]
+    density = MARSHALL_PALMER_N0_PER_M3_MM / lam * (np.exp(-lam * lo) - np.exp(-lam * hi))
+    # Mean of D e^{−ΛD} over [lo, hi] divided by the mean of e^{−ΛD}.
+    a, b = np.exp(-lam * lo), np.exp(-lam * hi)
+    mean = (a * (lo + 1 / lam) - b * (hi + 1 / lam)) / (a - b)
+    return mean, density
+
+
+_CELL_OFFSET = 1 << 30
+
+
+def drops_in_box(
+    low_m, high_m, time_s: float, rate_mm_h: float, seed: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every drop inside the world box [low_m, high_m] (3,) at `time_s`, from the seeded population.
+
+    Returns positions_m (N, 3) in the world, diameters_mm (N,) and speeds_m_s (N,). Deterministic in
+    (seed, time_s, box); a drop found at t is found at t + Δt lowered by v·Δt (module docstring)."""
+    low_m, high_m = np.asarray(low_m, np.float64), np.asarray(high_m, np.float64)
+    diameters, densities = diameter_classes(rate_mm_h)
+    speeds = terminal_speed_m_s(diameters)
+    cells_xy = [range(math.floor(low_m[i] / CELL_M), math.floor(high_m[i] / CELL_M) + 1) for i in range(2)]
+    positions, classes = [], []
+    for c, (density, speed) in enumerate(zip(densities, speeds, strict=True)):
+        s_lo, s_hi = low_m[2] + speed * time_s, high_m[2] + speed * time_s
+        mean_count = density * CELL_M**3
+        for i in cells_xy[0]:
+            for j in cells_xy[1]:
+                for k in range(math.floor(s_lo / CELL_M), math.floor(s_hi / CELL_M) + 1):
+                    rng = np.random.default_rng((seed, c, i + _CELL_OFFSET, j + _CELL_OFFSET, k + _CELL_OFFSET))
+                    cell = rng.random((rng.poisson(mean_count), 3))
+                    cell += (i, j, k)
+                    cell *= CELL_M
+                    cell[:, 2] -= speed * time_s
+                    positions.append(cell)
+                    classes.append(np.full(len(cell), c, np.int8))
+    if not positions:
+        return np.zeros((0, 3)), np.zeros(0), np.zeros(0)
+    p, c = np.concatenate(positions), np.concatenate(classes)
+    inside = np.all((p >= low_m) & (p <= high_m), axis=1)
+    return p[inside], diameters[c[inside]], speeds[c[inside]]
+
+
+def streak_coverage(
+    positions_cam_m: np.ndarray,
+    diameters_mm: np.ndarray,
+    fall_cam_m: np.ndarray,
+    K_px: np.ndarray,
+    depth_m: np.ndarray,
+) -> np.ndarray:
+    """(H, W) float32 α: the fraction of each pixel's exposure that rain drops cover it (Garg & Nayar 2007).
+
+    positions_cam_m (N, 3): each drop at the middle of the exposure, camera frame (OpenCV); fall_cam_m
+    (N, 3): its displacement over the whole exposure (v·T down, in the camera frame); K_px (3, 3);
+    depth_m (H, W): camera z of the nearest surface (+inf for the sky) — a drop behind it is hidden.
+    Each streak is sampled at n ≈ its length in pixels, every sample carrying 1/n of the drop's image
+    area π/4 (D f / z)², splatted bilinearly; the sum is clipped to 1."""
+    height_px, width_px = depth_m.shape
+    f_px = math.sqrt(abs(K_px[0, 0] * K_px[1, 1]))
+    start, end = positions_cam_m - fall_cam_m / 2, positions_cam_m + fall_cam_m / 2
+    keep = (start[:, 2] > NEAR_M) & (end[:, 2] > NEAR_M)
+    keep &= diameters_mm * 1e-3 * f_px / positions_cam_m[:, 2].clip(NEAR_M) <= DROP_IMAGE_MAX_PX
+    start, end, diameters_mm = start[keep], end[keep], diameters_mm[keep]
+    coverage = np.zeros(height_px * width_px, np.float64)
+    if len(start) == 0:
+        return coverage.reshape(height_px, width_px).astype(np.float32)
+    uv0, uv1 = start @ K_px.T, end @ K_px.T
+    x0, y0, x1, y1 = uv0[:, 0] / uv0[:, 2], uv0[:, 1] / uv0[:, 2], uv1[:, 0] / uv1[:, 2], uv1[:, 1] / uv1[:, 2]
+    # Streaks wholly outside the image (their bounding box misses it) are not sampled.
+    seen = (np.maximum(x0, x1) > -1) & (np.minimum(x0, x1) < width_px) & (np.maximum(y0, y1) > -1)
+    seen &= np.minimum(y0, y1) < height_px
+    start, end, diameters_mm = start[seen], end[seen], diameters_mm[seen]
+    length_px = np.hypot(x1 - x0, y1 - y0)[seen]
+    # Samples along each streak: one per pixel of its length, or fewer where each then still carries at
+    # most SAMPLE_ALPHA_MAX of a pixel (a faint streak's light is spread no less evenly than it shows).
+    middle_z = (start[:, 2] + end[:, 2]) / 2
+    area_px2 = math.pi / 4 * (diameters_mm * 1e-3 * f_px / middle_z) ** 2
+    n = np.minimum(np.ceil(length_px) + 1, np.ceil(area_px2 / SAMPLE_ALPHA_MAX))
+    n = np.clip(n, 1, SAMPLES_MAX).astype(np.int64)
+    drop = np.repeat(np.arange(len(n)), n)
+    first = np.cumsum(n) - n
+    u = ((np.arange(len(drop)) - first[drop] + 0.5) / n[drop]).astype(np.float32)
+    start32, delta32 = start.astype(np.float32), (end - start).astype(np.float32)
+    points = start32[drop]
+    points += u[:, None] * delta32[drop]
+    inverse_z = 1.0 / points[:, 2]
+    K32 = K_px.astype(np.float32)
+    x = (points[:, 0] * K32[0, 0] + points[:, 1] * K32[0, 1]) * inverse_z + K32[0, 2]
+    y = points[:, 1] * K32[1, 1] * inverse_z + K32[1, 2]
+    # Each sample carries 1/n of the drop's image area at its own depth.
+    scale = (diameters_mm * 1e-3 * f_px) ** 2 * (math.pi / 4) / n
+    weight = scale.astype(np.float32)[drop] * inverse_z * inverse_z
+    inside = (x > -1.0) & (x < width_px) & (y > -1.0) & (y < height_px)
+    x, y, z, weight = x[inside], y[inside], points[inside, 2], weight[inside]
+    x0, y0 = np.floor(x), np.floor(y)
+    fx, fy = x - x0, y - y0
+    x0, y0 = x0.astype(np.int64), y0.astype(np.int64)
+    # Bilinear splats onto the frame padded by a pixel on every side (x0, y0 ≥ −1 and x0 + 1, y0 + 1 ≤ W, H).
+    padded_w = width_px + 2
+    corner = (y0 + 1) * padded_w + (x0 + 1)  # (x0, y0) in the padded frame, whose origin is (−1, −1)
+    indices = np.concatenate([corner, corner + 1, corner + padded_w, corner + padded_w + 1])
+    weights = np.concatenate([(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy]) * np.tile(weight, 4)
+    # The depth test, at each pixel a sample reaches: a drop behind that pixel's surface is hidden.
+    padded_depth = np.full((height_px + 2, padded_w), -np.inf, np.float32)  # the border hides every splat
+    padded_depth[1:-1, 1:-1] = depth_m
+    front = np.tile(z, 4) < padded_depth.reshape(-1)[indices]
+    splats = np.bincount(indices[front], weights=weights[front], minlength=padded_depth.size)
+    coverage = splats.reshape(height_px + 2, padded_w)[1:-1, 1:-1]
+    return np.minimum(coverage, 1.0).astype(np.float32)
+
+
+def apply_rain(radiance: np.ndarray, coverage: np.ndarray, drop_radiance: np.ndarray) -> np.ndarray:
+    """(1 − α) L + α L_drop: `radiance` (H, W, 3) behind streaks of coverage α (H, W), the drops'
+    radiance `drop_radiance` (3,) or (H, W, 3); float32 out."""
+    drop = np.asarray(drop_radiance, np.float32)
+    return (radiance + coverage[..., None] * (drop - radiance)).astype(np.float32)
+
+
+def drop_radiance(horizon_sky: np.ndarray, radiance: np.ndarray) -> np.ndarray:
+    """(3,) a drop's radiance: the mean of the horizon sky (`horizon_sky`, (3,) or (H, W, 3)) and of the
+    frame's radiance (H, W, 3), a stand-in for the environment's mean over the drop's 165° field (Garg &
+    Nayar 2007)."""
+    sky = np.asarray(horizon_sky, np.float64).reshape(-1, 3).mean(axis=0)
+    scene = np.asarray(radiance, np.float64).reshape(-1, 3).mean(axis=0)
+    return (0.5 * (sky + scene)).astype(np.float32)
