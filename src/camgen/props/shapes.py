@@ -132,13 +132,16 @@ def blob(
 ) -> PropPart:
     """A lumpy closed blob: an icosphere mapped onto a superellipsoid of semi-axes `radii_m` (`exponent` 2
     an ellipsoid, 4 a rounded box) and displaced along each direction by `roughness` × a smooth random
-    field; its colour varies by `colour_variation` with a second field (lighter at the top), its NIR
-    reflectance by a tenth of that."""
+    field (with a finer one, a third as strong, for clumps of leaves); its colour varies by
+    `colour_variation` with another field (lighter at the top), its NIR reflectance by a tenth of that."""
     sphere = trimesh.creation.icosphere(subdivisions=subdivisions)
     d = np.asarray(sphere.vertices, dtype=np.float64)
     radii = np.asarray(radii_m, dtype=np.float64)
     superellipse = (np.abs(d) ** exponent).sum(axis=1) ** (-1.0 / exponent)
-    bump = 1.0 + roughness * np.clip(smooth_noise(d, rng=rng), -2.5, 2.5)
+    # Large lumps, and a finer field a third as strong for clumps of leaves.
+    bump = 1.0 + roughness * np.clip(
+        smooth_noise(d, rng=rng) + 0.35 * smooth_noise(d, rng=rng, waves=12, scale=0.25), -3, 3
+    )
     vertices = d * (superellipse * bump)[:, None] * radii + np.asarray(centre_m, dtype=np.float64)
     mesh = trimesh.Trimesh(vertices, np.asarray(sphere.faces), process=False)
     shade = 1.0 + colour_variation * np.clip(smooth_noise(d, rng=rng, scale=0.5) / 2.5, -1, 1) + 0.15 * d[:, 2]

@@ -167,6 +167,7 @@ def _tree(rng, height_m, form, length_m) -> PropModel:
                 rgb=rgb,
                 nir=nir,
                 rng=rng,
+                subdivisions=3,
             )
         )
     crown = parts[1:]
