@@ -23,13 +23,24 @@ from camgen.world.rain import (
 )
 
 
-def rain_coverage(view: View, depth_m: np.ndarray, time_s: float, exposure_time_s: float, rate_mm_h: float, seed: int):
+def rain_coverage(
+    view: View,
+    depth_m: np.ndarray,
+    time_s: float,
+    exposure_time_s: float,
+    rate_mm_h: float,
+    seed: int,
+    ground_m: float = -np.inf,
+):
     """(H, W) α of the streaks of the seeded drops within `STREAK_RANGE_M` of the view's camera at
-    `time_s`, each falling over `exposure_time_s` (`camgen.world.rain.streak_coverage`)."""
+    `time_s`, each falling over `exposure_time_s` (`camgen.world.rain.streak_coverage`); no drop is
+    looked for below `ground_m` (the lowest geometry: drops there are hidden)."""
     corners = frustum_corners_m(view, NEAR_M, STREAK_RANGE_M)
-    positions, diameters_mm, speeds_m_s = drops_in_box(
-        corners.min(axis=0), corners.max(axis=0), time_s, rate_mm_h, seed
-    )
+    low_m, high_m = corners.min(axis=0), corners.max(axis=0)
+    low_m[2] = max(low_m[2], ground_m)
+    if low_m[2] >= high_m[2]:
+        return np.zeros(depth_m.shape, np.float32)
+    positions, diameters_mm, speeds_m_s = drops_in_box(low_m, high_m, time_s, rate_mm_h, seed)
     T = view.T_world_from_cam
     offset = positions - T[:3, 3]
     near = np.linalg.norm(offset, axis=1) <= STREAK_RANGE_M
@@ -49,5 +60,6 @@ def rainy_radiance(
     airlight = horizon_airlight(graph, view)
     beyond_m = np.maximum(depth_m * ray_lengths(view) - np.float32(STREAK_RANGE_M), 0.0)
     hazy = apply_fog(radiance, beyond_m, airlight, rain_visibility_m(rate_mm_h))
-    coverage = rain_coverage(view, depth_m, time_s, exposure_time_s, rate_mm_h, seed)
+    ground_m = float(graph.scene.bounds[0][2]) if graph.scene.mesh_nodes else -np.inf
+    coverage = rain_coverage(view, depth_m, time_s, exposure_time_s, rate_mm_h, seed, ground_m)
     return apply_rain(hazy, coverage, drop_radiance(airlight, hazy))
