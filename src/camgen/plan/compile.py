@@ -46,7 +46,7 @@ from camgen.plan.camera_state import LensState as _LensState
 from camgen.plan.camera_state import camera_image_speed_px_s, camera_state, head_pose, lens_state
 from camgen.plan.ptz import head_track, holding_track, installed_focal_length_mm
 from camgen.plan.visibility import Bounds, box_corners, local_bounds, placement, visible_depth_range_m
-from camgen.props import placed_props
+from camgen.props import prop_box_corners
 from camgen.sensor.capture import NOISE_TERM_OFF, NOISE_TERMS, noise_term_is_on
 from camgen.world.rain import STREAK_RANGE_M
 
@@ -915,9 +915,7 @@ def compile(
         raise ConfigError(problems)
     check_job_size(scene)
     static_boxes = [box_corners(*local_bounds(mesh, file_bounds), placement(mesh)) for mesh in scene.environment.meshes]
-    for prop in placed_props(scene.environment, scene_seed=scene.seed):  # the props' own boxes
-        vertices = prop.model.arrays()[0]
-        static_boxes.append(box_corners(vertices.min(axis=0), vertices.max(axis=0), prop.T_world_from_prop))
+    static_boxes += prop_box_corners(scene.environment, scene_seed=scene.seed)
     routes = actor_routes(scene)
     problems = standing_action_problems(scene, routes)
     if problems:

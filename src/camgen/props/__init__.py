@@ -16,6 +16,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from camgen.config.placement import box_corners
 from camgen.config.scene import Environment
 from camgen.props.scatter import ScatterSpot, scatter_spots
 from camgen.props.shapes import PropPart
@@ -78,4 +79,23 @@ def placed_props(environment: Environment, *, scene_seed: int) -> list[PlacedPro
     return placed
 
 
-__all__ = ["PlacedProp", "PropModel", "PropPart", "build_prop", "placed_props", "prop_names", "prop_seed"]
+def prop_box_corners(environment: Environment, *, scene_seed: int) -> list[np.ndarray]:
+    """The 8 world corners (8, 3) of each placed prop's box in its own frame (what the plan's depth
+    ranges take of the environment's static geometry)."""
+    boxes = []
+    for prop in placed_props(environment, scene_seed=scene_seed):
+        vertices = prop.model.arrays()[0]
+        boxes.append(box_corners(vertices.min(axis=0), vertices.max(axis=0), prop.T_world_from_prop))
+    return boxes
+
+
+__all__ = [
+    "PlacedProp",
+    "PropModel",
+    "PropPart",
+    "build_prop",
+    "placed_props",
+    "prop_box_corners",
+    "prop_names",
+    "prop_seed",
+]

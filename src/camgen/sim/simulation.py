@@ -47,6 +47,7 @@ from camgen.plan.camera_state import camera_image_speed_px_s, camera_state, head
 from camgen.plan.compile import MOTION_SAMPLE_STEP_PX, MOTION_SAMPLES_MAX, actor_swept_boxes, compile, focus_distance_m
 from camgen.plan.ptz import eptz_limits, head_limits, installed_focal_length_mm
 from camgen.plan.visibility import box_corners, local_bounds, placement, visible_depth_range_m
+from camgen.props import prop_box_corners
 from camgen.render.renderer import Passes, Renderer
 from camgen.render.scene_graph import build_scene_graph
 from camgen.render.sequence import CameraRenderer
@@ -229,13 +230,15 @@ class Simulation:
             for i in self._delivering
         }
         routes = actor_routes(held)
-        self._depth_boxes = [
-            box_corners(*local_bounds(mesh, loaded.file_bounds), placement(mesh)) for mesh in held.environment.meshes
-        ] + [
-            box
-            for actor in held.actors
-            for box in actor_swept_boxes(actor, routes[actor.name], loaded.file_bounds, held.duration_s)
-        ]
+        self._depth_boxes = (
+            [box_corners(*local_bounds(mesh, loaded.file_bounds), placement(mesh)) for mesh in held.environment.meshes]
+            + prop_box_corners(held.environment, scene_seed=held.seed)
+            + [
+                box
+                for actor in held.actors
+                for box in actor_swept_boxes(actor, routes[actor.name], loaded.file_bounds, held.duration_s)
+            ]
+        )
         self.seed = self.job.seed
         self.frame = -1
         self._heads: list[CommandedHead | None] = []
