@@ -14,7 +14,7 @@ import trimesh
 from camgen.config.props import PROP_HEIGHT_RANGE_M, ScatterRule
 from camgen.config.scene import Environment
 from camgen.errors import ConfigError
-from camgen.props import placed_props, prop_names
+from camgen.props import placed_props, prop_box_corners, prop_names
 from camgen.props.scatter import scatter_spots
 from camgen.props.types import LAMP_HEIGHTS_M, LEAF_NIR, build_prop
 
@@ -170,6 +170,14 @@ def test_placed_props_names_seeds_and_poses():
     T = placed[0].T_world_from_prop
     assert np.allclose(T[:3, 0], (0, 1, 0)) and np.allclose(T[:3, 3], (1, 2, 0))
     assert [p.T_world_from_prop[0, 3] for p in placed[2:]] == [0.0, 2.0, 4.0]
+    # The plan's depth boxes hold every vertex of their prop, in the world.
+    for prop, corners in zip(placed, prop_box_corners(environment, scene_seed=7), strict=True):
+        T = prop.T_world_from_prop
+        world = prop.model.arrays()[0] @ T[:3, :3].T + T[:3, 3]
+        assert np.all(world >= corners.min(axis=0) - 1e-9) and np.all(world <= corners.max(axis=0) + 1e-9)
+        assert np.allclose(corners.min(axis=0)[2], world[:, 2].min()) and np.allclose(
+            corners.max(axis=0)[2], world[:, 2].max()
+        )
 
 
 W, H = 160, 120
