@@ -206,3 +206,20 @@ def test_plan_draws_depth_for_rain_and_says_why():
     decisions = {decision.stage: decision for decision in camera.decisions}
     assert decisions["render.rain"].included and "6 mm/h" in decisions["render.rain"].reason
     assert "rain's depth test" in decisions["pass.depth_m"].reason
+
+
+@pytest.mark.opengl
+def test_wet_road_shows_a_sharper_sun_glint(renderer):
+    """The sun low ahead (20°): a wet, smoother road's specular glint peaks far brighter than the dry one's,
+    though the wet road is darker on average (`WET_ROUGHNESS_FACTOR`: most of the wet look here)."""
+    lights = [{"type": "sun", "illuminance_lux": 50000.0, "azimuth_deg": 90.0, "elevation_deg": 20.0}]
+    road = {**ROAD, "material": {"color_rgb": [0.12, 0.12, 0.12], "roughness": 0.9}}
+    base = {"sky_luminance_cd_m2": 1000.0, "meshes": [road], "ground_to_horizon": False, "shadows": False}
+    view = _view()
+    peak, mean = {}, {}
+    for wet in (False, True):
+        drawn = renderer.draw(_graph({**base, "wet": wet}, lights), view, ("radiance", "instance_id"))
+        road_px = drawn.radiance[drawn.instance_id == 1].mean(axis=-1)
+        peak[wet], mean[wet] = float(road_px.max()), float(np.median(road_px))
+    assert peak[True] > 5.0 * peak[False]  # 33x on llvmpipe
+    assert mean[True] < mean[False]
