@@ -1,6 +1,7 @@
 """Occlusion of a sight line by the scene's environment meshes: exact ray tests against boxes,
 cylinders, spheres and one-sided planes in each mesh's own frame, Möller–Trumbore against the
-triangles of mesh files and of procedural props (`camgen.props`).
+triangles of mesh files and of procedural props (`camgen.props`; a crown or a bush by its convex hull,
+`PropModel.occluder_triangles`).
 
 A sight line is the segment from the camera centre to a point; it is blocked when it enters a mesh
 before it reaches the point (less `END_MARGIN_M`, so a point lying on a surface — the ground on its
@@ -77,7 +78,7 @@ def scene_occluders(scene: Scene, file_triangles_m: Mapping[str, np.ndarray] | N
     for prop in placed_props(scene.environment, scene_seed=scene.seed):  # props: their own triangles
         vertices, _, faces, _, _ = prop.model.arrays()
         T = np.linalg.inv(prop.T_world_from_prop)
-        occluders.append(Occluder(prop.name, "triangles", T, np.zeros(3), vertices[faces]))
+        occluders.append(Occluder(prop.name, "triangles", T, np.zeros(3), prop.model.occluder_triangles()))
     return occluders
 
 

@@ -36,6 +36,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+import trimesh
 
 from camgen.config.props import PROP_HEIGHT_RANGE_M
 from camgen.props.shapes import PropPart, blob, box, frustum, lumpy_cone, rot_x
@@ -97,6 +98,22 @@ class PropModel:
             np.concatenate([p.colours_rgb for p in self.parts]),
             np.concatenate([p.nir_reflectance for p in self.parts]),
         )
+
+    def occluder_triangles(self) -> np.ndarray:
+        """(T, 3, 3) triangles, in the prop's frame, that stand in for it in sight-line tests
+        (`camgen.coverage.occlusion`): its hard parts as drawn, and its leafy parts (a crown's lumps, a
+        bush) as one convex hull, a sixth to a twentieth of their triangles; the hull also fills the gaps
+        between lumps, which the render sees through at a crown's edge."""
+        hard = [p.vertices_m[p.faces] for p in self.parts if not p.name.startswith(ORGANIC_PARTS)]
+        leafy = [p.vertices_m for p in self.parts if p.name.startswith(ORGANIC_PARTS)]
+        if leafy:
+            hull = trimesh.convex.convex_hull(np.concatenate(leafy))
+            hard.append(np.asarray(hull.vertices)[hull.faces])
+        return np.concatenate(hard)
+
+
+ORGANIC_PARTS = ("crown", "foliage")
+"""Name prefixes of the leafy parts, which `PropModel.occluder_triangles` replaces by their convex hull."""
 
 
 def _height(kind: str, rng: np.random.Generator, pinned: float | None) -> float:
