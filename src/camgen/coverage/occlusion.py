@@ -75,8 +75,7 @@ def scene_occluders(scene: Scene, file_triangles_m: Mapping[str, np.ndarray] | N
             CheckerboardMesh: "plane",
         }[type(mesh)]
         occluders.append(Occluder(mesh.name, kind, T, local_bounds(mesh)[1]))
-    for prop in placed_props(scene.environment, scene_seed=scene.seed):  # props: their own triangles
-        vertices, _, faces, _, _ = prop.model.arrays()
+    for prop in placed_props(scene.environment, scene_seed=scene.seed):  # leafy parts by their hull
         T = np.linalg.inv(prop.T_world_from_prop)
         occluders.append(Occluder(prop.name, "triangles", T, np.zeros(3), prop.model.occluder_triangles()))
     return occluders
