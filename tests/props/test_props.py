@@ -321,3 +321,28 @@ def test_foliage_renders_as_bright_as_its_reflectance_in_the_ir_pass(renderer):
     crown = passes.radiance[..., 0][(passes.instance_id == ids["tree_0"]) & crown_rows]
     assert len(ball) > 200 and len(crown) > 200
     assert float(np.mean(crown)) == pytest.approx(float(np.mean(ball)), rel=0.3)
+
+
+def test_coverage_sight_lines_are_blocked_by_a_crown_and_pass_beside_it():
+    """`camgen.coverage` sees a tree by its trunk and the convex hull of its crown: a line through the
+    crown's middle is blocked, one passing a metre outside the crown's widest reach is not, and the hull
+    holds every vertex of the crown (it never hides less than the render does)."""
+    from camgen.coverage.occlusion import scene_occluders, sight_blocked
+    from tests.render.conftest import scene_from
+
+    scene = scene_from(environment={"props": [{"type": "tree", "position_m": [10, 0], "seed": 2, "height_m": 8}]},
+                       lights=[{"type": "ambient", "illuminance_lux": 1}])  # fmt: skip
+    (occluder,) = scene_occluders(scene)
+    model = placed_props(scene.environment, scene_seed=scene.seed)[0].model
+    crown = np.concatenate([p.vertices_m for p in model.parts if p.name.startswith("crown")])
+    hard = sum(len(p.faces) for p in model.parts if not p.name.startswith("crown"))
+    hull = occluder.triangles_m[hard:]  # the crown's hull follows the trunk's triangles
+    normals = np.cross(hull[:, 1] - hull[:, 0], hull[:, 2] - hull[:, 0])
+    outside = np.einsum("fk,vfk->vf", normals, crown[:, None, :] - hull[None, :, 0])
+    assert outside.max() <= 1e-9 * np.abs(outside).max()  # every crown vertex on the inner side of every face
+    centre_z = float(crown[:, 2].mean())
+    reach = float(np.hypot(crown[:, 0], crown[:, 1]).max())
+    origin = np.array([0.0, 0.0, centre_z + 0.37])  # not level: a ray parallel to a face warns (0/0)
+    targets = np.array([[20.0, 0.0, centre_z], [20.0, 2 * (reach + 1.0), centre_z], [10.0, 0.0, 0.5]])
+    assert sight_blocked(origin, targets, [occluder]).tolist() == [True, False, True]  # crown, beside, trunk
+    assert len(occluder.triangles_m) < len(model.arrays()[2]) / 5
