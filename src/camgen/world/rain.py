@@ -49,6 +49,11 @@ which under Marshall–Palmer is
 (3.9 km at 5 mm/h, 1.4 km at 25 mm/h) — Koschmieder's law (`camgen.world.fog`) with this visual
 range, over the part of each pixel's distance beyond STREAK_RANGE_M.
 
+**Not modelled.** Drops fall straight down (no wind); the streak ignores the camera's own motion during
+the exposure (a panning PTZ); drops nearer than NEAR_M or imaged wider than DROP_IMAGE_MAX_PX (out of
+focus) are left out rather than blurred; lamps do not light the drops (at night they show the dark
+environment's mean); no splashes, no drops on the lens or its dome, no reflections in the wet road.
+
 **Wet ground.** A water film darkens a rough surface (light that the film reflects back inside is
 absorbed again: Lekner & Dorf 1988, "Why some things are darker when wet", Appl. Opt. 27, 1278–1280;
 Twomey, Bohren & Mergenthaler 1986, Appl. Opt. 25, 431–437 measure 0.5–0.7 of the dry reflectance for
@@ -69,10 +74,11 @@ RAIN_RATE_MODERATE_MAX_MM_H = 7.6
 """AMS Glossary of Meteorology ("rain"), WMO-No. 8 §14.2.1: light < 2.5, moderate 2.5–7.6, heavy > 7.6 mm/h."""
 
 DIAMETER_MIN_MM = 1.0
-"""Smaller drops are not drawn as streaks: a 0.5 mm drop (v = 2.1 m/s) covers α ≈ 0.014/z of a pixel at z m
+"""Smaller drops are not drawn as streaks: a 0.5 mm drop (v = 2.1 m/s) covers α ≈ 0.007/z of a pixel at z m
 (T = 1/50 s, f = 1500 px), invisible beyond a metre or so; they are in the haze beyond STREAK_RANGE_M."""
 DIAMETER_MAX_MM = 6.0
-"""Larger drops break up (Pruppacher & Klett 1997, §10.3.5); Marshall–Palmer gives them ≪ 1 % of drops."""
+"""Larger drops break up (Pruppacher & Klett 1997, *Microphysics of clouds and precipitation*); Marshall–Palmer
+gives them ≪ 1 % of drops."""
 DIAMETER_STEP_MM = 0.5
 """Width of a diameter class; its drops share one speed (v varies by ≤ 1.2 m/s across a class above 1 mm)."""
 CELL_M = 4.0
@@ -186,8 +192,9 @@ def streak_coverage(
     positions_cam_m (N, 3): each drop at the middle of the exposure, camera frame (OpenCV); fall_cam_m
     (N, 3): its displacement over the whole exposure (v·T down, in the camera frame); K_px (3, 3);
     depth_m (H, W): camera z of the nearest surface (+inf for the sky) — a drop behind it is hidden.
-    Each streak is sampled at n ≈ its length in pixels, every sample carrying 1/n of the drop's image
-    area π/4 (D f / z)², splatted bilinearly; the sum is clipped to 1."""
+    Each streak is sampled at n points evenly along it, every sample carrying 1/n of the drop's image
+    area π/4 (D f / z)² and splatted bilinearly: n is about its length in pixels, or fewer when each
+    sample would carry less than SAMPLE_ALPHA_MAX; the sum is clipped to 1."""
     height_px, width_px = depth_m.shape
     f_px = math.sqrt(abs(K_px[0, 0] * K_px[1, 1]))
     start, end = positions_cam_m - fall_cam_m / 2, positions_cam_m + fall_cam_m / 2
