@@ -223,3 +223,14 @@ def test_wet_road_shows_a_sharper_sun_glint(renderer):
         peak[wet], mean[wet] = float(road_px.max()), float(np.median(road_px))
     assert peak[True] > 5.0 * peak[False]  # 33x on llvmpipe
     assert mean[True] < mean[False]
+
+
+def test_the_far_ground_is_wet_too():
+    from camgen.render.scene_graph import far_ground
+
+    road = {**ROAD, "material": {"color_rgb": [0.2, 0.1, 0.05]}}
+    dry = far_ground(scene_from(environment={"sky_luminance_cd_m2": 100.0, "meshes": [road]}, lights=[]))
+    wet = far_ground(
+        scene_from(environment={"sky_luminance_cd_m2": 100.0, "meshes": [road], "rain": {"rate_mm_h": 1.0}}, lights=[])
+    )
+    np.testing.assert_allclose(wet.reflectance_rgb, np.multiply(WET_ALBEDO_FACTOR, dry.reflectance_rgb), rtol=1e-12)
