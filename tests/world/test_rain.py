@@ -174,6 +174,28 @@ def test_rainy_frame_is_seeded_and_depth_tested(renderer):
 
 
 @pytest.mark.opengl
+def test_rain_haze_is_koschmieder_beyond_the_streaks(renderer, monkeypatch):
+    """Without streaks, rain is a haze of its visual range over each pixel's distance beyond 15 m: the
+    far ground (no mesh, depth +inf) over its own distance, as fog; the sky becomes the horizon's."""
+    import camgen.render.rain as rain_module
+    from camgen.render.renderer import far_ground_depth_m, ray_lengths
+
+    monkeypatch.setattr(rain_module, "rain_coverage", lambda view, depth_m, *args: np.zeros(depth_m.shape, np.float32))
+    environment = {"sky_luminance_cd_m2": 2000.0, "meshes": [ROAD], "rain": {"rate_mm_h": 40.0}}
+    graph = _graph(environment, [{"type": "ambient", "illuminance_lux": 5000.0}])
+    view = _view()
+    drawn = renderer.draw(graph, view, ("radiance", "depth_m"))
+    hazy = rain_module.rainy_radiance(graph, view, drawn.radiance, drawn.depth_m, 1.0, 1 / 50)
+    distance_m = np.where(
+        np.isinf(drawn.depth_m), far_ground_depth_m(graph.far_ground, view), drawn.depth_m
+    ) * ray_lengths(view)
+    t = np.exp(-3.912023 * np.maximum(distance_m - 15.0, 0.0) / rain_visibility_m(40.0))[..., None]
+    expected = 2000.0 + (drawn.radiance - 2000.0) * t
+    assert np.isinf(drawn.depth_m).sum() > 0 and (np.isinf(drawn.depth_m) & np.isfinite(distance_m)).sum() > 50
+    np.testing.assert_allclose(hazy, expected, rtol=1e-4)
+
+
+@pytest.mark.opengl
 def test_wet_asphalt_is_darker_by_the_documented_factor(renderer):
     """Under the ambient light alone (diffuse), wet asphalt's radiance is WET_ALBEDO_FACTOR of the dry;
     rain wets the ground unless `wet: false`."""

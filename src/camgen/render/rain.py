@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from camgen.render.renderer import View, frustum_corners_m, horizon_airlight, ray_lengths
+from camgen.render.renderer import View, far_ground_depth_m, frustum_corners_m, horizon_airlight, ray_lengths
 from camgen.world.fog import apply_fog
 from camgen.world.rain import (
     NEAR_M,
@@ -58,8 +58,11 @@ def rainy_radiance(
     graph, view: View, radiance: np.ndarray, depth_m: np.ndarray, time_s: float, exposure_time_s: float
 ) -> np.ndarray:
     """`radiance` (H, W, 3) of `view` in the graph's rain: Koschmieder haze of the rain's visual range
-    over each pixel's distance beyond STREAK_RANGE_M, then the near drops' streaks."""
+    over each pixel's distance beyond STREAK_RANGE_M (the far ground's where no mesh is hit, as fog
+    does), then the near drops' streaks."""
     rate_mm_h, seed = graph.rain_rate_mm_h, graph.rain_seed
+    if getattr(graph, "far_ground", None) is not None:  # the ground beyond the meshes is at a finite distance
+        depth_m = np.where(np.isinf(depth_m), far_ground_depth_m(graph.far_ground, view), depth_m)
     airlight = horizon_airlight(graph, view)
     beyond_m = np.maximum(depth_m * ray_lengths(view) - np.float32(STREAK_RANGE_M), 0.0)
     hazy = apply_fog(radiance, beyond_m, airlight, rain_visibility_m(rate_mm_h))
