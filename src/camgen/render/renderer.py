@@ -522,7 +522,7 @@ class Renderer:
             ground_depth_m[~target.sky_mask] = np.inf
             below = np.isfinite(ground_depth_m)
             if below.any():
-                out.radiance[below] = far_ground_radiance(graph)
+                out.radiance[below] = far_ground_radiance(graph, view, below)
         if out.radiance is not None and fog_visibility_m is not None:
             depth_m = out.depth_m if ground_depth_m is None else np.minimum(out.depth_m, ground_depth_m)
             out.radiance = fogged_radiance(graph, view, out.radiance, depth_m, fog_visibility_m)
@@ -585,15 +585,43 @@ def far_ground_depth_m(ground, view: View) -> np.ndarray:
     return depth_m if height_m > 0 else np.full_like(depth_m, np.inf)
 
 
-def far_ground_radiance(graph) -> np.ndarray:
-    """(3,) radiance of the far ground: ρ ⊙ (ambient + Σ_sun colour·E·max(0, cos θ_sun)/π), with the sun
-    lights as they are now in the graph (a site's dusk moves them, `SceneGraph.set_daylight`)."""
-    scene = graph.scene
-    irradiance = np.asarray(scene.ambient_light, np.float64) * math.pi  # ambient_light is E/π
+MIN_ROUGHNESS = 0.04
+"""The shader's lower clamp of roughness (`linear_mesh.frag`), also its dielectric F0."""
+
+
+def far_ground_radiance(graph, view: View, below: np.ndarray) -> np.ndarray:
+    """(N, 3) radiance of the far ground at the pixels `below` (H, W bool) of `view`: the shader's BRDF
+    (`linear_mesh.frag` compute_brdf: Lambert c_diff/π plus GGX D, Schlick–Smith G, Schlick F over
+    4 n·l n·v) for a level surface of the ground's material, under each sun light as it is now in the graph
+    (a site's dusk moves them, `SceneGraph.set_daylight`), plus the ambient term ρ·ambient_light."""
+    ground, scene = graph.far_ground, graph.scene
+    rows, cols = np.nonzero(below)
+    rays = np.stack([cols, rows, np.ones_like(cols)], axis=-1).astype(np.float64) @ np.linalg.inv(view.K_px).T
+    rays = rays @ view.T_world_from_cam[:3, :3].T
+    v = -rays / np.linalg.norm(rays, axis=1, keepdims=True)  # towards the camera
+    rho = np.asarray(ground.reflectance_rgb, np.float64)
+    metallic = min(max(ground.metallic, 0.0), 1.0)
+    roughness = min(max(ground.roughness, MIN_ROUGHNESS), 1.0)
+    c_diff, f0 = rho * (1.0 - metallic), MIN_ROUGHNESS * (1.0 - metallic) + rho * metallic
+    out = np.broadcast_to(rho * np.asarray(scene.ambient_light, np.float64), (len(rows), 3)).copy()
+    nv = np.clip(np.abs(v[:, 2]), 0.001, 1.0)
+    k = (roughness + 1.0) ** 2 / 8.0
+    a2 = roughness**4
     for node in scene.directional_light_nodes:
-        towards_sun_z = scene.get_pose(node)[2, 2]  # a light shines along its node's −Z
-        irradiance = irradiance + np.asarray(node.light.color) * node.light.intensity * max(0.0, towards_sun_z)
-    return (np.asarray(graph.far_ground.reflectance_rgb) * irradiance / math.pi).astype(np.float32)
+        towards_light = scene.get_pose(node)[:3, 2]  # a light shines along its node's −Z
+        nl = max(0.0, float(towards_light[2]))
+        if nl == 0.0:
+            continue
+        h = v + towards_light
+        h /= np.linalg.norm(h, axis=1, keepdims=True)
+        nh, vh = np.clip(h[:, 2], 0.0, 1.0), np.clip(np.sum(v * h, axis=1), 0.0, 1.0)
+        fresnel = f0 + (1.0 - f0) * ((1.0 - vh) ** 5)[:, None]
+        shadowing = nv / (nv * (1.0 - k) + k) * (nl / (nl * (1.0 - k) + k))
+        distribution = a2 / (math.pi * (nh * nh * (a2 - 1.0) + 1.0) ** 2)
+        specular = fresnel * (shadowing * distribution / (4.0 * nl * nv + 0.001))[:, None]
+        radiance = node.light.intensity * np.asarray(node.light.color, np.float64)
+        out += nl * radiance * (c_diff / math.pi + specular)
+    return out.astype(np.float32)
 
 
 def ray_lengths(view: View) -> np.ndarray:

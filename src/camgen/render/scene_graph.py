@@ -85,17 +85,22 @@ class Instance:
 
 @dataclass(frozen=True)
 class FarGround:
-    """The scene's ground continued to the horizon: a level, uniform, Lambertian plane that the renderer
-    draws where a ray goes down past every mesh (`camgen.render.renderer.far_ground_view`), so that a
-    camera looking over the edge of the modelled site sees ground, not the sky under the horizon.
+    """The scene's ground continued to the horizon: a level, uniform plane of the ground plane's material
+    that the renderer draws where a ray goes down past every mesh (`camgen.render.renderer.
+    far_ground_radiance`), so that a camera looking over the edge of the modelled site sees ground, not
+    the sky under the horizon.
 
-    It is a backdrop, not geometry: no shadows, no instance id, depth +inf (like the sky). Its reflectance
-    is the ground plane's mean (a texture's typical albedo: far away, the mipmaps average the texture to
-    it); it is lit by the sun lights (Lambert) and the ambient term, as the plane itself is, without the
-    specular lobe (≤ 2 % of a rough ground's radiance)."""
+    It is a backdrop, not geometry: no shadows, no instance id, depth +inf (like the sky). Its material is
+    the ground plane's mean: reflectance (a texture's typical albedo: far away, the mipmaps average the
+    texture to it), roughness and metalness (a texture's maps' means), wet as the plane is; it is shaded
+    per pixel by the renderer's own BRDF (`linear_mesh.frag`: Lambert plus GGX specular with Schlick's
+    Fresnel, whose share grows towards grazing view) under the sun lights, plus the ambient term, so it
+    meets the plane's far edge without a step in brightness."""
 
     height_m: float
     reflectance_rgb: tuple[float, float, float]
+    roughness: float = 1.0
+    metallic: float = 0.0
 
 
 FAR_GROUND_MIN_AREA_M2 = 100.0
@@ -121,9 +126,15 @@ def far_ground(scene: Scene) -> FarGround | None:
     material = ground.material
     textured = material.texture is not None and "color_rgb" not in material.model_fields_set
     rgb = TYPICAL_ALBEDO_RGB[material.texture.type] if textured else material.color_rgb
+    roughness, metallic = material.roughness, material.metallic
+    if material.texture is not None:  # `_textured` takes both from the texture's maps
+        texture = material.texture
+        maps = surface_maps(texture.type, texture.seed, texture.tile_m)
+        roughness, metallic = float(np.mean(maps.roughness)), float(np.mean(maps.metallic))
     if is_wet(scene):
         rgb = tuple(WET_ALBEDO_FACTOR * c for c in rgb)
-    return FarGround(float(ground.position_m[2]), tuple(float(c) for c in rgb))
+        roughness *= WET_ROUGHNESS_FACTOR
+    return FarGround(float(ground.position_m[2]), tuple(float(c) for c in rgb), roughness, metallic)
 
 
 @dataclass
