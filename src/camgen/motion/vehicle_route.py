@@ -37,6 +37,8 @@ from functools import cached_property
 
 import numpy as np
 
+from camgen.motion.route_fields import freeze_route_fields
+
 LEG_ARC_STEP_RAD = math.radians(5.0)
 """Largest turn of one straight piece that `VehicleRoute.legs_until` gives for an arc, rad."""
 
@@ -177,25 +179,7 @@ class VehicleRoute:
     loop: bool = False
 
     def __post_init__(self) -> None:
-        points = np.array(self.waypoints_m, dtype=np.float64)
-        pauses = np.array(self.pauses_s, dtype=np.float64)
-        if points.ndim != 2 or points.shape[1] != 2 or len(points) == 0:
-            raise ValueError(f"waypoints_m must have shape (N, 2) with N ≥ 1, got {points.shape}")
-        if pauses.shape != (len(points),):
-            raise ValueError(f"pauses_s must have shape ({len(points)},) like the waypoints, got {pauses.shape}")
-        if not (np.all(np.isfinite(points)) and np.all(np.isfinite(pauses)) and np.all(pauses >= 0)):
-            raise ValueError("waypoints_m must be finite and pauses_s finite and ≥ 0")
-        if not (self.speed_m_s > 0 and math.isfinite(self.speed_m_s)):
-            raise ValueError(f"speed_m_s must be > 0, got {self.speed_m_s}")
-        if not (self.start_s >= 0 and math.isfinite(self.start_s)):
-            raise ValueError(f"start_s must be ≥ 0, got {self.start_s}")
-        points.setflags(write=False)
-        pauses.setflags(write=False)
-        object.__setattr__(self, "waypoints_m", points)
-        object.__setattr__(self, "pauses_s", pauses)
-        object.__setattr__(self, "speed_m_s", float(self.speed_m_s))
-        object.__setattr__(self, "start_s", float(self.start_s))
-        object.__setattr__(self, "loop", bool(self.loop))
+        freeze_route_fields(self)
         self._path  # noqa: B018 — refuse a route the vehicle cannot drive when it is made
 
     @property
