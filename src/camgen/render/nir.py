@@ -28,6 +28,7 @@ import numpy as np
 from camgen.config.profile import Profile
 from camgen.config.scene import Material, Scene, actor_shape
 from camgen.render.gl import pyrender
+from camgen.render.mipmaps import MipmappedTexture
 from camgen.render.scene_graph import SceneGraph, _look_along, build_scene_graph
 from camgen.world.night import (
     NIR_REFLECTANCE_BY_TEXTURE,
@@ -66,8 +67,8 @@ def _nir_material(material, reflectance: float | None) -> None:
             mean = float(np.mean(rule))
             rule = rule * (reflectance / mean) if mean > 0 else np.full_like(rule, reflectance)
         grey = np.repeat(np.clip(rule, 0, 1)[..., None], 3, axis=-1).astype(np.float32)
-        material.baseColorTexture = pyrender.Texture(
-            source=encode_srgb8(grey), source_channels="RGB", sampler=texture.sampler
+        material.baseColorTexture = MipmappedTexture(
+            srgb=True, source=encode_srgb8(grey), source_channels="RGB", sampler=texture.sampler
         )
         material.baseColorFactor = (1.0, 1.0, 1.0, factor[3])
     else:

@@ -61,6 +61,7 @@ from camgen.motion.pose import T_world_from_cam, rot_z
 from camgen.motion.trajectory import Route, actor_routes
 from camgen.props import PropModel, placed_props, prop_names
 from camgen.render.gl import pyrender
+from camgen.render.mipmaps import MipmappedTexture
 from camgen.vehicles import LAMP_COLOUR_RGB, LAMP_LUMINANCE_CD_M2, VehicleRig, vehicle_rig
 from camgen.vehicles.plate import plate_image
 from camgen.world.ies import flux_lm as ies_flux_lm
@@ -344,10 +345,10 @@ def _textured(shape) -> pyrender.Mesh:
     sampler = pyrender.Sampler(wrapS=GL_REPEAT, wrapT=GL_REPEAT)
     pbr = pyrender.MetallicRoughnessMaterial(
         baseColorFactor=(1.0, 1.0, 1.0, 1.0),
-        baseColorTexture=pyrender.Texture(source=base, source_channels="RGB", sampler=sampler),
+        baseColorTexture=MipmappedTexture(srgb=True, source=base, source_channels="RGB", sampler=sampler),
         metallicFactor=1.0,
         roughnessFactor=1.0,
-        metallicRoughnessTexture=pyrender.Texture(source=mr, source_channels="RGB", sampler=sampler),
+        metallicRoughnessTexture=MipmappedTexture(srgb=False, source=mr, source_channels="RGB", sampler=sampler),
         emissiveFactor=(material.emission_cd_m2,) * 3,
         doubleSided=False,
     )
@@ -485,7 +486,7 @@ def vehicle_mesh(rig: VehicleRig) -> pyrender.Mesh:
             image = np.concatenate([plate_image(rig.look.plate_text, rear=rear) for rear in (False, True)])
             material = pyrender.MetallicRoughnessMaterial(
                 baseColorFactor=(1.0, 1.0, 1.0, 1.0),
-                baseColorTexture=pyrender.Texture(source=encode_srgb8(image), source_channels="RGB"),
+                baseColorTexture=MipmappedTexture(srgb=True, source=encode_srgb8(image), source_channels="RGB"),
                 metallicFactor=0.0,
                 roughnessFactor=0.5,
             )
@@ -534,12 +535,12 @@ def character_mesh(rig: CharacterRig, override: Material | None) -> pyrender.Mes
         else:
             material = pyrender.MetallicRoughnessMaterial(
                 baseColorFactor=m.base_color_factor,
-                baseColorTexture=_texture(m.base_color_image, m.wrap),
+                baseColorTexture=_texture(m.base_color_image, m.wrap, srgb=True),
                 metallicFactor=m.metallic_factor,
                 roughnessFactor=m.roughness_factor,
-                metallicRoughnessTexture=_texture(m.metallic_roughness_image, m.wrap),
-                normalTexture=_texture(m.normal_image, m.wrap),
-                occlusionTexture=_texture(m.occlusion_image, m.wrap),
+                metallicRoughnessTexture=_texture(m.metallic_roughness_image, m.wrap, srgb=False),
+                normalTexture=_texture(m.normal_image, m.wrap, srgb=False),
+                occlusionTexture=_texture(m.occlusion_image, m.wrap, srgb=False),
                 doubleSided=m.double_sided,
             )
         uses_uv = override is None and any(
@@ -559,11 +560,13 @@ def character_mesh(rig: CharacterRig, override: Material | None) -> pyrender.Mes
     return pyrender.Mesh(primitives=primitives)
 
 
-def _texture(image: np.ndarray | None, wrap: tuple[int, int]):
+def _texture(image: np.ndarray | None, wrap: tuple[int, int], *, srgb: bool):
+    """A glTF texture with its mip levels averaged as its texels mean (`camgen.render.mipmaps`): colour
+    (`srgb`) as linear values, data as stored."""
     if image is None:
         return None
     sampler = pyrender.Sampler(wrapS=wrap[0], wrapT=wrap[1])  # filters: pyrender's trilinear default
-    return pyrender.Texture(source=image, source_channels="RGBA"[: image.shape[2]], sampler=sampler)
+    return MipmappedTexture(srgb=srgb, source=image, source_channels="RGBA"[: image.shape[2]], sampler=sampler)
 
 
 def _look_along(direction: np.ndarray, position=(0.0, 0.0, 0.0)) -> np.ndarray:
