@@ -346,3 +346,21 @@ def test_coverage_sight_lines_are_blocked_by_a_crown_and_pass_beside_it():
     targets = np.array([[20.0, 0.0, centre_z], [20.0, 2 * (reach + 1.0), centre_z], [10.0, 0.0, 0.5]])
     assert sight_blocked(origin, targets, [occluder]).tolist() == [True, False, True]  # crown, beside, trunk
     assert len(occluder.triangles_m) < len(model.arrays()[2]) / 5
+
+
+def test_a_camera_mounted_inside_a_lamp_posts_column_sees_out_and_the_post_still_hides_from_outside():
+    """A camera on a lamp post sits inside its column, as the renderer (which culls back faces) lets it:
+    sight lines leaving through the column's inner faces are not blocked, while one passing through the
+    column from outside is (props are wound outward, `test_every_part_is_closed_and_wound_outwards`)."""
+    from camgen.coverage.occlusion import scene_occluders, sight_blocked
+    from tests.render.conftest import scene_from
+
+    scene = scene_from(environment={"props": [{"type": "lamp_post", "position_m": [0, 0], "seed": 1, "height_m": 8}]},
+                       lights=[{"type": "ambient", "illuminance_lux": 1}])  # fmt: skip
+    (occluder,) = scene_occluders(scene)
+    assert occluder.entering_only
+    inside_column = np.array([0.0, 0.0, 6.0])
+    ground = np.array([[10.0, 3.0, 0.0], [-8.0, -5.0, 0.0], [2.0, -9.0, 0.0]])
+    assert not sight_blocked(inside_column, ground, [occluder]).any()
+    # From outside, a line through the column at 2 m height is hidden by it.
+    assert sight_blocked(np.array([-5.0, 0.01, 2.0]), np.array([[5.0, 0.01, 2.0]]), [occluder]).tolist() == [True]

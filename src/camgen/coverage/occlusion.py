@@ -53,6 +53,10 @@ class Occluder:
     """(3,) half sizes: a box's; (r, r, h/2) of a cylinder; (r, r, r) of a sphere; (hx, hy, 0) of a plane."""
     triangles_m: np.ndarray | None = None
     """(T, 3, 3) vertices in the mesh frame, m (mesh files, already scaled)."""
+    entering_only: bool = False
+    """Triangles wound outward (counter-clockwise seen from outside) that hide only where a sight line
+    enters through their front, as the renderer culls back faces: a procedural prop, so a camera mounted
+    inside a lamp post's column sees out of it. Mesh files, whose winding is the user's, hide both ways."""
 
 
 def scene_occluders(scene: Scene, file_triangles_m: Mapping[str, np.ndarray] | None = None) -> list[Occluder]:
@@ -77,7 +81,8 @@ def scene_occluders(scene: Scene, file_triangles_m: Mapping[str, np.ndarray] | N
         occluders.append(Occluder(mesh.name, kind, T, local_bounds(mesh)[1]))
     for prop in placed_props(scene.environment, scene_seed=scene.seed):  # leafy parts by their hull
         T = np.linalg.inv(prop.T_world_from_prop)
-        occluders.append(Occluder(prop.name, "triangles", T, np.zeros(3), prop.model.occluder_triangles()))
+        triangles = prop.model.occluder_triangles()
+        occluders.append(Occluder(prop.name, "triangles", T, np.zeros(3), triangles, entering_only=True))
     return occluders
 
 
@@ -129,8 +134,9 @@ def _entering_s(kind: str, half: np.ndarray, o: np.ndarray, d: np.ndarray) -> np
     raise ValueError(f"unknown occluder kind {kind!r}")
 
 
-def _triangles_s(triangles: np.ndarray, o: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """Nearest s (N,) where o + s·d crosses any triangle (either side; Möller & Trumbore 1997)."""
+def _triangles_s(triangles: np.ndarray, o: np.ndarray, d: np.ndarray, *, entering_only: bool = False) -> np.ndarray:
+    """Nearest s (N,) where o + s·d crosses any triangle (Möller & Trumbore 1997): from either side, or,
+    `entering_only`, through its front (det > 0: d against the counter-clockwise normal)."""
     v0, e1, e2 = triangles[:, 0], triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]
     best = np.full(len(d), np.inf)
     step = max(1, TRIANGLE_CHUNK // max(1, len(triangles)))
@@ -145,7 +151,8 @@ def _triangles_s(triangles: np.ndarray, o: np.ndarray, d: np.ndarray) -> np.ndar
             u = np.einsum("ntk,tk->nt", pvec, tvec) * inv
             v = np.einsum("nk,tk->nt", dd, qvec) * inv
             s = np.einsum("tk,tk->t", e2, qvec)[None] * inv
-        hit = (np.abs(det) > 1e-15) & (u >= 0) & (v >= 0) & (u + v <= 1) & (s >= 0)
+        facing = det > 1e-15 if entering_only else np.abs(det) > 1e-15
+        hit = facing & (u >= 0) & (v >= 0) & (u + v <= 1) & (s >= 0)
         best[start : start + step] = np.where(hit, s, np.inf).min(axis=1, initial=np.inf)
     return best
 
@@ -184,7 +191,7 @@ def _entries(origin_m: np.ndarray, targets_m: np.ndarray, occluders: Sequence[Oc
         o = R @ origin + t
         d = (targets[near] - origin) @ R.T
         if occluder.kind == "triangles":
-            s = _triangles_s(occluder.triangles_m, o, d)
+            s = _triangles_s(occluder.triangles_m, o, d, entering_only=occluder.entering_only)
         else:
             s = _entering_s(occluder.kind, occluder.half_extent_m, o, d)
         yield occluder, near, np.where(s <= 1.0, s, np.inf)
