@@ -302,6 +302,11 @@ float shadow_calc(mat4 light_matrix, sampler2D shadow_map, float nl)
 {
     // Compute light texture UV coords
     vec4 proj_coords = vec4(light_matrix * vec4(frag_position.xyz, 1.0));
+    // camgen: a point at or behind the spot light's plane (w <= 0) is outside its frustum and unlit by
+    // it; dividing by w there made inf, and 0 * inf a NaN in the pixel (a wall above a street lamp).
+    if (proj_coords.w <= 1e-6) {
+        return 0.0;
+    }
     vec3 light_coords = proj_coords.xyz / proj_coords.w;
     light_coords = light_coords * 0.5 + 0.5;
     float current_depth = light_coords.z;
@@ -440,12 +445,16 @@ void main()
         if (spot_profile_row[i] > 0) {
             vec3 d = spot_profile_axes[i] * (-l);
             float gamma_deg = degrees(acos(clamp(d.z, -1.0, 1.0)));
-            float c_deg = degrees(atan(d.y, d.x));
+            // atan(0, 0) is undefined in GLSL: on the axis (gamma 0 or 180) every C is the same row
+            float c_deg = (abs(d.x) + abs(d.y) > 0.0) ? degrees(atan(d.y, d.x)) : 0.0;
             c_deg = c_deg < 0.0 ? c_deg + 360.0 : c_deg;
             ivec2 size = textureSize(spot_profile, 0);
             vec2 uv = vec2((c_deg / 5.0 + 0.5) / float(size.x),
                            (float(spot_profile_row[i] - 1) * 181.0 + gamma_deg + 0.5) / float(size.y));
             attenuation = texture(spot_profile, uv).r;
+        }
+        if (attenuation <= 0.0) {
+            continue;  // outside the beam: no light, and no shadow lookup to divide by zero
         }
         attenuation = attenuation * spot_lights[i].intensity;
         attenuation = attenuation / (dist * dist);
