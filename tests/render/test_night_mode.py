@@ -170,8 +170,9 @@ def test_textured_surfaces_and_people_take_their_nir_reflectance():
     asphalt one's 0.14, within 2 % (the texture's own variation is kept; their visible means are 0.06
     and 0.11), grey in R, G and B; a procedural person's vertex colours turn grey by the red-reflectance
     rule; emission is off."""
-    from camgen.render.nir import _decode_srgb8, build_nir_graph
+    from camgen.render.nir import build_nir_graph
     from camgen.world.night import NIR_REFLECTANCE_BY_TEXTURE
+    from camgen.world.textures import decode_srgb8
     from tests.render.conftest import scene_from
 
     profile = Profile.model_validate({**_profile_dict(), "night_mode": {}})
@@ -188,7 +189,7 @@ def test_textured_surfaces_and_people_take_their_nir_reflectance():
     )
     graph = build_nir_graph(scene, profile)
     for node, name in zip(graph.environment_nodes[:2], ("grass", "asphalt"), strict=True):
-        texture = _decode_srgb8(node.mesh.primitives[0].material.baseColorTexture.source)
+        texture = decode_srgb8(node.mesh.primitives[0].material.baseColorTexture.source)
         assert np.allclose(texture[..., 0], texture[..., 1]) and np.allclose(texture[..., 1], texture[..., 2])
         assert float(texture.mean()) == pytest.approx(NIR_REFLECTANCE_BY_TEXTURE[name], rel=0.02)
     assert tuple(graph.environment_nodes[2].mesh.primitives[0].material.emissiveFactor) == (0.0, 0.0, 0.0)

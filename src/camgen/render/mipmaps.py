@@ -21,19 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from camgen.render.gl import pyrender
-
-
-def srgb8_to_linear(codes: np.ndarray) -> np.ndarray:
-    """8-bit sRGB codes → linear values in [0, 1] (IEC 61966-2-1)."""
-    x = np.asarray(codes, dtype=np.float64) / 255.0
-    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
-
-
-def linear_to_srgb8(linear: np.ndarray) -> np.ndarray:
-    """Linear values → 8-bit sRGB codes, rounded to the nearest (IEC 61966-2-1)."""
-    x = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
-    srgb = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
-    return np.round(srgb * 255.0).astype(np.uint8)
+from camgen.world.textures import decode_srgb8, encode_srgb8
 
 
 def mip_levels(image: np.ndarray, *, srgb: bool) -> list[np.ndarray]:
@@ -45,7 +33,7 @@ def mip_levels(image: np.ndarray, *, srgb: bool) -> list[np.ndarray]:
     image = np.asarray(image)
     if image.dtype != np.uint8 or image.ndim != 3:
         raise ValueError(f"image must be (H, W, C) uint8, got {image.dtype} {image.shape}")
-    values = srgb8_to_linear(image) if srgb else image.astype(np.float64)
+    values = decode_srgb8(image) if srgb else image.astype(np.float64)
     levels = [image]
     while values.shape[0] > 1 or values.shape[1] > 1:
         height, width = max(1, values.shape[0] // 2), max(1, values.shape[1] // 2)
@@ -54,7 +42,7 @@ def mip_levels(image: np.ndarray, *, srgb: bool) -> list[np.ndarray]:
         else:
             resized = cv2.resize(values, (width, height), interpolation=cv2.INTER_AREA)
             values = resized.reshape(height, width, -1)
-        levels.append(linear_to_srgb8(values) if srgb else np.round(values).clip(0, 255).astype(np.uint8))
+        levels.append(encode_srgb8(values) if srgb else np.round(values).clip(0, 255).astype(np.uint8))
     return levels
 
 

@@ -36,13 +36,7 @@ from camgen.world.night import (
     default_nir_reflectance,
     nir_equivalent_intensity_cd,
 )
-from camgen.world.textures import encode_srgb8
-
-
-def _decode_srgb8(image: np.ndarray) -> np.ndarray:
-    """Linear values of 8-bit sRGB-encoded ones (IEC 61966-2-1), float32."""
-    v = image.astype(np.float32) / 255.0
-    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4).astype(np.float32)
+from camgen.world.textures import decode_srgb8, encode_srgb8
 
 
 def material_nir_reflectance(material: Material) -> float:
@@ -61,7 +55,8 @@ def _nir_material(material, reflectance: float | None) -> None:
     texture = material.baseColorTexture
     if texture is not None and texture.source is not None:
         image = texture.source
-        linear = _decode_srgb8(image[..., :3]) if image.dtype == np.uint8 else np.asarray(image[..., :3], np.float32)
+        encoded = image.dtype == np.uint8
+        linear = (decode_srgb8(image[..., :3]) if encoded else np.asarray(image[..., :3])).astype(np.float32)
         rule = default_nir_reflectance(linear * factor[:3])
         if reflectance is not None:  # keep the texture's variation around the material's mean
             mean = float(np.mean(rule))

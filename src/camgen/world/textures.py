@@ -263,6 +263,12 @@ def _facade(rng, size, m_per_px):
     return albedo, roughness, np.zeros((size, size))
 
 
+def decode_srgb8(codes: np.ndarray) -> np.ndarray:
+    """8-bit sRGB codes → linear values in [0, 1], float64 (IEC 61966-2-1; `encode_srgb8`'s inverse)."""
+    x = np.asarray(codes, dtype=np.float64) / 255.0
+    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
+
+
 def encode_srgb8(linear: np.ndarray) -> np.ndarray:
     """Linear values in [0, 1] → 8-bit sRGB (IEC 61966-2-1), as glTF base-colour textures are stored."""
     x = np.clip(linear, 0.0, 1.0)
