@@ -108,3 +108,20 @@ def test_sigterm_stops_a_render_like_ctrl_c(workspace):
     assert b"terminated" in stderr and b"Traceback" not in stderr
     assert not [p.name for p in out.rglob("*") if ".partial" in p.name]
     assert not list(out.rglob("manifest.json"))
+
+
+def test_a_render_stopped_just_before_its_manifest_leaves_nothing(workspace, monkeypatch):
+    """Every camera finished and renamed, job.json written, then the stop (a batch worker's SIGTERM landed
+    here once, leaving a whole camera folder in a job without a manifest): the render deletes what it wrote."""
+    import camgen.plan.execute
+
+    def stopped(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    small = FIXED_PROFILE.replace("width_px: 640", "width_px: 160").replace("height_px: 480", "height_px: 120")
+    write(workspace, "profiles/fixed.yaml", small)
+    scene = write(workspace, "scenes/walk.yaml", SCENE)
+    out = workspace / "out"
+    monkeypatch.setattr(camgen.plan.execute, "write_manifest", stopped)
+    assert main(["render", str(scene), "-o", str(out), "--frames", "2"]) == 130
+    assert not [path.relative_to(out).as_posix() for path in out.rglob("*")]

@@ -121,6 +121,9 @@ def _stop_with_parent() -> None:
 
 def _stop_worker(signum: int, frame) -> None:
     if _in_job:
+        # One stop is enough: a second SIGTERM must not cut short the unwinding that deletes the job's files
+        # (the parent's SIGKILL after `STOP_GRACE_S` still ends a worker that does not unwind).
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
         raise _WorkerStop
     os._exit(128 + signum)
 

@@ -44,7 +44,7 @@ from camgen.errors import ConfigError
 from camgen.io.files import write_text_atomic
 from camgen.io.manifest import JOB_NAME, read_manifest, verify
 from camgen.job import Job
-from camgen.plan.execute import job_directory_name, rendered_record
+from camgen.plan.execute import discard_unfinished, job_directory_name, rendered_record
 
 BATCH_MANIFEST_NAME = "dataset.json"
 """The dataset-level record in the output directory. Not manifest.json: `camgen verify OUT` would take a
@@ -274,6 +274,11 @@ def run_batch(
                     result = runner.result(handle)
                     if result is not None and result[2] is None:
                         record(index, *result)
+                    else:
+                        # A worker that did not unwind within the grace period was killed in the middle of
+                        # its job (a long draw or encode): its temporary files are deleted here instead.
+                        job = jobs[index][1]
+                        discard_unfinished(job, out_dir / job_directory_name(job))
         finally:
             if runner is not None:
                 runner.close()

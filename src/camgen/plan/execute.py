@@ -17,10 +17,11 @@ camgen version), so that callers can say it is skipped.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import shutil
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Collection, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -155,30 +156,59 @@ def execute(
                 shutil.rmtree(directory)
     results = []
     maps = LensMapCache()  # cameras with the same lens and zoom share their maps
-    with ThreadPoolExecutor(NOISE_THREADS) as executor:
-        for camera_index, camera in enumerate(job.cameras):
-            if wanted is not None and camera.name not in wanted:
-                continue
-            # A camera's files (per-frame images included) are written under a temporary name and the
-            # folder is renamed when the camera is complete; a render stopped part-way leaves none.
-            partial = job_dir / f"{camera.name}{PARTIAL_SUFFIX}"
-            context = _Context(job, camera_index, partial, renderer, maps, executor)
-            try:
+    try:
+        with ThreadPoolExecutor(NOISE_THREADS) as executor:
+            for camera_index, camera in enumerate(job.cameras):
+                if wanted is not None and camera.name not in wanted:
+                    continue
+                # A camera's files (per-frame images included) are written under a temporary name and the
+                # folder is renamed when the camera is complete; a render stopped part-way leaves none.
+                partial = job_dir / f"{camera.name}{PARTIAL_SUFFIX}"
+                context = _Context(job, camera_index, partial, renderer, maps, executor)
                 result = _execute_camera(context, indices, resolve_path, save_passes, on_frame)
-            except BaseException:
-                shutil.rmtree(partial, ignore_errors=True)
-                raise
-            final = job_dir / camera.name
-            partial.replace(final)
-            result.directory = final
-            result.files = [final / path.relative_to(partial) for path in result.files]
-            results.append(result)
-    # Written last: a job directory with job.json in it holds a finished render, of the cameras and
-    # frames the manifest's `rendered` names (all of them unless --camera/--frames chose fewer).
-    write_text_atomic(job_dir / "job.json", job.to_json())
-    rendered = rendered_record([r.name for r in results], indices if frames is not None else None)
-    write_manifest(job, job_dir, rendered=rendered)  # after everything, job.json included
+                final = job_dir / camera.name
+                partial.replace(final)
+                result.directory = final
+                result.files = [final / path.relative_to(partial) for path in result.files]
+                results.append(result)
+        # Written last: a job directory with job.json in it holds a finished render, of the cameras and
+        # frames the manifest's `rendered` names (all of them unless --camera/--frames chose fewer).
+        write_text_atomic(job_dir / "job.json", job.to_json())
+        rendered = rendered_record([r.name for r in results], indices if frames is not None else None)
+        write_manifest(job, job_dir, rendered=rendered)  # after everything, job.json included
+    except BaseException:
+        # Stopped anywhere before the manifest (an error, Ctrl-C, a batch worker's SIGTERM, even between
+        # job.json and the manifest): nothing this render wrote stays, finished cameras included, so a job
+        # directory without a manifest holds no file of it.
+        discard_unfinished(job, job_dir, wanted)
+        raise
     return results
+
+
+def discard_unfinished(job: Job, job_dir: Path, cameras: Collection[str] | None = None) -> bool:
+    """Delete what an unfinished render of `job` left in `job_dir` (its cameras' folders, finished or
+    ``.partial``, and job.json), unless the job's manifest is there (a finished render). cameras: only these
+    cameras' folders (None: every camera of the job). The job directory goes too once it is empty. Returns
+    whether anything was deleted. Used when a render stops part-way, by `execute` itself, and by a batch whose
+    worker was killed before it could (`camgen.batch.run`)."""
+    job_dir = Path(job_dir)
+    if not job_dir.is_dir() or (job_dir / "manifest.json").exists():
+        return False
+    deleted = False
+    for camera in job.cameras:
+        if cameras is not None and camera.name not in cameras:
+            continue
+        for directory in (job_dir / camera.name, job_dir / f"{camera.name}{PARTIAL_SUFFIX}"):
+            if directory.is_dir():
+                shutil.rmtree(directory, ignore_errors=True)
+                deleted = True
+    job_json = job_dir / "job.json"
+    if job_json.exists():
+        job_json.unlink(missing_ok=True)
+        deleted = True
+    with contextlib.suppress(OSError):
+        job_dir.rmdir()  # only if empty
+    return deleted
 
 
 @dataclass
