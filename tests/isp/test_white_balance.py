@@ -48,6 +48,20 @@ def test_saturated_sites_are_left_out(cfa):
     assert grey_world_gains(mosaic, cfa, BLACK_DN, white_level_dn=white + 1, subsample=1)[0] < 0.75 * gains[0]
 
 
+@pytest.mark.parametrize("cfa", CFA_PATTERNS)
+def test_a_cell_with_one_clipped_channel_is_left_out_whole(cfa):
+    """A bright sky whose blue clips while its red and green do not: kept per site, its red and green would
+    pull those means up and tint the grey ground below it (the intersection's dusk sky turned it green)."""
+    white = 4095
+    mosaic = lit_grey_scene(cfa, np.full((40, 50), 50.0))
+    index = cfa_channel_index(cfa, *mosaic.shape)
+    sky = np.arange(mosaic.shape[0])[:, None] < 20
+    mosaic[sky & (index == 2)] = white
+    mosaic[sky & (index != 2)] = 3000
+    gains = grey_world_gains(mosaic, cfa, BLACK_DN, white_level_dn=white, subsample=1)
+    np.testing.assert_allclose(gains, LIGHT_RGB[1] / LIGHT_RGB, rtol=1e-12)
+
+
 def test_samples_below_black_count_as_negative_signal():
     mosaic = np.full((8, 8), 100, np.uint16)
     mosaic[::2, ::2] = [[60], [140], [60], [140]]  # R averages 100 − 64 = 36 from samples on both sides of black

@@ -40,9 +40,9 @@ def grey_world_gains(
     black_level_dn : float
         Offset of a dark site, DN (≥ 0).
     white_level_dn : float
-        Sites at or above this value are clipped (saturated) and left out of the means, as a camera's
-        AWB does: their values no longer follow the light's colour. Default: the uint16 maximum; pass
-        the sensor's 2^bits − 1 (or its lower clip level).
+        Sites at or above this value are clipped (saturated): their 2×2 cell, every channel of it, is left
+        out of the means, as a camera's AWB leaves out clipped pixels: their values no longer follow the
+        light's colour. Default: the uint16 maximum; pass the sensor's 2^bits − 1 (or its lower clip level).
     subsample : int
         Stride, in sites of one Bayer phase, of the samples taken along each axis (≥ 1): every phase is
         sampled at rows ``py + 2·subsample·i`` and columns ``px + 2·subsample·j``, so each colour is
@@ -62,7 +62,7 @@ def grey_world_gains(
 
     Notes
     -----
-    With S_c the unsaturated samples of channel c and b the black level,
+    With S_c the samples of channel c in cells without a clipped site and b the black level,
 
         m_c = (1/|S_c|) Σ_{x ∈ S_c} (x − b),        g_c = m_G / m_c.
 
@@ -80,13 +80,20 @@ def grey_world_gains(
     if isinstance(subsample, bool) or not isinstance(subsample, int | np.integer) or subsample < 1:
         raise ValueError(f"subsample must be an integer ≥ 1, got {subsample!r}")
     step = 2 * int(subsample)
+    # The same 2×2 cells in every phase (a mosaic of odd size has one row or column fewer of some phases).
+    planes = [mosaic[phase // 2 :: step, phase % 2 :: step] for phase in range(4)]
+    rows = min(plane.shape[0] for plane in planes)
+    cols = min(plane.shape[1] for plane in planes)
+    planes = [plane[:rows, :cols] for plane in planes]
+    # A cell counts only when none of its sites is clipped: where one channel clips (the blue of a bright
+    # sky, the red of a sunset) the others keep rising, and keeping them alone would weigh the cell's colour
+    # by the channel that clipped (a dusk sky turned a street green this way).
+    unclipped = np.logical_and.reduce([plane < white_level_dn for plane in planes])
     sums = np.zeros(3)
     counts = np.zeros(3)
-    for phase, channel in enumerate(phases):
-        sites = mosaic[phase // 2 :: step, phase % 2 :: step]
-        unsaturated = sites < white_level_dn
-        sums[channel] += np.sum(sites, where=unsaturated, dtype=np.float64)
-        counts[channel] += np.count_nonzero(unsaturated)
+    for plane, channel in zip(planes, phases, strict=True):
+        sums[channel] += np.sum(plane, where=unclipped, dtype=np.float64)
+        counts[channel] += np.count_nonzero(unclipped)
     if np.any(counts == 0):
         return np.array(UNITY_GAINS_RGB)
     means = sums / counts - black_level_dn
