@@ -115,7 +115,11 @@ def add_parser(subparsers) -> None:
         "match",
         help="noise and tone parameters from a camera's ordinary 8-bit output",
         description="For a camera whose raw frames are not available: measure the noise level function of "
-        "its 8-bit output and fit the base profile's noise and ISP parameters to reproduce it.",
+        "its 8-bit output and fit the base profile's noise and ISP parameters to reproduce it. The matched "
+        "profile pins the exposure and gain the fit assumed (manual exposure), is rendered once more at that "
+        "operating point with an independent seed, and is refused unless its noise level function (every "
+        "intensity bin with enough samples), temporal noise spectrum and blockiness agree with the reference's "
+        "within 15 %%.",
     )
     match.add_argument(
         "--reference",
@@ -143,6 +147,13 @@ def add_parser(subparsers) -> None:
         action="store_true",
         help="leave the profile's codec out of the fit's simulation (by default a video reference is "
         "compared with camgen's output encoded by the profile's codec)",
+    )
+    match.add_argument(
+        "--accept-poor-fit",
+        action="store_true",
+        help="write the profile even when, rendered at the operating point, it misses the reference by more than "
+        "15 %% (an NLF bin with enough samples, the temporal noise spectrum or blockiness); the doubts become "
+        "warnings, also in the profile's header",
     )
     _add_output_options(match, "match", profile_required=True)
     match.set_defaults(run=run_match)
@@ -512,6 +523,7 @@ def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
     from camgen.fit.match import fit_match
     from camgen.fit.match_report import write_match_report
     from camgen.fit.match_statistics import ReferenceContentError
+    from camgen.fit.match_verify import MatchNotReproducedError
 
     if args.max_frames < 1:
         raise ConfigError(f"--max-frames must be ≥ 1, got {args.max_frames}")
@@ -555,17 +567,41 @@ def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
                 fit_denoise=args.fit_denoise,
                 codec=codec,
                 codec_fps=codec_fps,
+                accept_poor_match=args.accept_poor_fit,
             )
         except ReferenceContentError as exc:  # fit_match sees arrays only: say which reference it was
             where = listing([str(path) for path in args.reference])
-            raise ConfigError([Problem((), f"--reference {where}: {problem}") for problem in exc.problems]) from None
+            problems = [Problem((), f"--reference {where}: {problem}") for problem in exc.problems]
+            if isinstance(exc, MatchNotReproducedError) and exc.fit is not None:
+                # The refused match's report shows where it misses; the profile is not written.
+                report = _report_path(args)
+                try:
+                    write_match_report(exc.fit, report)
+                    problems.append(Problem((), f"the report {report} shows both curves; no profile was written"))
+                except OSError:
+                    pass
+            raise ConfigError(problems) from None
     _warn(err, list(fit.warnings))
     rows = [(key, value, fit.uncertainties.get(key, math.nan), "") for key, value in fit.parameters.items()]
     worst = fit.worst_relative_error
     _print_rows(out, f"fitted to {frames_read} reference frames (worst NLF bin {worst:.1%})", rows)
+    point, verification = fit.operating_point, fit.verification
+    out.print(escape(point.describe()), soft_wrap=True)
+    verdict = "reproduces the reference" if verification.reproduces else "does NOT reproduce the reference"
+    out.print(
+        escape(
+            f"rendered at the operating point (independent seed {verification.seed}), the matched profile {verdict}: "
+            f"{verification.summary()}"
+        ),
+        soft_wrap=True,
+    )
     header = [
-        f"camgen fit match --reference {' '.join(str(p) for p in args.reference)} --profile {args.profile}",
-        f"noise level function ({fit.reference.method}) reproduced within {worst:.1%} in every bin",
+        f"camgen fit match --reference {' '.join(str(p) for p in args.reference)} --profile {args.profile}"
+        + (" --accept-poor-fit" if args.accept_poor_fit else ""),
+        f"noise level function ({fit.reference.method}) fitted within {worst:.1%} in every compared bin",
+        point.describe(),
+        f"verified by rendering at the operating point with an independent seed: {verification.summary()}",
+        *(f"warning: {warning}" for warning in fit.warnings),
     ]
     _write_outputs(args, out, fit.profile_fragment(), header, lambda path: write_match_report(fit, path))
     return 0

@@ -55,6 +55,45 @@ clip one channel at the stretch's top shifts the simulated stretch by a few perc
 takes up. The spatial method, on a few images, gives a rough fit (bins scatter by ±10 %): prefer frames
 of a static view.
 
+What 8-bit footage can and cannot identify
+------------------------------------------
+The output shows noise variance against output level, per channel, after an unknown tone curve, an
+adaptive stretch and a codec: NLF(c) ≈ (dc/de)² · (e(c) + σ_read²), with e(c) the electrons that map to
+output code c and dc/de the codes per electron there (the tone curve's slope times 255 over the electrons
+the stretch spans). From this:
+
+- *identified*: the electrons per output code at the operating point (the shot-noise slope of the NLF),
+  i.e. the effective full well at the assumed gain, to a few per cent on a static view with mid-tones;
+  the codec's and ISP's temporal correlation and blockiness of the noise, compared after the fit;
+- *not identified*: the analog gain (a 4× larger full well at +12 dB gives the same output as the base at
+  0 dB), the absolute light (only its level relative to the stretch; the fit assumes the auto-exposure
+  target for an auto base, a raw range spanning the output for a manual one), and so the exposure time;
+  these set the operating point the matched profile pins rather than measures;
+- *read noise against full well*: read noise shows only as the constant term of the NLF at its darkest
+  bins. Where the NLF has only a shot-noise slope (no dark bins, or 8-bit rounding's 1/12 code² and a
+  codec's rounding swamp the constant), read noise is unconstrained (`MatchFit.uncertainties`, a warning);
+  where the stretch's low limit sits above black (no true black in view), that limit's shot noise is a
+  constant too, so read noise and the stretch's black offset are confounded (the pedestal warning); an
+  8-bit MPEG stream quantises small noise away (its NLF falls below the sensor's in flat areas and the
+  codec's inter-frame prediction correlates it in time), so read noise and full well from such footage
+  are effective values that reproduce it only through the same codec.
+
+Operating point and verification
+--------------------------------
+The fit assumes an exposure: the base's exposure time and ``gain_db`` (default the base's gain), with the
+content's light at the auto-exposure target (an auto base) or spanning the raw range (a manual one). The
+matched profile pins it as a manual exposure (`OperatingPoint`): left to auto-exposure, a rendered scene
+gets the camera's own split of exposure time and gain, whose electrons per code are not those the fit
+found (issue 24 measured the matched profile's noise equal to the base's that way). Then the matched
+profile films the reference's content once more under the same light, through its own exposure block,
+with an independent seed and the codec, and its NLF, temporal noise spectrum and blockiness are compared
+with the reference's (`camgen.fit.match_verify`); a miss beyond 15 % is refused with
+`MatchNotReproducedError` unless ``accept_poor_match``. The content model leaves a bias of its own at the
+darkest bins: the content is the inverse of the output's temporal mean, biased by the clip at code 0 and
+by its residual noise, and the adaptive stretch keys on those tails (at 12 dB gain on a 160 × 120 ramp,
+the truth's own parameters simulated from the inverted content miss the darkest R bin by +28 %, the true
+light by +9 %); a fit absorbs it into its parameters or is refused.
+
 References
 ----------
 C. Liu, W. T. Freeman, R. Szeliski and S. B. Kang, "Noise estimation from a single image", CVPR 2006;
@@ -83,9 +122,20 @@ from camgen.fit.match_nlf import (
     _check_method,
     _nlf,
 )
-from camgen.fit.match_simulation import _content, _grey_world, _simulate
+from camgen.fit.match_simulation import (
+    _capture,
+    _codec_fps,
+    _content,
+    _exposure_at_light,
+    _grey_world,
+    _light,
+    _simulate,
+)
 from camgen.fit.match_statistics import ReferenceContentError, _collect, _plane_image
 from camgen.fit.match_tone import _tone_from_counts
+from camgen.fit.match_verify import MatchNotReproducedError, MatchVerification, OperatingPoint, compare
+from camgen.sensor.auto_exposure import metering_window
+from camgen.sensor.exposure import photons_per_cd_m2_s
 
 SIGNIFICANT_DIGITS = 4
 """Fitted values are rounded to this many significant digits."""
@@ -123,6 +173,8 @@ PEDESTAL_READ_SHARE = 0.5
 """With a contrast stretch, a fit whose read noise makes more than this share of the variance at the
 darkest compared bin gets a warning: that constant term is what a stretch low limit above black (a
 scene without black) produces as well (module docstring)."""
+VERIFY_SEED_KEY = 0x5EED
+"""Mixed with the fit's seed into the verification's (`SeedSequence`), so the two are independent."""
 DIFF_STEP = 0.02
 """Finite-difference step of the fit, in log parameter units (2 %; denoise strength: 0.02): far above
 the jitter that 8-bit rounding gives the objective."""
@@ -163,6 +215,11 @@ class MatchFit:
         Jacobian of the log-NLF residuals at the solution and s² their variance per degree of freedom,
         carried to the profile's values to first order. inf where the NLF does not respond to a value,
         NaN where there are no more residuals than variables.
+    operating_point : OperatingPoint or None
+        The exposure the fit assumed, which `profile` pins as a manual exposure (None only for a fit made
+        without it).
+    verification : MatchVerification or None
+        `profile` rendered at the operating point with an independent seed, against the reference.
     """
 
     reference: NoiseLevelFunction
@@ -177,12 +234,18 @@ class MatchFit:
     light_rgb: tuple[float, float, float]
     evaluations: int
     uncertainties: dict[str, float] = field(default_factory=dict)
+    operating_point: OperatingPoint | None = None
+    verification: MatchVerification | None = None
 
     def profile_fragment(self) -> dict:
-        """YAML-ready nested dict of only the fitted keys (plain floats and lists)."""
+        """YAML-ready nested dict of only the fitted keys (plain floats and lists), and the pinned
+        operating point (``exposure``: mode, exposure time, gain)."""
         dumped = self.profile.model_dump(mode="json")
         fragment: dict = {}
-        for key in self.parameters:
+        keys = list(self.parameters)
+        if self.operating_point is not None:
+            keys += ["exposure.mode", "exposure.exposure_time_s", "exposure.gain_db"]
+        for key in keys:
             path = key.split("[")[0].split(".")
             value = dumped
             for part in path:
@@ -281,6 +344,7 @@ def fit_match(
     codec_fps: float | None = None,
     simulation_max_px: int = 320 * 240,
     max_evaluations: int = 60,
+    accept_poor_match: bool = False,
 ) -> MatchFit:
     """Fit the base profile's noise so that camgen's output reproduces the reference's noise level function.
 
@@ -315,6 +379,8 @@ def fit_match(
     max_evaluations : int
         Most evaluations of the objective the optimiser may make; each of its iterations also runs one
         simulation per fitted parameter for the finite differences.
+    accept_poor_match : bool
+        Return a match that the verification doubts (its doubts become warnings) instead of raising.
 
     Returns
     -------
@@ -323,7 +389,12 @@ def fit_match(
     Raises
     ------
     ConfigError
-        For a reference `nlf_from_frames` refuses, or a simulation that shares no usable bin with it.
+        For a reference `nlf_from_frames` refuses, a simulation that shares no usable bin with it, or a
+        `gain_db` above the base sensor's ``analog_gain_max_db``.
+    MatchNotReproducedError
+        (a ConfigError) Unless `accept_poor_match`: the matched profile, rendered at its operating point,
+        misses the reference by more than 15 % in an NLF bin with enough samples, in the temporal noise
+        spectrum or in blockiness (`camgen.fit.match_verify`); its ``fit`` holds the refused MatchFit.
 
     Notes
     -----
@@ -333,12 +404,18 @@ def fit_match(
     """
     _check_method(method)
     edges = _bin_edges(bins)
+    if gain_db is not None and not 0 <= gain_db <= base.sensor.analog_gain_max_db:
+        raise ConfigError(
+            f"gain_db must lie in [0, sensor.analog_gain_max_db] = [0, {base.sensor.analog_gain_max_db:g}] dB of "
+            f"the base profile, got {gain_db:g}: the matched profile pins the exposure at this gain"
+        )
     statistics = _collect(
         reference_frames_rgb8,
         temporal=method != "spatial",
         spatial=method != "temporal",
         histogram=True,
         half_scale=fit_denoise,
+        spectrum=True,
     )
     reference = _nlf(statistics, method, edges, min_count)
     if not np.any(reference.variance[reference.usable] > 0):
@@ -566,16 +643,40 @@ def fit_match(
                 f"{key} is hardly constrained by this reference (1σ {shown}){why}; the fitted value is not a "
                 "measurement"
             )
-    profile = _with_values(base, values)
+    unpinned = _with_values(base, values)
     light = light_at(solution.x)
-    fitted = measure(profile, light)
+    fitted = measure(unpinned, light)
     base_nlf = measure(base, light)
     with np.errstate(invalid="ignore", divide="ignore"):
         relative = fitted.variance / reference.variance - 1.0
     worst = float(np.nanmax(np.abs(relative[mask]))) if np.isfinite(relative[mask]).any() else math.nan
     if not worst <= WORST_BIN_WARNING:
         warnings.append(f"the fitted NLF misses the reference by up to {worst:.0%} in a bin")
-    return MatchFit(
+
+    # The operating point: the light that gave the fit its output levels, and the exposure it was taken
+    # at, pinned as the matched profile's manual exposure (what auto-exposure would choose for a
+    # rendered scene is not what the fit assumed).
+    scene = _light(unpinned, content, light)
+    operating_point = _operating_point(unpinned, scene.photons_per_s, scene.exposure_time_s, scene.gain_db)
+    profile = unpinned.model_copy(
+        update={
+            "exposure": unpinned.exposure.model_copy(
+                update={"mode": "manual", "exposure_time_s": scene.exposure_time_s, "gain_db": scene.gain_db}
+            )
+        }
+    )
+    verification = _verify(
+        profile,
+        content,
+        scene.photons_per_s,
+        reference,
+        statistics,
+        edges=edges,
+        count=count,
+        frames=frames,
+        seed=simulation_seed,
+    )
+    result = MatchFit(
         reference=reference,
         fitted=fitted,
         base=base_nlf,
@@ -583,11 +684,79 @@ def fit_match(
         relative_error_per_bin=relative,
         worst_relative_error=worst,
         profile=profile,
-        warnings=tuple(warnings),
+        warnings=tuple(warnings + list(verification.doubts)),
         tone=tone,
         light_rgb=light,
         evaluations=len(evaluated),
         uncertainties=uncertainties,
+        operating_point=operating_point,
+        verification=verification,
+    )
+    if verification.doubts and not accept_poor_match:
+        raise MatchNotReproducedError(
+            "the matched profile does not reproduce the reference: "
+            + "; ".join(verification.doubts)
+            + f". {REFUSAL_ADVICE}",
+            fit=result,
+        )
+    return result
+
+
+REFUSAL_ADVICE = (
+    "What to try: the temporal method on frames of a static view (--method temporal) with more frames "
+    "(--max-frames), the reference's own codec in the base profile (or --no-codec when the footage is "
+    "lossless), --fit-denoise where the camera smooths its noise, and the gain the footage was taken at "
+    "(--gain-db); or pass --accept-poor-fit to write the profile anyway, with these doubts in its header"
+)
+"""The end of `MatchNotReproducedError`'s message."""
+
+
+def _operating_point(
+    profile: Profile, photons_per_s: np.ndarray, exposure_time_s: float, gain_db: float
+) -> OperatingPoint:
+    """The exposure the fit assumed and the mean scene luminance (metering window) of its light."""
+    sensor = profile.sensor
+    window = metering_window(*photons_per_s.shape, profile.exposure.auto.metering_region_frac)
+    per_cd_m2_s = photons_per_cd_m2_s(sensor.pixel_pitch_um * sensor.pitch_y_um, profile.lens.f_number)
+    return OperatingPoint(
+        exposure_time_s=exposure_time_s,
+        gain_db=gain_db,
+        f_number=profile.lens.f_number,
+        mean_luminance_cd_m2=float(np.mean(photons_per_s[window], dtype=np.float64)) / per_cd_m2_s,
+        was_auto=profile.exposure.mode == "auto",
+    )
+
+
+def _verify(
+    profile: Profile,
+    content,
+    photons_per_s: np.ndarray,
+    reference: NoiseLevelFunction,
+    reference_statistics,
+    *,
+    edges: np.ndarray,
+    count: int,
+    frames: int,
+    seed: int,
+) -> MatchVerification:
+    """The matched profile films the content's light through its own exposure block, with a seed
+    independent of the fit's, through the codec; its output against the reference (`camgen.fit.match_verify`)."""
+    exposure_time_s, gain = _exposure_at_light(profile, photons_per_s, fps=_codec_fps(profile, content))
+    verify_seed = int(np.random.SeedSequence([seed % 2**63, VERIFY_SEED_KEY]).generate_state(1, np.uint64)[0] >> 1)
+    output = _capture(
+        profile, content, photons_per_s, exposure_time_s=exposure_time_s, gain_db=gain, frames=frames, seed=verify_seed
+    )
+    temporal = reference.method == "temporal"
+    simulated = _collect(output, temporal=temporal, spatial=not temporal, histogram=False, spectrum=temporal)
+    nlf = _nlf(simulated, reference.method, edges, count, refuse_empty=False)
+    return compare(
+        reference,
+        reference_statistics,
+        nlf,
+        simulated if temporal else None,
+        exposure_time_s=exposure_time_s,
+        gain_db=gain,
+        seed=verify_seed,
     )
 
 

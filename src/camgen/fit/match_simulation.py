@@ -39,7 +39,7 @@ from camgen.io.video import VideoWriter, decoded_rgb8
 from camgen.isp.pipeline import CameraIsp
 from camgen.isp.tone import tone_curve
 from camgen.plan.compile import isp_steps
-from camgen.sensor.auto_exposure import metering_window
+from camgen.sensor.auto_exposure import ExposureLimits, metering_window, split_exposure
 from camgen.sensor.capture import NOISE_TERMS, SensorModel
 from camgen.sensor.cfa import cfa_site_values, mosaic
 from camgen.sensor.characteristics import saturation_e
@@ -203,34 +203,116 @@ def _exposure_scale(site: np.ndarray, profile: Profile, gain_db: float) -> float
     return scale
 
 
-def _simulate(
-    profile: Profile, content: _Content, light_rgb: tuple[float, float, float], *, frames: int, seed: int
-) -> list[np.ndarray]:
-    """Camgen's 8-bit output of the static content through the profile's sensor and ISP."""
+@dataclass(frozen=True)
+class _Light:
+    """The simulated scene's light at the sensor and the exposure that gave the fit's output levels."""
+
+    photons_per_s: np.ndarray
+    """(H, W) float32: photons per second arriving at each site (before its QE)."""
+    exposure_time_s: float
+    gain_db: float
+
+
+def _light(profile: Profile, content: _Content, light_rgb: tuple[float, float, float]) -> _Light:
+    """The photons per second that give the site levels of `_site_levels` at the profile's exposure time
+    and the content's gain, once the sensor model applies each colour's QE."""
+    sensor = profile.sensor
     height, width = content.linear_rgb.shape[:2]
-    sensor = profile.sensor.model_copy(update={"width_px": width, "height_px": height})
-    terms = TEMPORAL_NOISE_TERMS if content.shows_fixed_pattern else NOISE_TERMS
-    model = SensorModel.build(sensor, profile.serial, terms=terms)
-    isp = CameraIsp(
-        profile.isp, sensor, frame_interval_s=1.0 / sensor.frame_rate_max_hz, steps=isp_steps(profile.isp, sensor)
-    )
     saturation, _ = saturation_e(
         sensor.full_well_e, sensor.conversion_gain_dn_per_e, sensor.black_level_dn, sensor.bit_depth, content.gain_db
     )
     exposure_time_s = profile.exposure.exposure_time_s
     qe = sensor.quantum_efficiency
     per_photon = 1.0 if sensor.cfa == "mono" else cfa_site_values((qe.r, qe.g, qe.b), sensor.cfa, height, width)
-    # Photons per second that give the site levels once the sensor model applies each colour's QE.
     rate = _site_levels(content, profile, light_rgb) * np.float32(saturation / exposure_time_s) / per_photon
+    return _Light(photons_per_s=rate.astype(np.float32), exposure_time_s=exposure_time_s, gain_db=content.gain_db)
+
+
+def _exposure_at_light(profile: Profile, photons_per_s: np.ndarray, *, fps: float) -> tuple[float, float]:
+    """(exposure time s, gain dB) that the profile's own exposure block sets for this light: the manual
+    setting, or where auto-exposure settles as `camgen.plan.camera_pipeline.CameraPipeline.converge_exposure`
+    finds it (the noise-free metered level at the target, exposure time first up to the frame interval,
+    then analog gain up to ``sensor.analog_gain_max_db``)."""
+    sensor, exposure = profile.sensor, profile.exposure
+    if exposure.mode != "auto":
+        return exposure.exposure_time_s, exposure.gain_db
+    longest = min(exposure.exposure_time_max_s, 1.0 / fps)
+    limits = ExposureLimits(min(exposure.exposure_time_min_s, longest), longest, sensor.analog_gain_max_db)
+    height, width = photons_per_s.shape
+    qe = sensor.quantum_efficiency
+    per_photon = 1.0 if sensor.cfa == "mono" else cfa_site_values((qe.r, qe.g, qe.b), sensor.cfa, height, width)
+    window = metering_window(height, width, exposure.auto.metering_region_frac)
+    rate_e_per_s = (photons_per_s * per_photon)[window].astype(np.float64)
+    range_dn = sensor.white_level_dn - sensor.black_level_dn
+    setting = split_exposure(exposure.exposure_time_s * gain_linear(exposure.gain_db), limits)
+    for _ in range(30):
+        clip_e, _ = saturation_e(
+            sensor.full_well_e,
+            sensor.conversion_gain_dn_per_e,
+            sensor.black_level_dn,
+            sensor.bit_depth,
+            setting.gain_db,
+        )
+        electrons = np.minimum(rate_e_per_s * setting.exposure_time_s, clip_e)
+        level = float(np.mean(electrons)) * sensor.conversion_gain_dn_per_e * gain_linear(setting.gain_db) / range_dn
+        if level <= 0:
+            return split_exposure(limits.product_max_s, limits).exposure_time_s, limits.gain_max_db
+        settled = split_exposure(setting.product_s * exposure.auto.target_level_frac / level, limits)
+        done = abs(settled.product_s / setting.product_s - 1) < 1e-4
+        setting = settled
+        if done:
+            break
+    return setting.exposure_time_s, setting.gain_db
+
+
+def _simulate(
+    profile: Profile, content: _Content, light_rgb: tuple[float, float, float], *, frames: int, seed: int
+) -> list[np.ndarray]:
+    """Camgen's 8-bit output of the static content through the profile's sensor and ISP."""
+    light = _light(profile, content, light_rgb)
+    return _capture(
+        profile,
+        content,
+        light.photons_per_s,
+        exposure_time_s=light.exposure_time_s,
+        gain_db=light.gain_db,
+        frames=frames,
+        seed=seed,
+    )
+
+
+def _capture(
+    profile: Profile,
+    content: _Content,
+    photons_per_s: np.ndarray,
+    *,
+    exposure_time_s: float,
+    gain_db: float,
+    frames: int,
+    seed: int,
+) -> list[np.ndarray]:
+    """Frames of a static light (photons per second per site) through the profile's sensor at an exposure,
+    its ISP and the content's codec."""
+    height, width = photons_per_s.shape
+    sensor = profile.sensor.model_copy(update={"width_px": width, "height_px": height})
+    terms = TEMPORAL_NOISE_TERMS if content.shows_fixed_pattern else NOISE_TERMS
+    model = SensorModel.build(sensor, profile.serial, terms=terms)
+    isp = CameraIsp(
+        profile.isp, sensor, frame_interval_s=1.0 / sensor.frame_rate_max_hz, steps=isp_steps(profile.isp, sensor)
+    )
     rng = np.random.default_rng(seed)
     out = []
     for _ in range(frames):
-        raw = model.capture(rate, exposure_time_s=exposure_time_s, gain_db=content.gain_db, rng=rng)
-        out.append(isp.process(raw, content.gain_db))
+        raw = model.capture(photons_per_s, exposure_time_s=exposure_time_s, gain_db=gain_db, rng=rng)
+        out.append(isp.process(raw, gain_db))
     if content.codec is not None:
-        fps = content.codec_fps if content.codec_fps is not None else sensor.frame_rate_max_hz
-        out = _through_codec(out, content.codec, fps=fps)
+        out = _through_codec(out, content.codec, fps=_codec_fps(profile, content))
     return out
+
+
+def _codec_fps(profile: Profile, content: _Content) -> float:
+    """Frame rate the simulated frames are encoded (and auto-exposure's frame interval set) at, Hz."""
+    return content.codec_fps if content.codec_fps is not None else profile.sensor.frame_rate_max_hz
 
 
 def _through_codec(frames_rgb8: list[np.ndarray], codec: Codec, *, fps: float) -> list[np.ndarray]:

@@ -6,7 +6,10 @@ each frame is checked (`_check_frame`) and its histogram counted; for the spatia
 blocks are reduced to a mean, plane slopes and a residual variance (`_block_statistics`); for the
 temporal method its sums, squares and squared successive differences, its clipped samples and its
 moving pixels are accumulated (`_Statistics`), and the same of the frames averaged over 2 × 2 pixels
-when the denoise strength is fitted. `camgen.fit.match_nlf` turns them into a noise level function,
+when the denoise strength is fitted. With ``spectrum``, the temporal pass also sums the squared
+differences of frames `SPECTRUM_LAGS` apart and the squared steps of the successive-frame differences
+across and inside the 8 × 8 block grid, from which `camgen.fit.match_verify` measures the noise's temporal
+correlation and its blockiness. `camgen.fit.match_nlf` turns them into a noise level function,
 `camgen.fit.match_tone` into the clips of the output.
 
 References
@@ -19,6 +22,7 @@ noise from a single image", IEEE TPAMI 30(2), 299–314 (2008).
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
@@ -42,6 +46,8 @@ BLOCK_PX = 8
 """Side of the blocks of the spatial method, px."""
 SPATIAL_FRAMES_MAX = 64
 """The spatial method reads blocks from at most this many frames."""
+SPECTRUM_LAGS = 4
+"""Frame lags 1…4 of the temporal correlation the spectrum pass measures (`camgen.fit.match_verify`)."""
 
 
 def _check_frame(index: int, frame: object) -> np.ndarray:
@@ -132,7 +138,16 @@ class _Statistics:
     counts: np.ndarray = field(default_factory=lambda: np.zeros((3, 256), np.int64))
     half: _Statistics | None = None
     """The same statistics of the frames averaged over 2 × 2 pixels (temporal only), or None."""
+    spectrum: bool = False
+    lag_squared_differences: list[np.ndarray] = field(default_factory=list)
+    """With ``spectrum``: per lag k = 2 … `SPECTRUM_LAGS`, Σ_t (x_{t+k} − x_t)² per pixel and channel (lag 1
+    is `squared_differences`)."""
+    block_steps: dict[str, np.ndarray] = field(default_factory=dict)
+    """With ``spectrum``: Σ over successive pairs of the squared step of the frame difference d between a
+    pixel at an odd offset and the next one, ``"x"`` (H, ⌊(W − 1)/2⌋, 3) along rows between columns
+    (2i + 1, 2i + 2), ``"y"`` likewise along columns."""
     _previous: np.ndarray | None = None
+    _history: deque = field(default_factory=deque)
     _previous_luma: np.ndarray | None = None
 
     def add(self, frame: np.ndarray) -> None:
@@ -176,14 +191,43 @@ class _Statistics:
                 self.moving |= change > MOTION_THRESHOLD_CODES
                 cv2.accumulateSquare(cv2.absdiff(frame, self._previous), self.squared_differences)
                 self.pairs += 1
+                if self.spectrum:
+                    _add_block_steps(self.block_steps, frame.astype(np.int16) - self._previous)
+        if self.spectrum:
+            self._add_lags(frame)
         self._previous = frame.copy()  # a reader may refill the array it yielded
         self._previous_luma = luma
+
+    def _add_lags(self, frame: np.ndarray) -> None:
+        """Σ (x_t − x_{t−k})² for k = 2 … `SPECTRUM_LAGS`, from the frames kept in `_history`."""
+        if not self.lag_squared_differences:
+            self.lag_squared_differences = [np.zeros(frame.shape, np.float64) for _ in range(SPECTRUM_LAGS - 1)]
+        for k, earlier in enumerate(reversed(self._history), start=1):
+            if k >= 2:
+                cv2.accumulateSquare(cv2.absdiff(frame, earlier), self.lag_squared_differences[k - 2])
+        self._history.append(frame.copy())
+        if len(self._history) > SPECTRUM_LAGS:
+            self._history.popleft()
 
     @property
     def static_fraction(self) -> float:
         if self.moving is None or self.pairs == 0:
             return math.nan
         return 1.0 - float(np.mean(self.moving))
+
+
+def _add_block_steps(steps: dict[str, np.ndarray], difference: np.ndarray) -> None:
+    """Add the squared steps of a frame difference between odd-offset pixels and their next neighbours
+    (`_Statistics.block_steps`): at offset 7 of 8 the step crosses a block edge, at 1, 3, 5 it stays inside
+    one, and both pair a CFA phase of one parity with the other."""
+    for axis, name in ((1, "x"), (0, "y")):
+        length = (difference.shape[axis] - 1) // 2
+        left = np.take(difference, np.arange(1, 2 * length, 2), axis=axis)
+        right = np.take(difference, np.arange(2, 2 * length + 1, 2), axis=axis)
+        step = (right - left).astype(np.float64)
+        if name not in steps:
+            steps[name] = np.zeros(step.shape, np.float64)
+        steps[name] += step * step
 
 
 def _half_scale(frame: np.ndarray) -> np.ndarray:
@@ -193,14 +237,20 @@ def _half_scale(frame: np.ndarray) -> np.ndarray:
 
 
 def _collect(
-    frames_rgb8: Iterable[np.ndarray], *, temporal: bool, spatial: bool, histogram: bool, half_scale: bool = False
+    frames_rgb8: Iterable[np.ndarray],
+    *,
+    temporal: bool,
+    spatial: bool,
+    histogram: bool,
+    half_scale: bool = False,
+    spectrum: bool = False,
 ) -> _Statistics:
     if isinstance(frames_rgb8, np.ndarray) and frames_rgb8.ndim == 3:
         raise ConfigError(
             f"the reference is one array of shape {frames_rgb8.shape}; pass a sequence of (H, W, 3) frames "
             "(or a (T, H, W, 3) array)"
         )
-    statistics = _Statistics(temporal=temporal, spatial=spatial, histogram=histogram)
+    statistics = _Statistics(temporal=temporal, spatial=spatial, histogram=histogram, spectrum=spectrum and temporal)
     if half_scale and temporal:
         statistics.half = _Statistics(temporal=True, spatial=False, histogram=False)
     for frame in frames_rgb8:
