@@ -6,10 +6,13 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from camgen.batch.expand import compile_batch_job, expand
+from camgen.batch.randomize import _kept_actors
 from camgen.config.loader import load_dataset
+from camgen.config.scene import Actor
 from camgen.errors import ConfigError
 from tests.batch.conftest import make_dataset
 from tests.conftest import PTZ_PROFILE, SCENE, write
@@ -209,3 +212,21 @@ def test_a_drawn_ptz_program_naming_a_missing_preset_names_the_job(tmp_path):
     write(tmp_path, "scenes/head.yaml", PTZ_SCENE)
     with pytest.raises(ConfigError, match=r"job head-own-seed0.*after randomize.*'door'"):
         compile_batch_job(expand(path)[0])
+
+
+def test_a_rider_is_kept_or_left_out_with_its_two_wheeler():
+    actors = [
+        Actor.model_validate({"name": "walker", "class": "person", "path": {"waypoints_m": [[0, 0], [5, 0]]}}),
+        Actor.model_validate({"name": "cyclist", "class": "person", "rides": "bike"}),
+        Actor.model_validate({"name": "bike", "class": "bicycle", "path": {"waypoints_m": [[0, 2], [9, 2]]}}),
+        Actor.model_validate({"name": "car", "class": "car", "path": {"waypoints_m": [[0, 5], [9, 5]]}}),
+    ]
+    seen = set()
+    for seed in range(40):
+        kept = _kept_actors(actors, (1, 2), set(), np.random.default_rng(seed))
+        assert ("cyclist" in kept) == ("bike" in kept), kept
+        assert 1 <= len(set(kept) - {"cyclist"}) <= 2
+        seen.add(tuple(kept))
+    assert ("cyclist", "bike") in {tuple(k for k in kept if k in ("cyclist", "bike")) for kept in seen}
+    # A followed rider keeps its two-wheeler.
+    assert {"cyclist", "bike"} <= set(_kept_actors(actors, (1, 1), {"cyclist"}, np.random.default_rng(0)))

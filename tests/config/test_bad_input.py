@@ -21,6 +21,11 @@ def edit(base: str, old: str, new: str) -> str:
     return base.replace(old, new, 1)
 
 
+RIDER_PATH = "    class: person\n    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n      speed_m_s: 1.4\n"
+"""The test scene's walker's class and path (a rider has no path of its own)."""
+RIDER = "  - name: {name}\n    class: person\n    rides: {rides} #<\ncameras:\n"
+"""A rider added after the test scene's actors (replacing its "cameras:" line)."""
+
 # (id, kind, file text, expected key path, expected message fragment)
 CASES = [
     (
@@ -517,6 +522,82 @@ CASES = [
         edit(SCENE, "    class: person\n", "    class: truck\n    vehicle: {lights_on: bright} #<\n"),
         "actors[0].vehicle.lights_on",
         "must be true or false, got 'bright'",
+    ),
+    (
+        "rides_for_a_car",
+        "scene",
+        edit(SCENE, "    class: person\n", "    class: car\n    rides: walker #<\n"),
+        "actors[0].rides",
+        "names 'walker' for a procedural person to ride, but this actor is a 'car'",
+    ),
+    (
+        "rider_with_a_path",
+        "scene",
+        edit(SCENE, "    class: person\n    path:\n", "    class: person\n    rides: bike\n    path: #<\n"),
+        "actors[0].path",
+        "is given, but this person rides 'bike' and moves with it; remove path",
+    ),
+    (
+        "rider_of_a_missing_actor",
+        "scene",
+        edit(SCENE, RIDER_PATH, "    class: person\n    rides: bike #<\n"),
+        "actors[0].rides",
+        "names 'bike', which the scene does not have; give the name of a bicycle or motorcycle actor",
+    ),
+    (
+        "rider_of_a_car",
+        "scene",
+        edit(
+            edit(SCENE, "    class: person\n", "    class: car\n"),
+            "cameras:\n",
+            RIDER.format(name="driver", rides="walker"),
+        ),
+        "actors[1].rides",
+        "names 'walker', a car; a person rides a procedural bicycle or motorcycle",
+    ),
+    (
+        "two_riders_on_one_bicycle",
+        "scene",
+        edit(
+            edit(SCENE, "    class: person\n", "    class: bicycle\n"),
+            "cameras:\n",
+            RIDER.format(name="rider", rides="walker").replace(" #<\ncameras:", "")
+            + RIDER.format(name="pillion", rides="walker"),
+        ),
+        "actors[2].rides",
+        "which actors[1] already rides; one rider per two-wheeler",
+    ),
+    (
+        "rider_with_actions",
+        "scene",
+        edit(
+            SCENE,
+            RIDER_PATH,
+            "    class: person\n    rides: bike\n    actions: [{type: wave, start_s: 0, duration_s: 1}] #<\n",
+        ),
+        "actors[0].actions",
+        "are for a person on foot, but this person rides 'bike'",
+    ),
+    (
+        "bicycle_plate_text",
+        "scene",
+        edit(SCENE, "    class: person\n", "    class: bicycle\n    vehicle: {plate_text: AB12 CDE} #<\n"),
+        "actors[0].vehicle.plate_text",
+        "but a bicycle carries no licence plate",
+    ),
+    (
+        "bicycle_lights_on",
+        "scene",
+        edit(SCENE, "    class: person\n", "    class: bicycle\n    vehicle: {lights_on: true} #<\n"),
+        "actors[0].vehicle.lights_on",
+        "the procedural bicycle has no lamps",
+    ),
+    (
+        "motorcycle_body_on_a_bicycle",
+        "scene",
+        edit(SCENE, "    class: person\n", "    class: bicycle\n    vehicle: {body_type: motorcycle} #<\n"),
+        "actors[0].vehicle.body_type",
+        "is motorcycle, a body of class 'motorcycle', but this actor is a 'bicycle'",
     ),
     (
         "heading_on_a_moving_path",

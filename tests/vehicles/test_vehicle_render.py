@@ -27,11 +27,13 @@ from camgen.plan.lens_stages import LensStages
 from camgen.render.scene_graph import build_scene_graph
 from camgen.render.sequence import CameraRenderer
 from camgen.vehicles import vehicle_rig
+from camgen.vehicles.look import TWO_WHEELERS
 from camgen.vehicles.plate import plate_image
 
 pytestmark = pytest.mark.opengl
 
-BODIES = [(body, cls) for cls, bodies in VEHICLE_BODY_TYPES.items() for body in bodies]
+BODIES = [(body, cls) for cls, bodies in VEHICLE_BODY_TYPES.items() for body in bodies if body not in TWO_WHEELERS]
+"""The four-wheelers' body types (the two-wheelers, with riders: tests/vehicles/test_two_wheelers.py)."""
 ROW_Y_M = 2.0
 """Where every rear axle stands; the vehicles face +y, their rear plates towards the cameras."""
 PLATE_TEXT = "CG26 VEH"

@@ -1,8 +1,9 @@
-"""The world's actors as pure geometry: procedural people (and, later, vehicles).
+"""The world's actors as pure geometry: procedural people (vehicles: `camgen.vehicles`).
 
 `person_rig` turns a scene's person actor into what the renderer draws and the annotations read: a
 `PersonModel` (rest mesh, colours, skinning, keypoint markers) and a `Walker` (its pose at any time
-along its route). Nothing here touches OpenGL or files other than the MakeHuman data it reads.
+along its route); `rider_rig` seats one on a bicycle or motorcycle (`camgen.actors.riding`). Nothing
+here touches OpenGL or files other than the MakeHuman data it reads.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import numpy as np
 from camgen.actors.appearance import Appearance, draw_appearance
 from camgen.actors.gait import Walker
 from camgen.actors.person import KEYPOINT_JOINT_ROWS, PersonModel, build_person
+from camgen.actors.riding import Rider
 from camgen.actors.skeleton import (
     INDEX,
     JOINTS,
@@ -42,12 +44,16 @@ def identity_seed(actor: Actor, *, scene_seed: int, actor_index: int) -> int:
 
 
 def person_appearance(actor: Actor, *, scene_seed: int, actor_index: int) -> Appearance:
+    """The person's look from its identity seed. A rider (`Actor.rides`) drawn as a child is drawn again
+    as an adult, everything else as drawn (the two-wheelers are adults' sizes)."""
     block = actor.appearance
-    return draw_appearance(
-        identity_seed(actor, scene_seed=scene_seed, actor_index=actor_index),
-        season=block.season if block is not None else "mixed",
-        pinned=block.pinned() if block is not None else None,
-    )
+    seed = identity_seed(actor, scene_seed=scene_seed, actor_index=actor_index)
+    season = block.season if block is not None else "mixed"
+    pinned = block.pinned() if block is not None else {}
+    appearance = draw_appearance(seed, season=season, pinned=pinned)
+    if actor.rides is not None and appearance.age_group == "child" and "age_group" not in pinned:
+        appearance = draw_appearance(seed, season=season, pinned={**pinned, "age_group": "adult"})
+    return appearance
 
 
 @lru_cache(maxsize=256)
@@ -60,7 +66,7 @@ class PersonRig:
     """A person's mesh and gait, and its posed state at the last `place` time."""
 
     model: PersonModel
-    walker: Walker
+    walker: Walker | Rider
     vertices_m: np.ndarray = field(init=False)
     """(V, 3) float32 posed vertices in the world."""
     normals: np.ndarray = field(init=False)
@@ -140,6 +146,17 @@ class Crowd:
             rig.settle(time_s)
 
 
+def person_model(actor: Actor, *, scene_seed: int, actor_index: int) -> PersonModel:
+    """The procedural person of a person actor (no shape), at rest."""
+    return _model(person_appearance(actor, scene_seed=scene_seed, actor_index=actor_index))
+
+
+def rider_rig(actor: Actor, vehicle, *, scene_seed: int, actor_index: int) -> PersonRig:
+    """The procedural person of a rider (`Actor.rides`) on `vehicle`, a `camgen.vehicles.TwoWheelerRig`."""
+    model = person_model(actor, scene_seed=scene_seed, actor_index=actor_index)
+    return PersonRig(model, Rider(model, vehicle.rider_targets, vehicle.route))
+
+
 def person_rig(actor: Actor, route: Route, *, scene_seed: int, actor_index: int) -> PersonRig:
     """The procedural person of a person actor (no shape) walking its route."""
     appearance = person_appearance(actor, scene_seed=scene_seed, actor_index=actor_index)
@@ -148,4 +165,13 @@ def person_rig(actor: Actor, route: Route, *, scene_seed: int, actor_index: int)
     return PersonRig(_model(appearance), walker)
 
 
-__all__ = ["COCO_KEYPOINTS", "Crowd", "PersonRig", "identity_seed", "person_appearance", "person_rig"]
+__all__ = [
+    "COCO_KEYPOINTS",
+    "Crowd",
+    "PersonRig",
+    "identity_seed",
+    "person_appearance",
+    "person_model",
+    "person_rig",
+    "rider_rig",
+]

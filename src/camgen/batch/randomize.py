@@ -115,13 +115,23 @@ def draw(randomize: Randomize, dataset_seed: int, job_name: str, scene: Scene) -
 def _kept_actors(
     actors: list[Actor], count_range: tuple[int, int], followed: set[str], rng: np.random.Generator
 ) -> list[str]:
-    """Names of a random subset of `actors` of a size drawn in `count_range` (capped), in scene order."""
-    low, high = (min(n, len(actors)) for n in count_range)
-    required = [i for i, actor in enumerate(actors) if actor.name in followed]
-    others = [i for i, actor in enumerate(actors) if actor.name not in followed]
+    """Names of a random subset of `actors` of a size drawn in `count_range` (capped), in scene order. A
+    rider (`Actor.rides`) goes with its bicycle or motorcycle: the two count as one and are kept or left
+    out together."""
+    index = {actor.name: i for i, actor in enumerate(actors)}
+    units: dict[int, list[int]] = {}  # the first member's index → every member's (a two-wheeler and its rider)
+    for i, actor in enumerate(actors):
+        if actor.rides is None:
+            units.setdefault(i, []).insert(0, i)
+        else:
+            units.setdefault(index[actor.rides], []).append(i)
+    firsts = sorted(units)
+    low, high = (min(n, len(firsts)) for n in count_range)
+    required = [u for u in firsts if any(actors[i].name in followed for i in units[u])]
+    others = [u for u in firsts if u not in required]
     count = max(int(rng.integers(low, high + 1)), len(required))
     chosen = rng.choice(others, size=count - len(required), replace=False) if count > len(required) else []
-    kept = sorted([*required, *(int(i) for i in chosen)])
+    kept = sorted(i for u in [*required, *(int(u) for u in chosen)] for i in units[u])
     return [actors[i].name for i in kept]
 
 

@@ -573,27 +573,38 @@ VEHICLE_BODY_TYPES: dict[str, tuple[str, ...]] = {
     "car": ("sedan", "hatchback", "estate", "suv", "pickup"),
     "truck": ("van", "box_truck"),
     "bus": ("bus",),
+    "bicycle": ("bicycle",),
+    "motorcycle": ("motorcycle",),
 }
 """The procedural vehicle's body types of each actor class (`camgen.vehicles.look` draws among them)."""
+RIDDEN_CLASSES = ("bicycle", "motorcycle")
+"""Classes a procedural person can ride (`Actor.rides`)."""
 PLATE_CHARACTERS = "ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789"
 VehicleColour = Literal["white", "black", "grey", "silver", "blue", "red", "green", "beige", "yellow", "orange"]
 
 
 class VehicleIdentity(Model):
-    """Who a procedural vehicle (a car, truck or bus without a shape) is. Everything not given is drawn
+    """Who a procedural vehicle (a car, truck, bus, bicycle or motorcycle without a shape) is. Everything
+    not given is drawn
     from the identity seed (`camgen.vehicles.look` cites the distributions); a given value pins that
     attribute only."""
 
     seed: Annotated[int, Field(ge=0)] | None = None
     """Identity seed; null derives one from the scene's seed and the actor's place in the scene."""
-    body_type: Literal["sedan", "hatchback", "estate", "suv", "pickup", "van", "box_truck", "bus"] | None = None
-    """car: sedan, hatchback, estate, suv or pickup; truck: van or box_truck; bus: bus."""
+    body_type: (
+        Literal["sedan", "hatchback", "estate", "suv", "pickup", "van", "box_truck", "bus", "bicycle", "motorcycle"]
+        | None
+    ) = None
+    """car: sedan, hatchback, estate, suv or pickup; truck: van or box_truck; bus: bus; bicycle: bicycle;
+    motorcycle: motorcycle."""
     colour: VehicleColour | None = None
     """Paint colour (drawn from the Axalta 2022 shares otherwise)."""
     plate_text: str | None = None
-    """The registration on both plates; null draws one in the UK's current format, "AB12 CDE"."""
+    """The registration on both plates (a motorcycle's one rear plate, in two lines; a bicycle has none);
+    null draws one in the UK's current format, "AB12 CDE"."""
     lights_on: bool = False
-    """Head and tail lamps lit (they emit light; brake lamps and indicators follow the driving)."""
+    """Head and tail lamps lit (they emit light; brake lamps and indicators follow the driving). A
+    bicycle has no lamps."""
 
     @field_validator("plate_text")
     @classmethod
@@ -652,7 +663,7 @@ class Actor(Model):
     shape: ActorShape | None = None
     """Geometry in the actor's frame (x forward, z up, origin on the ground): shapes are centred on their
     position_m, so give z = height/2 to stand on the ground. null: a procedural person (person) or vehicle
-    (car, truck, bus), a box of a class-typical size otherwise."""
+    (car, truck, bus, bicycle, motorcycle), a 1 m box otherwise (other)."""
     path: ActorPath | None = None
     """Waypoints to follow; give either this or random_walk."""
     random_walk: RandomWalk | None = None
@@ -663,12 +674,19 @@ class Actor(Model):
     """For a person without a shape: named actions (wave, phone, sit, fall) at given times; they must
     not overlap."""
     vehicle: VehicleIdentity | None = None
-    """For a car, truck or bus without a shape (a procedural vehicle): its identity seed and any
-    attribute to pin (null: all drawn)."""
+    """For a car, truck, bus, bicycle or motorcycle without a shape (a procedural vehicle): its identity
+    seed and any attribute to pin (null: all drawn)."""
+    rides: Name | None = None
+    """For a person without a shape: the name of the bicycle or motorcycle actor (procedural, without a
+    shape) this person rides, seated, hands on the grips, feet on the pedals or footpegs, moving with it
+    (no path of its own). Annotated as a person of its own, as COCO labels riders; MOT17's class 2,
+    person on vehicle, in MOTChallenge's gt.txt."""
 
     @model_validator(mode="after")
     def _check(self) -> Actor:
-        if self.path is None and self.random_walk is None:
+        if self.rides is not None:
+            self._check_rider()
+        elif self.path is None and self.random_walk is None:
             raise invalid(
                 "",
                 "needs a path or a random_walk, got neither; add path: {waypoints_m: [[x, y], …]} or "
@@ -727,7 +745,32 @@ class Actor(Model):
                 + (f"a {self.cls!r}" if self.cls != "person" else "given a shape")
                 + "; remove appearance, or make it a person without a shape",
             )
+        if self.cls == "bicycle" and self.vehicle is not None and self.vehicle.plate_text is not None:
+            raise invalid(
+                "vehicle.plate_text",
+                f"is {self.vehicle.plate_text!r}, but a bicycle carries no licence plate; remove plate_text",
+            )
+        if self.cls == "bicycle" and self.vehicle is not None and self.vehicle.lights_on:
+            raise invalid("vehicle.lights_on", "is true, but the procedural bicycle has no lamps; remove lights_on")
         return self
+
+    def _check_rider(self) -> None:
+        if self.cls != "person" or self.shape is not None:
+            raise invalid(
+                "rides",
+                f"names {self.rides!r} for a procedural person to ride, but this actor is "
+                + (f"a {self.cls!r}" if self.cls != "person" else "given a shape")
+                + "; remove rides, or make it a person (class: person) without a shape",
+            )
+        for key in ("path", "random_walk"):
+            if getattr(self, key) is not None:
+                raise invalid(
+                    key,
+                    f"is given, but this person rides {self.rides!r} and moves with it; remove {key} (the "
+                    f"route is {self.rides}'s)",
+                )
+        if self.actions:
+            raise invalid("actions", f"are for a person on foot, but this person rides {self.rides!r}; remove them")
 
 
 class Mount(Model):
@@ -995,6 +1038,7 @@ class Scene(Model):
                     "remove animation, or make the mesh an actor's shape",
                 )
         actor_names = [actor.name for actor in self.actors]
+        _check_riders(self.actors)
         for i, camera in enumerate(self.cameras):
             program = camera.head.program if camera.head is not None else None
             if isinstance(program, FollowProgram) and program.target not in actor_names:
@@ -1028,6 +1072,37 @@ class Scene(Model):
                 "so every frame would be black)",
             )
         return self
+
+
+def _check_riders(actors: list[Actor]) -> None:
+    """Each rider names a procedural bicycle or motorcycle of the scene, and no two ride the same one."""
+    by_name = {actor.name: actor for actor in actors}
+    ridden: dict[str, int] = {}
+    for i, actor in enumerate(actors):
+        if actor.rides is None:
+            continue
+        target = by_name.get(actor.rides)
+        if target is None:
+            candidates = [a.name for a in actors if a.cls in RIDDEN_CLASSES]
+            raise invalid(
+                f"actors[{i}].rides",
+                f"names {actor.rides!r}, which the scene does not have; give the name of a bicycle or "
+                f"motorcycle actor (the scene's: {', '.join(repr(n) for n in candidates) or 'none'})",
+            )
+        if target.cls not in RIDDEN_CLASSES or target.shape is not None:
+            raise invalid(
+                f"actors[{i}].rides",
+                f"names {actor.rides!r}, a {target.cls}"
+                + (" given a shape" if target.shape is not None else "")
+                + "; a person rides a procedural bicycle or motorcycle (class bicycle or motorcycle, no shape)",
+            )
+        if actor.rides in ridden:
+            raise invalid(
+                f"actors[{i}].rides",
+                f"names {actor.rides!r}, which actors[{ridden[actor.rides]}] already rides; one rider per "
+                "two-wheeler (a pillion is not modelled)",
+            )
+        ridden[actor.rides] = i
 
 
 def _renderer_kind(light_type: str) -> str:
@@ -1178,12 +1253,8 @@ def _with_night_sky(data: dict) -> dict:
     return {**data, "lights": filled, "environment": {"sky_luminance_cd_m2": luminance_cd_m2, **environment}}
 
 
-# Class-typical sizes (m) used when an actor gives no shape and is not procedural (a bicycle, …)
-_DEFAULT_BOX_SIZE_M: dict[str, tuple[float, float, float]] = {
-    "bicycle": (1.8, 0.6, 1.6),
-    "motorcycle": (2.1, 0.8, 1.4),
-    "other": (1.0, 1.0, 1.0),
-}
+# Class-typical sizes (m) used when an actor gives no shape and is not procedural (class other)
+_DEFAULT_BOX_SIZE_M: dict[str, tuple[float, float, float]] = {"other": (1.0, 1.0, 1.0)}
 
 
 PERSON_ENVELOPE_RADIUS_M = 0.6
@@ -1213,17 +1284,26 @@ VEHICLE_ENVELOPE_M: dict[str, tuple[tuple[float, float, float], tuple[float, flo
     "car": ((-1.4, -1.2, 0.0), (4.6, 1.2, 1.95)),
     "truck": ((-2.6, -1.6, 0.0), (6.5, 1.6, 3.75)),
     "bus": ((-3.6, -1.6, 0.0), (8.9, 1.6, 3.2)),
+    "bicycle": ((-0.5, -0.5, 0.0), (1.6, 0.5, 1.25)),
+    "motorcycle": ((-0.6, -0.6, 0.0), (2.0, 0.6, 1.35)),
 }
 """(low, high) corners of the box, in the actor's frame, that holds every procedural vehicle of a class
 (`camgen.vehicles`): its rear axle's middle stands on the actor's ground point (as a kinematic bicycle
 model's reference point), so the box reaches from the longest rear overhang (an estate's 1.1 m, a box
 truck's 2.4 m, a city bus's 3.5 m) to the longest wheelbase and front overhang (a pickup's 4.3 m, a box
 truck's 6.2 m, a bus's 8.7 m), over the widest wheels steered to the class's lock (about 0.6 rad) and to
-the tallest roof of its body types (`camgen.vehicles.look` cites the dimensions)."""
+the tallest roof of its body types (`camgen.vehicles.look` cites the dimensions); a bicycle's and a
+motorcycle's from the rear tyre to the front tyre steered to its lock, over the widest handlebar and
+mirrors."""
+RIDER_ENVELOPE_M = ((-0.6, -0.75, 0.0), (1.7, 0.75, 2.1))
+"""(low, high) corners of the box, in the ridden vehicle's frame on its route's point (the rear axle),
+that holds a rider of any stature on a bicycle or motorcycle: from behind the rear axle to the hands on
+the bars and a handbag swinging off the arm, up to the head of a tall rider sitting on a motorcycle's seat."""
 
 
 def is_procedural_vehicle(actor: Actor) -> bool:
-    """Whether an actor is drawn as camgen's procedural vehicle (a car, truck or bus given no shape)."""
+    """Whether an actor is drawn as camgen's procedural vehicle (a car, truck, bus, bicycle or motorcycle
+    given no shape)."""
     return actor.cls in VEHICLE_ENVELOPE_M and actor.shape is None
 
 
@@ -1245,6 +1325,11 @@ def actor_shape(actor: Actor) -> BoxMesh | CylinderMesh | SphereMesh | FileMesh:
     """The actor's geometry in its own frame (x forward, z up, origin on the ground)."""
     if actor.shape is not None:
         return actor.shape
+    if actor.cls == "person" and actor.rides is not None:
+        low, high = RIDER_ENVELOPE_M
+        centre = tuple((a + b) / 2 for a, b in zip(low, high, strict=True))
+        extent = tuple(b - a for a, b in zip(low, high, strict=True))
+        return BoxMesh(type="box", name=actor.name, size_m=extent, position_m=centre)
     if actor.cls == "person":
         # The procedural person's envelope (`is_procedural_person`): the tallest stature with hair and
         # shoes, and the reach of a running stride and swinging arms.

@@ -10,7 +10,8 @@ x0 + 1 for camgen's pixel-edge x0). The box is the whole object's projection, oc
 and not clipped: as in MOT17 it reaches outside the image where the object does; conf is 1 (consider)
 when some of the object is visible, else 0; visibility, as MOT17 counts it, includes cropping by the
 image border: (visible / unoccluded pixels) × (1 − truncation), truncation being the share of the
-amodal box outside the image. Classes follow MOT17's table (`MOT_CLASSES`). Optional ``det/det.txt``
+amodal box outside the image. Classes follow MOT17's table (`MOT_CLASSES`; a rider is class 2, person
+on vehicle: `mot_class`). Optional ``det/det.txt``
 holds public detections as MOT17's do: ``frame, -1, bb_left, bb_top, bb_width, bb_height, conf, -1,
 -1, -1`` with conf the detector's score.
 
@@ -24,7 +25,8 @@ visible pixels, ``segmentation`` as compressed RLE of the visible mask, ``area``
 ``side``, ``text``, ``quad`` (its 4 corners as one reads it), ``bbox``, ``visible`` and
 ``visible_share``: `camgen.annotate.plates`), ``categories`` (camgen's actor classes; ``person`` with
 COCO's 17 keypoint names and skeleton) and ``tracks`` (one per actor, TAO-style, with a person's
-attribute labels, or a procedural vehicle's body type, colour, plate text and dimensions). People too
+attribute labels, or a procedural vehicle's body type, colour, plate text and dimensions; a rider's
+``rides_track_id``, the track of its bicycle or motorcycle). People too
 small to separate, three or more under `CROWD_MAX_HEIGHT_PX` whose visible pixels touch, are one crowd
 annotation instead (``iscrowd`` 1, the union's mask and box, ``crowd_track_ids``; `crowd_groups`), which
 COCO's evaluation ignores; MOT's gt.txt, YOLO and ``tracks`` keep every person.
@@ -54,6 +56,16 @@ from camgen.io.frames import write_frame
 MOT_CLASSES = {"person": 1, "car": 3, "truck": 3, "bus": 3, "bicycle": 4, "motorcycle": 5, "other": 6}
 """MOT17 class ids: 1 pedestrian, 3 car (all motor vehicles of four or more wheels), 4 bicycle,
 5 motorbike, 6 non-motorised vehicle (camgen's 'other')."""
+MOT_PERSON_ON_VEHICLE = 2
+"""MOT17's class of a person riding a bicycle or motorcycle (`Actor.rides`), which its evaluation
+ignores (Milan et al. 2016, Table 2); in COCO and YOLO a rider is a person, as COCO labels riders."""
+
+
+def mot_class(obj) -> int:
+    """The MOT17 class id of an annotated object (a `camgen.plan.annotations.ObjectAnnotation`)."""
+    return MOT_PERSON_ON_VEHICLE if getattr(obj, "rides", None) is not None else MOT_CLASSES[obj.cls]
+
+
 COCO_CATEGORIES = ("person", "car", "truck", "bus", "bicycle", "motorcycle", "other")
 YOLO_CLASSES = COCO_CATEGORIES
 """YOLO class names by class id (from 0): COCO's category ids less one."""
@@ -100,11 +112,16 @@ class SequenceAnnotations:
         self.keypoint_lines: list[str] = []
         """One JSON line per frame with people: their keypoints in the image and in the world."""
 
-    def describe(self, track_id: int, *, name: str, cls: str, attributes: dict | None = None) -> None:
-        """Record a track (once per actor): its class and, for a person, its attributes."""
+    def describe(
+        self, track_id: int, *, name: str, cls: str, attributes: dict | None = None, rides: int | None = None
+    ) -> None:
+        """Record a track (once per actor): its class, for a person its attributes, and for a rider the
+        track id of the bicycle or motorcycle it rides (``rides_track_id``)."""
         record = {"id": track_id, "video_id": 1, "category_id": COCO_CATEGORIES.index(cls) + 1, "name": name}
         if attributes is not None:
             record["attributes"] = attributes
+        if rides is not None:
+            record["rides_track_id"] = rides
         self.tracks[track_id] = record
 
     def add(self, frame) -> None:
@@ -139,7 +156,7 @@ class SequenceAnnotations:
             u0, v0, u1, v1 = (round(v, 4) for v in obj.unclipped_box)  # the same digits on every machine
             self.mot.append(
                 f"{frame.frame + 1},{obj.track_id},{u0 + 1:.3f},{v0 + 1:.3f},{u1 - u0:.3f},{v1 - v0:.3f},"
-                f"{1 if obj.visible_pixels > 0 else 0},{MOT_CLASSES[obj.cls]},"
+                f"{1 if obj.visible_pixels > 0 else 0},{mot_class(obj)},"
                 f"{obj.visibility * (1.0 - obj.truncation):.4f}"
             )
             x0, y0, x1, y1 = (round(v, 4) for v in obj.amodal_box)

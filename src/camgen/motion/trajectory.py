@@ -357,12 +357,15 @@ def vehicle_path_problems(scene: Scene) -> list[Problem]:
 
 def actor_routes(scene: Scene) -> dict[str, Route | VehicleRoute]:
     """Actor name → route for every actor of `scene`, covering the scene and a margin after it
-    (`ROUTE_MARGIN_S`, or one frame period if that is longer)."""
+    (`ROUTE_MARGIN_S`, or one frame period if that is longer). A rider (`Actor.rides`) shares the route of
+    what it rides."""
     horizon_s = scene.duration_s + max(ROUTE_MARGIN_S, 1.0 / scene.fps)
-    return {
+    routes = {
         actor.name: actor_route(actor, scene_seed=scene.seed, actor_index=i, horizon_s=horizon_s)
         for i, actor in enumerate(scene.actors)
+        if actor.rides is None
     }
+    return {actor.name: routes[actor.rides if actor.rides is not None else actor.name] for actor in scene.actors}
 
 
 def position_on_path(

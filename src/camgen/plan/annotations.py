@@ -60,6 +60,8 @@ class ObjectAnnotation:
     plates: tuple[dict, ...] = ()
     """A procedural vehicle's licence plates in the image (`camgen.annotate.plates.plate_annotation`, with
     ``side`` front or rear and the plate's ``text``), those imaged inside the image."""
+    rides: str | None = None
+    """For a rider, the name of the bicycle or motorcycle it rides (`camgen.config.scene.Actor.rides`)."""
 
 
 @dataclass
@@ -174,6 +176,7 @@ class Annotator:
                     keypoints=keypoints,
                     keypoints_world_m=keypoints_world,
                     plates=tuple(plates),
+                    rides=actor.rides,
                 )
             )
         return result

@@ -265,10 +265,18 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
             detections=detector is not None,
         )
         graph = camera_renderer.graph
+        actor_nodes = zip(graph.actors, graph.actor_nodes, strict=True)
+        track_ids = {actor.name: graph.instance_ids[node] for actor, node in actor_nodes}
         for index, (actor, node) in enumerate(zip(graph.actors, graph.actor_nodes, strict=True)):
             rig = graph.rig(index)
             attributes = None if rig is None or rig.model is None else rig.model.appearance.attributes()
-            sequence.describe(graph.instance_ids[node], name=actor.name, cls=actor.cls, attributes=attributes)
+            sequence.describe(
+                graph.instance_ids[node],
+                name=actor.name,
+                cls=actor.cls,
+                attributes=attributes,
+                rides=None if actor.rides is None else track_ids[actor.rides],
+            )
     radiance_files = (
         RadianceWriter(directory / "radiance", stages["io.radiance"].params["format"])
         if "io.radiance" in stages

@@ -30,7 +30,7 @@ from typing import Literal
 import numpy as np
 import trimesh
 
-from camgen.actors import Crowd, PersonRig, person_rig
+from camgen.actors import Crowd, PersonRig, person_rig, rider_rig
 from camgen.actors.character import CharacterRig, character_rig
 from camgen.config.placement import placement
 from camgen.config.scene import (
@@ -62,8 +62,7 @@ from camgen.motion.trajectory import Route, actor_routes
 from camgen.props import PropModel, placed_props, prop_names
 from camgen.render.gl import pyrender
 from camgen.render.mipmaps import MipmappedTexture
-from camgen.vehicles import LAMP_COLOUR_RGB, LAMP_LUMINANCE_CD_M2, VehicleRig, vehicle_rig
-from camgen.vehicles.plate import plate_image
+from camgen.vehicles import LAMP_COLOUR_RGB, LAMP_LUMINANCE_CD_M2, VehicleRig, plate_texture, vehicle_rigs
 from camgen.world.ies import flux_lm as ies_flux_lm
 from camgen.world.ies import intensity_grid_cd
 from camgen.world.night import SPOT_FULL_INTENSITY_FRACTION, peak_intensity_cd
@@ -482,8 +481,8 @@ def vehicle_mesh(rig: VehicleRig) -> pyrender.Mesh:
             material = pyrender.MetallicRoughnessMaterial(
                 baseColorFactor=(*paint.color_rgb, 1.0), metallicFactor=paint.metallic, roughnessFactor=paint.roughness
             )
-        elif part.surface == "plates":  # the front plate over the rear one
-            image = np.concatenate([plate_image(rig.look.plate_text, rear=rear) for rear in (False, True)])
+        elif part.surface == "plates":  # a car's front plate over its rear one; a motorcycle's one plate
+            image = plate_texture(rig.look)
             material = pyrender.MetallicRoughnessMaterial(
                 baseColorFactor=(1.0, 1.0, 1.0, 1.0),
                 baseColorTexture=MipmappedTexture(srgb=True, source=encode_srgb8(image), source_channels="RGB"),
@@ -769,18 +768,22 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
     graph.add(pyrender.IntrinsicsCamera(1.0, 1.0, 0.0, 0.0), name="camera")
     instances = instance_table(scene)
     routes = actor_routes(scene)
+    vehicle_by_name = vehicle_rigs(scene, routes)
     actor_nodes, local_poses, environment_nodes, people, vehicles = [], [], [], [], []
     characters: dict[str, Character] = {}
     for index, actor in enumerate(scene.actors):
         if is_procedural_person(actor):
-            rig = person_rig(actor, routes[actor.name], scene_seed=scene.seed, actor_index=index)
+            if actor.rides is not None:  # seated on its bicycle or motorcycle
+                rig = rider_rig(actor, vehicle_by_name[actor.rides], scene_seed=scene.seed, actor_index=index)
+            else:
+                rig = person_rig(actor, routes[actor.name], scene_seed=scene.seed, actor_index=index)
             actor_nodes.append(graph.add(person_mesh(rig), name=f"actor:{actor.name}"))
             local_poses.append(np.eye(4))
             people.append(rig)
             vehicles.append(None)
             continue
         if is_procedural_vehicle(actor):
-            vehicle = vehicle_rig(actor, routes[actor.name], scene_seed=scene.seed, actor_index=index)
+            vehicle = vehicle_by_name[actor.name]
             actor_nodes.append(graph.add(vehicle_mesh(vehicle), name=f"actor:{actor.name}"))
             local_poses.append(np.eye(4))
             people.append(None)

@@ -1,25 +1,48 @@
 """Procedural vehicles as pure geometry: cars (sedan, hatchback, estate, SUV, pickup), vans, box
-trucks and buses.
+trucks, buses, bicycles and motorcycles.
 
-`vehicle_rig` turns a scene's car, truck or bus actor without a shape into what the renderer draws
+`vehicle_rig` turns a scene's car, truck, bus, bicycle or motorcycle actor without a shape into what
+the renderer draws
 and the annotations read: a `VehicleModel` (`camgen.vehicles.body`: shell, glass, wheels, lamps,
 plates) of a `VehicleLook` drawn from the actor's identity seed (`camgen.vehicles.look`), posed along
 its route at any time — the wheels turned by the distance travelled (angle = distance / wheel
 radius) and the front wheels steered by the route's steering angle where the route has one
-(`steer_rad_at`; straight ahead otherwise). Nothing here touches OpenGL or files.
+(`steer_rad_at`; straight ahead otherwise). A two-wheeler (`camgen.vehicles.two_wheeler`,
+`TwoWheelerRig`) turns its fork and handlebar about its raked steering axis and a bicycle its crank and
+pedals with the rear wheel through its gearing; it tells its rider (`camgen.actors.riding`) where the
+seat, the grips and the pedals or footpegs are at any time. Nothing here touches OpenGL or files.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 
-from camgen.config.scene import Actor
+from camgen.config.scene import Actor, Scene, is_procedural_vehicle
 from camgen.motion.trajectory import Route
 from camgen.vehicles.body import Part, VehicleModel, build_vehicle
-from camgen.vehicles.look import VehicleLook, draw_look
+from camgen.vehicles.look import TWO_WHEELERS, VehicleLook, draw_look
+from camgen.vehicles.plate import motorcycle_plate_image, plate_image
+from camgen.vehicles.two_wheeler import (
+    CRANK,
+    CRANK_M,
+    DEFAULT_SADDLE_M,
+    FRONT,
+    PEDAL_LEFT,
+    PEDAL_RIGHT,
+    PEDAL_TOP_M,
+    PEDAL_Y_M,
+    REAR,
+    STEERING,
+    TwoWheelerModel,
+    build_bicycle,
+    build_motorcycle,
+    chain_ratio,
+    saddle_height_for,
+)
 
 VEHICLE_SPAWN_KEY = 0x7665_6869
 """First spawn key of an identity seed derived from the scene's seed (ASCII "vehi")."""
@@ -155,8 +178,8 @@ class VehicleRig:
         if not moved:
             return changed
         self._state = state
-        # Each vertex's transform to the world: the body's, or the body's after its wheel's.
-        M = np.empty((5, 4, 4))
+        # Each vertex's transform to the world: the body's, or the body's after its wheel's (bone's).
+        M = np.empty((len(wheels) + 1, 4, 4))
         M[0] = T
         M[1:] = T @ wheels
         chosen = M[self._wheel + 1]
@@ -193,23 +216,175 @@ class VehicleRig:
         return {side: quad @ T[:3, :3].T + T[:3, 3] for side, quad in self.model.plate_corners_m.items()}
 
 
-def vehicle_rig(actor: Actor, route: Route, *, scene_seed: int, actor_index: int) -> VehicleRig:
-    """The procedural vehicle of a car, truck or bus actor without a shape, driving its route."""
+def handlebar_rad(steer_rad: float, rake_rad: float) -> float:
+    """How far a two-wheeler's handlebar turns about its steering axis, raked `rake_rad` from the
+    vertical, for the kinematic steering angle `steer_rad` on the ground: tan δ = tan θ · cos(rake)
+    (the front wheel's plane turned by θ about the tilted axis, seen from above; Cossalter, *Motorcycle
+    Dynamics*, 2006, §1.3, neglecting the roll a rider leans into a turn)."""
+    return math.atan2(math.tan(steer_rad), math.cos(rake_rad))
+
+
+def _rotation_about(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rodrigues' rotation matrix about the unit `axis`."""
+    x, y, z = axis
+    K = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
+def _translation(offset: np.ndarray) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, 3] = offset
+    return T
+
+
+class TwoWheelerRig(VehicleRig):
+    """A bicycle or motorcycle driving its route: its bones (front and rear wheel, steering, and a
+    bicycle's crank and pedals) posed at any time, and where its rider's hands, feet and seat go."""
+
+    model: TwoWheelerModel
+
+    def crank_rad(self, time_s: float) -> float:
+        """The bicycle's crank angle at `time_s`, rad: the rear wheel's turn over the gearing (0 with
+        the right crank forward and level; growing as the pedals are pushed forward over the top)."""
+        spin = wheel_spin_rad(self.route.distance_at(time_s), self.look.wheel_radius_m)
+        return spin / chain_ratio(self.look)
+
+    def pose(self, time_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """(T_world_from_vehicle (4, 4), T_vehicle_from_bone (B, 4, 4)) at `time_s`, bones as
+        `camgen.vehicles.two_wheeler.BONES` (a motorcycle has the first three)."""
+        xy, heading = self.route.at(time_s)
+        look, model = self.look, self.model
+        T = np.eye(4)
+        T[:3, :3] = _rot_z(float(heading))
+        T[:2, 3] = np.asarray(xy, dtype=np.float64) - look.rear_axle_x_m * T[:2, 0]
+        spin = _rot_y(wheel_spin_rad(self.route.distance_at(time_s), look.wheel_radius_m))
+        steer = np.eye(4)  # about the steering axis through the head tube
+        steer[:3, :3] = _rotation_about(model.steer_axis, handlebar_rad(self.steer_rad(time_s), model.rake_rad))
+        steer[:3, 3] = model.steer_point_m - steer[:3, :3] @ model.steer_point_m
+        bones = np.tile(np.eye(4), (3 if model.bottom_bracket_m is None else 6, 1, 1))
+        front, rear = model.wheel_centres_m
+        bones[FRONT] = steer @ _translation(front)
+        bones[FRONT, :3, :3] = bones[FRONT, :3, :3] @ spin
+        bones[REAR, :3, :3], bones[REAR, :3, 3] = spin, rear
+        bones[STEERING] = steer
+        if model.bottom_bracket_m is not None:
+            crank = self.crank_rad(time_s)
+            bones[CRANK, :3, :3], bones[CRANK, :3, 3] = _rot_y(crank), model.bottom_bracket_m
+            for bone, angle, side in ((PEDAL_RIGHT, crank, -1), (PEDAL_LEFT, crank + math.pi, 1)):
+                bones[bone, :3, 3] = model.bottom_bracket_m + _rot_y(angle) @ (CRANK_M, 0.0, 0.0)
+                bones[bone, 1, 3] += side * PEDAL_Y_M
+        return T, bones
+
+    def lamps(self, time_s: float) -> dict[str, bool]:
+        lit = super().lamps(time_s)
+        return {key: value for key, value in lit.items() if not key.startswith("indicator")}
+
+    def rider_targets(self, time_s: float) -> RiderTargets:
+        """Where the rider's body meets the two-wheeler at `time_s`, in the world."""
+        T, bones = self.pose(time_s)
+        model = self.model
+
+        def world(points: np.ndarray, M: np.ndarray) -> np.ndarray:
+            A = T @ M
+            return points @ A[:3, :3].T + A[:3, 3]
+
+        grips = world(model.grips_m, bones[STEERING])
+        if model.bottom_bracket_m is not None:
+            top = np.array([0.0, 0.0, PEDAL_TOP_M])
+            feet = np.array([world(top, bones[PEDAL_LEFT]), world(top, bones[PEDAL_RIGHT])])
+        else:
+            feet = world(model.pegs_m, np.eye(4))
+        return RiderTargets(T, world(model.seat_m, np.eye(4)), grips, feet)
+
+
+@dataclass(frozen=True)
+class RiderTargets:
+    """Where a rider sits, holds and stands on a two-wheeler at one time, world coordinates, m."""
+
+    T_world_from_vehicle: np.ndarray
+    """(4, 4) the vehicle's frame (x forward, z up)."""
+    seat_m: np.ndarray
+    """(3,) where the sitting bones rest."""
+    grips_m: np.ndarray
+    """(2, 3) the handlebar's grips, left then right."""
+    feet_m: np.ndarray
+    """(2, 3) the tread of the left and right pedal, or the footpegs, where the ball of each foot rests."""
+
+
+@lru_cache(maxsize=64)
+def _two_wheeler(look: VehicleLook, saddle_mm: int) -> TwoWheelerModel:
+    return build_bicycle(look, saddle_mm / 1000) if look.body_type == "bicycle" else build_motorcycle(look)
+
+
+def saddle_for_rider(joints_m: np.ndarray, joint_index: dict[str, int]) -> float:
+    """The saddle height (m up the seat tube from the bottom bracket) that fits a rider of these rest
+    joints (`camgen.actors.skeleton.JOINTS` order, `joint_index` their rows)."""
+    J, i = joints_m, joint_index
+    thigh = float(np.linalg.norm(J[i["calf_l"]] - J[i["thigh_l"]]))
+    shin = float(np.linalg.norm(J[i["foot_l"]] - J[i["calf_l"]]))
+    behind = J[i["foot_l"], 0] - J[i["ball_l"], 0]  # the rest foot stands level on its sole at z = 0
+    return saddle_height_for(thigh, shin, np.array([behind, J[i["foot_l"], 2]]), float(abs(J[i["thigh_l"], 1])))
+
+
+def vehicle_rig(
+    actor: Actor, route: Route, *, scene_seed: int, actor_index: int, saddle_m: float | None = None
+) -> VehicleRig:
+    """The procedural vehicle of a car, truck, bus, bicycle or motorcycle actor without a shape, driving
+    its route; `saddle_m`: a bicycle's saddle height for its rider (`saddle_for_rider`)."""
     look = vehicle_look(actor, scene_seed=scene_seed, actor_index=actor_index)
     lights_on = actor.vehicle is not None and actor.vehicle.lights_on
+    if look.body_type in TWO_WHEELERS:
+        saddle_mm = round(1000 * (DEFAULT_SADDLE_M if saddle_m is None else saddle_m))
+        return TwoWheelerRig(_two_wheeler(look, saddle_mm), route, lights_on=lights_on)
     return VehicleRig(_model(look), route, lights_on=lights_on)
+
+
+def vehicle_rigs(scene: Scene, routes: dict[str, Route]) -> dict[str, VehicleRig]:
+    """Actor name → the procedural vehicle of every such actor of `scene`; a ridden bicycle's saddle is
+    set for its rider (`camgen.config.scene.Actor.rides`)."""
+    from camgen.actors import person_model  # the riders' bodies
+    from camgen.actors.skeleton import INDEX
+
+    riders = {actor.rides: (index, actor) for index, actor in enumerate(scene.actors) if actor.rides is not None}
+    rigs = {}
+    for index, actor in enumerate(scene.actors):
+        if not is_procedural_vehicle(actor):
+            continue
+        saddle = None
+        if actor.name in riders and actor.cls == "bicycle":
+            rider_index, rider = riders[actor.name]
+            model = person_model(rider, scene_seed=scene.seed, actor_index=rider_index)
+            saddle = saddle_for_rider(model.joints_m, INDEX)
+        rigs[actor.name] = vehicle_rig(
+            actor, routes[actor.name], scene_seed=scene.seed, actor_index=index, saddle_m=saddle
+        )
+    return rigs
+
+
+def plate_texture(look: VehicleLook) -> np.ndarray:
+    """The linear albedo image of a vehicle's `plates` part: a car's front plate over its rear plate, or
+    a motorcycle's one two-line rear plate."""
+    if look.body_type == "motorcycle":
+        return motorcycle_plate_image(look.plate_text)
+    return np.concatenate([plate_image(look.plate_text, rear=rear) for rear in (False, True)])
 
 
 __all__ = [
     "LAMP_COLOUR_RGB",
     "LAMP_LUMINANCE_CD_M2",
     "Part",
+    "RiderTargets",
+    "TwoWheelerRig",
     "VehicleLook",
     "VehicleModel",
     "VehicleRig",
     "ackermann_rad",
+    "handlebar_rad",
     "identity_seed",
+    "plate_texture",
+    "saddle_for_rider",
     "vehicle_look",
     "vehicle_rig",
+    "vehicle_rigs",
     "wheel_spin_rad",
 ]

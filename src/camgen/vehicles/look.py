@@ -35,7 +35,22 @@ Sources:
   blue 8 %, red 5 %, green 1 %; the remaining 4 % split here between beige/brown (2 %), yellow/gold
   (1 %) and orange (1 %). Vans and trucks are mostly white fleet vehicles (white 60 % here, an
   estimate: Axalta puts white far ahead in commercial vehicles), buses take a livery colour.
-- Plates: `camgen.vehicles.plate` (the UK's DVLA format).
+- Plates: `camgen.vehicles.plate` (the UK's DVLA format; a motorcycle carries one, at the rear; a
+  bicycle none).
+- Bicycles: an adult hybrid or city bike with 700C wheels (ISO 5775 / ETRTO 622 mm bead seat, 700 × 32C
+  tyre: outer diameter 622 + 2 × 32 = 686 mm, radius 0.343 m); wheelbase and handlebar width within the
+  ranges of hybrids' geometry tables for sizes S–L (Trek FX, Giant Escape: wheelbases about 1.04–1.08 m,
+  flat bars 0.60–0.68 m wide); the length is the wheelbase plus a wheel's diameter, the height the bar's
+  (frame geometry and the rider's saddle: `camgen.vehicles.two_wheeler`; the drawn height is a label,
+  the built bike's bar is 1.0 m up for a 1.75 m rider). Frame colours: no fleet
+  statistics were found; the shares here are an estimate (black and grey frames most common, then white,
+  blue, red, green, silver).
+- Motorcycles: a standard (naked) bike of 125–650 cc, from the makers' specifications: Honda CB125F
+  (2021: 2.01 × 0.76 × 1.08 m, wheelbase 1.28 m), Honda CB500F (2022: 2.08 × 0.80 × 1.06 m, 1.41 m) and
+  Yamaha MT-07 (2021: 2.085 × 0.78 × 1.105 m, 1.40 m); wheels 17-inch with a 120/70 ZR17 front tyre
+  (ETRTO: 431.8 + 2 × 84 = 600 mm, radius 0.300 m; the rear's 160/60 is drawn at the same radius).
+  Colours: no registration statistics by colour were found; the shares here are an estimate (black
+  the most common, then grey, white, red, blue, silver, green, orange, yellow).
 """
 
 from __future__ import annotations
@@ -47,8 +62,10 @@ import numpy as np
 
 from camgen.vehicles.plate import draw_plate_text
 
-BodyType = Literal["sedan", "hatchback", "estate", "suv", "pickup", "van", "box_truck", "bus"]
-VehicleClass = Literal["car", "truck", "bus"]
+BodyType = Literal["sedan", "hatchback", "estate", "suv", "pickup", "van", "box_truck", "bus", "bicycle", "motorcycle"]
+VehicleClass = Literal["car", "truck", "bus", "bicycle", "motorcycle"]
+TWO_WHEELERS = ("bicycle", "motorcycle")
+"""Body types built by `camgen.vehicles.two_wheeler` (a frame, two wheels in line, a rider's seat)."""
 
 
 @dataclass(frozen=True)
@@ -74,12 +91,16 @@ BODY_TYPES: dict[str, BodyDimensions] = {
     "van": BodyDimensions((4.90, 5.93), (1.90, 2.02), (1.99, 2.69), (3.00, 3.67), 0.343, 0.50),
     "box_truck": BodyDimensions((6.90, 8.60), (2.45, 2.55), (3.20, 3.70), (3.60, 4.80), 0.384, 0.38),
     "bus": BodyDimensions((10.80, 12.14), (2.45, 2.55), (2.90, 3.12), (5.20, 5.85), 0.478, 0.45),
+    "bicycle": BodyDimensions((1.72, 1.80), (0.60, 0.68), (1.00, 1.10), (1.04, 1.08), 0.343, 0.50),
+    "motorcycle": BodyDimensions((2.01, 2.09), (0.76, 0.80), (1.06, 1.11), (1.28, 1.41), 0.300, 0.48),
 }
 
 CLASS_BODY_TYPES: dict[str, dict[str, float]] = {
     "car": {"suv": 50.0, "hatchback": 25.0, "sedan": 10.0, "estate": 10.0, "pickup": 5.0},
     "truck": {"van": 75.0, "box_truck": 25.0},
     "bus": {"bus": 100.0},
+    "bicycle": {"bicycle": 100.0},
+    "motorcycle": {"motorcycle": 100.0},
 }
 """Body-type shares (%) within each vehicle class (see the module's sources)."""
 
@@ -88,6 +109,10 @@ PAINT_SHARES: dict[str, dict[str, float]] = {
             "yellow": 1, "orange": 1},
     "truck": {"white": 60, "silver": 10, "grey": 8, "black": 6, "blue": 7, "red": 5, "green": 2, "yellow": 2},
     "bus": {"red": 25, "white": 20, "blue": 20, "green": 15, "yellow": 10, "silver": 10},
+    "bicycle": {"black": 30, "grey": 15, "white": 14, "blue": 12, "red": 10, "green": 7, "silver": 7, "yellow": 2,
+                "orange": 3},
+    "motorcycle": {"black": 35, "grey": 15, "white": 12, "red": 12, "blue": 10, "silver": 6, "green": 4,
+                   "orange": 4, "yellow": 2},
 }  # fmt: skip
 
 
@@ -163,8 +188,8 @@ class VehicleLook:
         return self.front_axle_x_m - self.wheelbase_m
 
     def attributes(self) -> dict[str, object]:
-        """Attribute labels of what is rendered (COCO track attributes)."""
-        return {
+        """Attribute labels of what is rendered (COCO track attributes); a bicycle has no plate text."""
+        labels = {
             "body_type": self.body_type,
             "colour": self.colour,
             "plate_text": self.plate_text,
@@ -172,6 +197,9 @@ class VehicleLook:
             "width_m": round(self.width_m, 3),
             "height_m": round(self.height_m, 3),
         }
+        if not self.plate_text:
+            del labels["plate_text"]
+        return labels
 
 
 def _choice(rng: np.random.Generator, table: dict[str, float]) -> str:
@@ -181,7 +209,7 @@ def _choice(rng: np.random.Generator, table: dict[str, float]) -> str:
 
 
 def draw_look(seed: int, vehicle_class: str, *, pinned: dict[str, object] | None = None) -> VehicleLook:
-    """The look of vehicle identity `seed` of class car, truck or bus; `pinned` attributes
+    """The look of vehicle identity `seed` of class car, truck, bus, bicycle or motorcycle; `pinned` attributes
     (body_type, colour, plate_text) replace draws. Every draw is made whether or not it is pinned.
 
     A pinned body type must belong to the class (`CLASS_BODY_TYPES`); the scene's schema checks that.
@@ -213,4 +241,6 @@ def draw_look(seed: int, vehicle_class: str, *, pinned: dict[str, object] | None
         plate_text=plate_text,
         identity_seed=int(seed),
     )
+    if vehicle_class == "bicycle":  # its plate text drawn all the same, so that every later draw stays as it was
+        look = replace(look, plate_text="", length_m=look.wheelbase_m + 2 * look.wheel_radius_m)
     return replace(look, **{k: v for k, v in pinned.items() if k in ("colour", "plate_text")})
