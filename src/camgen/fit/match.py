@@ -76,7 +76,13 @@ the stretch spans). From this:
   constant too, so read noise and the stretch's black offset are confounded (the pedestal warning); an
   8-bit MPEG stream quantises small noise away (its NLF falls below the sensor's in flat areas and the
   codec's inter-frame prediction correlates it in time), so read noise and full well from such footage
-  are effective values that reproduce it only through the same codec.
+  are effective values that reproduce it only through the same codec;
+- *codecs camgen does not write*: camgen encodes H.264, H.265 and MJPEG, so footage from another codec
+  (MPEG-4 part 2, as the footage of issue 24) is reproduced only as far as one of them shapes its noise
+  alike. camgen's own 320 × 240 ramp through MPEG-4 part 2 at 400 kbit/s showed noise blockiness 2.92 and
+  D_4/D_1 2.21 (1 and 1 for the sensor's noise), against 1.00 and 1.00 without a codec and 1.14 and 1.12
+  through the bullet profile's H.265; the fits missed the NLF by 28 % and 122 % with a full well 20
+  times the true one (at their bound, 50 times the start), and all three figures refuse them.
 
 Operating point and verification
 --------------------------------

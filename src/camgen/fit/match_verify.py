@@ -114,7 +114,11 @@ class OperatingPoint:
             "read noise give only at the gain the fit assumed; auto-exposure would pick its own gain (and time) "
             "for a rendered scene"
         )
-        pinned = "replaces the base profile's auto-exposure" if self.was_auto else "as the base profile's"
+        pinned = (
+            "replaces the base profile's auto-exposure"
+            if self.was_auto
+            else "the base profile's manual exposure time, at the gain the fit assumed"
+        )
         return (
             f"operating point pinned: manual exposure {self.exposure_time_s:.4g} s at {self.gain_db:.3g} dB "
             f"({pinned}): {why}; at f/{self.f_number:.3g} a scene of mean luminance "
