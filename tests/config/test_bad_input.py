@@ -284,6 +284,13 @@ CASES = [
         "must have at least 1 item, got 0",
     ),
     (
+        "metering_zone_reversed",
+        "scene",
+        edit(SCENE, "      pitch_deg: -20", "      pitch_deg: -20\n    metering_region_frac: [0, 0.6, 1, 0.4] #<"),
+        "cameras[0].metering_region_frac",
+        "must be [x0, y0, x1, y1] with x0 < x1 and y0 < y1, got [0, 0.6, 1, 0.4]",
+    ),
+    (
         "repeated_waypoint",
         "scene",
         edit(SCENE, "waypoints_m: [[-3, 5], [3, 5]]", "waypoints_m: [[-3, 5], [-3, 5]] #<"),

@@ -475,6 +475,14 @@ def check_cameras(scene: Scene, profiles: dict[str, Profile]) -> list[Problem]:
                     f"period 1/fps = {1 / scene.fps:g} s; shorten the exposure or lower fps",
                 )
             )
+        if camera.metering_region_frac is not None and profile.exposure.mode != "auto":
+            problems.append(
+                Problem(
+                    (*base, "metering_region_frac"),
+                    f"is set, but profile {camera.profile!r} exposes manually (exposure.mode: manual), so nothing "
+                    "meters; drop it, or use a profile with exposure.mode: auto",
+                )
+            )
         if camera.ptz is not None and head is None:
             problems.append(
                 Problem(

@@ -879,6 +879,11 @@ class Camera(Model):
     night_mode: Literal["auto"] | bool = "auto"
     """IR night mode (the profile's `night_mode`): auto switches below its `switch_lux`; true (YAML's on)
     and false (off) force it."""
+    metering_region_frac: tuple[Fraction, Fraction, Fraction, Fraction] | None = None
+    """The exposure zone an installer set on this unit (Axis calls it the exposure zone, Hikvision the BLC
+    area): [x0, y0, x1, y1] of the auto-exposure's metering window as fractions of width and height; null
+    keeps the profile's `exposure.auto.metering_region_frac` (the whole frame). A camera that sees a bright
+    sky meters the ground below it this way, instead of filming the street as silhouettes."""
 
     @model_validator(mode="after")
     def _check_heads(self) -> Camera:
@@ -886,6 +891,14 @@ class Camera(Model):
             raise invalid(
                 "eptz", "must not be set together with ptz: a camera has a mechanical or a virtual head; drop one"
             )
+        if self.metering_region_frac is not None:
+            x0, y0, x1, y1 = self.metering_region_frac
+            if not (x0 < x1 and y0 < y1):
+                raise invalid(
+                    "metering_region_frac",
+                    f"must be [x0, y0, x1, y1] with x0 < x1 and y0 < y1, got [{x0:g}, {y0:g}, {x1:g}, {y1:g}]; "
+                    "e.g. [0, 0.4, 1, 1] meters the lower 60 % of the frame",
+                )
         return self
 
     @property

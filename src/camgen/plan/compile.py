@@ -930,7 +930,7 @@ def compile(
             scene,
             i,
             camera,
-            profiles[camera.name],
+            installed_profile(camera, profiles[camera.name]),
             (profile_names or {}).get(camera.name, camera.profile),
             settings,
             static_boxes,
@@ -951,6 +951,15 @@ def compile(
         cameras=cameras,
     )
     return job.model_copy(update={"job_id": job.content_hash()})
+
+
+def installed_profile(camera: Camera, profile: Profile) -> Profile:
+    """The profile as this unit is set up: the camera's own exposure zone (`metering_region_frac`), where it
+    has one, replaces the profile's metering window."""
+    if camera.metering_region_frac is None:
+        return profile
+    auto = profile.exposure.auto.model_copy(update={"metering_region_frac": camera.metering_region_frac})
+    return profile.model_copy(update={"exposure": profile.exposure.model_copy(update={"auto": auto})})
 
 
 def compile_scene(loaded: LoadedScene, settings: PlanSettings | None = None) -> Job:
