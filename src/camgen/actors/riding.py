@@ -12,9 +12,10 @@ The two-wheeler says where its seat, grips and pedals (or footpegs) are at each 
   bar takes one grip forward and the rider leans on to reach it; the neck and head lift back against the
   lean so that the eyes look ahead;
 - arms and legs are two-bone chains solved in closed form (as the gait's legs, `camgen.actors.gait`):
-  the wrists on the grips (`WRIST_FROM_GRIP_M`: the hand's width behind and over the bar), the elbows
-  bent outwards and down; the ball of each foot on its pedal's tread or footpeg, the foot level along
-  the vehicle, the knees forwards and a little outwards.
+  the wrists on the grips (`WRIST_FROM_GRIP_M`: the hand's width behind and over the bar), the hands
+  over the bar (`HAND_DIRECTION`, thumbs inwards), the elbows bent outwards and down; the ball of each
+  foot on its pedal's tread or footpeg, the foot level along the vehicle, the knees forwards and a
+  little outwards.
 
 A bicycle's saddle is set for its rider (`camgen.vehicles.two_wheeler.saddle_height_for`); a leg that
 cannot reach its pedal (a motorcycle's pegs are fixed) stretches as far as it goes.
@@ -41,6 +42,9 @@ ARM_REACH = 0.93
 LEAN_LIMITS_RAD = (math.radians(5.0), math.radians(70.0))
 WRIST_FROM_GRIP_M = np.array([-0.04, 0.0, 0.03])
 """The wrist joint from the grip's axis, in the vehicle's frame, m (a hand wrapped over the bar)."""
+HAND_DIRECTION = np.array([0.86, 0.0, -0.51])
+"""Which way the hands point from the wrists, in the vehicle's frame: forward and 30° down, over the bar
+(the fingers, which the skeleton lacks, would wrap round it)."""
 ELBOW_POLE = np.array([-0.3, 0.8, -0.5])
 """Which way the left elbow points, in the vehicle's frame (mirrored in y for the right): outwards,
 back and down."""
@@ -127,7 +131,10 @@ class Rider:
             mirror = np.array([1.0, sign, 1.0])
             pole = R @ (ELBOW_POLE * mirror)
             arm = (f"upperarm_{side}", f"lowerarm_{side}", f"hand_{side}")
-            self._chain(local, G, arm, wrists[k], pole, front_sign=-1.0)
+            # The hand over the grip: pointing forward and down, the thumb towards the stem.
+            R_hand = _aim(J[INDEX[f"hand_{side}"]] - J[INDEX[f"lowerarm_{side}"]], R @ HAND_DIRECTION,
+                          R @ np.array([0.0, -sign, 0.0]))  # fmt: skip
+            self._chain(local, G, arm, wrists[k], pole, R_hand, front_sign=-1.0)
             # The foot level along the vehicle, the ball on the tread.
             ball = targets.feet_m[k] + np.array([0.0, 0.0, self.ball_height_m])
             ankle = ball + R @ self.ankle_from_ball[side]

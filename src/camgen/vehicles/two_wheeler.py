@@ -296,8 +296,11 @@ def build_motorcycle(look: VehicleLook) -> TwoWheelerModel:
     axis = np.array([-math.sin(MOTO_RAKE_RAD), 0.0, math.cos(MOTO_RAKE_RAD)])
     ground = np.array([front[0] + MOTO_TRAIL_M, 0.0, 0.0])  # the steering axis meets the ground a trail ahead
     head_low, head_top = _on_axis(ground, axis, 0.74), _on_axis(ground, axis, 0.93)
-    pivot = np.array([rear[0] + 0.56, 0.0, 0.42])
-    seat_front_x = pivot[0] + 0.12
+    pivot = np.array([rear[0] + 0.56, 0.0, 0.42])  # the swingarm's
+    # The tank behind the steering head, the seat behind the tank, the engine behind the front tyre.
+    tank_centre = np.array([head_top[0] - 0.32, 0.0, 0.88])
+    seat_front_x = tank_centre[0] - 0.26
+    engine_x = front[0] - R - 0.06 - 0.21
     # Fork, triple clamps, handlebar, headlamp: the steering bone.
     steer = []
     for side in (1, -1):
@@ -323,7 +326,6 @@ def build_motorcycle(look: VehicleLook) -> TwoWheelerModel:
     steer.append((fender, STEERING, ENGINE_RGB))
     head_lamp = _part("head_lamp", "head", [(_tube(lamp_centre - _v(0.01, 0, 0), lamp_centre, 0.08, 20), STEERING)])
     # The body: tank and tail in paint, frame and engine dark, seat black, exhaust chrome.
-    tank_centre = np.array([seat_front_x + 0.24, 0.0, 0.88])
     tail_end = np.array([-L / 2 + 0.06, 0.0, 0.82])
     tail_start = np.array([seat_front_x - 0.30, 0.0, 0.74])
     tail_centre, tail_half = (tail_start + tail_end) / 2, float(tail_start[0] - tail_end[0]) / 2 + 0.04
@@ -340,20 +342,20 @@ def build_motorcycle(look: VehicleLook) -> TwoWheelerModel:
     seat_top = np.array([seat_front_x - 0.08, 0.0, MOTO_SEAT_M])
     body = [
         (_blob(seat_top + _v(-0.22, 0, -0.035), (0.36, 0.13, 0.05), 2, math.radians(-4)), -1, SEAT_RGB),  # and pillion
-        (_block((0.42, 0.30, 0.30), (pivot[0] + 0.30, 0.0, 0.40)), -1, ENGINE_RGB),
-        (_block((0.22, 0.27, 0.24), (pivot[0] + 0.50, 0.0, 0.60), math.radians(-20)), -1, CYLINDER_RGB),
+        (_block((0.42, 0.30, 0.30), (engine_x, 0.0, 0.40)), -1, ENGINE_RGB),
+        (_block((0.22, 0.27, 0.24), (engine_x + 0.16, 0.0, 0.60), math.radians(-20)), -1, CYLINDER_RGB),
         (_tube(head_low, pivot + _v(0.05, 0, 0.30), 0.025), -1, ENGINE_RGB),
         (_tube(head_top, pivot + _v(0.10, 0, 0.40), 0.025), -1, ENGINE_RGB),
         (_tube(pivot + _v(0.10, 0, 0.35), tail_end + _v(0.05, 0, -0.08), 0.02), -1, ENGINE_RGB),
-        (_tube(pivot + _v(0.62, -0.05, 0.20), pivot + _v(0.35, -0.12, -0.22), 0.022), -1, CHROME_RGB),
-        (_tube(pivot + _v(0.35, -0.12, -0.22), pivot + _v(0.0, -0.17, -0.16), 0.024), -1, CHROME_RGB),
+        (_tube(_v(engine_x + 0.24, -0.05, 0.62), _v(engine_x + 0.10, -0.12, 0.20), 0.022), -1, CHROME_RGB),
+        (_tube(_v(engine_x + 0.10, -0.12, 0.20), pivot + _v(0.0, -0.17, -0.16), 0.024), -1, CHROME_RGB),
         (_tube(pivot + _v(0.02, -0.17, -0.15), rear + _v(0.20, -0.19, 0.10), 0.055, 16), -1, CHROME_RGB),
         (_tube(rear + _v(0.45, 0, 0.12), pivot + _v(0.06, 0, 0.35), 0.025), -1, (0.45, 0.08, 0.03)),
     ]
     for side in (1, -1):
         body.append((_block((0.56, 0.03, 0.05), ((pivot[0] + rear[0]) / 2, side * 0.11, (pivot[2] + R) / 2),
                             math.atan2(pivot[2] - R, pivot[0] - rear[0])), -1, ENGINE_RGB))  # fmt: skip
-    pegs = np.array([[pivot[0] + 0.03, 0.19, 0.33], [pivot[0] + 0.03, -0.19, 0.33]])
+    pegs = np.array([[seat_front_x + 0.05, 0.19, 0.33], [seat_front_x + 0.05, -0.19, 0.33]])
     for peg in pegs:
         out = _v(0, np.sign(peg[1]), 0)
         body.append((_tube(peg - 0.09 * out, peg + 0.04 * out, 0.012), -1, SEAT_RGB))
