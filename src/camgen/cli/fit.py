@@ -567,7 +567,7 @@ def run_match(args: argparse.Namespace, out: Console, err: Console) -> int:
                 fit_denoise=args.fit_denoise,
                 codec=codec,
                 codec_fps=codec_fps,
-                accept_poor_match=args.accept_poor_fit,
+                accept_poor_fit=args.accept_poor_fit,
             )
         except ReferenceContentError as exc:  # fit_match sees arrays only: say which reference it was
             where = listing([str(path) for path in args.reference])

@@ -94,7 +94,7 @@ found (issue 24 measured the matched profile's noise equal to the base's that wa
 profile films the reference's content once more under the same light, through its own exposure block,
 with an independent seed and the codec, and its NLF, temporal noise spectrum and blockiness are compared
 with the reference's (`camgen.fit.match_verify`); a miss beyond 15 % is refused with
-`MatchNotReproducedError` unless ``accept_poor_match``. The content model leaves a bias of its own at the
+`MatchNotReproducedError` unless ``accept_poor_fit``. The content model leaves a bias of its own at the
 darkest bins: the content is the inverse of the output's temporal mean, biased by the clip at code 0 and
 by its residual noise, and the adaptive stretch keys on those tails (at 12 dB gain on a 160 × 120 ramp,
 the truth's own parameters simulated from the inverted content miss the darkest R bin by +28 %, the true
@@ -350,7 +350,7 @@ def fit_match(
     codec_fps: float | None = None,
     simulation_max_px: int = 320 * 240,
     max_evaluations: int = 60,
-    accept_poor_match: bool = False,
+    accept_poor_fit: bool = False,
 ) -> MatchFit:
     """Fit the base profile's noise so that camgen's output reproduces the reference's noise level function.
 
@@ -385,7 +385,7 @@ def fit_match(
     max_evaluations : int
         Most evaluations of the objective the optimiser may make; each of its iterations also runs one
         simulation per fitted parameter for the finite differences.
-    accept_poor_match : bool
+    accept_poor_fit : bool
         Return a match that the verification doubts (its doubts become warnings) instead of raising.
 
     Returns
@@ -398,7 +398,7 @@ def fit_match(
         For a reference `nlf_from_frames` refuses, a simulation that shares no usable bin with it, or a
         `gain_db` above the base sensor's ``analog_gain_max_db``.
     MatchNotReproducedError
-        (a ConfigError) Unless `accept_poor_match`: the matched profile, rendered at its operating point,
+        (a ConfigError) Unless `accept_poor_fit`: the matched profile, rendered at its operating point,
         misses the reference by more than 15 % in an NLF bin with enough samples, in the temporal noise
         spectrum or in blockiness (`camgen.fit.match_verify`); its ``fit`` holds the refused MatchFit.
 
@@ -698,7 +698,7 @@ def fit_match(
         operating_point=operating_point,
         verification=verification,
     )
-    if verification.doubts and not accept_poor_match:
+    if verification.doubts and not accept_poor_fit:
         raise MatchNotReproducedError(
             "the matched profile does not reproduce the reference: "
             + "; ".join(verification.doubts)
