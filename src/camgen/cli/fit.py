@@ -140,7 +140,13 @@ def add_parser(subparsers) -> None:
         help="noise estimate: temporal (a static view over frames), spatial (flat patches), auto (default)",
     )
     match.add_argument("--bins", type=int, default=32, metavar="N", help="intensity bins (default %(default)s)")
-    match.add_argument("--gain-db", type=float, metavar="DB", help="analog gain the reference was taken at, dB")
+    match.add_argument(
+        "--gain-db",
+        type=float,
+        metavar="DB",
+        help="analog gain the reference was taken at, dB (invisible in 8-bit output, so assumed: default the base "
+        "profile's; the matched profile pins it with the exposure time as a manual exposure)",
+    )
     match.add_argument("--fit-denoise", action="store_true", help="also fit isp.denoise_strength")
     match.add_argument(
         "--no-codec",
