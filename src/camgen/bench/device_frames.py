@@ -1,0 +1,84 @@
+"""Frames/s of the speed issue's two reference cameras on whatever OpenGL this process gets: llvmpipe on a
+machine without a GPU, the GPU's own driver through EGL where there is one (`Renderer.gl_renderer` names it).
+
+    python -m camgen.bench.device_frames [--frames N] [--json FILE]
+
+The cases are `camgen bench`'s end-to-end ones (`camgen.bench.e2e_cases.measure`: every output the scene
+plans, frames spread over the sequence, the first a warm-up that is not timed): the parking lot's PTZ at
+1080p and the intersection's 4K box camera at its native 3840 × 2160. Where PyAV is not installed (a GPU
+machine that was lent bare), the video output is dropped and the table says so; the rest of the camera
+model (lens, sensor, ISP, frames, annotations) runs as always. The same command on both machines gives
+the comparison recorded in BENCHMARKS.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import importlib.util
+import json
+import os
+import platform
+import shutil
+import tempfile
+from pathlib import Path
+
+from camgen.bench.e2e_cases import EndToEnd, spread_frames, timed_per_frame
+from camgen.bench.variants import at_output_size, one_camera
+from camgen.config import load_scene
+from camgen.plan import PlanSettings, compile_scene
+
+CASES = (
+    ("parking_lot", "pole_ptz", (1920, 1080)),
+    ("intersection_two_cameras", "box_4k_sw", (3840, 2160)),
+)
+"""(example scene, camera, stream size): the speed issue's goals (≥ 5 frames/s and ≥ 1 frame/s on two cores)."""
+
+
+def measure_case(repo: Path, scene: str, camera: str, size: tuple[int, int], frames: int, renderer, video: bool):
+    """One case's `EndToEnd`, rendered into a temporary directory with `renderer`."""
+    from camgen.plan.execute import execute
+
+    path = repo / "scenes" / f"{scene}.yaml"
+    loaded = at_output_size(one_camera(load_scene(path), camera), *size)
+    if not video:
+        outputs = loaded.scene.outputs.model_copy(update={"video": False})
+        loaded = dataclasses.replace(loaded, scene=loaded.scene.model_copy(update={"outputs": outputs}))
+    job = compile_scene(loaded, PlanSettings())
+    out = Path(tempfile.mkdtemp(prefix="camgen-device-frames-"))
+    try:
+        (result,) = execute(job, out, renderer=renderer, frames=spread_frames(job.frame_count, frames),
+                            resolve_path=path.parent.joinpath)  # fmt: skip
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+    frame_ms, stage_ms = timed_per_frame(result)
+    return EndToEnd(scene, camera, loaded.profiles[camera].name, f"{size[0]}×{size[1]}",
+                    tuple(stage.name for stage in job.cameras[0].stages), stage_ms, frame_ms)  # fmt: skip
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m camgen.bench.device_frames", description=__doc__.split("\n")[0])
+    parser.add_argument("--frames", type=int, default=5, help="frames per case, the first untimed (default 5)")
+    parser.add_argument("--json", type=Path, help="also write the figures here")
+    args = parser.parse_args(argv)
+    from camgen.render.renderer import Renderer
+
+    repo = Path(__file__).resolve().parents[3]
+    video = importlib.util.find_spec("av") is not None
+    renderer = Renderer()
+    records = [measure_case(repo, scene, camera, size, args.frames, renderer, video) for scene, camera, size in CASES]
+    where = f"OpenGL: {renderer.gl_renderer}; {os.cpu_count()} CPUs; {platform.processor() or platform.machine()}"
+    print(where + ("" if video else "; video output left out (PyAV is not installed)"))
+    print("| scene | camera | stream | frames/s | ms per frame | stages (ms per frame) |")
+    print("|---|---|---|---:|---:|---|")
+    for r in records:
+        stages = ", ".join(f"{name} {ms:.0f}" for name, ms in sorted(r.stage_ms.items(), key=lambda kv: -kv[1]))
+        print(f"| {r.scene} | {r.camera} | {r.size} | {r.frames_per_s:.2f} | {r.frame_ms:.0f} | {stages} |")
+    if args.json is not None:
+        rows = [{**dataclasses.asdict(r), "frames_per_s": r.frames_per_s} for r in records]
+        args.json.write_text(json.dumps({"where": where, "video": video, "cases": rows}, indent=1), encoding="utf-8")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
