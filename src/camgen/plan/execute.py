@@ -222,8 +222,6 @@ class _Context:
 
 
 def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_frame) -> CameraResult:
-    from camgen.io.video import VideoWriter
-
     job, directory = context.job, context.directory
     camera = job.cameras[context.camera_index]
     result = CameraResult(camera.name, directory)
@@ -316,6 +314,8 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
             if rgb8 is not None and "io.video" in stages:
                 with clock("io.video"):
                     if video is None:
+                        from camgen.io.video import VideoWriter  # PyAV only where a video is written
+
                         width_px, height_px = camera.output_size_px or (camera.width_px, camera.height_px)
                         video = VideoWriter(
                             directory / "video.mp4",
