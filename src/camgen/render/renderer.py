@@ -78,6 +78,32 @@ class View:
         K[1, 2] = (K[1, 2] + 0.5) * factor - 0.5
         return View(K, self.T_world_from_cam, self.width_px * factor, self.height_px * factor)
 
+    def cropped(self, rect_px: tuple[int, int, int, int]) -> View:
+        """The part (x0, y0, x1, y1) of this view (x1, y1 exclusive) as a view of its own: its pixel (u, v)
+        sees what this view sees at (u + x0, v + y0)."""
+        x0, y0, x1, y1 = rect_px
+        K = self.K_px.copy()
+        K[0, 2] -= x0
+        K[1, 2] -= y0
+        return View(K, self.T_world_from_cam, x1 - x0, y1 - y0)
+
+
+@dataclass(frozen=True)
+class ShadowFit:
+    """What a draw fits its shadow maps to, instead of its own view and the scene's current bounds.
+
+    Draws that must agree pixel for pixel share one: a frame's motion sub-frames (whose actors move the
+    scene's bounds and whose jittered views move the frustum) and a crop of a frame's view (whose frustum is
+    smaller). Without it each draw's sun shadow map is fitted to that draw alone, so its texels, and the
+    shadow edges they sample, move between draws that see the same surfaces."""
+
+    view: View
+    """The view whose frustum the sun's shadow map covers (`seen_part_of_box_m`)."""
+    low_m: np.ndarray
+    """(3,) world corner of a box holding every shadow caster at any time (an actor's whole route)."""
+    high_m: np.ndarray
+    """(3,) its opposite corner."""
+
 
 @dataclass
 class Passes:
@@ -194,31 +220,38 @@ class _Framebuffer:
             GL.glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL.GL_COLOR_BUFFER_BIT, GL.GL_NEAREST)
         GL.glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL.GL_DEPTH_BUFFER_BIT, GL.GL_NEAREST)
 
-    def read(self) -> Passes:
+    def read(self, rect_px: tuple[int, int, int, int] | None = None) -> Passes:
+        """Every pass, of the whole target or of its pixels (x0, y0, x1, y1; x1, y1 exclusive)."""
         GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, self.fbo)
         GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
-        w, h = self.width_px, self.height_px
+        x, y, w, h = (0, 0, self.width_px, self.height_px) if rect_px is None else _origin_size(rect_px)
         out = Passes()
         for name in self.passes:
             GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT0 + PASSES.index(name))
             if name == "radiance":
-                data = GL.glReadPixels(0, 0, w, h, GL.GL_RGBA, GL.GL_FLOAT)
+                data = GL.glReadPixels(x, y, w, h, GL.GL_RGBA, GL.GL_FLOAT)
                 rgba = np.frombuffer(data, np.float32).reshape(h, w, 4)
                 out.radiance = np.ascontiguousarray(rgba[..., :3])
                 self.sky_mask = rgba[..., 3] == 0.0
             elif name == "depth_m":
-                data = GL.glReadPixels(0, 0, w, h, GL.GL_RED, GL.GL_FLOAT)
+                data = GL.glReadPixels(x, y, w, h, GL.GL_RED, GL.GL_FLOAT)
                 depth = np.frombuffer(data, np.float32).reshape(h, w).copy()
                 depth[depth == _NO_DEPTH] = np.inf
                 out.depth_m = depth
             else:
-                data = GL.glReadPixels(0, 0, w, h, GL.GL_RED_INTEGER, GL.GL_UNSIGNED_INT)
+                data = GL.glReadPixels(x, y, w, h, GL.GL_RED_INTEGER, GL.GL_UNSIGNED_INT)
                 out.instance_id = np.frombuffer(data, np.uint32).reshape(h, w)
         return out
 
     def delete(self) -> None:
         GL.glDeleteFramebuffers(1, [self.fbo])
         GL.glDeleteRenderbuffers(len(self.renderbuffers), self.renderbuffers)
+
+
+def _origin_size(rect_px: tuple[int, int, int, int]) -> tuple[int, int, int, int]:
+    """(x, y, width, height) of a rectangle (x0, y0, x1, y1), x1 and y1 exclusive."""
+    x0, y0, x1, y1 = rect_px
+    return x0, y0, x1 - x0, y1 - y0
 
 
 class _PassRenderer(pyrender.Renderer):
@@ -232,6 +265,9 @@ class _PassRenderer(pyrender.Renderer):
         self.shadow_focus_m: np.ndarray | None = None
         """(N, 3) world points the current draw sees (its view frustum's corners); a sun's shadow map
         covers only the part of the scene whose shadows can fall among them."""
+        self.shadow_bounds_m: tuple[np.ndarray, np.ndarray] | None = None
+        """(low, high) world box the current draw's shadow maps span instead of the scene's bounds (a
+        `ShadowFit`'s), or None."""
 
     def _get_light_cam_matrices(self, scene, light_node, flags):
         """A sun's shadow camera fitted to what the draw sees (pyrender's covers a square twice the
@@ -239,10 +275,16 @@ class _PassRenderer(pyrender.Renderer):
         cross-section is the overlap, in the light's axes, of the scene's bounds and the view frustum,
         and whose depth spans the whole scene (casters outside the view still cast into it)."""
         light = light_node.light
+        bounds = scene.bounds if self.shadow_bounds_m is None else self.shadow_bounds_m
+        if isinstance(light, SpotLight) and self.shadow_bounds_m is not None:
+            # pyrender's spot shadow camera, its near and far planes from the fixed box's diagonal.
+            scale = float(np.linalg.norm(np.subtract(bounds[1], bounds[0])))
+            P = light._get_shadow_camera(scale).get_projection_matrix()
+            return np.linalg.inv(scene.get_pose(light_node)), P
         if not isinstance(light, DirectionalLight):
             return super()._get_light_cam_matrices(scene, light_node, flags)
         return directional_shadow_matrices(
-            scene.get_pose(light_node)[:3, :3], box_corners(*scene.bounds, np.eye(4)), self.shadow_focus_m
+            scene.get_pose(light_node)[:3, :3], box_corners(*bounds, np.eye(4)), self.shadow_focus_m
         )
 
     def _compute_max_n_lights(self, flags):
@@ -460,6 +502,8 @@ class Renderer:
         keep_as: str | None = None,
         read: bool = True,
         clip_range_m: tuple[float, float] | None = None,
+        shadow_fit: ShadowFit | None = None,
+        crop_px: tuple[int, int, int, int] | None = None,
     ) -> Passes:
         """Draw `nodes` (default: every mesh) of a `SceneGraph` as seen by `view`.
 
@@ -469,6 +513,14 @@ class Renderer:
         depth-tested against it, exactly as if everything were drawn together, provided both draws
         use the same `clip_range_m` (near, far in m; default: from the scene's current bounds, which
         move with the actors). Nodes are drawn in the order given (default: environment, then actors).
+        `shadow_fit`: what the shadow maps are fitted to (default: this view and the scene's current
+        bounds); draws sharing one shade every surface they both see alike. `crop_px`: draw only the
+        pixels (x0, y0, x1, y1) of `view` (x1, y1 exclusive; passes of that size), at a cost that follows
+        their number: the whole view's draw scissored to them, so each is bit for bit the whole draw's
+        pixel. (A view cropped by moving its principal point, or a viewport moved by (−x0, −y0), rounds
+        window positions differently, and shadow-map comparisons on lit ground flip here and there: up to
+        6e-4 of a pixel's value, measured.) Its sky, far ground and fog are evaluated through
+        `view.cropped(crop_px)`. Not with `keep_as`.
         """
         unknown = set(passes) - set(PASSES)
         if unknown or not passes:
@@ -491,7 +543,14 @@ class Renderer:
         renderer._update_context(scene, flags)
         near_m, far_m = clip_range_m or _scene_clip_range_m(scene, view.T_world_from_cam)
         if flags != RenderFlags.NONE:
-            renderer.shadow_focus_m = seen_part_of_box_m(view, near_m, far_m, *scene.bounds)
+            if shadow_fit is None:
+                renderer.shadow_bounds_m = None
+                renderer.shadow_focus_m = seen_part_of_box_m(view, near_m, far_m, *scene.bounds)
+            else:
+                renderer.shadow_bounds_m = (shadow_fit.low_m, shadow_fit.high_m)
+                renderer.shadow_focus_m = seen_part_of_box_m(
+                    shadow_fit.view, near_m, far_m, shadow_fit.low_m, shadow_fit.high_m
+                )
             renderer.render_shadow_maps(scene, flags)
 
         size = (view.width_px, view.height_px)
@@ -505,15 +564,23 @@ class Renderer:
             target.bind()
         else:
             target.bind()
+            if crop_px is not None:
+                if keep_as is not None:
+                    raise ValueError("a cropped draw cannot be kept as a background")
+                GL.glEnable(GL.GL_SCISSOR_TEST)
+                GL.glScissor(*_origin_size(crop_px))  # framebuffer row v holds image row v (gl_projection)
             target.clear(graph.sky_luminance_cd_m2)
 
         P = gl_projection(view.K_px, view.width_px, view.height_px, near_m, far_m)
         V = np.linalg.inv(pose_gl)
         renderer.forward(scene, nodes, graph.instance_ids, V, P, pose_gl[:3, 3], flags, lit)
         GL.glFlush()
+        if crop_px is not None:
+            GL.glDisable(GL.GL_SCISSOR_TEST)
+            view = view.cropped(crop_px)
         if not read:
             return Passes()
-        out = target.read()
+        out = target.read(crop_px)
         if out.radiance is not None and getattr(graph, "sky", "uniform") != "uniform" and target.sky_mask.any():
             out.radiance[target.sky_mask] = sky_view(graph, view)[target.sky_mask]
         ground_depth_m = None
@@ -773,4 +840,4 @@ def clip_planes_m(farthest_m: float) -> tuple[float, float]:
     return NEAR_CLIP_M, max(2.0 * NEAR_CLIP_M, farthest_m * 1.01 + 1.0)
 
 
-__all__ = ["PASSES", "Passes", "Renderer", "View", "gl_camera_pose", "gl_projection"]
+__all__ = ["PASSES", "Passes", "Renderer", "ShadowFit", "View", "gl_camera_pose", "gl_projection"]

@@ -14,10 +14,19 @@
   drawn at 1× through one of the s×s sub-pixel positions, in turn, and their number is rounded up to
   a multiple of s², so a static pixel gets exactly the s×s box average at 1/s² of the cost per
   sub-frame (time and area sampled together, as a distribution ray tracer does).
+- Moving regions (`CameraRenderer.moving_rects_px`): when the camera and the lights hold still during
+  the exposure, a pixel that no moving actor and no shadow of one reaches is the same in every sub-frame
+  of one sub-pixel position. So the first s² sub-frames (one per position) are drawn whole, and the
+  others only inside a few rectangles that bound what moves (`Renderer.draw`'s `crop_px`: the whole
+  view's draw scissored to them, so the same pixels bit for bit); outside them the mean is the whole
+  draws' mean, which is what every sub-frame gives there. All of a frame's draws fit their shadow maps
+  alike (`ShadowFit`), so that a shadow map's texels move with neither the actors nor the crop. Equal to
+  drawing every sub-frame whole within float rounding (tests/render/test_moving_regions.py).
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
@@ -33,7 +42,17 @@ from camgen.errors import ConfigError
 from camgen.job import CameraJob, CameraState, Job, RenderSpec
 from camgen.motion.pose import R_HEAD_FROM_CV, R_mount_from_head
 from camgen.optics.motion_blur import sub_frame_count, sub_frame_offsets
-from camgen.render.renderer import Passes, Renderer, View, clip_planes_m
+from camgen.render.renderer import (
+    NEAR_CLIP_M,
+    SKY_STEP_PX,
+    Passes,
+    Renderer,
+    ShadowFit,
+    View,
+    clip_planes_m,
+    directional_shadow_matrices,
+    seen_part_of_box_m,
+)
 from camgen.render.scene_graph import SceneGraph, build_scene_graph
 
 
@@ -90,6 +109,60 @@ def shifted(view: View, dx_px: float, dy_px: float) -> View:
     return View(K, view.T_world_from_cam, view.width_px, view.height_px)
 
 
+def aligned_rect_px(rect_px: tuple[int, int, int, int], width_px: int, height_px: int) -> tuple[int, int, int, int]:
+    """`rect_px` grown so that a draw cropped to it evaluates the sky on the whole view's grid
+    (`camgen.render.renderer.sky_view`: nodes every `SKY_STEP_PX` pixels from the draw's corner, plus its
+    last pixel, interpolated between): its left and top on a multiple of `SKY_STEP_PX`, its last column
+    and row on one too or at the view's edge."""
+    step = SKY_STEP_PX
+
+    def end(last: int, size: int) -> int:
+        return min(size, -(-last // step) * step + 1)
+
+    x0, y0, x1, y1 = rect_px
+    return (x0 // step) * step, (y0 // step) * step, end(x1 - 1, width_px), end(y1 - 1, height_px)
+
+
+def merged_rects_px(rects: list[tuple[int, int, int, int]], slack_px: int) -> list[tuple[int, int, int, int]]:
+    """Rectangles (x0, y0, x1, y1) merged pairwise while one rectangle around two costs no more than the two
+    apart plus `slack_px` (a draw's fixed cost, in pixels). Rectangles left overlapping are both drawn
+    (the same pixels twice: correct, at some cost)."""
+    rects = list(rects)
+
+    def area(r):
+        return (r[2] - r[0]) * (r[3] - r[1])
+
+    merging = True
+    while merging:
+        merging = False
+        for i in range(len(rects)):
+            for j in range(i + 1, len(rects)):
+                a, b = rects[i], rects[j]
+                both = (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3]))
+                if area(both) <= area(a) + area(b) + slack_px:
+                    rects[i] = both
+                    del rects[j]
+                    merging = True
+                    break
+            if merging:
+                break
+    return rects
+
+
+MOVING_AREA_MAX_FRACTION = 0.85
+"""Above this share of the frame inside the moving regions, every sub-frame is drawn whole: the crops
+would save less than their fixed costs (a shadow-map pass each, the sky and far ground per draw)."""
+RECT_MERGE_SLACK_PX = 256 * 256
+"""Two moving regions are drawn as one when that adds no more than this many pixels: a stand-in for each
+draw's fixed cost (its shadow-map passes, Python, the sky and far-ground set-up), chosen, not tuned."""
+RECT_PAD_PX = 2
+"""Pixels added around a projected bound: half a pixel of sub-pixel jitter, half a pixel of rasterisation
+to the nearest centre, and one spare."""
+SHADOW_TEXEL_MARGIN = 2.0
+"""Shadow-map texels a caster's box grows by before its shadow is projected: the shader's 4-tap bilinear
+lookup (`linear_mesh.frag`) reaches one texel past a caster's rasterised texels, plus one spare."""
+
+
 def box_downsample(image: np.ndarray, factor: int) -> np.ndarray:
     """Mean over factor×factor blocks, (H·f, W·f, …) → (H, W, …); float32 in, float32 out."""
     if factor == 1:
@@ -109,11 +182,24 @@ class Frame:
 class CameraRenderer:
     """Draws the planned passes of one camera; keeps its static background between frames."""
 
-    def __init__(self, renderer: Renderer, graph: SceneGraph, camera: CameraJob):
+    def __init__(self, renderer: Renderer, graph: SceneGraph, camera: CameraJob, *, moving_regions: bool = True):
         self.renderer, self.graph, self.camera = renderer, graph, camera
         self.spec = camera.render
+        self.moving_regions = moving_regions
+        """Draw motion sub-frames only where something moves (module docstring); False draws each whole."""
         self._kept_views: dict[str, View] = {}
         self._reach_points_m, self._reach_radius_m = _reach(graph)
+        reach = self._reach_radius_m[:, None]
+        self._caster_box_m = (
+            (self._reach_points_m - reach).min(axis=0),
+            (self._reach_points_m + reach).max(axis=0),
+        )
+        """A box holding every shadow caster at any time: the shadow maps span it (`ShadowFit`)."""
+        environment_z = [
+            box_corners(*n.mesh.bounds, graph.scene.get_pose(n))[:, 2].min() for n in graph.environment_nodes
+        ]
+        self._lowest_z_m = float(min([0.0, *environment_z]))
+        """The lowest surface a shadow can fall on (the ground, or the lowest environment mesh), m."""
         motion = [stage.params for stage in camera.stages if stage.name == "optics.motion_blur"]
         self._motion = motion[0] if motion else None
         self._nir: SceneGraph | None = None
@@ -140,18 +226,32 @@ class CameraRenderer:
             self.renderer.forget(kept)
         self._kept_views.clear()
 
-    def _draw(self, view: View, passes: tuple[str, ...], key: str) -> Passes:
+    def shadow_fit(self, view: View) -> ShadowFit:
+        """What every draw of a frame seen through `view` fits its shadow maps to."""
+        return ShadowFit(view, *self._caster_box_m)
+
+    def _draw(self, view: View, passes: tuple[str, ...], key: str, fit: ShadowFit | None = None) -> Passes:
         graph, renderer = self.graph, self.renderer
         clip = self.clip_range_m(view)
+        fit = self.shadow_fit(view) if fit is None else fit
         if not self.spec.static_background:
-            return renderer.draw(graph, view, passes, clip_range_m=clip)
+            return renderer.draw(graph, view, passes, clip_range_m=clip, shadow_fit=fit)
         kept = f"{self.camera.name}:{key}"
         if kept not in self._kept_views or not _same_view(self._kept_views[kept], view):
             renderer.draw(
-                graph, view, passes, nodes=graph.environment_nodes, keep_as=kept, read=False, clip_range_m=clip
+                graph,
+                view,
+                passes,
+                nodes=graph.environment_nodes,
+                keep_as=kept,
+                read=False,
+                clip_range_m=clip,
+                shadow_fit=fit,
             )
             self._kept_views[kept] = view
-        return renderer.draw(graph, view, passes, nodes=graph.actor_nodes, background=kept, clip_range_m=clip)
+        return renderer.draw(
+            graph, view, passes, nodes=graph.actor_nodes, background=kept, clip_range_m=clip, shadow_fit=fit
+        )
 
     def motion_samples(self, state: CameraState) -> int:
         """Sub-frames for this frame's exposure: the plan's largest motion scales with the exposure
@@ -198,16 +298,14 @@ class CameraRenderer:
             else:
                 key = "radiance" if s == 1 else f"radiance {s}x"
                 draws = [(float(t), 0.0, 0.0, s, key) for t in sub_frame_offsets(samples)]
-            for offset, dx_px, dy_px, factor, key in draws:
-                self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
-                # The head moves during the exposure too.
-                sub_view = shifted(view_at(state, spec, offset * state.exposure_time_s), dx_px, dy_px)
-                if factor > 1:
-                    sub_view = sub_view.scaled(factor)
-                radiance = box_downsample(self._draw(sub_view, ("radiance",), key).radiance, factor)
-                result.radiance = radiance if result.radiance is None else result.radiance + radiance
-            if len(draws) > 1:
-                result.radiance /= len(draws)
+            fit = self.shadow_fit(view)
+            rects = None
+            if self.moving_regions and len(draws) > 1 and all(factor == 1 for _, _, _, factor, _ in draws):
+                rects = self.moving_rects_px(state, view, [offset for offset, *_ in draws], fit)
+            if rects is None:
+                result.radiance = self._sub_frame_mean(state, view, draws, fit)
+            else:
+                result.radiance = self._composited_mean(state, view, draws, fit, rects, s**2)
         if "radiance" in passes and state.night_mode:
             result.radiance = result.radiance + self._nir_radiance(view, state)
         geometric = tuple(p for p in passes if p != "radiance")
@@ -218,6 +316,110 @@ class CameraRenderer:
         if "radiance" in passes and self.graph.rain_rate_mm_h is not None:
             result.radiance = self._rain(view, state, result.radiance, result.depth_m)
         return Frame(index, state.time_s, result)
+
+    def _sub_frame_mean(self, state: CameraState, view: View, draws: list, fit: ShadowFit) -> np.ndarray:
+        """The mean radiance of `draws` (time offset, sub-pixel shift, draw factor, kept-background key),
+        each drawn whole."""
+        spec, total = self.spec, None
+        for offset, dx_px, dy_px, factor, key in draws:
+            self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
+            # The head moves during the exposure too.
+            sub_view = shifted(view_at(state, spec, offset * state.exposure_time_s), dx_px, dy_px)
+            if factor > 1:
+                sub_view = sub_view.scaled(factor)
+            radiance = box_downsample(self._draw(sub_view, ("radiance",), key, fit).radiance, factor)
+            total = radiance if total is None else total + radiance
+        return total / len(draws) if len(draws) > 1 else total
+
+    def _composited_mean(
+        self, state: CameraState, view: View, draws: list, fit: ShadowFit, rects: list, positions: int
+    ) -> np.ndarray:
+        """The mean radiance of `draws` (all at 1×, through a still camera) when only `rects` change
+        between sub-frames: the first `positions` sub-frames (one per sub-pixel position) whole, the rest
+        inside `rects` only (module docstring)."""
+        whole = self._sub_frame_mean(state, view, draws[:positions], fit) * np.float32(positions)
+        if len(draws) == positions:
+            return whole / np.float32(positions)
+        inside = [whole[y0:y1, x0:x1].copy() for x0, y0, x1, y1 in rects]
+        clip = self.clip_range_m(view)
+        for offset, dx_px, dy_px, _, _ in draws[positions:]:
+            self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
+            sub_view = shifted(view, dx_px, dy_px)
+            for total, rect in zip(inside, rects, strict=True):
+                part = self.renderer.draw(
+                    self.graph, sub_view, ("radiance",), clip_range_m=clip, shadow_fit=fit, crop_px=rect
+                )
+                total += part.radiance
+        result = whole / np.float32(positions)
+        for total, (x0, y0, x1, y1) in zip(inside, rects, strict=True):
+            result[y0:y1, x0:x1] = total / np.float32(len(draws))
+        return result
+
+    def moving_rects_px(
+        self, state: CameraState, view: View, offsets: list[float], fit: ShadowFit
+    ) -> list[tuple[int, int, int, int]] | None:
+        """Rectangles (x0, y0, x1, y1) of `view` outside which no sub-frame of the exposure (at `offsets`,
+        fractions of it) differs from another of the same sub-pixel position; None when that cannot be
+        bounded, or the rectangles would cover most of the frame (then every sub-frame is drawn whole).
+
+        Each actor whose mesh, pose or lamps change during the exposure is bounded by its box swept over
+        the sub-frame times, grown by two shadow-map texels, and by that box's shadow volume down to the
+        lowest surface (`_shadow_slices`: along a sun's direction, or along the rays from a spot light;
+        point lights cast no shadows in this renderer), as a few convex hulls whose parts in front of
+        the near plane are projected, each to a rectangle. Falls back when the head moves (pan, tilt,
+        zoom), a light moves or changes, a sun is at or below the horizon, or a spot light is not above a
+        moving box."""
+        graph, scene, spec = self.graph, self.graph.scene, self.spec
+        exposure_s = state.exposure_time_s
+        if any(not _same_view(view_at(state, spec, offset * exposure_s), view) for offset in offsets):
+            return None
+        lights_before = _light_state(scene)
+        boxes: list[list[np.ndarray]] = [[] for _ in graph.actor_nodes]
+        first: list[tuple] = []
+        changed = [False] * len(graph.actor_nodes)
+        for step, offset in enumerate(offsets):
+            graph.place_actors(state.time_s + offset * exposure_s)
+            for k, node in enumerate(graph.actor_nodes):
+                look = _actor_look(scene, node)
+                if step == 0:
+                    first.append(look)
+                elif not changed[k]:
+                    changed[k] = not all(np.array_equal(a, b) for a, b in zip(first[k], look, strict=True))
+                boxes[k].append(box_corners(*node.mesh.bounds, scene.get_pose(node)))
+        if not all(np.array_equal(a, b) for a, b in zip(lights_before, _light_state(scene), strict=True)):
+            return None
+        near_m, far_m = self.clip_range_m(view)
+        casting = _shadow_lights(scene) if graph.shadows else []
+        rects = []
+        for k in range(len(graph.actor_nodes)):
+            if not changed[k]:
+                continue
+            corners = np.concatenate(boxes[k])
+            low, high = corners.min(axis=0), corners.max(axis=0)
+            grow_m = max(
+                (
+                    SHADOW_TEXEL_MARGIN
+                    * _shadow_texel_m(scene, node, fit, (near_m, far_m), self._caster_box_m, corners)
+                    for node in casting
+                ),
+                default=0.0,
+            )
+            swept = box_corners(low - grow_m, high + grow_m, np.eye(4))
+            hulls = [swept]
+            for node in casting:
+                slices = _shadow_slices(scene, node, swept, self._lowest_z_m)
+                if slices is None:
+                    return None
+                hulls += slices
+            for hull in hulls:
+                rect = _projected_rect_px(hull, view, NEAR_CLIP_M)
+                if rect is not None:
+                    rects.append(aligned_rect_px(rect, view.width_px, view.height_px))
+        rects = merged_rects_px(rects, RECT_MERGE_SLACK_PX)
+        area = sum((x1 - x0) * (y1 - y0) for x0, y0, x1, y1 in rects)
+        if area > MOVING_AREA_MAX_FRACTION * view.width_px * view.height_px:
+            return None
+        return rects
 
     def _rain(self, view: View, state: CameraState, radiance: np.ndarray, depth_m: np.ndarray | None) -> np.ndarray:
         """The frame's radiance in the scene's rain (`camgen.render.rain`): streaks over the exposure the
@@ -279,6 +481,129 @@ def _reach(graph: SceneGraph) -> tuple[np.ndarray, np.ndarray]:
     if not points:
         return np.zeros((1, 3)), np.zeros(1)
     return np.concatenate(points), np.concatenate(radii)
+
+
+def _light_state(scene) -> list[np.ndarray]:
+    """Every light's pose, colour and intensity (what a sub-frame's draw takes from the lights)."""
+    state = []
+    for node in scene.light_nodes:
+        light = node.light
+        state += [scene.get_pose(node), np.asarray(light.color, np.float64), np.asarray(light.intensity, np.float64)]
+    return state
+
+
+def _actor_look(scene, node) -> tuple[np.ndarray, ...]:
+    """What an actor's node draws: its pose, and each primitive's vertices, normals and emission."""
+    look = [scene.get_pose(node).copy()]
+    for primitive in node.mesh.primitives:
+        look += [
+            np.array(primitive.positions, copy=True),
+            np.array(primitive.normals, copy=True) if primitive.normals is not None else np.zeros(0),
+            np.asarray(primitive.material.emissiveFactor, np.float64).copy(),
+        ]
+    return tuple(look)
+
+
+def _shadow_lights(scene) -> list:
+    """The light nodes that cast shadow maps (`Renderer.draw`: suns and spot lights when shadows are on)."""
+    from pyrender.light import DirectionalLight, SpotLight
+
+    return [node for node in scene.light_nodes if isinstance(node.light, DirectionalLight | SpotLight)]
+
+
+def _shadow_texel_m(scene, node, fit: ShadowFit, clip_m, box_m, corners_m: np.ndarray) -> float:
+    """A light's shadow-map texel, m, at a caster whose box corners are `corners_m` (N, 3): across a sun's
+    map (fitted as `Renderer.draw` fits it to `fit` and the clip range `clip_m`), or a spot light's field
+    of view over the map's texels times the caster's farthest distance from it."""
+    from pyrender.constants import SHADOW_TEX_SZ
+    from pyrender.light import DirectionalLight
+
+    light, pose = node.light, scene.get_pose(node)
+    if isinstance(light, DirectionalLight):
+        focus = seen_part_of_box_m(fit.view, *clip_m, *box_m)
+        _, P = directional_shadow_matrices(pose[:3, :3], box_corners(*box_m, np.eye(4)), focus)
+        return 2.0 / (min(P[0, 0], P[1, 1]) * SHADOW_TEX_SZ)
+    fov = min(2.0 * light.outerConeAngle + math.pi / 16.0, math.pi)
+    distance_m = float(np.linalg.norm(corners_m - pose[:3, 3], axis=1).max())
+    return 2.0 * math.tan(fov / 2.0) / SHADOW_TEX_SZ * distance_m
+
+
+SHADOW_SLICES_MAX = 16
+"""Most pieces a caster's shadow volume is cut into along the light (`_shadow_slices`)."""
+
+
+def _shadow_slices(scene, node, corners_m: np.ndarray, lowest_z_m: float) -> list[np.ndarray] | None:
+    """Point sets (N, 3) whose convex hulls together hold the shadow volume that the box with
+    corners `corners_m` (8, 3) casts in the light of `node` down to the plane z = `lowest_z_m`; None when
+    the light does not shine down past every corner.
+
+    A sun shining along d moves a corner c to c + λd, λ ∈ [0, λ_ground(c)]; a spot light at L to
+    L + κ(c − L), κ ∈ [1, κ_ground(c)]. The volume lies in the union over λ (κ) of the box moved (scaled)
+    by it, and that union over an interval [a, b] lies in the hull of the box at a and at b (the box
+    moved along a segment, or scaled about L between two factors), cut at the plane (`_above_plane`).
+    Cutting the interval into pieces about as long as the box is wide bounds a long shadow by a chain of
+    small hulls, not one long diagonal."""
+    from pyrender.light import DirectionalLight
+
+    pose = scene.get_pose(node)
+    width_m = max(float(np.ptp(corners_m[:, 0])), float(np.ptp(corners_m[:, 1])), 0.1)
+    if isinstance(node.light, DirectionalLight):
+        d = -pose[:3, 2]  # a light shines along its node's −Z
+        if d[2] >= -1e-6:
+            return None
+        reach = max(float(np.max(corners_m[:, 2] - lowest_z_m)) / -d[2], 0.0)
+        pieces = int(min(SHADOW_SLICES_MAX, max(1, math.ceil(reach * math.hypot(d[0], d[1]) / width_m))))
+        ends = np.linspace(0.0, reach, pieces + 1)
+        hulls = [np.concatenate([corners_m + a * d, corners_m + b * d]) for a, b in itertools.pairwise(ends)]
+        return [_above_plane(hull, lowest_z_m) for hull in hulls]
+    L = pose[:3, 3]
+    if L[2] <= corners_m[:, 2].max() + 1e-6:
+        return None
+    reach = float(np.max((L[2] - lowest_z_m) / (L[2] - corners_m[:, 2])))
+    length_m = (reach - 1.0) * float(np.linalg.norm(corners_m - L, axis=1).max())
+    pieces = int(min(SHADOW_SLICES_MAX, max(1, math.ceil(length_m / width_m))))
+    ends = np.linspace(1.0, max(reach, 1.0), pieces + 1)
+    hulls = [np.concatenate([L + a * (corners_m - L), L + b * (corners_m - L)]) for a, b in itertools.pairwise(ends)]
+    return [_above_plane(hull, lowest_z_m) for hull in hulls]
+
+
+def _above_plane(points_m: np.ndarray, z_m: float) -> np.ndarray:
+    """Points whose convex hull is the part of the convex hull of `points_m` (N, 3) at or above z = `z_m`:
+    those at or above it, and where each segment between two of them crosses it (every edge of the hull
+    is such a segment)."""
+    above = points_m[:, 2] >= z_m
+    i, j = np.nonzero(above[:, None] & ~above[None, :])
+    t = (z_m - points_m[i, 2]) / (points_m[j, 2] - points_m[i, 2])
+    return np.concatenate([points_m[above], points_m[i] + t[:, None] * (points_m[j] - points_m[i])])
+
+
+def _projected_rect_px(points_m: np.ndarray, view: View, near_m: float) -> tuple[int, int, int, int] | None:
+    """The pixels (x0, y0, x1, y1; x1, y1 exclusive) of `view` that the convex hull of `points_m` (N, 3,
+    world) can cover, padded by `RECT_PAD_PX`; the hull is clipped at the near plane first (every segment
+    between two points crossing it adds its crossing); None when it misses the view."""
+    T = view.T_world_from_cam
+    camera = (points_m - T[:3, 3]) @ T[:3, :3]
+    z = camera[:, 2]
+    front = camera[z >= near_m]
+    i, j = np.nonzero((z[:, None] >= near_m) != (z[None, :] >= near_m))
+    keep = i < j
+    i, j = i[keep], j[keep]
+    t = (near_m - z[i]) / (z[j] - z[i])
+    crossings = camera[i] + t[:, None] * (camera[j] - camera[i])
+    hull = np.concatenate([front, crossings])
+    if len(hull) == 0:
+        return None
+    K = view.K_px
+    x, y = hull[:, 0] / hull[:, 2], hull[:, 1] / hull[:, 2]
+    u = K[0, 0] * x + K[0, 1] * y + K[0, 2]
+    v = K[1, 1] * y + K[1, 2]
+    x0 = max(0, math.floor(u.min()) - RECT_PAD_PX)
+    y0 = max(0, math.floor(v.min()) - RECT_PAD_PX)
+    x1 = min(view.width_px, math.ceil(u.max()) + RECT_PAD_PX + 1)
+    y1 = min(view.height_px, math.ceil(v.max()) + RECT_PAD_PX + 1)
+    if x0 >= x1 or y0 >= y1:
+        return None
+    return x0, y0, x1, y1
 
 
 def _same_view(a: View, b: View) -> bool:
