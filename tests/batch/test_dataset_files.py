@@ -29,7 +29,7 @@ from camgen.plan.execute import job_directory_name
 from tests.batch.conftest import make_dataset
 from tests.conftest import write
 
-CATEGORIES = [{"id": 1, "name": "person"}, {"id": 2, "name": "car"}]
+CATEGORIES = [{"id": 1, "name": "person"}, {"id": 3, "name": "car"}]  # COCO 2017's ids, as camgen writes them
 
 
 def camera_coco(*, frames: int, tracks: dict[int, str], shift_px: float, categories=CATEGORIES) -> dict:
@@ -200,7 +200,7 @@ def test_the_card_names_every_camera_counts_the_classes_and_the_missing_job(synt
     for video in merged["videos"]:
         assert f"| {video['job']} | {video['camera']} | small | 320×240 | 10 | 3 | 0.30 s |" in card
     for name, boxes in (("person", 48), ("car", 30)):
-        count = sum(a["category_id"] == {"person": 1, "car": 2}[name] for a in merged["annotations"])
+        count = sum(a["category_id"] == {"person": 1, "car": 3}[name] for a in merged["annotations"])
         assert count == boxes == stats.boxes[name]
         assert f"| {name} | {boxes} | {stats.tracks[name]} | {stats.identities[name]} |" in card
     assert "| job5 | failed: ConfigError: no such mesh |" in card

@@ -107,7 +107,10 @@ def test_yolo_labels_are_the_coco_boxes_normalised(sequence):
     data = yaml.safe_load((sequence / "data.yaml").read_text())
     assert data["train"] == data["val"] == "images" and "path" not in data
     coco = json.loads((sequence / "coco.json").read_text())
-    assert data["names"] == {c["id"] - 1: c["name"] for c in coco["categories"]}
+    # YOLO's ids count from 0; coco.json keeps COCO's own ids: the two name the same classes.
+    assert sorted(data["names"]) == list(range(len(coco["categories"])))
+    assert sorted(data["names"].values()) == sorted(c["name"] for c in coco["categories"])
+    category_names = {c["id"]: c["name"] for c in coco["categories"]}
     images = sorted(p.stem for p in (sequence / "images").iterdir())
     assert images == sorted(p.stem for p in (sequence / "labels").iterdir()) == [f"{k:06d}" for k in range(FRAMES)]
     assert cv2.imread(str(sequence / "images" / "000000.jpg")).shape == (HEIGHT_PX, WIDTH_PX, 3)
@@ -119,7 +122,7 @@ def test_yolo_labels_are_the_coco_boxes_normalised(sequence):
         for line, annotation in zip(lines, annotations, strict=True):
             class_id, *box = line.split()
             x, y, w, h = annotation["bbox"]
-            assert int(class_id) == annotation["category_id"] - 1
+            assert data["names"][int(class_id)] == category_names[annotation["category_id"]]
             expected = [(x + w / 2) / WIDTH_PX, (y + h / 2) / HEIGHT_PX, w / WIDTH_PX, h / HEIGHT_PX]
             np.testing.assert_allclose([float(v) for v in box], expected, atol=5e-7)
             assert all(0 <= float(v) <= 1 for v in box)

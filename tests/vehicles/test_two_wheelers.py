@@ -26,7 +26,7 @@ from camgen.actors.skeleton import INDEX
 from camgen.config.placement import placement
 from camgen.config.profile import Profile
 from camgen.config.scene import RIDER_ENVELOPE_M, VEHICLE_ENVELOPE_M, Mount, Scene, actor_shape
-from camgen.io.annotations import COCO_CATEGORIES, MOT_CLASSES, MOT_PERSON_ON_VEHICLE
+from camgen.io.annotations import COCO_CATEGORY_IDS, MOT_CLASSES, MOT_PERSON_ON_VEHICLE
 from camgen.motion.trajectory import Route, actor_routes
 from camgen.plan import PlanSettings, compile
 from camgen.plan.annotations import Annotator
@@ -277,7 +277,7 @@ def test_riders_and_their_two_wheelers_are_annotated_apart(renderer, tmp_path):
         assert category[tracks[cls]["category_id"]] == cls
         assert category[tracks[f"{cls}_rider"]["category_id"]] == "person"
         assert tracks[f"{cls}_rider"]["rides_track_id"] == tracks[cls]["id"]
-    assert COCO_CATEGORIES.index("bicycle") + 1 == tracks["bicycle"]["category_id"]
+    assert COCO_CATEGORY_IDS["bicycle"] == tracks["bicycle"]["category_id"] == 2  # COCO 2017's id
     assert "plate_text" not in tracks["bicycle"]["attributes"]
     assert tracks["motorcycle"]["attributes"]["plate_text"] == PLATE_TEXT
     annotations = {a["instance_name"]: a for a in coco["annotations"]}

@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 import camgen
-from camgen.io.annotations import COCO_CATEGORIES
+from camgen.io.annotations import COCO_CATEGORY_IDS
 from camgen.io.files import atomic_path, write_text_atomic
 from camgen.io.manifest import read_manifest
 
@@ -205,8 +205,12 @@ def _merged_categories(sequences: Sequence[CameraSequence]) -> list[dict]:
     for sequence in sequences:
         for category in sequence.coco.get("categories", []):
             if all(known["name"] != category["name"] for known in categories):
-                categories.append({**category, "id": len(categories) + 1})
-    return categories or [{"id": i + 1, "name": name} for i, name in enumerate(COCO_CATEGORIES)]
+                # A category keeps its id (COCO's, in camgen's files); one whose id is taken by another name
+                # (files from versions that numbered differently) gets the next free id.
+                taken = {known["id"] for known in categories}
+                category_id = category["id"] if category["id"] not in taken else max(taken) + 1
+                categories.append({**category, "id": category_id})
+    return categories or [{"id": category_id, "name": name} for name, category_id in COCO_CATEGORY_IDS.items()]
 
 
 def _stream_size(coco: Mapping) -> tuple[int | None, int | None]:

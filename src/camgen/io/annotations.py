@@ -66,9 +66,14 @@ def mot_class(obj) -> int:
     return MOT_PERSON_ON_VEHICLE if getattr(obj, "rides", None) is not None else MOT_CLASSES[obj.cls]
 
 
-COCO_CATEGORIES = ("person", "car", "truck", "bus", "bicycle", "motorcycle", "other")
-YOLO_CLASSES = COCO_CATEGORIES
-"""YOLO class names by class id (from 0): COCO's category ids less one."""
+COCO_CATEGORY_IDS = {"person": 1, "bicycle": 2, "car": 3, "motorcycle": 4, "bus": 6, "truck": 8, "other": 1000}
+"""Each class's category id in coco.json: COCO 2017's own (Lin et al. 2014, the ``categories`` of
+``instances_val2017.json``), so that a model trained on COCO is scored against camgen's ground truth by
+pycocotools without a mapping. `other` has no COCO category and takes an id above COCO's 1–90."""
+COCO_CATEGORIES = tuple(COCO_CATEGORY_IDS)
+"""camgen's classes in the order coco.json lists them (by id)."""
+YOLO_CLASSES = ("person", "car", "truck", "bus", "bicycle", "motorcycle", "other")
+"""YOLO class names by class id (from 0, contiguous as YOLO wants them; not COCO's ids)."""
 ANNOTATIONS_OF_DELIVERED_FRAMES = ("mot", "reid", "yolo")
 """Annotation formats written with (or cut from) the delivered 8-bit frames."""
 IMAGE_SUFFIXES = {"jpg": ".jpg", "png": ".png"}
@@ -117,7 +122,7 @@ class SequenceAnnotations:
     ) -> None:
         """Record a track (once per actor): its class, for a person its attributes, and for a rider the
         track id of the bicycle or motorcycle it rides (``rides_track_id``)."""
-        record = {"id": track_id, "video_id": 1, "category_id": COCO_CATEGORIES.index(cls) + 1, "name": name}
+        record = {"id": track_id, "video_id": 1, "category_id": COCO_CATEGORY_IDS[cls], "name": name}
         if attributes is not None:
             record["attributes"] = attributes
         if rides is not None:
@@ -168,7 +173,7 @@ class SequenceAnnotations:
                     "id": len(self.annotations) + 1,
                     "image_id": image_id,
                     "video_id": 1,
-                    "category_id": COCO_CATEGORIES.index(obj.cls) + 1,
+                    "category_id": COCO_CATEGORY_IDS[obj.cls],
                     "track_id": obj.track_id,
                     "instance_name": obj.name,
                     "bbox": [vx0, vy0, vx1 - vx0, vy1 - vy0],
@@ -196,7 +201,7 @@ class SequenceAnnotations:
                 "id": len(self.annotations) + 1,
                 "image_id": image_id,
                 "video_id": 1,
-                "category_id": COCO_CATEGORIES.index("person") + 1,
+                "category_id": COCO_CATEGORY_IDS["person"],
                 "bbox": [x0, y0, x1 - x0, y1 - y0],
                 "area": int(np.count_nonzero(mask)),
                 "segmentation": rle(mask),
@@ -254,7 +259,7 @@ class SequenceAnnotations:
             "videos": [{"id": 1, "name": self.name, "width": self.width_px, "height": self.height_px}],
             "images": self.images,
             "annotations": self.annotations,
-            "categories": [_category(i + 1, name) for i, name in enumerate(COCO_CATEGORIES)],
+            "categories": [_category(category_id, name) for name, category_id in COCO_CATEGORY_IDS.items()],
             "tracks": [self.tracks[key] for key in sorted(self.tracks)],
         }
 
