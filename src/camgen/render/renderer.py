@@ -504,6 +504,7 @@ class Renderer:
         clip_range_m: tuple[float, float] | None = None,
         shadow_fit: ShadowFit | None = None,
         crop_px: tuple[int, int, int, int] | None = None,
+        shadow_maps_kept: bool = False,
     ) -> Passes:
         """Draw `nodes` (default: every mesh) of a `SceneGraph` as seen by `view`.
 
@@ -520,7 +521,9 @@ class Renderer:
         pixel. (A view cropped by moving its principal point, or a viewport moved by (−x0, −y0), rounds
         window positions differently, and shadow-map comparisons on lit ground flip here and there: up to
         6e-4 of a pixel's value, measured.) Its sky, far ground and fog are evaluated through
-        `view.cropped(crop_px)`. Not with `keep_as`.
+        `view.cropped(crop_px)`. Not with `keep_as`. `shadow_maps_kept`: the previous draw's shadow maps
+        stand (the caller vouches that it drew the same graph, placed alike, with the same `shadow_fit`):
+        another crop of the same sub-frame skips their pass.
         """
         unknown = set(passes) - set(PASSES)
         if unknown or not passes:
@@ -551,7 +554,8 @@ class Renderer:
                 renderer.shadow_focus_m = seen_part_of_box_m(
                     shadow_fit.view, near_m, far_m, shadow_fit.low_m, shadow_fit.high_m
                 )
-            renderer.render_shadow_maps(scene, flags)
+            if not shadow_maps_kept:
+                renderer.render_shadow_maps(scene, flags)
 
         size = (view.width_px, view.height_px)
         target = self._framebuffer(("main", keep_as), *size, passes)

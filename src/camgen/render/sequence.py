@@ -345,9 +345,15 @@ class CameraRenderer:
         for offset, dx_px, dy_px, _, _ in draws[positions:]:
             self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
             sub_view = shifted(view, dx_px, dy_px)
-            for total, rect in zip(inside, rects, strict=True):
+            for k, (total, rect) in enumerate(zip(inside, rects, strict=True)):
                 part = self.renderer.draw(
-                    self.graph, sub_view, ("radiance",), clip_range_m=clip, shadow_fit=fit, crop_px=rect
+                    self.graph,
+                    sub_view,
+                    ("radiance",),
+                    clip_range_m=clip,
+                    shadow_fit=fit,
+                    crop_px=rect,
+                    shadow_maps_kept=k > 0,  # the same sub-frame's: same placement, same fit
                 )
                 total += part.radiance
         result = whole / np.float32(positions)
