@@ -39,7 +39,7 @@ from camgen.io.video import VideoWriter, decoded_rgb8
 from camgen.isp.pipeline import CameraIsp
 from camgen.isp.tone import tone_curve
 from camgen.plan.compile import isp_steps
-from camgen.sensor.auto_exposure import ExposureLimits, metering_window, split_exposure
+from camgen.sensor.auto_exposure import ExposureLimits, metering_window, settled_exposure, split_exposure
 from camgen.sensor.capture import NOISE_TERMS, SensorModel
 from camgen.sensor.cfa import cfa_site_values, mosaic
 from camgen.sensor.characteristics import saturation_e
@@ -243,25 +243,10 @@ def _exposure_at_light(profile: Profile, photons_per_s: np.ndarray, *, fps: floa
     per_photon = 1.0 if sensor.cfa == "mono" else cfa_site_values((qe.r, qe.g, qe.b), sensor.cfa, height, width)
     window = metering_window(height, width, exposure.auto.metering_region_frac)
     rate_e_per_s = (photons_per_s * per_photon)[window].astype(np.float64)
-    range_dn = sensor.white_level_dn - sensor.black_level_dn
-    setting = split_exposure(exposure.exposure_time_s * gain_linear(exposure.gain_db), limits)
-    for _ in range(30):
-        clip_e, _ = saturation_e(
-            sensor.full_well_e,
-            sensor.conversion_gain_dn_per_e,
-            sensor.black_level_dn,
-            sensor.bit_depth,
-            setting.gain_db,
-        )
-        electrons = np.minimum(rate_e_per_s * setting.exposure_time_s, clip_e)
-        level = float(np.mean(electrons)) * sensor.conversion_gain_dn_per_e * gain_linear(setting.gain_db) / range_dn
-        if level <= 0:
-            return split_exposure(limits.product_max_s, limits).exposure_time_s, limits.gain_max_db
-        settled = split_exposure(setting.product_s * exposure.auto.target_level_frac / level, limits)
-        done = abs(settled.product_s / setting.product_s - 1) < 1e-4
-        setting = settled
-        if done:
-            break
+    start = split_exposure(exposure.exposure_time_s * gain_linear(exposure.gain_db), limits)
+    setting = settled_exposure(
+        rate_e_per_s, start, sensor=sensor, target_frac=exposure.auto.target_level_frac, limits=limits
+    )
     return setting.exposure_time_s, setting.gain_db
 
 

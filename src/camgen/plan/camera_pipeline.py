@@ -45,12 +45,11 @@ from camgen.sensor.auto_exposure import (
     metered_level_frac,
     metering_window,
     next_exposure,
-    split_exposure,
+    settled_exposure,
 )
 from camgen.sensor.capture import SensorModel
 from camgen.sensor.cfa import cfa_channel_index, mosaic
-from camgen.sensor.characteristics import saturation_e
-from camgen.sensor.exposure import gain_linear, photons_per_cd_m2_s
+from camgen.sensor.exposure import photons_per_cd_m2_s
 from camgen.world.night import monochrome
 
 
@@ -212,29 +211,14 @@ class CameraPipeline:
         rate_e_per_s = light * (per_site[window] if isinstance(per_site, np.ndarray) else per_site)
         dark = self.sensor_model.dark_e_per_s
         rate_e_per_s = rate_e_per_s + (dark[window] if isinstance(dark, np.ndarray) else dark)
-        range_dn = sensor.white_level_dn - sensor.black_level_dn
-        setting = self.setting
-        for _ in range(iterations):
-            clip_e, _ = saturation_e(
-                sensor.full_well_e,
-                sensor.conversion_gain_dn_per_e,
-                sensor.black_level_dn,
-                sensor.bit_depth,
-                setting.gain_db,
-            )
-            electrons = np.minimum(rate_e_per_s * setting.exposure_time_s, clip_e)
-            level = (
-                float(np.mean(electrons)) * sensor.conversion_gain_dn_per_e * gain_linear(setting.gain_db) / range_dn
-            )
-            if level <= 0:
-                setting = split_exposure(self.limits.product_max_s, self.limits)
-                break
-            settled = split_exposure(setting.product_s * auto.target_level_frac / level, self.limits)
-            if abs(settled.product_s / setting.product_s - 1) < 1e-4:
-                setting = settled
-                break
-            setting = settled
-        self.setting = setting
+        self.setting = settled_exposure(
+            rate_e_per_s,
+            self.setting,
+            sensor=sensor,
+            target_frac=auto.target_level_frac,
+            limits=self.limits,
+            iterations=iterations,
+        )
 
     def process(self, state: CameraState, passes: Passes, *, rng: np.random.Generator) -> CapturedFrame:
         """One frame's raw and ISP output, and the exposure set for the next frame."""

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from camgen.config.profile import Sensor
+from camgen.sensor.characteristics import saturation_e
 from camgen.sensor.exposure import gain_db, gain_linear
 
 STEP_EV_MAX = 1000.0
@@ -118,3 +120,38 @@ def next_exposure(
 def frames_to_adapt(light_factor: float, *, speed_ev_per_s: float, frame_interval_s: float) -> int:
     """Frames after a light change by `light_factor` until auto-exposure has corrected it."""
     return math.ceil(abs(math.log2(light_factor)) / (speed_ev_per_s * frame_interval_s) - 1e-9)
+
+
+def settled_exposure(
+    rate_e_per_s: np.ndarray,
+    start: ExposureSetting,
+    *,
+    sensor: Sensor,
+    target_frac: float,
+    limits: ExposureLimits,
+    iterations: int = 30,
+) -> ExposureSetting:
+    """Where auto-exposure settles for a steady light: the setting at which the noise-free metered level
+    of the sites in the metering window (`rate_e_per_s`, electrons per second each) reaches `target_frac`
+    of the range above black, from `start`, without the speed limit. The level is linear in the exposure
+    product until sites saturate, so a few multiplicative corrections converge; `iterations` bounds them.
+    A window that collects nothing asks for the most exposure the limits allow."""
+    range_dn = sensor.white_level_dn - sensor.black_level_dn
+    setting = start
+    for _ in range(iterations):
+        clip_e, _ = saturation_e(
+            sensor.full_well_e,
+            sensor.conversion_gain_dn_per_e,
+            sensor.black_level_dn,
+            sensor.bit_depth,
+            setting.gain_db,
+        )
+        electrons = np.minimum(rate_e_per_s * setting.exposure_time_s, clip_e)
+        level = float(np.mean(electrons)) * sensor.conversion_gain_dn_per_e * gain_linear(setting.gain_db) / range_dn
+        if level <= 0:
+            return split_exposure(limits.product_max_s, limits)
+        settled = split_exposure(setting.product_s * target_frac / level, limits)
+        if abs(settled.product_s / setting.product_s - 1) < 1e-4:
+            return settled
+        setting = settled
+    return setting
