@@ -98,7 +98,24 @@ def test_list_names_every_section(capsys):
         "sim",
         "coverage",
         "other",
+        "device",
     ]
+
+
+def test_recorded_device_runs_are_listed_as_measured(tmp_path):
+    import json
+
+    from camgen.bench.device_frames import recorded_table
+
+    assert "No run is recorded yet" in recorded_table(tmp_path / "none")
+    case = {"scene": "parking_lot", "camera": "pole_ptz", "size": "1920×1080", "frame_ms": 250.0, "frames_per_s": 4.0,
+            "stage_ms": {"render": 120.0, "isp": 30.0, "annotate": 60.0, "io.files": 20.0, "sensor": 5.0}}  # fmt: skip
+    record = {"where": "OpenGL: NVIDIA H100; 16 CPUs; x86_64", "video": False, "note": "at abc1234", "cases": [case]}
+    (tmp_path / "h100.json").write_text(json.dumps(record), encoding="utf-8")
+    text = recorded_table(tmp_path)
+    assert "| h100 | NVIDIA H100, 16 CPUs | parking_lot | pole_ptz | 1920×1080 | 4.00 | 250 | " in text
+    assert "render 120, annotate 60, isp 30, io.files 20 |" in text  # the four largest stages, largest first
+    assert "at abc1234" in text and "PyAV was not installed" in text
 
 
 def test_a_failing_section_is_reported_and_the_others_still_written(tmp_path):

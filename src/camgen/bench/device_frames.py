@@ -8,7 +8,9 @@ plans, frames spread over the sequence, the first a warm-up that is not timed): 
 1080p and the intersection's 4K box camera at its native 3840 × 2160. Where PyAV is not installed (a GPU
 machine that was lent bare), the video output is dropped and the table says so; the rest of the camera
 model (lens, sensor, ISP, frames, annotations) runs as always. The same command on both machines gives
-the comparison recorded in BENCHMARKS.md.
+the comparison recorded in BENCHMARKS.md: each run's ``--json`` file goes into `RECORDS_DIR`, and `make
+bench`'s ``device`` section prints them (it does not measure them: the figures of this machine, the other
+sections, are the contract).
 """
 
 from __future__ import annotations
@@ -27,6 +29,9 @@ from camgen.bench.e2e_cases import EndToEnd, spread_frames, timed_per_frame
 from camgen.bench.variants import at_output_size, one_camera
 from camgen.config import load_scene
 from camgen.plan import PlanSettings, compile_scene
+
+RECORDS_DIR = Path("docs/bench/device_frames")
+"""Where the recorded runs live (JSON, one per machine and run), relative to the repository."""
 
 CASES = (
     ("parking_lot", "pole_ptz", (1920, 1080)),
@@ -59,7 +64,8 @@ def measure_case(repo: Path, scene: str, camera: str, size: tuple[int, int], fra
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m camgen.bench.device_frames", description=__doc__.split("\n")[0])
     parser.add_argument("--frames", type=int, default=5, help="frames per case, the first untimed (default 5)")
-    parser.add_argument("--json", type=Path, help="also write the figures here")
+    parser.add_argument("--json", type=Path, help=f"also write the figures here (kept in {RECORDS_DIR}/NAME.json)")
+    parser.add_argument("--note", default="", help="what to say about this run (the commit, what else ran)")
     args = parser.parse_args(argv)
     from camgen.render.renderer import Renderer
 
@@ -76,8 +82,43 @@ def main(argv: list[str] | None = None) -> int:
         print(f"| {r.scene} | {r.camera} | {r.size} | {r.frames_per_s:.2f} | {r.frame_ms:.0f} | {stages} |")
     if args.json is not None:
         rows = [{**dataclasses.asdict(r), "frames_per_s": r.frames_per_s} for r in records]
-        args.json.write_text(json.dumps({"where": where, "video": video, "cases": rows}, indent=1), encoding="utf-8")
+        record = {"where": where, "video": video, "note": args.note, "frames": args.frames, "cases": rows}
+        args.json.write_text(json.dumps(record, indent=1), encoding="utf-8")
     return 0
+
+
+def recorded_table(directory: Path) -> str:
+    """The recorded runs in `directory` as BENCHMARKS.md's text: one row per case and run."""
+    files = sorted(directory.glob("*.json")) if directory.is_dir() else []
+    intro = (
+        "`python -m camgen.bench.device_frames --json FILE` times the speed issue's two reference cameras end "
+        "to end (the parking lot's PTZ at 1080p, the intersection's 4K box camera at 3840 × 2160; frames "
+        "spread over the sequence, the first a warm-up) on whatever OpenGL the process gets. Runs recorded on "
+        f"other machines are kept in `{RECORDS_DIR}/` and listed here as they were measured; `make bench` does "
+        "not re-measure them. Machines and loads differ: compare rows of one run, and this machine's own "
+        "sections above."
+    )
+    if not files:
+        return intro + "\n\nNo run is recorded yet."
+    rows = ["| run | OpenGL, CPUs | scene | camera | stream | frames/s | ms per frame | largest stages (ms) |",
+            "|---|---|---|---|---|---:|---:|---|"]  # fmt: skip
+    notes = []
+    for path in files:
+        record = json.loads(path.read_text(encoding="utf-8"))
+        machine = record["where"].split("; ")
+        where = f"{machine[0].removeprefix('OpenGL: ')}, {machine[1]}" if len(machine) > 1 else record["where"]
+        for case in record["cases"]:
+            stages = sorted(case["stage_ms"].items(), key=lambda kv: -kv[1])[:4]
+            rows.append(
+                f"| {path.stem} | {where} | {case['scene']} | {case['camera']} | {case['size']} | "
+                f"{case['frames_per_s']:.2f} | {case['frame_ms']:.0f} | "
+                + ", ".join(f"{name} {ms:.0f}" for name, ms in stages)
+                + " |"
+            )
+        note = record.get("note") or ""
+        video = "" if record.get("video", True) else " Video encoding left out (PyAV was not installed there)."
+        notes.append(f"- `{path.stem}`: {note}{video}")
+    return intro + "\n\n" + "\n".join(rows) + "\n\n" + "\n".join(notes)
 
 
 if __name__ == "__main__":

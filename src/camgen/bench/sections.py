@@ -35,6 +35,7 @@ def sections(repo: Path) -> list[Section]:
         _sim(repo),
         _coverage(repo),
         _other(repo),
+        _device(repo),
     ]
 
 
@@ -641,6 +642,15 @@ def _coverage(repo: Path) -> Section:
         lambda: coverage_cases(repo, coverage_facts),
         body,
     )
+
+
+def _device(repo: Path) -> Section:
+    from camgen.bench.device_frames import RECORDS_DIR, recorded_table
+
+    def body(results, plots: Plots) -> str:
+        return recorded_table(repo / RECORDS_DIR)
+
+    return Section("device", "On other machines: a GPU through EGL (recorded)", lambda: [], body)
 
 
 def _other(repo: Path) -> Section:
