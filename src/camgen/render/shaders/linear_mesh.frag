@@ -345,10 +345,12 @@ float shadow_calc(mat4 light_matrix, sampler2D shadow_map, float nl)
 }
 
 // camgen: a sun's shadow map is orthographic (camgen.render.renderer.directional_shadow_matrices), so
-// its bias is set in metres: 5 mm plus one and a half texels of the surface's depth slope, converted
-// to depth units through the map's own scale (rows of light_matrix = P·V, V a rotation). pyrender's
-// bias, 0.001 (1 − n·l) of the map's depth range, grew with the scene: tens of centimetres of
-// detached shadow on a large site.
+// its bias is set in metres: 5 mm plus three texels of the surface's depth slope, converted to depth
+// units through the map's own scale (rows of light_matrix = P·V, V a rotation). Three texels: the PCF
+// kernel (texture2DShadowPCF) compares texels up to 2 texels from the lookup along each map axis, 2√2
+// along a diagonal, and a lit surface must not shadow itself there (with 1.5 texels a flat sunlit ground
+// under a high sun showed stripes down to 0.85 of its light). pyrender's bias, 0.001 (1 − n·l) of the
+// map's depth range, grew with the scene: tens of centimetres of detached shadow on a large site.
 float shadow_calc_ortho(mat4 light_matrix, sampler2D shadow_map, float nl)
 {
     vec4 proj_coords = vec4(light_matrix * vec4(frag_position.xyz, 1.0));
@@ -359,7 +361,7 @@ float shadow_calc_ortho(mat4 light_matrix, sampler2D shadow_map, float nl)
     vec2 size = vec2(textureSize(shadow_map, 0));
     float texel_m = 2.0 / (size.x * scale_x);
     float tan_incidence = sqrt(max(1.0 - nl * nl, 0.0)) / max(nl, 0.1);
-    float bias_m = 0.005 + 1.5 * texel_m * tan_incidence;
+    float bias_m = 0.005 + 3.0 * texel_m * tan_incidence;
     float compare = light_coords.z - bias_m * 0.5 * scale_z;
     float shadow = texture2DShadowPCF(shadow_map, size, light_coords.xy, compare);
     if (light_coords.z > 1.0) {
