@@ -22,13 +22,40 @@ def test_the_written_file_lists_those_ids_and_yolo_counts_from_zero():
     assert sorted(YOLO_CLASSES) == sorted(COCO_CATEGORY_IDS)  # the same classes, ids 0 … 6
 
 
-def test_a_merged_dataset_keeps_the_ids_and_moves_only_a_colliding_one():
+def test_a_merged_dataset_gives_camgens_classes_coco_ids_and_moves_only_a_colliding_other_name():
     from types import SimpleNamespace
 
     from camgen.batch.dataset_files import _merged_categories
 
     camgen_file = SimpleNamespace(coco={"categories": [{"id": 1, "name": "person"}, {"id": 3, "name": "car"}]})
-    older_file = SimpleNamespace(coco={"categories": [{"id": 3, "name": "bus"}, {"id": 1, "name": "person"}]})
-    merged = _merged_categories([camgen_file, older_file])
-    assert merged == [{"id": 1, "name": "person"}, {"id": 3, "name": "car"}, {"id": 4, "name": "bus"}]
+    other_file = SimpleNamespace(coco={"categories": [{"id": 3, "name": "scooter"}, {"id": 1, "name": "person"}]})
+    merged = _merged_categories([camgen_file, other_file])
+    assert merged == [{"id": 1, "name": "person"}, {"id": 3, "name": "car"}, {"id": 4, "name": "scooter"}]
     assert {c["name"]: c["id"] for c in _merged_categories([])} == COCO_CATEGORY_IDS
+
+
+OLDER_IDS = {"person": 1, "car": 2, "truck": 3, "bus": 4, "bicycle": 5, "motorcycle": 6, "other": 7}
+"""coco.json's ids before COCO 2017's: camgen's class list order. A batch run again after an update reuses its
+finished jobs (the job hash holds no camgen version), so one merge can see files of both."""
+
+
+def _sequence(job: str, ids: dict[str, int], cls: str):
+    from camgen.batch.dataset_files import CameraSequence
+
+    coco = {
+        "images": [{"id": 1, "frame_index": 0, "width": 64, "height": 48}],
+        "annotations": [{"id": 1, "image_id": 1, "category_id": ids[cls], "track_id": 1, "bbox": [1, 2, 3, 4]}],
+        "categories": [{"id": category_id, "name": name} for name, category_id in ids.items()],
+        "tracks": [{"id": 1, "video_id": 1, "category_id": ids[cls], "name": cls}],
+    }
+    return CameraSequence(job=job, directory=job, camera="cam", coco=coco, fps=10.0)
+
+
+def test_a_merge_that_starts_with_an_older_file_still_has_cocos_ids():
+    from camgen.batch.dataset_files import merge_coco
+
+    merged = merge_coco([_sequence("old", OLDER_IDS, "car"), _sequence("new", COCO_CATEGORY_IDS, "truck")])
+    assert {c["name"]: c["id"] for c in merged["categories"]} == COCO_CATEGORY_IDS
+    names = {c["id"]: c["name"] for c in merged["categories"]}
+    assert [names[a["category_id"]] for a in merged["annotations"]] == ["car", "truck"]
+    assert [names[t["category_id"]] for t in merged["tracks"]] == ["car", "truck"]

@@ -199,18 +199,23 @@ def merge_coco(
 
 
 def _merged_categories(sequences: Sequence[CameraSequence]) -> list[dict]:
-    """The first file's categories, then any name a later file adds (files of one camgen version agree);
-    camgen's class names when there is no file."""
-    categories: list[dict] = []
+    """Every category name the files list, by id: camgen's classes with COCO 2017's ids (`COCO_CATEGORY_IDS`)
+    whatever id a file gave them, so that the merged ids do not depend on which file comes first (a batch
+    reuses a finished job's files, written by a camgen version that numbered the classes 1, 2, … in its list
+    order); another name keeps its file's id, or gets the next free id where that is taken. camgen's class
+    names when there is no file."""
+    names: dict[str, dict] = {}
     for sequence in sequences:
         for category in sequence.coco.get("categories", []):
-            if all(known["name"] != category["name"] for known in categories):
-                # A category keeps its id (COCO's, in camgen's files); one whose id is taken by another name
-                # (files from versions that numbered differently) gets the next free id.
-                taken = {known["id"] for known in categories}
-                category_id = category["id"] if category["id"] not in taken else max(taken) + 1
-                categories.append({**category, "id": category_id})
-    return categories or [{"id": category_id, "name": name} for name, category_id in COCO_CATEGORY_IDS.items()]
+            names.setdefault(category["name"], category)
+    if not names:
+        return [{"id": category_id, "name": name} for name, category_id in COCO_CATEGORY_IDS.items()]
+    ids = {name: COCO_CATEGORY_IDS[name] for name in names if name in COCO_CATEGORY_IDS}
+    for name, category in names.items():
+        if name not in ids:
+            taken = set(ids.values())
+            ids[name] = category["id"] if category["id"] not in taken else max(taken) + 1
+    return sorted(({**category, "id": ids[name]} for name, category in names.items()), key=lambda c: c["id"])
 
 
 def _stream_size(coco: Mapping) -> tuple[int | None, int | None]:
