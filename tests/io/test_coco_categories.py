@@ -36,7 +36,8 @@ def test_a_merged_dataset_gives_camgens_classes_coco_ids_and_moves_only_a_collid
 
 OLDER_IDS = {"person": 1, "car": 2, "truck": 3, "bus": 4, "bicycle": 5, "motorcycle": 6, "other": 7}
 """coco.json's ids before COCO 2017's: camgen's class list order. A batch run again after an update reuses its
-finished jobs (the job hash holds no camgen version), so one merge can see files of both."""
+finished jobs (the job hash holds camgen's version, 0.1.0 before and after the change), so one merge can see
+files of both."""
 
 
 def _sequence(job: str, ids: dict[str, int], cls: str):
