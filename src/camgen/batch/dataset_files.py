@@ -202,8 +202,8 @@ def _merged_categories(sequences: Sequence[CameraSequence]) -> list[dict]:
     """Every category name the files list, by id: camgen's classes with COCO 2017's ids (`COCO_CATEGORY_IDS`)
     whatever id a file gave them, so that the merged ids do not depend on which file comes first (a batch
     reuses a finished job's files, written by a camgen of the same version number that numbered the classes
-    1, 2, … in its list order); another name keeps its file's id, or gets the next free id where that is taken. camgen's class
-    names when there is no file."""
+    1, 2, … in its list order); another name keeps its file's id, or gets the next free id where that is
+    taken. camgen's class names when there is no file."""
     names: dict[str, dict] = {}
     for sequence in sequences:
         for category in sequence.coco.get("categories", []):
