@@ -21,7 +21,12 @@
   view's draw scissored to them, so the same pixels bit for bit); outside them the mean is the whole
   draws' mean, which is what every sub-frame gives there. All of a frame's draws fit their shadow maps
   alike (`ShadowFit`), so that a shadow map's texels move with neither the actors nor the crop. Equal to
-  drawing every sub-frame whole within float rounding (tests/render/test_moving_regions.py).
+  drawing every sub-frame whole within float rounding (tests/render/test_moving_regions.py). Measured on
+  the 2-core llvmpipe machine under other work (load 3–5, so ±30 %): the intersection's 4K box camera
+  (32 sub-frames, s = 2) 146 → 78 s at frame 0 (rectangles 27 % of the frame) and 236 → 141–168 s at
+  frame 125 (66 %: the 4° dusk sun's shadows are 14 times as long as the casters are high); the parking
+  lot's PTZ at its preset (16 sub-frames) 16.9 → 8.3 s (6 %) and 16.5 → 9.6 s (17 %); largest
+  difference 3e-7 of the frame's maximum. The s² whole draws and the depth and id pass remain.
 """
 
 from __future__ import annotations
