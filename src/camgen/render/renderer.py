@@ -262,6 +262,8 @@ class _PassRenderer(pyrender.Renderer):
         self._program_cache = _LinearProgramCache()
         self._profile_textures: dict[int, tuple[weakref.ref, int]] = {}
         """Per scene (by id, with a weak reference to tell a reused id): its spot-light table texture."""
+        self.texture_lod_bias = 0.0
+        """Added to every material texture's level of detail in the current draw (`Renderer.draw`)."""
         self.shadow_focus_m: np.ndarray | None = None
         """(N, 3) world points the current draw sees (its view frustum's corners); a sun's shadow map
         covers only the part of the scene whose shadows can fall among them."""
@@ -389,6 +391,7 @@ class _PassRenderer(pyrender.Renderer):
                 program.set_uniform("instance_id", instance_ids[node], unsigned=True)
                 if lit:
                     program.set_uniform("cam_pos", cam_position)
+                    program.set_uniform("texture_lod_bias", self.texture_lod_bias)
                     self._bind_lighting(scene, program, node, flags)
                     self._bind_spot_profiles(scene, program)
                     self._bind_and_draw_primitive(primitive, scene.get_pose(node), program, draw_flags)
@@ -505,6 +508,7 @@ class Renderer:
         shadow_fit: ShadowFit | None = None,
         crop_px: tuple[int, int, int, int] | None = None,
         shadow_maps_kept: bool = False,
+        texture_lod_bias: float = 0.0,
     ) -> Passes:
         """Draw `nodes` (default: every mesh) of a `SceneGraph` as seen by `view`.
 
@@ -523,7 +527,8 @@ class Renderer:
         6e-4 of a pixel's value, measured.) Its sky, far ground and fog are evaluated through
         `view.cropped(crop_px)`. Not with `keep_as`. `shadow_maps_kept`: the previous draw's shadow maps
         stand (the caller vouches that it drew the same graph, placed alike, with the same `shadow_fit`):
-        another crop of the same sub-frame skips their pass.
+        another crop of the same sub-frame skips their pass. `texture_lod_bias`: added to every material
+        texture's mip level; a draw at 1× that stands for s × s samples of each pixel takes −log2 s.
         """
         unknown = set(passes) - set(PASSES)
         if unknown or not passes:
@@ -538,6 +543,7 @@ class Renderer:
         nodes = graph.environment_nodes + graph.actor_nodes if nodes is None else list(nodes)
         lit = "radiance" in passes
         renderer = self._renderer
+        renderer.texture_lod_bias = float(texture_lod_bias)
         flags = renderer.shadow_flags(scene, graph.shadows) if lit else RenderFlags.NONE
         pose_gl = gl_camera_pose(view.T_world_from_cam)
         scene.set_pose(scene.main_camera_node, pose_gl)

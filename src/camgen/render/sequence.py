@@ -235,12 +235,14 @@ class CameraRenderer:
         """What every draw of a frame seen through `view` fits its shadow maps to."""
         return ShadowFit(view, *self._caster_box_m)
 
-    def _draw(self, view: View, passes: tuple[str, ...], key: str, fit: ShadowFit | None = None) -> Passes:
+    def _draw(
+        self, view: View, passes: tuple[str, ...], key: str, fit: ShadowFit | None = None, lod_bias: float = 0.0
+    ) -> Passes:
         graph, renderer = self.graph, self.renderer
         clip = self.clip_range_m(view)
         fit = self.shadow_fit(view) if fit is None else fit
         if not self.spec.static_background:
-            return renderer.draw(graph, view, passes, clip_range_m=clip, shadow_fit=fit)
+            return renderer.draw(graph, view, passes, clip_range_m=clip, shadow_fit=fit, texture_lod_bias=lod_bias)
         kept = f"{self.camera.name}:{key}"
         if kept not in self._kept_views or not _same_view(self._kept_views[kept], view):
             renderer.draw(
@@ -252,10 +254,18 @@ class CameraRenderer:
                 read=False,
                 clip_range_m=clip,
                 shadow_fit=fit,
+                texture_lod_bias=lod_bias,
             )
             self._kept_views[kept] = view
         return renderer.draw(
-            graph, view, passes, nodes=graph.actor_nodes, background=kept, clip_range_m=clip, shadow_fit=fit
+            graph,
+            view,
+            passes,
+            nodes=graph.actor_nodes,
+            background=kept,
+            clip_range_m=clip,
+            shadow_fit=fit,
+            texture_lod_bias=lod_bias,
         )
 
     def motion_samples(self, state: CameraState) -> int:
@@ -332,7 +342,9 @@ class CameraRenderer:
             sub_view = shifted(view_at(state, spec, offset * state.exposure_time_s), dx_px, dy_px)
             if factor > 1:
                 sub_view = sub_view.scaled(factor)
-            radiance = box_downsample(self._draw(sub_view, ("radiance",), key, fit).radiance, factor)
+            # A 1× draw that stands for s × s samples samples textures at the s× draw's mip level.
+            lod_bias = math.log2(factor / spec.supersampling)
+            radiance = box_downsample(self._draw(sub_view, ("radiance",), key, fit, lod_bias).radiance, factor)
             total = radiance if total is None else total + radiance
         return total / len(draws) if len(draws) > 1 else total
 
@@ -359,6 +371,7 @@ class CameraRenderer:
                     shadow_fit=fit,
                     crop_px=rect,
                     shadow_maps_kept=k > 0,  # the same sub-frame's: same placement, same fit
+                    texture_lod_bias=-math.log2(self.spec.supersampling),  # as `_sub_frame_mean`'s 1× draws
                 )
                 total += part.radiance
         result = whole / np.float32(positions)

@@ -114,6 +114,10 @@ uniform int spot_profile_row[MAX_SPOT_LIGHTS];
 uniform mat3 spot_profile_axes[MAX_SPOT_LIGHTS];
 uniform sampler2D spot_profile;
 uniform vec3 cam_pos;
+// camgen: added to every material texture's level of detail. A sub-frame drawn at 1x that stands for s x s
+// samples of a pixel (motion blur's jittered draws) takes -log2(s), the level an s x supersampled draw
+// picks; without it its textures came out a mip level blurrier than the same frame without motion blur.
+uniform float texture_lod_bias;
 uniform vec3 ambient_light;
 uniform uint instance_id;
 
@@ -207,7 +211,7 @@ vec3 get_normal()
 
 #endif
 
-    vec3 n = texture(material.normal_texture, uv_0).rgb;
+    vec3 n = texture(material.normal_texture, uv_0, texture_lod_bias).rgb;
     n = normalize(tbn_n * ((2.0 * n - 1.0) * vec3(1.0, 1.0, 1.0)));
     return n; // TODO NORMAL MAPPING
 
@@ -388,7 +392,7 @@ void main()
 #ifdef HAS_METALLIC_ROUGHNESS_TEX
     // glTF 2.0 (3.9.2): roughness in the G channel, metalness in B. pyrender's shader reads R and G,
     // which made every textured surface a polished metal (R = 0, G = roughness ≈ 0.9 as metalness).
-    vec2 mr = texture(material.metallic_roughness_texture, uv_0).gb;
+    vec2 mr = texture(material.metallic_roughness_texture, uv_0, texture_lod_bias).gb;
     roughness = roughness * mr.r;
     metallic = metallic * mr.g;
 #endif
@@ -400,7 +404,7 @@ void main()
     // Compute albedo
     vec4 base_color = material.base_color_factor;
 #ifdef HAS_BASE_COLOR_TEX
-    base_color = base_color * srgb_to_linear(texture(material.base_color_texture, uv_0));
+    base_color = base_color * srgb_to_linear(texture(material.base_color_texture, uv_0, texture_lod_bias));
 #endif
 #ifdef COLOR_0_LOC
     base_color *= color_multiplier;  // glTF 2.0: COLOR_0 multiplies the base colour (albedo), not the light
@@ -510,14 +514,14 @@ void main()
 
     // Apply occlusion
 #ifdef HAS_OCCLUSION_TEX
-    float ao = texture(material.occlusion_texture, uv_0).r;
+    float ao = texture(material.occlusion_texture, uv_0, texture_lod_bias).r;
     color.xyz *= ao;
 #endif
 
     // Apply emissive map
     vec3 emissive = material.emissive_factor;
 #ifdef HAS_EMISSIVE_TEX
-    emissive *= srgb_to_linear(texture(material.emissive_texture, uv_0)).rgb;
+    emissive *= srgb_to_linear(texture(material.emissive_texture, uv_0, texture_lod_bias)).rgb;
 #endif
     color.xyz += emissive;
 
