@@ -72,3 +72,37 @@ def test_discard_unfinished_keeps_a_finished_job(tmp_path):
     (job_dir / "notes.txt").write_text("a user's file")
     assert discard_unfinished(job, job_dir)
     assert [path.name for path in job_dir.iterdir()] == ["notes.txt"]
+
+
+class CrashedWorkers(KilledWorkers):
+    """Each job's worker dies hard mid-frame (the kernel's OOM killer, a crash in the driver): its ``.partial``
+    folder stays, and the pool reports the job failed, as `camgen.batch.run._result` does for a broken pool."""
+
+    def submit(self, job_json, out_dir, frames, scene_path):
+        from camgen.job import Job
+
+        job = Job.from_json(job_json)
+        for camera in job.cameras:  # a retry starts over where the last try left its files, as `execute` does
+            frames_dir = Path(out_dir) / job_directory_name(job) / f"{camera.name}{PARTIAL_SUFFIX}" / "img1"
+            frames_dir.mkdir(parents=True, exist_ok=True)
+            (frames_dir / "000001.jpg").write_bytes(b"\xff\xd8")
+        handle = Future()
+        handle.set_result((0, 0.0, "BrokenProcessPool: A process in the process pool was terminated abruptly"))
+        return handle
+
+    def wait(self, handles):
+        return [handle for handle in handles if handle.done()]
+
+    def result(self, handle):
+        return handle.result()
+
+
+def test_a_job_whose_worker_died_leaves_no_files(tmp_path, monkeypatch):
+    """No stop: the batch runs to its end with every job failed, retried once. A worker that died never unwound
+    its job, so the batch deletes what it left (as `execute` deletes what a job that raised left)."""
+    dataset = make_dataset(tmp_path)
+    out = tmp_path / "out"
+    monkeypatch.setattr(batch_run, "PoolExecutor", CrashedWorkers)
+    assert main(["batch", str(dataset), "-o", str(out), "--workers", "2", "--retries", "1"]) != 0
+    left = [path.relative_to(out).as_posix() for path in out.rglob("*") if path.is_file()]
+    assert left and all(".partial" not in name and not name.startswith("walk-") for name in left), left

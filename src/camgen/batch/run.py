@@ -199,7 +199,8 @@ def run_batch(
     DATASET.md. executor: "local", a process pool on this machine, or "ray", one Ray task per job on the
     cluster at `address` (None: a local Ray with `workers` CPUs); with Ray, `out_dir` and the scenes must be
     on a filesystem every node shares. A job that raises is tried again up
-    to `retries` times, then reported as failed with its error; the others go on. on_event(outcome) is
+    to `retries` times, then reported as failed with its error; the others go on. A failed try leaves no files,
+    a worker that died included (`camgen.plan.execute.discard_unfinished`). on_event(outcome) is
     called in this process as each job is skipped, done or failed. SIGINT or SIGTERM (or a KeyboardInterrupt)
     stops the batch within about `STOP_GRACE_S`: the running jobs are stopped, their partial files deleted,
     and what completed is returned (`stop_signal` set). The dataset record and DATASET.md are written at the
@@ -260,6 +261,11 @@ def run_batch(
                         result = runner.result(handle)
                         if result is None:  # a Ray task stopped by a Ctrl-C that reached its worker
                             raise KeyboardInterrupt
+                        if result[2] is not None:
+                            # A job that raised deleted its files as it unwound; a worker that died hard (out of
+                            # memory, a crash in the driver; the pool then fails its other jobs too) did not.
+                            job = jobs[index][1]
+                            discard_unfinished(job, out_dir / job_directory_name(job))
                         if result[2] is not None and attempts[index] <= retries:
                             submit(index)
                         else:
