@@ -67,6 +67,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", type=Path, help=f"also write the figures here (kept in {RECORDS_DIR}/NAME.json)")
     parser.add_argument("--note", default="", help="what to say about this run (the commit, what else ran)")
     args = parser.parse_args(argv)
+    if args.frames < 2:
+        parser.error(f"--frames must be at least 2 (a warm-up and a timed frame), got {args.frames}")
     from camgen.render.renderer import Renderer
 
     repo = Path(__file__).resolve().parents[3]

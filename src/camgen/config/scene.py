@@ -881,8 +881,9 @@ class Camera(Model):
     and false (off) force it."""
     metering_region_frac: tuple[Fraction, Fraction, Fraction, Fraction] | None = None
     """The exposure zone an installer set on this unit (Axis calls it the exposure zone, Hikvision the BLC
-    area): [x0, y0, x1, y1] of the auto-exposure's metering window as fractions of width and height; null
-    keeps the profile's `exposure.auto.metering_region_frac` (the whole frame). A camera that sees a bright
+    area): [x0, y0, x1, y1] of the auto-exposure's metering window as fractions of the sensor's width and
+    height (of the whole sensor, also for a virtual PTZ, whose stream is a crop of it); null keeps the
+    profile's `exposure.auto.metering_region_frac` (by default the whole frame). A camera that sees a bright
     sky meters the ground below it this way, instead of filming the street as silhouettes."""
 
     @model_validator(mode="after")

@@ -51,8 +51,8 @@ def grey_world_gains(
     Returns
     -------
     (3,) float64
-        Gains (g_R, g_G, g_B) with g_G = 1. Unity gains (1, 1, 1) when a channel has no unsaturated
-        sample or its mean above black is ≤ 0 (a black or fully clipped frame has no colour to balance).
+        Gains (g_R, g_G, g_B) with g_G = 1. Unity gains (1, 1, 1) when no sampled cell is free of clipping
+        or a channel's mean above black is ≤ 0 (a black or fully clipped frame has no colour to balance).
 
     Raises
     ------

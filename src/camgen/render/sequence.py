@@ -163,9 +163,10 @@ draw's fixed cost (its shadow-map passes, Python, the sky and far-ground set-up)
 RECT_PAD_PX = 2
 """Pixels added around a projected bound: half a pixel of sub-pixel jitter, half a pixel of rasterisation
 to the nearest centre, and one spare."""
-SHADOW_TEXEL_MARGIN = 2.0
-"""Shadow-map texels a caster's box grows by before its shadow is projected: the shader's 4-tap bilinear
-lookup (`linear_mesh.frag`) reaches one texel past a caster's rasterised texels, plus one spare."""
+SHADOW_TEXEL_MARGIN = 3.0
+"""Shadow-map texels a caster's box grows by before its shadow is projected: the shader's filtered lookup
+(`texture2DShadowPCF` in `linear_mesh.frag`, 3 × 3 bilinear taps) reaches two texels past a caster's
+rasterised texels, plus one spare."""
 
 
 def box_downsample(image: np.ndarray, factor: int) -> np.ndarray:

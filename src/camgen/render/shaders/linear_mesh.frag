@@ -287,21 +287,6 @@ float texture2DCompare(sampler2D depths, vec2 uv, float compare) {
     return compare > texture(depths, uv.xy).r ? 1.0 : 0.0;
 }
 
-float texture2DShadowLerp(sampler2D depths, vec2 size, vec2 uv, float compare) {
-    vec2 texelSize = vec2(1.0)/size;
-    vec2 f = fract(uv*size+0.5);
-    vec2 centroidUV = floor(uv*size+0.5)/size;
-
-    float lb = texture2DCompare(depths, centroidUV+texelSize*vec2(0.0, 0.0), compare);
-    float lt = texture2DCompare(depths, centroidUV+texelSize*vec2(0.0, 1.0), compare);
-    float rb = texture2DCompare(depths, centroidUV+texelSize*vec2(1.0, 0.0), compare);
-    float rt = texture2DCompare(depths, centroidUV+texelSize*vec2(1.0, 1.0), compare);
-    float a = mix(lb, lt, f.y);
-    float b = mix(rb, rt, f.y);
-    float c = mix(a, b, f.x);
-    return c;
-}
-
 // camgen: percentage-closer filtering (Reeves, Salesin and Cook 1987, "Rendering antialiased shadows with
 // depth maps"), the mean of 3 x 3 bilinear lookups one texel apart: a kernel four texels wide whose weights
 // fall off smoothly, so a shadow's edge is a soft ramp instead of following the map's texel staircase (the
