@@ -17,6 +17,7 @@ ANNY := anny==0.6.2
 # opencv-python, which would overwrite camgen's OpenCV contrib build in the shared cv2 folder; its metrics
 # import only numpy and scipy, so it too is installed without its dependencies.
 TRACKEVAL := trackeval==1.3.0
+PYOPENGL_312 := PyOpenGL==3.1.10
 
 $(STAMP): pyproject.toml Makefile
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -27,6 +28,10 @@ $(STAMP): pyproject.toml Makefile
 	  $(BIN)/python -m pip uninstall --quiet --yes opencv-python-headless && \
 	  $(BIN)/python -m pip install --quiet --force-reinstall --no-deps 'opencv-contrib-python-headless>=5.0'; fi
 	$(BIN)/python -m pip install --quiet --no-deps '$(ANNY)' '$(TRACKEVAL)'
+	# pyrender 0.1.45 pins PyOpenGL 3.1.0, whose array handling fails on Python 3.12's ctypes (glGenTextures:
+	# "No array-type handler for type _ctypes.type"); 3.1.10 runs pyrender there (seen on an NVIDIA driver).
+	if $(BIN)/python -c 'import sys; sys.exit(sys.version_info < (3, 12))'; then \
+	  $(BIN)/python -m pip install --quiet --no-deps '$(PYOPENGL_312)'; fi
 	touch $(STAMP)
 
 demo: setup
