@@ -46,7 +46,8 @@ def sensors(width_px=SIDE_PX, height_px=SIDE_PX):
             black_level_dn=black_frac * (2**bits - 1),
             analog_gain_max_db=gain_max,
             temperature_c=temp,
-            noise={**noise, "read_noise_e": min(noise["read_noise_e"], full_well / 10)},
+            # read noise a hair under full_well / 10: the profile's 10× rule must hold after rounding
+            noise={**noise, "read_noise_e": min(noise["read_noise_e"], full_well / 10 * (1 - 1e-9))},
         ),
         width_px,
         height_px,
