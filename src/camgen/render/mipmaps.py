@@ -59,7 +59,7 @@ class MipmappedTexture(pyrender.Texture):
     def _add_to_context(self):
         from OpenGL import GL
 
-        super()._add_to_context()  # level 0, the sampler's state, and OpenGL's own levels (replaced here)
+        super()._add_to_context()  # the sampler's state and OpenGL's own levels (all replaced here)
         if self.source is None:
             return
         image = np.asarray(self.source)
@@ -68,9 +68,12 @@ class MipmappedTexture(pyrender.Texture):
         formats = {1: GL.GL_RED, 2: GL.GL_RG, 3: GL.GL_RGB, 4: GL.GL_RGBA}
         fmt = formats[image.shape[2]]
         GL.glBindTexture(self.tex_type, self._texid)
-        GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)  # rows of the small levels are not 4-byte multiples
+        # Rows of 1- and 3-channel levels are not 4-byte multiples, level 0 included: pyrender uploads that one
+        # at OpenGL's default alignment of 4, which shears an image whose row is not (a 229 px wide RGB plate
+        # came out striped and wrapped wherever level 0 was sampled), so every level is uploaded again here.
+        GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
         try:
-            for level, data in enumerate(mip_levels(image, srgb=self.srgb)[1:], start=1):
+            for level, data in enumerate(mip_levels(image, srgb=self.srgb)):
                 flipped = np.ascontiguousarray(np.flip(data, axis=0))  # pyrender uploads row 0 last
                 height, width = flipped.shape[:2]
                 GL.glTexImage2D(self.tex_type, level, fmt, width, height, 0, fmt, GL.GL_UNSIGNED_BYTE, flipped)

@@ -287,6 +287,24 @@ float texture2DCompare(sampler2D depths, vec2 uv, float compare) {
     return compare > texture(depths, uv.xy).r ? 1.0 : 0.0;
 }
 
+// pyrender's one bilinear lookup (its corner sits half a texel off the grid): kept for the spot lights,
+// whose perspective maps have only pyrender's constant depth bias, which does not cover the filtered
+// lookup's reach (the road under a steep street lamp shadowed itself); see shadow_calc.
+float texture2DShadowLerp(sampler2D depths, vec2 size, vec2 uv, float compare) {
+    vec2 texelSize = vec2(1.0)/size;
+    vec2 f = fract(uv*size+0.5);
+    vec2 centroidUV = floor(uv*size+0.5)/size;
+
+    float lb = texture2DCompare(depths, centroidUV+texelSize*vec2(0.0, 0.0), compare);
+    float lt = texture2DCompare(depths, centroidUV+texelSize*vec2(0.0, 1.0), compare);
+    float rb = texture2DCompare(depths, centroidUV+texelSize*vec2(1.0, 0.0), compare);
+    float rt = texture2DCompare(depths, centroidUV+texelSize*vec2(1.0, 1.0), compare);
+    float a = mix(lb, lt, f.y);
+    float b = mix(rb, rt, f.y);
+    float c = mix(a, b, f.x);
+    return c;
+}
+
 // camgen: percentage-closer filtering (Reeves, Salesin and Cook 1987, "Rendering antialiased shadows with
 // depth maps"), the mean of 3 x 3 bilinear lookups one texel apart: a kernel four texels wide whose weights
 // fall off smoothly, so a shadow's edge is a soft ramp instead of following the map's texel staircase (the
@@ -326,7 +344,7 @@ float shadow_calc(mat4 light_matrix, sampler2D shadow_map, float nl)
     float current_depth = light_coords.z;
     float bias = max(0.001 * (1.0 - nl), 0.0001) / proj_coords.w;
     float compare = (current_depth - bias);
-    float shadow = texture2DShadowPCF(shadow_map, vec2(textureSize(shadow_map, 0)), light_coords.xy, compare);
+    float shadow = texture2DShadowLerp(shadow_map, vec2(textureSize(shadow_map, 0)), light_coords.xy, compare);
     if (light_coords.z > 1.0) {
         shadow = 0.0;
     }
