@@ -223,6 +223,11 @@ def run_batch(
         if on_event is not None:
             on_event(outcomes[index])
 
+    def discard(index: int) -> None:
+        """Delete what an unfinished try of job `index` left (`discard_unfinished`)."""
+        job = jobs[index][1]
+        discard_unfinished(job, out_dir / job_directory_name(job))
+
     def submit(index: int) -> None:
         batch, job = jobs[index]
         attempts[index] += 1
@@ -264,8 +269,7 @@ def run_batch(
                         if result[2] is not None:
                             # A job that raised deleted its files as it unwound; a worker that died hard (out of
                             # memory, a crash in the driver; the pool then fails its other jobs too) did not.
-                            job = jobs[index][1]
-                            discard_unfinished(job, out_dir / job_directory_name(job))
+                            discard(index)
                         if result[2] is not None and attempts[index] <= retries:
                             submit(index)
                         else:
@@ -283,8 +287,7 @@ def run_batch(
                     else:
                         # A worker that did not unwind within the grace period was killed in the middle of
                         # its job (a long draw or encode): its temporary files are deleted here instead.
-                        job = jobs[index][1]
-                        discard_unfinished(job, out_dir / job_directory_name(job))
+                        discard(index)
         finally:
             if runner is not None:
                 runner.close()

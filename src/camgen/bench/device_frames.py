@@ -21,14 +21,9 @@ import importlib.util
 import json
 import os
 import platform
-import shutil
-import tempfile
 from pathlib import Path
 
-from camgen.bench.e2e_cases import EndToEnd, spread_frames, timed_per_frame
-from camgen.bench.variants import at_output_size, one_camera
-from camgen.config import load_scene
-from camgen.plan import PlanSettings, compile_scene
+from camgen.bench.e2e_cases import measure
 
 RECORDS_DIR = Path("docs/bench/device_frames")
 """Where the recorded runs live (JSON, one per machine and run), relative to the repository."""
@@ -38,27 +33,6 @@ CASES = (
     ("intersection_two_cameras", "box_4k_sw", (3840, 2160)),
 )
 """(example scene, camera, stream size): the speed issue's goals (≥ 5 frames/s and ≥ 1 frame/s on two cores)."""
-
-
-def measure_case(repo: Path, scene: str, camera: str, size: tuple[int, int], frames: int, renderer, video: bool):
-    """One case's `EndToEnd`, rendered into a temporary directory with `renderer`."""
-    from camgen.plan.execute import execute
-
-    path = repo / "scenes" / f"{scene}.yaml"
-    loaded = at_output_size(one_camera(load_scene(path), camera), *size)
-    if not video:
-        outputs = loaded.scene.outputs.model_copy(update={"video": False})
-        loaded = dataclasses.replace(loaded, scene=loaded.scene.model_copy(update={"outputs": outputs}))
-    job = compile_scene(loaded, PlanSettings())
-    out = Path(tempfile.mkdtemp(prefix="camgen-device-frames-"))
-    try:
-        (result,) = execute(job, out, renderer=renderer, frames=spread_frames(job.frame_count, frames),
-                            resolve_path=path.parent.joinpath)  # fmt: skip
-    finally:
-        shutil.rmtree(out, ignore_errors=True)
-    frame_ms, stage_ms = timed_per_frame(result)
-    return EndToEnd(scene, camera, loaded.profiles[camera].name, f"{size[0]}×{size[1]}",
-                    tuple(stage.name for stage in job.cameras[0].stages), stage_ms, frame_ms)  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -73,9 +47,13 @@ def main(argv: list[str] | None = None) -> int:
 
     repo = Path(__file__).resolve().parents[3]
     video = importlib.util.find_spec("av") is not None
-    renderer = Renderer()
-    records = [measure_case(repo, scene, camera, size, args.frames, renderer, video) for scene, camera, size in CASES]
-    where = f"OpenGL: {renderer.gl_renderer}; {os.cpu_count()} CPUs; {platform.processor() or platform.machine()}"
+    with Renderer() as renderer:  # the OpenGL implementation each case's draws get
+        gl_renderer = renderer.gl_renderer
+    records = [
+        measure(repo / "scenes" / f"{scene}.yaml", camera, size, frames=args.frames, video=video)
+        for scene, camera, size in CASES
+    ]
+    where = f"OpenGL: {gl_renderer}; {os.cpu_count()} CPUs; {platform.processor() or platform.machine()}"
     print(where + ("" if video else "; video output left out (PyAV is not installed)"))
     print("| scene | camera | stream | frames/s | ms per frame | stages (ms per frame) |")
     print("|---|---|---|---:|---:|---|")

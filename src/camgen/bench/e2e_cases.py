@@ -12,6 +12,7 @@ annotation files written at the end are shared out over the timed frames.
 
 from __future__ import annotations
 
+import dataclasses
 import shutil
 import tempfile
 from dataclasses import dataclass
@@ -74,10 +75,16 @@ def spread_frames(frame_count: int, count: int) -> list[int]:
     return sorted({int(i) for i in np.linspace(0, frame_count - 1, count).round()})
 
 
-def measure(path: Path, camera: str, size: tuple[int, int], frames: int = FRAMES, settings=None) -> EndToEnd:
-    """Render `frames` spread frames of `camera` in the scene at `path` at `size` and time them."""
+def measure(
+    path: Path, camera: str, size: tuple[int, int], frames: int = FRAMES, settings=None, *, video: bool = True
+) -> EndToEnd:
+    """Render `frames` spread frames of `camera` in the scene at `path` at `size` and time them; `video`
+    False leaves the scene's video output out (a machine without PyAV)."""
     loaded = load_scene(path)
     variant = at_output_size(one_camera(loaded, camera), *size)
+    if not video:
+        outputs = variant.scene.outputs.model_copy(update={"video": False})
+        variant = dataclasses.replace(variant, scene=variant.scene.model_copy(update={"outputs": outputs}))
     job = compile_scene(variant, settings or PlanSettings())
     (result,) = execute_in_scratch(job, spread_frames(job.frame_count, frames), path.parent.joinpath)
     frame_ms, stage_ms = timed_per_frame(result)

@@ -240,34 +240,16 @@ class CameraRenderer:
         self, view: View, passes: tuple[str, ...], key: str, fit: ShadowFit | None = None, lod_bias: float = 0.0
     ) -> Passes:
         graph, renderer = self.graph, self.renderer
-        clip = self.clip_range_m(view)
         fit = self.shadow_fit(view) if fit is None else fit
+        # Every draw of this view shares the depth mapping, the shadow fit and the texture detail.
+        shared = {"clip_range_m": self.clip_range_m(view), "shadow_fit": fit, "texture_lod_bias": lod_bias}
         if not self.spec.static_background:
-            return renderer.draw(graph, view, passes, clip_range_m=clip, shadow_fit=fit, texture_lod_bias=lod_bias)
+            return renderer.draw(graph, view, passes, **shared)
         kept = f"{self.camera.name}:{key}"
         if kept not in self._kept_views or not _same_view(self._kept_views[kept], view):
-            renderer.draw(
-                graph,
-                view,
-                passes,
-                nodes=graph.environment_nodes,
-                keep_as=kept,
-                read=False,
-                clip_range_m=clip,
-                shadow_fit=fit,
-                texture_lod_bias=lod_bias,
-            )
+            renderer.draw(graph, view, passes, nodes=graph.environment_nodes, keep_as=kept, read=False, **shared)
             self._kept_views[kept] = view
-        return renderer.draw(
-            graph,
-            view,
-            passes,
-            nodes=graph.actor_nodes,
-            background=kept,
-            clip_range_m=clip,
-            shadow_fit=fit,
-            texture_lod_bias=lod_bias,
-        )
+        return renderer.draw(graph, view, passes, nodes=graph.actor_nodes, background=kept, **shared)
 
     def motion_samples(self, state: CameraState) -> int:
         """Sub-frames for this frame's exposure: the plan's largest motion scales with the exposure
