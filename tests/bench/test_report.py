@@ -138,3 +138,12 @@ def test_a_failing_section_is_reported_and_the_others_still_written(tmp_path):
     assert set(written) == {"bad", "good"}  # each block handed over as soon as its section finished
     with pytest.raises(KeyError):  # without a failures list, the error propagates
         run_sections([Section("bad", "Bad", lambda: [], broken)], repeats=1, plots=plots)
+
+
+def test_device_frames_refuses_fewer_than_two_frames(capsys):
+    from camgen.bench.device_frames import main as device_frames
+
+    with pytest.raises(SystemExit) as stop:
+        device_frames(["--frames", "1"])
+    assert stop.value.code == 2
+    assert "--frames must be at least 2 (a warm-up and a timed frame), got 1" in capsys.readouterr().err
