@@ -353,6 +353,39 @@ class Rain(Model):
     """Draws the drops; the same seed gives the same rain."""
 
 
+class Wind(Model):
+    """Wind over the whole scene: trees and bushes sway in it and their leaves flutter
+    (`camgen.props.sway`); its gusts are drawn from the scene's seed (or `seed`). Calm (no wind, or
+    speed_m_s 0) leaves every prop still and every frame as without it."""
+
+    speed_m_s: Annotated[
+        float,
+        Field(ge=0, le=40),
+        Why("mean wind speeds run from calm (0) to hurricane force (Beaufort 12, ≥ 32.7 m/s; WMO-No. 8); 0–40 m/s"),
+    ]
+    """Mean wind speed near the crowns, m/s. Beaufort (WMO-No. 8): 3.4–5.4 gentle breeze (leaves and twigs
+    in constant motion), 8.0–10.7 fresh breeze (small trees in leaf sway), 13.9–17.1 near gale (whole
+    trees in motion)."""
+    direction_deg: Annotated[float, Field(ge=-360, le=360), Why("a direction, −360° to 360°")] = 0.0
+    """The direction the wind blows towards, counter-clockwise from +X like the scene's other azimuths,
+    degrees (a meteorological wind direction names where it comes from: add 180° and turn it into the
+    scene's frame)."""
+    turbulence_intensity: Annotated[
+        float,
+        Field(ge=0, le=0.6),
+        Why(
+            "the turbulence intensity σ_u/U is 0.1–0.2 over open country and 0.3–0.45 among buildings "
+            "(EN 1991-1-4 §4.4, I_v = 1/ln(z/z0)); 0–0.6"
+        ),
+    ] = 0.3
+    """Gustiness: the standard deviation of the wind speed over its mean (σ_u/U); EN 1991-1-4 §4.4 gives
+    I_v = 1/ln(z/z0) at height z over terrain of roughness length z0: 0.29 at 10 m in suburbs (z0 =
+    0.3 m), 0.43 in city centres (z0 = 1 m). 0: a steady wind (the trees still sway at their own
+    frequency)."""
+    seed: Annotated[int, Field(ge=0)] | None = None
+    """Draws the gusts; null derives it from the scene's seed. The same seed gives the same gusts."""
+
+
 class Environment(Model):
     sky_luminance_cd_m2: Luminance = 0.0
     """Luminance of the background where no geometry is hit, cd/m² (clear day sky ≈ 5000); for a CIE
@@ -364,6 +397,9 @@ class Environment(Model):
     """Fog or haze by meteorological visibility; null: clear air."""
     rain: Rain | None = None
     """Rain by its rate (`camgen.world.rain`); null: dry."""
+    wind: Wind | None = None
+    """Wind by its speed, direction and gustiness: trees and bushes sway and their leaves flutter
+    (`camgen.props.sway`); null: calm, every prop still."""
     wet: bool | None = None
     """Wet ground: level planes facing up darken and get smoother (`camgen.world.rain.WET_ALBEDO_FACTOR`,
     `WET_ROUGHNESS_FACTOR`); null: wet while it rains."""
@@ -374,8 +410,8 @@ class Environment(Model):
     meshes: list[Mesh] = []
     props: list[Prop] = []
     """Trees, bushes, benches, bins, bollards, lamp posts, signs and fences (`camgen.config.props`), each
-    ``{type, position_m, heading_deg, seed, …}``: static environment geometry that casts and receives
-    shadows, with instance ids after the meshes' (not annotated)."""
+    ``{type, position_m, heading_deg, seed, …}``: environment geometry that casts and receives shadows
+    (trees and bushes sway in `wind`), with instance ids after the meshes' (not annotated)."""
     scatter: list[ScatterRule] = []
     """Props placed by rule (`camgen.props.scatter`): ``{type, along: [[x, y], …], spacing_m}`` or
     ``{type, region_m: [[x0, y0], [x1, y1]], count}``, with ``seed`` and ``min_gap_m``; the same seed

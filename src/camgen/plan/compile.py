@@ -47,6 +47,7 @@ from camgen.plan.camera_state import camera_image_speed_px_s, camera_state, head
 from camgen.plan.ptz import head_track, holding_track, installed_focal_length_mm
 from camgen.plan.visibility import Bounds, box_corners, local_bounds, placement, visible_depth_range_m
 from camgen.props import prop_box_corners
+from camgen.props.sway import swaying_props
 from camgen.sensor.capture import NOISE_TERM_OFF, NOISE_TERMS, noise_term_is_on
 from camgen.world.rain import STREAK_RANGE_M
 
@@ -162,6 +163,40 @@ def _actor_motion_px(
                 # the body (the foot's speed peaks at ~2.4 × walking speed in mid-swing: Winter 1991).
                 limbs = LIMB_SPEED_FACTOR if is_procedural_person(actor) or is_character(actor) else 1.0
                 worst = max(worst, limbs * float(np.max(np.hypot(*(uv[1] - uv[0])[inside].T))))
+    return worst
+
+
+def _sway_motion_px(
+    swaying: list,
+    duration_s: float,
+    exposure_s: float,
+    T_world_from_cam_: np.ndarray,
+    K: np.ndarray,
+    width_px: int,
+    height_px: int,
+) -> float:
+    """Largest image displacement within one exposure of a vertex of a prop swaying in the wind
+    (`camgen.props.sway`), px: its speed bound seen at the nearest corner of its box, for each prop whose
+    box reaches into the view."""
+    T_cam_from_world = np.linalg.inv(T_world_from_cam_)
+    worst = 0.0
+    for prop, sway in swaying:
+        vertices = prop.model.arrays()[0]
+        corners = box_corners(vertices.min(axis=0), vertices.max(axis=0), prop.T_world_from_prop)
+        cams = corners @ T_cam_from_world[:3, :3].T + T_cam_from_world[:3, 3]
+        front = cams[cams[:, 2] > 0.1]
+        if len(front) == 0:
+            continue
+        uv = (front[:, :2] / front[:, 2:3]) @ K[:2, :2].T + K[:2, 2]
+        if len(front) == len(cams) and (
+            uv[:, 0].max() < -0.5
+            or uv[:, 0].min() > width_px - 0.5
+            or uv[:, 1].max() < -0.5
+            or uv[:, 1].min() > height_px - 0.5
+        ):
+            continue
+        near_m = max(float(cams[:, 2].min()), 0.1)
+        worst = max(worst, float(K[0, 0]) * sway.speed_max_m_s(duration_s) * exposure_s / near_m)
     return worst
 
 
@@ -444,7 +479,13 @@ def _compile_camera(
     groups: dict = {}
     for k, key in enumerate(view_keys):
         groups.setdefault(key, []).append(k)
+    swaying = swaying_props(scene.environment, scene_seed=scene.seed)
     for key, indices in groups.items():
+        if swaying:
+            motion_px = max(
+                motion_px,
+                _sway_motion_px(swaying, scene.duration_s, exposure_longest_s, pose_of[key], lens_of[key[2]].K, W, H),
+            )
         motion_px = max(
             motion_px,
             _actor_motion_px(
@@ -469,7 +510,8 @@ def _compile_camera(
             "optics.motion_blur",
             motion_px + camera_worst_px > blur_max and needs_image,
             force and needs_image,
-            f"largest actor motion {motion_px:.3g} px and camera motion {camera_worst_px:.3g} px during a "
+            f"largest {'actor or swaying-prop' if swaying else 'actor'} motion {motion_px:.3g} px and camera "
+            f"motion {camera_worst_px:.3g} px during a "
             f"{exposure_longest_s:.3g} s exposure "
             f"({'manual' if exposure.mode == 'manual' else 'longest auto-exposure'})",
             effect=motion_px + camera_worst_px,
@@ -544,6 +586,16 @@ def _compile_camera(
                 included=True,
                 reason=f"{rain.rate_mm_h:g} mm/h: drop streaks over each frame's exposure within "
                 f"{STREAK_RANGE_M:g} m, depth-tested, and haze beyond (camgen.world.rain)",
+            )
+        )
+    wind = scene.environment.wind
+    if wind is not None and wind.speed_m_s > 0 and needs_image:
+        decisions.append(
+            Decision(
+                stage="render.wind",
+                included=True,
+                reason=f"{wind.speed_m_s:g} m/s: trees and bushes sway and their leaves flutter (camgen.props.sway); "
+                "they are drawn with the actors each frame, never into a kept background",
             )
         )
     ids_reason = ", ".join(outputs.annotations) if annotations else ""

@@ -5,7 +5,8 @@ bracket and lantern, sign posts with a plate, and fences or railings.
 `placed_props` resolves a scene's `environment.props` and `environment.scatter` (placed props and
 scatter rules, `camgen.config.props`) into `PlacedProp`s: a `PropModel` (`camgen.props.types`: closed parts with a
 colour and an 850 nm reflectance per vertex, dimensions drawn from the identity seed within cited ranges)
-and its pose in the world. Nothing here touches OpenGL or files. Props are static: trees do not sway.
+and its pose in the world. Nothing here touches OpenGL or files. Trees and bushes sway in the scene's
+wind (`camgen.props.sway`); the other props stand still.
 """
 
 from __future__ import annotations

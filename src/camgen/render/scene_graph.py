@@ -60,6 +60,7 @@ from camgen.io.ies import read_ies
 from camgen.motion.pose import T_world_from_cam, rot_z
 from camgen.motion.trajectory import Route, actor_routes
 from camgen.props import PropModel, placed_props, prop_names
+from camgen.props.sway import PropSway, prop_sway, wind_gusts
 from camgen.render.gl import pyrender
 from camgen.render.mipmaps import MipmappedTexture
 from camgen.vehicles import LAMP_COLOUR_RGB, LAMP_LUMINANCE_CD_M2, VehicleRig, plate_texture, vehicle_rigs
@@ -138,6 +139,31 @@ def far_ground(scene: Scene) -> FarGround | None:
 
 
 @dataclass
+class SwayingProp:
+    """A tree or bush that sways in the scene's wind (`camgen.props.sway`): its node stays an environment
+    node (its instance id), but it is drawn with the actors, never into a kept static background."""
+
+    node: pyrender.Node
+    sway: PropSway
+    rest_vertices_m: np.ndarray
+    """(V, 3) in the prop's frame, at rest."""
+    rest_normals: np.ndarray
+    placed_at_s: float | None = None
+    """The time its vertices were last bent to."""
+
+    def place(self, time_s: float, scene: pyrender.Scene, deformed: set) -> None:
+        """Bend the prop's vertices to `time_s` (nothing when they already are)."""
+        if self.placed_at_s == time_s:
+            return
+        primitive = self.node.mesh.primitives[0]
+        primitive.positions, primitive.normals = self.sway.deformed(self.rest_vertices_m, self.rest_normals, time_s)
+        deformed.add(primitive)
+        self.node.mesh._bounds = None  # pyrender caches a mesh's bounds, and the scene's until a node moves
+        scene.set_pose(self.node, self.node.matrix)
+        self.placed_at_s = time_s
+
+
+@dataclass
 class SceneGraph:
     """A pyrender scene built from a camgen scene; actor nodes are moved with `place_actors`."""
 
@@ -176,9 +202,24 @@ class SceneGraph:
     """Each actor's procedural vehicle (its mesh posed in world coordinates), or None."""
     prop_nir: dict[int, np.ndarray] = field(default_factory=dict)
     """id() of each prop's primitive → its vertices' reflectance at 850 nm (`camgen.render.nir`)."""
+    swaying: list[SwayingProp] = field(default_factory=list)
+    """The props that sway in the scene's wind (`environment.wind`), moved with the actors; empty when calm."""
     source: tuple[Scene, Callable[[str], Path] | None] | None = None
     """The scene it was built from and its path resolver (a night-mode camera builds its NIR graph
     from them: `camgen.render.nir`)."""
+
+    @property
+    def moving_nodes(self) -> list[pyrender.Node]:
+        """Every node whose look changes with time: the actors', then the swaying props'."""
+        return self.actor_nodes + [prop.node for prop in self.swaying] if self.swaying else self.actor_nodes
+
+    @property
+    def still_nodes(self) -> list[pyrender.Node]:
+        """The environment nodes that never change (a kept static background holds these only)."""
+        if not self.swaying:
+            return self.environment_nodes
+        swaying = {id(prop.node) for prop in self.swaying}
+        return [node for node in self.environment_nodes if id(node) not in swaying]
 
     def rig(self, index: int) -> PersonRig | CharacterRig | VehicleRig | None:
         """Actor `index`'s procedural person, glTF character or procedural vehicle, or None (a shape)."""
@@ -206,7 +247,8 @@ class SceneGraph:
         self.sun_direction = towards_sun if track.suns else self.sun_direction
 
     def place_actors(self, time_s: float) -> None:
-        """Move every actor to where its route puts it at `time_s` (and pose every person)."""
+        """Move every actor to where its route puts it at `time_s` (and pose every person), and bend every
+        swaying prop to its shape in the wind then."""
         vehicles = self.vehicles or [None] * len(self.actor_nodes)
         for route, node, local, rig, vehicle in zip(
             self.actor_routes, self.actor_nodes, self.actor_local_poses, self.people, vehicles, strict=True
@@ -228,6 +270,8 @@ class SceneGraph:
                 self.deformed.add(primitive)
             node.mesh._bounds = None  # pyrender caches a mesh's bounds, and the scene's bounds until
             self.scene.set_pose(node, np.eye(4))  # a node moves: the identity pose stands for "moved"
+        for prop in self.swaying:
+            prop.place(time_s, self.scene, self.deformed)
 
 
 def instance_table(scene: Scene) -> tuple[Instance, ...]:
@@ -810,10 +854,17 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         node = graph.add(pyrender_mesh, pose=placement(mesh), name=f"environment:{mesh.name}")
         environment_nodes.append(node)
     prop_nir = {}
+    swaying = []
+    gusts = wind_gusts(scene.environment.wind, scene_seed=scene.seed)
     for prop in placed_props(scene.environment, scene_seed=scene.seed):
         mesh = prop_mesh(prop.model)
         prop_nir[id(mesh.primitives[0])] = prop.model.arrays()[4]
-        environment_nodes.append(graph.add(mesh, pose=prop.T_world_from_prop, name=f"environment:{prop.name}"))
+        node = graph.add(mesh, pose=prop.T_world_from_prop, name=f"environment:{prop.name}")
+        environment_nodes.append(node)
+        sway = prop_sway(prop.model, prop.T_world_from_prop, gusts)
+        if sway is not None:
+            vertices, normals = prop.model.arrays()[:2]
+            swaying.append(SwayingProp(node, sway, vertices, normals))
     nodes = actor_nodes + environment_nodes
     instance_ids = {node: instance.instance_id for node, instance in zip(nodes, instances, strict=True)}
     result = SceneGraph(
@@ -838,6 +889,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         crowd=Crowd([rig for rig in people if isinstance(rig, PersonRig)]),
         vehicles=vehicles,
         prop_nir=prop_nir,
+        swaying=swaying,
         source=(scene, resolve_path),
     )
     result.place_actors(0.0)

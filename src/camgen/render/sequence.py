@@ -7,7 +7,8 @@
   pixel's area as a sensor pixel does. depth_m and instance_id stay point samples at pixel centres
   (exact values, no mixed ids), drawn together at 1× in one cheap geometry-only draw.
 - Static background: the environment is drawn once per camera and kept on the GPU; each frame starts
-  from a copy of it and draws only the actors, depth-tested against it.
+  from a copy of it and draws only the actors (and the props swaying in the wind,
+  `SceneGraph.moving_nodes`), depth-tested against it.
 - Motion blur (when planned): radiance integrates the exposure as the mean of sub-frames at evenly
   spread times, so each sub-frame only redraws the actors over the kept background. With
   supersampling s > 1, the sub-frames carry the spatial samples too (`jittered_samples`): each is
@@ -247,9 +248,9 @@ class CameraRenderer:
             return renderer.draw(graph, view, passes, **shared)
         kept = f"{self.camera.name}:{key}"
         if kept not in self._kept_views or not _same_view(self._kept_views[kept], view):
-            renderer.draw(graph, view, passes, nodes=graph.environment_nodes, keep_as=kept, read=False, **shared)
+            renderer.draw(graph, view, passes, nodes=graph.still_nodes, keep_as=kept, read=False, **shared)
             self._kept_views[kept] = view
-        return renderer.draw(graph, view, passes, nodes=graph.actor_nodes, background=kept, **shared)
+        return renderer.draw(graph, view, passes, nodes=graph.moving_nodes, background=kept, **shared)
 
     def motion_samples(self, state: CameraState) -> int:
         """Sub-frames for this frame's exposure: the plan's largest motion scales with the exposure
@@ -369,7 +370,8 @@ class CameraRenderer:
         fractions of it) differs from another of the same sub-pixel position; None when that cannot be
         bounded, or the rectangles would cover most of the frame (then every sub-frame is drawn whole).
 
-        Each actor whose mesh, pose or lamps change during the exposure is bounded by its box swept over
+        Each actor (and each prop swaying in the wind, `SceneGraph.moving_nodes`) whose mesh, pose or
+        lamps change during the exposure is bounded by its box swept over
         the sub-frame times, grown by two shadow-map texels, and by that box's shadow volume down to the
         lowest surface (`_shadow_slices`: along a sun's direction, or along the rays from a spot light;
         point lights cast no shadows in this renderer), as a few convex hulls whose parts in front of
@@ -381,12 +383,13 @@ class CameraRenderer:
         if any(not _same_view(view_at(state, spec, offset * exposure_s), view) for offset in offsets):
             return None
         lights_before = _light_state(scene)
-        boxes: list[list[np.ndarray]] = [[] for _ in graph.actor_nodes]
+        moving = graph.moving_nodes
+        boxes: list[list[np.ndarray]] = [[] for _ in moving]
         first: list[tuple] = []
-        changed = [False] * len(graph.actor_nodes)
+        changed = [False] * len(moving)
         for step, offset in enumerate(offsets):
             graph.place_actors(state.time_s + offset * exposure_s)
-            for k, node in enumerate(graph.actor_nodes):
+            for k, node in enumerate(moving):
                 look = _actor_look(scene, node)
                 if step == 0:
                     first.append(look)
@@ -398,7 +401,7 @@ class CameraRenderer:
         near_m, far_m = self.clip_range_m(view)
         casting = _shadow_lights(scene) if graph.shadows else []
         rects = []
-        for k in range(len(graph.actor_nodes)):
+        for k in range(len(moving)):
             if not changed[k]:
                 continue
             corners = np.concatenate(boxes[k])
@@ -464,13 +467,21 @@ class CameraRenderer:
 
 def _reach(graph: SceneGraph) -> tuple[np.ndarray, np.ndarray]:
     """Points (N, 3) and radii (N,) such that all geometry, at any time, lies within a radius of a
-    point: environment mesh corners (radius 0), and every point each actor's route visits with the
-    actor's own extent (a route runs along straight segments, whose farthest point from a camera is
-    an end; a resolved random walk covers the whole sequence)."""
+    point: environment mesh corners (radius 0; a swaying prop's at rest, with its sway's reach), and every
+    point each actor's route visits with the actor's own extent (a route runs along straight segments,
+    whose farthest point from a camera is an end; a resolved random walk covers the whole sequence)."""
     points, radii = [], []
+    swaying = {id(prop.node): prop for prop in graph.swaying}
     for node in graph.environment_nodes:
-        points.append(box_corners(*node.mesh.bounds, graph.scene.get_pose(node)))
-        radii.append(np.zeros(8))
+        pose = graph.scene.get_pose(node)
+        prop = swaying.get(id(node))
+        if prop is None:
+            points.append(box_corners(*node.mesh.bounds, pose))
+            radii.append(np.zeros(8))
+        else:  # its box at rest, and how far its sway can take a vertex from there
+            rest = prop.rest_vertices_m
+            points.append(box_corners(rest.min(axis=0), rest.max(axis=0), pose))
+            radii.append(np.full(8, prop.sway.reach_m()))
     for index, (actor, route, node, local) in enumerate(
         zip(graph.actors, graph.actor_routes, graph.actor_nodes, graph.actor_local_poses, strict=True)
     ):
