@@ -1,8 +1,11 @@
 """scenes/night_street.yaml at 160 × 90: its IR camera films in night mode, monochrome, and the hedge
-(ρ 0.06 visible, 0.5 at 850 nm) stands out against the asphalt (0.11 / 0.14) several times more than in
-colour; camera.jsonl says which mode each frame was in. Measured (8-bit stream means, hedge / road):
-84 / 159 in IR, 21 / 162 in colour (the road is lit mostly by the lamps' visible light, which reaches
-the sensor too with the IR-cut filter out)."""
+(ρ 0.06 visible, 0.5 at 850 nm) stands out against the asphalt (0.11 / 0.14) more than in colour;
+camera.jsonl says which mode each frame was in. Measured (8-bit stream means, hedge / road): 107 / 155
+in IR, 72 / 156 in colour, 1.48 times the contrast; with the hedge's 850 nm reflectance set to its
+visible one, 69 / 156 in IR (0.95 times). The east lamp lights the hedge's street face, and its visible
+light, which reaches the sensor too with the IR-cut filter out, outshines the illuminator there. (Until
+the lamps' shadow maps had a depth bias for their slope, the hedge shadowed itself out of most of that
+light: 84 / 159 in IR, 21 / 162 in colour, and the test asked for 2.5 times.)"""
 
 from __future__ import annotations
 
@@ -73,4 +76,4 @@ def test_the_hedge_stands_out_in_infrared(night_street):
     hedge, road = instance["hedge"], instance["road"]
     ratio_ir = _mean_grey(ir, ids_ir, hedge) / _mean_grey(ir, ids_ir, road)
     ratio_colour = _mean_grey(colour, ids_colour, hedge) / _mean_grey(colour, ids_colour, road)
-    assert ratio_ir > 2.5 * ratio_colour
+    assert ratio_ir > 1.25 * ratio_colour

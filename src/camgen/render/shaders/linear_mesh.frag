@@ -1,8 +1,9 @@
 #version 330 core
 // camgen: pyrender 0.1.45's mesh.frag (MIT licence, (c) Matthew Matl) changed to write linear,
 // unclamped radiance (no gamma, no clamp), metric depth and the instance id into three render targets,
-// to add the emissive factor once (pyrender multiplies it by itself), and to filter shadow maps
-// bilinearly (4 taps) instead of pyrender's 36-tap PCF, which doubled the cost of a frame on llvmpipe,
+// to add the emissive factor once (pyrender multiplies it by itself), to filter shadow maps with 3 x 3
+// bilinear taps (16 comparisons, texture2DShadowPCF) instead of pyrender's 36, which doubled the cost of a
+// frame on llvmpipe, under depth biases set in metres for each kind of map (shadow_calc_ortho, shadow_calc_spot),
 // and to make the diffuse term Lambertian (rho/pi; pyrender scales it by 0.96 (1 - F)) with no light
 // leaking onto faces turned away (pyrender floors n.l at 0.001).
 ///////////////////////////////////////////////////////////////////////////////
@@ -287,24 +288,6 @@ float texture2DCompare(sampler2D depths, vec2 uv, float compare) {
     return compare > texture(depths, uv.xy).r ? 1.0 : 0.0;
 }
 
-// pyrender's one bilinear lookup (its corner sits half a texel off the grid): kept for the spot lights,
-// whose perspective maps have only pyrender's constant depth bias, which does not cover the filtered
-// lookup's reach (the road under a steep street lamp shadowed itself); see shadow_calc.
-float texture2DShadowLerp(sampler2D depths, vec2 size, vec2 uv, float compare) {
-    vec2 texelSize = vec2(1.0)/size;
-    vec2 f = fract(uv*size+0.5);
-    vec2 centroidUV = floor(uv*size+0.5)/size;
-
-    float lb = texture2DCompare(depths, centroidUV+texelSize*vec2(0.0, 0.0), compare);
-    float lt = texture2DCompare(depths, centroidUV+texelSize*vec2(0.0, 1.0), compare);
-    float rb = texture2DCompare(depths, centroidUV+texelSize*vec2(1.0, 0.0), compare);
-    float rt = texture2DCompare(depths, centroidUV+texelSize*vec2(1.0, 1.0), compare);
-    float a = mix(lb, lt, f.y);
-    float b = mix(rb, rt, f.y);
-    float c = mix(a, b, f.x);
-    return c;
-}
-
 // camgen: percentage-closer filtering (Reeves, Salesin and Cook 1987, "Rendering antialiased shadows with
 // depth maps"), the mean of 3 x 3 bilinear lookups one texel apart: a kernel four texels wide whose weights
 // fall off smoothly, so a shadow's edge is a soft ramp instead of following the map's texel staircase (the
@@ -330,21 +313,52 @@ float texture2DShadowPCF(sampler2D depths, vec2 size, vec2 uv, float compare) {
     return sum / 9.0;
 }
 
-float shadow_calc(mat4 light_matrix, sampler2D shadow_map, float nl)
+// camgen: a spot light's shadow map is perspective (pyrender's camera at the lamp: a field of view of twice
+// the cone plus 11.25 deg, 2048 texels across), filtered like the sun's (texture2DShadowPCF). Its depth bias is
+// the receiver plane's own climb over the kernel's reach (slope-scaled bias, as in Dou et al. 2014, "Adaptive
+// depth bias for shadow maps", JCGT 3(4), written out for a perspective map): in the light's view frame a plane
+// with unit normal n (towards the lamp), met at distance r along the ray of a point at axial depth D, has an
+// axial depth whose reciprocal is linear across the map, and between the lookup and a texel (dx, dy) texels
+// away it comes nearer by at most D^2 / (r n.l) * (2 / size) * tan(fov / 2) * |n_x dx + n_y dy| (n_x, n_y its
+// components across the map's axes). The kernel's 4 x 4 texels lie within 2 texels of the lookup on each
+// axis, so the bias is that with |dx| = |dy| = 2 (exact for a plane, zero for a plane square to the axis: the
+// ground under a lamp that points straight down), plus 5 mm for meshes that are not one plane and for the
+// depth buffer's precision (24 bits or a float over a near plane at 1 % of the scene's diagonal: under 0.1 mm
+// where lamps light). n.l is floored at 0.1 as the sun's is (a face nearly edge-on to the lamp spans few texels
+// over a deep range and gets under a tenth of its light). The normal is the face's (the depth map holds the
+// faces, not the interpolated normals), from screen-space derivatives taken in main (uniform control flow).
+// The bias is applied exactly, in metres, by moving the point that far nearer along its own ray from the lamp:
+// the same texel, and the depth the map would store there (its depth is not linear in distance). pyrender's
+// bias, 0.001 (1 - n.l) of the window depth over w (at most 6 mm 8 m from the night street's lamps), does not
+// grow with the slope: with it even pyrender's one lookup left the hedge's and the houses' street faces,
+// nearly along the lamps' axes, in their own shadow.
+const float SPOT_SHADOW_MIN_COS = 0.1;
+const float SPOT_SHADOW_BIAS_M = 0.005;
+
+float shadow_calc_spot(mat4 light_matrix, sampler2D shadow_map, vec3 light_position, vec3 face_normal)
 {
-    // Compute light texture UV coords
-    vec4 proj_coords = vec4(light_matrix * vec4(frag_position.xyz, 1.0));
-    // camgen: a point at or behind the spot light's plane (w <= 0) is outside its frustum and unlit by
-    // it; dividing by w there made inf, and 0 * inf a NaN in the pixel (a wall above a street lamp).
+    vec4 proj_coords = light_matrix * vec4(frag_position, 1.0);
+    // A point at or behind the spot light's plane (w <= 0) is outside its frustum and unlit by it; dividing
+    // by w there made inf, and 0 * inf a NaN in the pixel (a wall above a street lamp).
     if (proj_coords.w <= 1e-6) {
         return 0.0;
     }
-    vec3 light_coords = proj_coords.xyz / proj_coords.w;
-    light_coords = light_coords * 0.5 + 0.5;
-    float current_depth = light_coords.z;
-    float bias = max(0.001 * (1.0 - nl), 0.0001) / proj_coords.w;
-    float compare = (current_depth - bias);
-    float shadow = texture2DShadowLerp(shadow_map, vec2(textureSize(shadow_map, 0)), light_coords.xy, compare);
+    float depth_m = proj_coords.w;  // the point's depth along the lamp's axis (w = -z of the light's view)
+    vec3 to_light = light_position - frag_position;
+    float distance_m = length(to_light);
+    vec3 normal = dot(face_normal, to_light) < 0.0 ? -face_normal : face_normal;
+    float nl = max(dot(normal, to_light) / distance_m, SPOT_SHADOW_MIN_COS);
+    vec2 size = vec2(textureSize(shadow_map, 0));
+    // The rows of light_matrix = P V: P's first two are the map's axes over tan(fov / 2).
+    vec3 row_x = vec3(light_matrix[0][0], light_matrix[1][0], light_matrix[2][0]);
+    vec3 row_y = vec3(light_matrix[0][1], light_matrix[1][1], light_matrix[2][1]);
+    float climb_m = 4.0 * depth_m * depth_m / (distance_m * nl)
+        * (abs(dot(normal, row_x)) / (size.x * dot(row_x, row_x)) + abs(dot(normal, row_y)) / (size.y * dot(row_y, row_y)));
+    float bias_m = min(SPOT_SHADOW_BIAS_M + climb_m, 0.5 * depth_m);
+    vec4 biased = light_matrix * vec4(frag_position + to_light * (bias_m / depth_m), 1.0);
+    vec3 light_coords = proj_coords.xyz / proj_coords.w * 0.5 + 0.5;
+    float compare = biased.z / biased.w * 0.5 + 0.5;
+    float shadow = texture2DShadowPCF(shadow_map, size, light_coords.xy, compare);
     if (light_coords.z > 1.0) {
         shadow = 0.0;
     }
@@ -420,6 +434,12 @@ void main()
 
     // Compute normal
     vec3 n = normalize(get_normal());
+#ifdef SPOT_LIGHT_SHADOWS
+    // The face's geometric normal (the plane the shadow maps hold), for the spot lights' depth bias; taken
+    // here, outside the light loop's per-fragment branches, where derivatives are defined.
+    vec3 face_normal = cross(dFdx(frag_position), dFdy(frag_position));
+    face_normal = dot(face_normal, face_normal) > 0.0 ? normalize(face_normal) : n;
+#endif
 
     // Loop over lights
     for (int i = 0; i < n_directional_lights; i++) {
@@ -498,11 +518,11 @@ void main()
         vec3 res = compute_brdf(n, v, l, roughness, metallic,
                                 f0, c_diff, base_color.rgb, radiance);
 #ifdef SPOT_LIGHT_SHADOWS
-        float nl = clamp(dot(n,l), 0.0, 1.0);
-        float shadow = shadow_calc(
+        float shadow = shadow_calc_spot(
             spot_lights[i].light_matrix,
             spot_lights[i].shadow_map,
-            nl
+            position,
+            face_normal
         );
         res = res * (1.0 - shadow);
 #endif
