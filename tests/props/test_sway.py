@@ -347,3 +347,59 @@ def test_a_kept_static_background_leaves_the_swaying_tree_out(renderer, tmp_path
         whole = renderer.draw(graph, view, ("radiance",), clip_range_m=drawer.clip_range_m(view)).radiance
         assert np.abs(frames[-1] - whole).max() <= 1e-5 * whole.max()
     assert (np.abs(frames[0] - frames[1]).max(axis=2) > 1e-3 * frames[0].max()).sum() > 50
+
+
+@pytest.mark.opengl
+def test_optical_flow_carries_the_sway(renderer, tmp_path):
+    """The scene flow of a swaying tree's trunk is its bend between the two frames, linear up the trunk's
+    drawn side (its two rings: the foot fixed, the top ring moved by (z/H)²·ΔD and its drop); the crown
+    moves, the ground and the sky do not."""
+    from camgen.plan.flow import FlowField
+    from camgen.plan.lens_stages import LensStages
+    from camgen.render.renderer import View
+    from camgen.render.scene_graph import build_scene_graph, instance_table
+    from camgen.render.sequence import CameraRenderer
+
+    job = _job(tmp_path, shadows=False)
+    camera = job.cameras[0]
+    graph = build_scene_graph(job.scene)
+    state, later = camera.states[4], camera.states[5]
+    view = View(np.array(state.K_px), np.array(state.T_world_from_cam), camera.width_px, camera.height_px)
+    graph.place_actors(state.time_s)
+    passes = renderer.draw(graph, view, ("depth_m", "instance_id"))
+    field = FlowField(CameraRenderer(renderer, graph, camera), LensStages(camera))
+    displacement = field.displacement_m(state, later.time_s, passes)
+    ids = {i.name: i.instance_id for i in instance_table(job.scene)}
+    tree = passes.instance_id == ids["tree_0"]
+    assert np.linalg.norm(displacement[tree], axis=1).max() > 0.01
+    assert np.all(displacement[passes.instance_id == ids["ground"]] == 0.0)
+    assert np.isnan(displacement[passes.instance_id == 0]).all()
+    (prop,) = graph.swaying
+    sway = prop.sway
+    trunk = next(p for p in build_prop("tree", 2, height_m=5.0).parts if p.name == "trunk")
+    top_m = float(trunk.vertices_m[:, 2].max())
+    s = top_m / sway.height_m
+    D0, D1 = sway.tip_displacement_m(state.time_s), sway.tip_displacement_m(later.time_s)
+    top_moved = s**2 * (D1 - D0)
+    top_moved[2] -= (2.0 / 3.0) * (D1 @ D1 - D0 @ D0) * s**3 / sway.height_m
+    R = graph.scene.get_pose(prop.node)[:3, :3]
+    points = passes.depth_m[tree]  # the trunk's pixels: those of the tree below the crown
+    rows, cols = np.nonzero(tree)
+    from camgen.annotate.flow import surface_points_m
+
+    rays = field.rays(state)[rows, cols]
+    world = surface_points_m(rays, points, np.array(state.T_world_from_cam))
+    foot = np.array([3.0, 16.0])
+    low = (world[:, 2] < 0.8 * trunk_crown_base(job)) & (np.linalg.norm(world[:, :2] - foot, axis=1) < 0.3)
+    assert low.sum() >= 5
+    expected = (world[low, 2] / top_m)[:, None] * (R @ top_moved)
+    error = np.linalg.norm(displacement[tree][low] - expected, axis=1) / np.linalg.norm(top_moved)
+    # Pixels at the very foot may take the bottom cap's (fixed) triangle: 1.5 % of the top's motion at most.
+    assert np.median(error) < 1e-3 and error.max() < 0.015
+    assert np.linalg.norm(expected, axis=1).max() > 0.3 * np.linalg.norm(top_moved)  # up the trunk, it moves
+
+
+def trunk_crown_base(job) -> float:
+    from camgen.props import placed_props
+
+    return placed_props(job.scene.environment, scene_seed=job.scene.seed)[0].model.dims["crown_base_m"]

@@ -67,17 +67,30 @@ def rigid_displacement_m(points_m: np.ndarray, T_world_from_actor: np.ndarray, T
 
 MESH_CANDIDATES = 8
 """Triangles (those with the nearest centroids) among which `mesh_displacement_m` finds a point's own."""
+LONG_TRIANGLE_REACH = 4.0
+"""A triangle whose reach (its farthest corner from its centroid) is over this many times the mesh's median
+reach is long (a tree trunk's 4 m side beside a crown of 0.2 m facets): `mesh_displacement_m(…,
+long_triangles=True)` weighs it for every point, as a point near its end lies far from its centroid."""
+LONG_TRIANGLES_MAX = 64
+"""The most long triangles weighed for every point (the longest)."""
 
 
 def mesh_displacement_m(
-    points_m: np.ndarray, vertices_m: np.ndarray, vertices_next_m: np.ndarray, faces: np.ndarray
+    points_m: np.ndarray,
+    vertices_m: np.ndarray,
+    vertices_next_m: np.ndarray,
+    faces: np.ndarray,
+    *,
+    long_triangles: bool = False,
 ) -> np.ndarray:
     """Displacement (N, 3) m of surface points (N, 3) on a deforming triangle mesh: the point's
     barycentric blend of its triangle's corner motions, which is exact for a point on the mesh.
 
-    The triangle is the nearest to the point among the `MESH_CANDIDATES` whose centroids are nearest
-    (closest point on a triangle: Ericson 2004, "Real-Time Collision Detection", §5.1.5), so a point
-    sampled off the surface (a depth from the neighbouring pixel) takes its closest point's motion.
+    The triangle is the nearest to the point among the `MESH_CANDIDATES` whose centroids are nearest, and,
+    with `long_triangles`, the mesh's long triangles (`LONG_TRIANGLE_REACH`: a plant's trunk among its
+    crown's facets; off for people, whose hundreds of long triangles would multiply the cost) (closest point on a
+    triangle: Ericson 2004, "Real-Time Collision Detection", §5.1.5), so a point sampled off the surface (a
+    depth from the neighbouring pixel) takes its closest point's motion.
 
     Parameters
     ----------
@@ -86,6 +99,8 @@ def mesh_displacement_m(
         The mesh's vertices at t and t + 1, same order.
     faces : (F, 3) int
         Vertex indices of each triangle.
+    long_triangles : bool
+        Weigh the mesh's `LONG_TRIANGLES_MAX` longest long triangles for every point too.
     """
     vertices = np.asarray(vertices_m, dtype=np.float64)
     points = np.asarray(points_m, dtype=np.float64).reshape(-1, 3)
@@ -94,8 +109,14 @@ def mesh_displacement_m(
     faces = np.asarray(faces).reshape(-1, 3)
     corners = vertices[faces]  # (F, 3, 3)
     k = min(MESH_CANDIDATES, len(faces))
-    _, candidates = cKDTree(corners.mean(axis=1)).query(points, k=k)
+    centroids = corners.mean(axis=1)
+    _, candidates = cKDTree(centroids).query(points, k=k)
     candidates = np.asarray(candidates).reshape(len(points), k)
+    if long_triangles:
+        reach = np.linalg.norm(corners - centroids[:, None, :], axis=2).max(axis=1)
+        long = np.flatnonzero(reach > LONG_TRIANGLE_REACH * np.median(reach))
+        long = long[np.argsort(reach[long])[::-1][:LONG_TRIANGLES_MAX]]
+        candidates = np.concatenate([candidates, np.broadcast_to(long, (len(points), len(long)))], axis=1)
     a, b, c = (corners[candidates, i] for i in range(3))  # (N, k, 3) each
     weights = _closest_barycentric(points[:, None, :], a, b, c)
     closest = weights[..., 0:1] * a + weights[..., 1:2] * b + weights[..., 2:3] * c

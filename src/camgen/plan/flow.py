@@ -4,12 +4,13 @@
 Each output pixel of frame t (on the stream: after the lens and a virtual PTZ's crop) sees the surface
 of its instance id at its depth; its displacement until t + 1 is
 
-- zero for the environment and the sky;
+- zero for the still environment and the sky;
 - the pose change of an actor whose node moves (a rigid shape: its pose at t + 1 times the inverse of
   that at t), exact;
 - for an actor whose mesh is posed in the world instead (a person or glTF character, skinned; a
-  procedural vehicle), the barycentric blend of the corner motions of the posed triangle the point lies
-  on (`mesh_displacement_m`): exact for a point on the mesh.
+  procedural vehicle) or a tree or bush swaying in the wind (`camgen.props.sway`), the barycentric blend of
+  the corner motions of the posed triangle the point lies on (`mesh_displacement_m`): exact for a point on
+  the mesh.
 
 The camera at t + 1 is the plan's state of that frame: its pose (a PTZ head's pan and tilt), zoom,
 distortion and, for a virtual PTZ, the stream's camera matrix. Depth comes from the nearest render
@@ -68,9 +69,10 @@ class FlowField:
         return rays
 
     def _poses(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Each actor's node pose and its mesh's vertices in the world, as the graph stands."""
+        """Each moving node's pose and its mesh's vertices in the world, as the graph stands (the actors, then
+        the swaying props: `SceneGraph.moving_nodes`)."""
         graph, poses = self.graph, []
-        for node in graph.actor_nodes:
+        for node in graph.moving_nodes:
             pose = np.array(graph.scene.get_pose(node), dtype=np.float64)
             local = np.concatenate([np.asarray(p.positions, dtype=np.float64) for p in node.mesh.primitives])
             poses.append((pose, local @ pose[:3, :3].T + pose[:3, 3]))
@@ -100,8 +102,9 @@ class FlowField:
         displacement = np.zeros((*depth.shape, 3))
         displacement[~np.isfinite(depth)] = np.nan
         T = np.array(state.T_world_from_cam)
-        # Each actor's pixels, found with one sort of the frame's actor pixels (not a pass per actor).
-        actor_ids = np.array([graph.instance_ids[node] for node in graph.actor_nodes], dtype=np.int64)
+        # Each moving node's pixels, found with one sort of the frame's pixels of moving nodes (not a pass each).
+        moving = graph.moving_nodes
+        actor_ids = np.array([graph.instance_ids[node] for node in moving], dtype=np.int64)
         ids = passes.instance_id.ravel().astype(np.int64)
         pixels = np.flatnonzero(np.isin(ids, actor_ids))
         pixels = pixels[np.argsort(ids[pixels], kind="stable")]
@@ -109,7 +112,7 @@ class FlowField:
         ends = np.searchsorted(ids[pixels], actor_ids, side="right")
         flat_rays, flat_depth = rays.reshape(-1, 2), depth.ravel()
         flat_displacement = displacement.reshape(-1, 3)
-        for k, node in enumerate(graph.actor_nodes):
+        for k, node in enumerate(moving):
             seen = pixels[starts[k] : ends[k]]
             if len(seen) == 0:
                 continue
@@ -117,8 +120,10 @@ class FlowField:
             points = surface_points_m(flat_rays[seen], flat_depth[seen], T)
             if not np.array_equal(pose, pose_next) or len(vertices) != len(vertices_next):
                 flat_displacement[seen] = rigid_displacement_m(points, pose, pose_next)
-            else:  # a mesh posed in the world (or at rest): its vertices carry the motion
-                flat_displacement[seen] = mesh_displacement_m(points, vertices, vertices_next, self._faces(node))
+            else:  # a mesh posed in the world (or at rest), or a swaying prop: its vertices carry the motion
+                flat_displacement[seen] = mesh_displacement_m(
+                    points, vertices, vertices_next, self._faces(node), long_triangles=k >= len(graph.actor_nodes)
+                )
         return displacement
 
     def flow(self, state: CameraState, next_state: CameraState, passes: Passes) -> tuple[np.ndarray, np.ndarray]:
