@@ -106,6 +106,22 @@ def test_the_trunks_foot_never_moves_and_the_crown_does():
         assert np.linalg.norm(moved - vertices, axis=1).max() <= sway.reach_m()
 
 
+def test_no_vertex_moves_faster_than_the_planned_bound():
+    """The plan blurs by `speed_max_m_s` (over the sequence's gusts): finite differences over 20 s stay under
+    it, and reach a third of it (a bound, not a guess)."""
+    model, sway = _sway(speed_m_s=8.0)
+    vertices, normals = model.arrays()[:2]
+    step_s = 0.01
+    fastest = 0.0
+    for t in np.arange(0.0, 20.0, 0.25):
+        a, _ = sway.deformed(vertices, normals, float(t))
+        b, _ = sway.deformed(vertices, normals, float(t) + step_s)
+        fastest = max(fastest, float(np.linalg.norm(b - a, axis=1).max()) / step_s)
+    bound = sway.speed_max_m_s(20.0)
+    assert fastest <= bound <= sway.speed_max_m_s()
+    assert fastest > bound / 3
+
+
 def test_a_bent_normal_stays_perpendicular_to_the_bent_surface():
     """The normals turn with the surface (n′ ∝ (I − ∇uᵀ)n): across each triangle of the bent crown the
     face normal and the mean of its vertices' normals agree as well as they do at rest."""
@@ -337,6 +353,8 @@ def test_a_kept_static_background_leaves_the_swaying_tree_out(renderer, tmp_path
         update={"stages": tuple(s for s in job.cameras[0].stages if s.name != "optics.motion_blur")}
     )
     assert camera.render.static_background
+    (decision,) = [d for d in camera.decisions if d.stage == "render.static_background"]
+    assert "swaying in the wind are drawn with the actors" in decision.reason
     graph = build_scene_graph(job.scene)
     drawer = CameraRenderer(renderer, graph, camera)
     frames = []

@@ -622,6 +622,8 @@ def _compile_camera(
             if len(pose_of) == 1
             else f"the camera rests in {still_frames} of {frames} frames; the environment is redrawn when it moves"
         )
+        if swaying:
+            static_reason += "; the trees and bushes swaying in the wind are drawn with the actors"
     elif daylight_moves:
         static_reason = (
             "the site's daylight changes over the sequence (world.daylight), so every frame is drawn in full"
