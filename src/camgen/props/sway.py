@@ -12,7 +12,8 @@ The model, per plant (prop frame: z up, foot at the origin, height H):
   lean L downwind ŵ, with sway of r·L about it along the wind and c·r·L across it (trees trace
   ellipses; a crown's two principal stiffnesses differ a little, hence 1.04). The drag, and so the lean,
   grows as U² up to `DRAG_REFERENCE_SPEED_M_S` and as U^(2+β) above it, crowns streamlining with
-  Vogel's exponent β (de Langre 2008, §4). The phases φ, φ′ are the plant's own, from its seed.
+  Vogel's exponent β (Vogel 1989, "Drag and reconfiguration of broad leaves in high winds", J. Exp.
+  Bot. 40: 941; de Langre 2008, §4). The phases φ, φ′ are the plant's own, from its seed.
 - **Natural frequency f.** Trees: f = k·D_stem/H² (Moore & Maguire 2004, "Natural sway frequencies and
   damping ratios of trees: concepts, review and synthesis of previous studies", Trees 18: 195, found f
   linear in DBH/H² over 602 trees, as a cantilever beam's is); k is chosen so that this package's
@@ -31,7 +32,9 @@ The model, per plant (prop frame: z up, foot at the origin, height H):
   the whole plant's, de Langre 2008, §5; Tadrist et al. 2018, "Foliage motion under wind, from leaf
   flutter to branch buffeting", J. R. Soc. Interface 15: 20180010); their RMS displacement grows
   linearly with the wind speed, 1.7 cm at 4 m/s (chosen: Beaufort 3, 3.4–5.4 m/s, "leaves and small
-  twigs in constant motion", WMO-No. 8), and the normals wobble with it, so the crown's shading
+  twigs in constant motion", WMO-No. 8; Tadrist et al. found leaf flutter to depend weakly on the speed
+  and to dominate in light wind, the branches' buffeting to grow strongly and dominate in strong wind,
+  as here the flutter's U against the sway's U²), and the normals wobble with it, so the crown's shading
   flickers as a real one does.
 
 Calibration (chosen, against the Beaufort scale's descriptions, WMO-No. 8): the tip's mean lean is
