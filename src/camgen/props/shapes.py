@@ -71,35 +71,40 @@ def box(name: str, size_m, centre_m, rgb, nir: float, *, rotation: np.ndarray | 
     )
 
 
-def frustum_mesh(r0_m: float, r1_m: float, z0_m: float, z1_m: float, sections: int = ROUND_SECTIONS) -> trimesh.Trimesh:
-    """A closed tapered cylinder about the z axis from radius `r0_m` at `z0_m` to `r1_m` at `z1_m`."""
+def frustum_mesh(
+    r0_m: float, r1_m: float, z0_m: float, z1_m: float, sections: int = ROUND_SECTIONS, bands: int = 1
+) -> trimesh.Trimesh:
+    """A closed tapered cylinder about the z axis from radius `r0_m` at `z0_m` to `r1_m` at `z1_m`, its side
+    cut into `bands` equal bands (more rings, so that a bent trunk curves: `camgen.props.sway`)."""
     a = np.linspace(0.0, 2 * math.pi, sections, endpoint=False)
     ring = np.column_stack([np.cos(a), np.sin(a)])
+    f = np.arange(bands + 1) / bands
     vertices = np.vstack(
-        [
-            np.column_stack([r0_m * ring, np.full(sections, z0_m)]),
-            np.column_stack([r1_m * ring, np.full(sections, z1_m)]),
-            [(0.0, 0.0, z0_m), (0.0, 0.0, z1_m)],
-        ]
+        [np.column_stack([(r0_m + (r1_m - r0_m) * t) * ring, np.full(sections, z0_m + (z1_m - z0_m) * t)]) for t in f]
+        + [[(0.0, 0.0, z0_m), (0.0, 0.0, z1_m)]]
     )
     i = np.arange(sections)
     j = (i + 1) % sections
-    bottom, top = 2 * sections, 2 * sections + 1
+    bottom, top = (bands + 1) * sections, (bands + 1) * sections + 1
+    sides = []
+    for k in range(bands):
+        low, high = k * sections, (k + 1) * sections
+        sides += [np.column_stack([low + i, low + j, high + j]), np.column_stack([low + i, high + j, high + i])]
+    last = bands * sections
     faces = np.vstack(
         [
-            np.column_stack([i, j, sections + j]),
-            np.column_stack([i, sections + j, sections + i]),
+            *sides,
             np.column_stack([np.full(sections, bottom), j, i]),
-            np.column_stack([np.full(sections, top), sections + i, sections + j]),
+            np.column_stack([np.full(sections, top), last + i, last + j]),
         ]
     )
     return trimesh.Trimesh(vertices, faces, process=False)
 
 
 def frustum(
-    name: str, r0_m: float, r1_m: float, z0_m: float, z1_m: float, rgb, nir: float, *, offset_m=(0, 0)
+    name: str, r0_m: float, r1_m: float, z0_m: float, z1_m: float, rgb, nir: float, *, offset_m=(0, 0), bands: int = 1
 ) -> PropPart:
-    mesh = frustum_mesh(r0_m, r1_m, z0_m, z1_m)
+    mesh = frustum_mesh(r0_m, r1_m, z0_m, z1_m, bands=bands)
     mesh.vertices[:, :2] += np.asarray(offset_m, dtype=np.float64)
     return _hard(name, mesh, rgb, nir)
 

@@ -45,6 +45,7 @@ motion"), sway of the same size about it.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -52,6 +53,7 @@ import numpy as np
 
 from camgen.config.scene import Environment, Wind
 from camgen.props import PlacedProp, placed_props
+from camgen.props.shapes import frustum
 from camgen.props.types import ORGANIC_PARTS, PropModel
 
 WIND_SPAWN_KEY = 0x7769_6E64
@@ -81,6 +83,8 @@ FLUTTER_RMS_M_PER_M_S = 0.006 / math.sqrt(2.0)
 FLUTTER_WAVES = 6
 FLUTTER_FREQUENCY_HZ = (1.5, 4.0)
 FLUTTER_WAVELENGTH_M = (0.6, 1.5)
+TRUNK_BAND_M = 0.5
+"""A swaying trunk's side is cut into bands no taller than this (`bendable`), so that it curves."""
 GUST_WAVES = 8
 GUST_PERIOD_S = (3.0, 60.0)
 GUST_BOUND_STEP_S = 0.1
@@ -247,6 +251,27 @@ class PropSway:
         tip = self.lean_m * g2 * math.hypot(1.0 + SWAY_TO_LEAN, SWAY_TO_LEAN * CROSS_WIND_FRAC)
         flutter = self.gusts.factor_max() * float(self.flutter_m.sum()) if self.leafy.any() else 0.0
         return tip + (2.0 / 3.0) * tip**2 / self.height_m + flutter
+
+
+def bendable(model: PropModel) -> PropModel:
+    """`model` with its trunk's side cut into bands of at most `TRUNK_BAND_M` (the same surface, more
+    rings), so that a bent trunk curves as (z/H)² instead of tilting straight between its foot and its top
+    ring. A prop without a trunk comes back as it is."""
+    if not any(part.name == "trunk" for part in model.parts):
+        return model
+    parts = []
+    for part in model.parts:
+        if part.name != "trunk":
+            parts.append(part)
+            continue
+        z = part.vertices_m[:, 2]
+        z0, z1 = float(z.min()), float(z.max())
+        radius = np.linalg.norm(part.vertices_m[:, :2], axis=1)
+        r0, r1 = float(radius[z == z0].max()), float(radius[z == z1].max())
+        bands = max(1, math.ceil((z1 - z0) / TRUNK_BAND_M))
+        rgb, nir = part.colours_rgb[0], float(part.nir_reflectance[0])
+        parts.append(frustum("trunk", r0, r1, z0, z1, rgb, nir, bands=bands))
+    return dataclasses.replace(model, parts=parts)
 
 
 def prop_sway(model: PropModel, T_world_from_prop: np.ndarray, gusts: Gusts | None) -> PropSway | None:

@@ -60,7 +60,7 @@ from camgen.io.ies import read_ies
 from camgen.motion.pose import T_world_from_cam, rot_z
 from camgen.motion.trajectory import Route, actor_routes
 from camgen.props import PropModel, placed_props, prop_names
-from camgen.props.sway import PropSway, prop_sway, wind_gusts
+from camgen.props.sway import SWAYING_TYPES, PropSway, bendable, prop_sway, wind_gusts
 from camgen.render.gl import pyrender
 from camgen.render.mipmaps import MipmappedTexture
 from camgen.vehicles import LAMP_COLOUR_RGB, LAMP_LUMINANCE_CD_M2, VehicleRig, plate_texture, vehicle_rigs
@@ -857,14 +857,15 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
     swaying = []
     gusts = wind_gusts(scene.environment.wind, scene_seed=scene.seed)
     for prop in placed_props(scene.environment, scene_seed=scene.seed):
-        mesh = prop_mesh(prop.model)
-        prop_nir[id(mesh.primitives[0])] = prop.model.arrays()[4]
+        swings = gusts is not None and prop.model.type in SWAYING_TYPES
+        model = bendable(prop.model) if swings else prop.model  # a trunk that curves as it bends
+        mesh = prop_mesh(model)
+        prop_nir[id(mesh.primitives[0])] = model.arrays()[4]
         node = graph.add(mesh, pose=prop.T_world_from_prop, name=f"environment:{prop.name}")
         environment_nodes.append(node)
-        sway = prop_sway(prop.model, prop.T_world_from_prop, gusts)
-        if sway is not None:
-            vertices, normals = prop.model.arrays()[:2]
-            swaying.append(SwayingProp(node, sway, vertices, normals))
+        if swings:
+            vertices, normals = model.arrays()[:2]
+            swaying.append(SwayingProp(node, prop_sway(model, prop.T_world_from_prop, gusts), vertices, normals))
     nodes = actor_nodes + environment_nodes
     instance_ids = {node: instance.instance_id for node, instance in zip(nodes, instances, strict=True)}
     result = SceneGraph(
