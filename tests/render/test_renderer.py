@@ -210,6 +210,39 @@ def test_radiance_is_linear_and_unclamped(renderer):
     np.testing.assert_allclose(double[lit], 2.0 * single[lit], rtol=1e-3)
 
 
+def test_a_repeated_draw_sends_no_unchanged_uniform_and_a_changed_one_takes_effect(renderer, monkeypatch):
+    # camgen.render.renderer._RememberingProgram skips setting a uniform to the value it holds (pyrender
+    # sets every uniform of every primitive in every draw); a light changed between draws must still show.
+    from OpenGL import GL
+
+    lights = [
+        {"type": "sun", "illuminance_lux": 40000, "elevation_deg": 50},
+        {"type": "point", "position_m": [2, -2, 3], "intensity_cd": 2000},
+    ]
+    graph = _lit_plane(lights=lights, sky=100.0)
+    view = _overhead_view()
+    first = renderer.draw(graph, view, ("radiance",)).radiance
+    sent = []
+    counting = GL.glUniform1f
+
+    def count(location, value):
+        sent.append(location)
+        counting(location, value)
+
+    monkeypatch.setattr(GL, "glUniform1f", count)
+    again = renderer.draw(graph, view, ("radiance",)).radiance
+    np.testing.assert_array_equal(again, first)
+    assert sent == []  # every float uniform (intensities, cone scales, texture LOD bias) already held
+    (sun,) = graph.scene.directional_light_nodes
+    sun.light.intensity *= 2.0
+    brighter = renderer.draw(graph, view, ("radiance",)).radiance
+    assert len(sent) >= 1
+    sun.light.intensity /= 2.0
+    np.testing.assert_array_equal(renderer.draw(graph, view, ("radiance",)).radiance, first)
+    lit_by_sun = brighter - first
+    assert lit_by_sun.max() > 1.0 and lit_by_sun.min() >= 0.0
+
+
 def test_ambient_emission_and_sky_in_cd_per_m2(renderer):
     """Closed forms: a Lambertian surface under a uniform sky of E lux has L = ρ·E/π; emission adds."""
     graph = _lit_plane(lights=[{"type": "ambient", "illuminance_lux": 1000.0}], sky=4321.0, emission=7.0)

@@ -39,7 +39,7 @@ from camgen.render.gl import pyrender
 from OpenGL import GL  # isort: skip — after camgen.render.gl, which selects the EGL platform
 from pyrender.constants import ProgramFlags, RenderFlags  # isort: skip
 from pyrender.light import DirectionalLight, SpotLight  # isort: skip
-from pyrender.shader_program import ShaderProgramCache  # isort: skip
+from pyrender.shader_program import ShaderProgram, ShaderProgramCache  # isort: skip
 
 SHADER_DIR = Path(__file__).parent / "shaders"
 PASSES = ("radiance", "depth_m", "instance_id")
@@ -159,7 +159,65 @@ class _LinearProgramCache(ShaderProgramCache):
         def ours(name):
             return str(SHADER_DIR / self.OURS[name]) if name in self.OURS else name
 
-        return super().get_program(ours(vertex_shader), ours(fragment_shader), geometry_shader, defines)
+        program = super().get_program(ours(vertex_shader), ours(fragment_shader), geometry_shader, defines)
+        if not isinstance(program, _RememberingProgram):
+            program.__class__ = _RememberingProgram
+            program.locations, program.values = {}, {}
+        return program
+
+
+class _RememberingProgram(ShaderProgram):
+    """pyrender's shader program, remembering each uniform's location and last value.
+
+    pyrender sets every uniform of every primitive for every draw (camera, material, each light) and
+    asks OpenGL for the uniform's location each time: about 1,500 calls through PyOpenGL per draw of the
+    parking lot, 148,000 per 4K frame with motion blur (measured on an H100, where they were the largest
+    cost of a draw). A uniform keeps its value in its program until set again, so setting it to the
+    value it holds changes nothing: those calls are skipped, and locations are asked once. Values are
+    compared as pyrender would send them (the same conversions), so what OpenGL holds is bit for bit
+    what pyrender's own `set_uniform` leaves there."""
+
+    locations: dict[str, int]
+    values: dict[str, tuple]
+
+    def set_uniform(self, name, value, unsigned=False):
+        location = self.locations.get(name)
+        if location is None:
+            location = self.locations[name] = int(GL.glGetUniformLocation(self._program_id, name))
+        if location == -1:  # pyrender ignores a name its shader does not use; so do we
+            return
+        if isinstance(value, np.ndarray):
+            held = (value.dtype.str, value.shape, value.tobytes(), unsigned)
+        else:
+            held = (type(value), value, unsigned)
+        if self.values.get(name) == held:
+            return
+        try:  # pyrender's dispatch (shader_program.py), without its second location lookup
+            if isinstance(value, np.ndarray):
+                if value.ndim == 1:
+                    if np.issubdtype(value.dtype, np.unsignedinteger) or unsigned:
+                        kind, value = "u", value.astype(np.uint32)
+                    elif np.issubdtype(value.dtype, np.integer):
+                        kind, value = "i", value.astype(np.int32)
+                    else:
+                        kind, value = "f", value.astype(np.float32)
+                    self._FUNC_MAP[(value.shape[0], kind)](location, 1, value)
+                else:
+                    self._FUNC_MAP[(value.shape[0], value.shape[1])](location, 1, GL.GL_TRUE, value)
+            elif isinstance(value, float):
+                GL.glUniform1f(location, value)
+            elif isinstance(value, int):  # bool too, as pyrender (its bool branch is never reached)
+                (GL.glUniform1ui if unsigned else GL.glUniform1i)(location, value)
+            else:
+                return  # pyrender raises and swallows 'Invalid data type'
+        except Exception:  # pyrender swallows every error of setting a uniform
+            return
+        self.values[name] = held
+
+    def delete(self):
+        self.locations.clear()
+        self.values.clear()
+        super().delete()
 
 
 class _Framebuffer:
@@ -270,8 +328,19 @@ class _PassRenderer(pyrender.Renderer):
         self.shadow_bounds_m: tuple[np.ndarray, np.ndarray] | None = None
         """(low, high) world box the current draw's shadow maps span instead of the scene's bounds (a
         `ShadowFit`'s), or None."""
+        self.light_matrices: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        """Each light's shadow camera (V, P) in the current draw, by the light node's id; emptied when a
+        draw renders its shadow maps (`Renderer.draw`), so that the maps and the lookups share it."""
 
     def _get_light_cam_matrices(self, scene, light_node, flags):
+        """A light's shadow camera (V, P), worked out once per draw (`light_matrices`): pyrender asks for it
+        for every primitive it shades."""
+        key = id(light_node)
+        if key not in self.light_matrices:
+            self.light_matrices[key] = self._light_cam_matrices(scene, light_node, flags)
+        return self.light_matrices[key]
+
+    def _light_cam_matrices(self, scene, light_node, flags):
         """A sun's shadow camera fitted to what the draw sees (pyrender's covers a square twice the
         scene's diagonal, wasting most of its texels): an orthographic box along the light whose
         cross-section is the overlap, in the light's axes, of the scene's bounds and the view frustum,
@@ -561,6 +630,7 @@ class Renderer:
                     shadow_fit.view, near_m, far_m, shadow_fit.low_m, shadow_fit.high_m
                 )
             if not shadow_maps_kept:
+                renderer.light_matrices.clear()
                 renderer.render_shadow_maps(scene, flags)
 
         size = (view.width_px, view.height_px)
