@@ -669,7 +669,7 @@ class Renderer:
             ground_depth_m[~target.sky_mask] = np.inf
             below = np.isfinite(ground_depth_m)
             if below.any():
-                out.radiance[below] = far_ground_radiance(graph, view, below)
+                np.copyto(out.radiance, far_ground_radiance(graph, view, below), where=below[..., None])
         if out.radiance is not None and fog_visibility_m is not None:
             depth_m = out.depth_m if ground_depth_m is None else np.minimum(out.depth_m, ground_depth_m)
             out.radiance = fogged_radiance(graph, view, out.radiance, depth_m, fog_visibility_m)
@@ -692,27 +692,39 @@ def _sky_on_grid(graph, view: View, *, horizontal: bool) -> np.ndarray:
     """(H, W, 3) the graph's CIE sky radiance in the world direction of each pixel's ray (or, with
     `horizontal`, at the horizon under or over it), evaluated every `SKY_STEP_PX` pixels and
     interpolated bilinearly (the sky varies smoothly over degrees)."""
-    import cv2
-
     from camgen.world.sky import sky_radiance
 
-    w, h = view.width_px, view.height_px
-    us = np.append(np.arange(0, w, SKY_STEP_PX), w - 1).astype(np.float64)
-    vs = np.append(np.arange(0, h, SKY_STEP_PX), h - 1).astype(np.float64)
-    uu, vv = np.meshgrid(us, vs)
-    rays_cam = np.stack([uu, vv, np.ones_like(uu)], axis=-1) @ np.linalg.inv(view.K_px).T
-    rays = rays_cam @ view.T_world_from_cam[:3, :3].T
+    us, vs, rays = _grid_rays(view, SKY_STEP_PX)
     if horizontal:
         rays = rays * np.array([1.0, 1.0, 0.0])
         vertical = np.linalg.norm(rays, axis=-1, keepdims=True) < 1e-9  # straight down or up: any azimuth
         rays = np.where(vertical, np.array([1.0, 0.0, 0.0]), rays)
     sun = graph.sun_direction if graph.sun_direction is not None else np.array([0.0, 0.0, 1.0])
-    coarse = sky_radiance(rays, sun, graph.sky, graph.sky_luminance_cd_m2)
-    # Interpolate onto every pixel: the grid's nodes sit at pixels us × vs.
-    map_u = np.interp(np.arange(w), us, np.arange(len(us))).astype(np.float32)
-    map_v = np.interp(np.arange(h), vs, np.arange(len(vs))).astype(np.float32)
+    return _grid_interpolated(sky_radiance(rays, sun, graph.sky, graph.sky_luminance_cd_m2), us, vs, view)
+
+
+def _grid_rays(view: View, step_px: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Columns `us` and rows `vs` of a grid every `step_px` pixels from the view's corner plus its last
+    pixel, and (len(vs), len(us), 3) the world direction of the ray through each node."""
+    us = np.append(np.arange(0, view.width_px, step_px), view.width_px - 1).astype(np.float64)
+    vs = np.append(np.arange(0, view.height_px, step_px), view.height_px - 1).astype(np.float64)
+    uu, vv = np.meshgrid(us, vs)
+    rays_cam = np.stack([uu, vv, np.ones_like(uu)], axis=-1) @ np.linalg.inv(view.K_px).T
+    return us, vs, rays_cam @ view.T_world_from_cam[:3, :3].T
+
+
+def _grid_interpolated(
+    coarse: np.ndarray, us: np.ndarray, vs: np.ndarray, view: View, at: tuple[np.ndarray, np.ndarray] | None = None
+) -> np.ndarray:
+    """(H, W, C): `coarse` (len(vs), len(us), C), given at the grid nodes (`_grid_rays`),
+    interpolated bilinearly onto every pixel of `view`, or onto the pixel columns × rows `at`."""
+    import cv2
+
+    columns, rows = (np.arange(view.width_px), np.arange(view.height_px)) if at is None else at
+    map_u = np.interp(columns, us, np.arange(len(us))).astype(np.float32)
+    map_v = np.interp(rows, vs, np.arange(len(vs))).astype(np.float32)
     mx, my = np.meshgrid(map_u, map_v)
-    return cv2.remap(coarse, mx, my, cv2.INTER_LINEAR)
+    return cv2.remap(np.ascontiguousarray(coarse), mx, my, cv2.INTER_LINEAR)
 
 
 def far_ground_depth_m(ground, view: View) -> np.ndarray:
@@ -736,21 +748,82 @@ MIN_ROUGHNESS = 0.04
 """The shader's lower clamp of roughness (`linear_mesh.frag`), also its dielectric F0."""
 
 
+FAR_GROUND_TOLERANCE = 1e-3
+"""Largest relative difference between the far ground's radiance interpolated from a grid and from a grid
+twice as coarse at which the finer one is used as it is; its cells beyond are evaluated pixel by pixel."""
+
+
 def far_ground_radiance(graph, view: View, below: np.ndarray) -> np.ndarray:
-    """(N, 3) radiance of the far ground at the pixels `below` (H, W bool) of `view`: the shader's BRDF
-    (`linear_mesh.frag` compute_brdf: Lambert c_diff/π plus GGX D, Schlick–Smith G, Schlick F over
-    4 n·l n·v) for a level surface of the ground's material, under each sun light as it is now in the graph
-    (a site's dusk moves them, `SceneGraph.set_daylight`), plus the ambient term ρ·ambient_light."""
-    ground, scene = graph.far_ground, graph.scene
-    rows, cols = np.nonzero(below)
+    """(H, W, 3) float32 radiance of the far ground at the pixels `below` (H, W bool) of `view` (others
+    undefined): the shader's BRDF for a level surface of the ground's material (`far_ground_brdf_radiance`).
+
+    A rough ground's radiance changes over degrees, not pixels, so it is evaluated on a grid (nodes every
+    `far_ground_step_px` / 2 pixels, placed as the sky's) and interpolated bilinearly, and checked against
+    the same interpolation from a grid twice as coarse: a cell of the fine grid with a node where the two
+    differ by more than `FAR_GROUND_TOLERANCE` of the radiance (near the horizon under a low sun, where
+    Fresnel's grazing term turns fast) is evaluated at every pixel. Measured on the examples at 1280×720,
+    max relative error 4e-4 against every pixel evaluated (a tenth of an 8-bit code at full scale)."""
+    coarse_px = far_ground_step_px(graph.far_ground, view)
+    if coarse_px <= 2:
+        out = np.zeros((view.height_px, view.width_px, 3), np.float32)
+        rows, cols = np.nonzero(below)
+        out[rows, cols] = _far_ground_exact(graph, view, rows, cols)
+        return out
+    fine_px = coarse_px // 2
+    us_c, vs_c, rays_c = _grid_rays(view, coarse_px)
+    us_f, vs_f, rays_f = _grid_rays(view, fine_px)
+    nodes_c = far_ground_brdf_radiance(graph, rays_c.reshape(-1, 3)).reshape(len(vs_c), len(us_c), 3)
+    nodes_f = far_ground_brdf_radiance(graph, rays_f.reshape(-1, 3)).reshape(len(vs_f), len(us_f), 3)
+    # The coarse grid's interpolation at the fine nodes (each a pixel).
+    from_coarse = _grid_interpolated(nodes_c, us_c, vs_c, view, at=(us_f, vs_f))
+    scale = np.maximum(nodes_f.max(axis=-1), 1e-30)
+    far_off = np.abs(from_coarse - nodes_f).max(axis=-1) / scale > FAR_GROUND_TOLERANCE
+    # A fine cell (between nodes j, j + 1 in both directions) is evaluated pixel by pixel where a corner is
+    # far off; pixel (u, v) lies in the cell of the last node at or before it.
+    corner = far_off[:-1, :-1] | far_off[:-1, 1:] | far_off[1:, :-1] | far_off[1:, 1:]
+    out = _grid_interpolated(nodes_f.astype(np.float32), us_f, vs_f, view)
+    if corner.any():
+        cell_u = np.clip(np.searchsorted(us_f, np.arange(view.width_px), side="right") - 1, 0, len(us_f) - 2)
+        cell_v = np.clip(np.searchsorted(vs_f, np.arange(view.height_px), side="right") - 1, 0, len(vs_f) - 2)
+        rows, cols = np.nonzero(corner[np.ix_(cell_v, cell_u)] & below)
+        out[rows, cols] = _far_ground_exact(graph, view, rows, cols)
+    return out
+
+
+def _far_ground_exact(graph, view: View, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """(N, 3) float32 far-ground radiance at the pixels (`rows`, `cols`) of `view`, each evaluated."""
     rays = np.stack([cols, rows, np.ones_like(cols)], axis=-1).astype(np.float64) @ np.linalg.inv(view.K_px).T
-    rays = rays @ view.T_world_from_cam[:3, :3].T
+    return far_ground_brdf_radiance(graph, rays @ view.T_world_from_cam[:3, :3].T).astype(np.float32)
+
+
+def far_ground_step_px(ground, view: View) -> int:
+    """Grid step (1, 2, 4 or `SKY_STEP_PX` pixels) that puts at least eight nodes across the far ground's
+    specular lobe. The GGX lobe's half-width in the half vector is about α = roughness² radians and the
+    reflected ray turns twice as fast, so the lobe spans about 2α·f pixels, and the step is at most
+    α·f / 4 (rough asphalt, roughness 0.9, at f = 1000 px: α·f / 4 = 200, so 8; a wet road at roughness
+    0.1: 2.5, so 2)."""
+    alpha = max(min(ground.roughness, 1.0), MIN_ROUGHNESS) ** 2
+    f_px = float(max(abs(view.K_px[0, 0]), abs(view.K_px[1, 1])))
+    bound = alpha * f_px / 4.0
+    step_px = 1
+    while step_px * 2 <= min(bound, SKY_STEP_PX):
+        step_px *= 2
+    return step_px
+
+
+def far_ground_brdf_radiance(graph, rays: np.ndarray) -> np.ndarray:
+    """(N, 3) float64 radiance towards the camera of the far ground seen along world `rays` (N, 3): the
+    shader's BRDF (`linear_mesh.frag` compute_brdf: Lambert c_diff/π plus GGX D, Schlick–Smith G,
+    Schlick F over 4 n·l n·v) for a level surface of the ground's material, under each sun light as it
+    is now in the graph (a site's dusk moves them, `SceneGraph.set_daylight`), plus the ambient term
+    ρ·ambient_light."""
+    ground, scene = graph.far_ground, graph.scene
     v = -rays / np.linalg.norm(rays, axis=1, keepdims=True)  # towards the camera
     rho = np.asarray(ground.reflectance_rgb, np.float64)
     metallic = min(max(ground.metallic, 0.0), 1.0)
     roughness = min(max(ground.roughness, MIN_ROUGHNESS), 1.0)
     c_diff, f0 = rho * (1.0 - metallic), MIN_ROUGHNESS * (1.0 - metallic) + rho * metallic
-    out = np.broadcast_to(rho * np.asarray(scene.ambient_light, np.float64), (len(rows), 3)).copy()
+    out = np.broadcast_to(rho * np.asarray(scene.ambient_light, np.float64), (len(v), 3)).copy()
     nv = np.clip(np.abs(v[:, 2]), 0.001, 1.0)
     k = (roughness + 1.0) ** 2 / 8.0
     a2 = roughness**4
@@ -768,7 +841,7 @@ def far_ground_radiance(graph, view: View, below: np.ndarray) -> np.ndarray:
         specular = fresnel * (shadowing * distribution / (4.0 * nl * nv + 0.001))[:, None]
         radiance = node.light.intensity * np.asarray(node.light.color, np.float64)
         out += nl * radiance * (c_diff / math.pi + specular)
-    return out.astype(np.float32)
+    return out
 
 
 def ray_lengths(view: View) -> np.ndarray:
