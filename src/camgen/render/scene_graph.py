@@ -104,6 +104,47 @@ class FarGround:
     metallic: float = 0.0
 
 
+class OrderedScene(pyrender.Scene):
+    """pyrender's Scene, listing its meshes and lights in the order they were added.
+
+    pyrender keeps nodes in sets, which iterate in the order of the nodes' hashes, their memory addresses:
+    a different order in every run. The shader sums the lights' contributions in the order pyrender binds
+    them (`light_nodes`), so a frame lit by several lights differed in its last bits from run to run (the
+    night street's street lamps: 1e-5 of the radiance at 11 % of its pixels, enough to flip an 8-bit code
+    now and then), and the same seed must give the same bytes. Lists in insertion order fix it."""
+
+    def __init__(self, *args, **kwargs):
+        self._added: dict = {}
+        super().__init__(*args, **kwargs)
+
+    def add_node(self, node, parent_node=None):
+        self._added.setdefault(node, len(self._added))
+        return super().add_node(node, parent_node)
+
+    def _in_order(self, nodes) -> list:
+        return sorted(nodes, key=self._added.__getitem__)
+
+    @property
+    def mesh_nodes(self):
+        return self._in_order(self._mesh_nodes)
+
+    @property
+    def point_light_nodes(self):
+        return self._in_order(self._point_light_nodes)
+
+    @property
+    def spot_light_nodes(self):
+        return self._in_order(self._spot_light_nodes)
+
+    @property
+    def directional_light_nodes(self):
+        return self._in_order(self._directional_light_nodes)
+
+    @property
+    def light_nodes(self):
+        return self._in_order(self._point_light_nodes | self._spot_light_nodes | self._directional_light_nodes)
+
+
 FAR_GROUND_MIN_AREA_M2 = 100.0
 """The smallest level plane taken for the site's ground (10 × 10 m); a smaller one is a prop (a mat, a board)."""
 
@@ -806,7 +847,7 @@ def wet_ground(mesh, node_mesh: pyrender.Mesh) -> None:
 def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None = None) -> SceneGraph:
     """Meshes, actors (at t = 0) and lights of `scene` as a pyrender scene; no camera yet."""
     ambient_lux = sum(light.illuminance_lux for light in scene.lights if isinstance(light, AmbientLight))
-    graph = pyrender.Scene(bg_color=(0.0, 0.0, 0.0, 0.0), ambient_light=np.full(3, ambient_lux / math.pi))
+    graph = OrderedScene(bg_color=(0.0, 0.0, 0.0, 0.0), ambient_light=np.full(3, ambient_lux / math.pi))
     _add_lights(graph, scene.lights, resolve_path)
     # pyrender's shadow passes sort meshes by distance to the main camera; draws set its pose.
     graph.add(pyrender.IntrinsicsCamera(1.0, 1.0, 0.0, 0.0), name="camera")
