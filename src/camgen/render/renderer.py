@@ -37,7 +37,7 @@ from camgen.config.scene import MAX_LIGHTS
 from camgen.render.gl import pyrender
 
 from OpenGL import GL  # isort: skip — after camgen.render.gl, which selects the EGL platform
-from pyrender.constants import ProgramFlags, RenderFlags  # isort: skip
+from pyrender.constants import SHADOW_TEX_SZ, ProgramFlags, RenderFlags  # isort: skip
 from pyrender.light import DirectionalLight, SpotLight  # isort: skip
 from pyrender.shader_program import ShaderProgram, ShaderProgramCache  # isort: skip
 
@@ -322,29 +322,36 @@ class _PassRenderer(pyrender.Renderer):
         """Per scene (by id, with a weak reference to tell a reused id): its spot-light table texture."""
         self.texture_lod_bias = 0.0
         """Added to every material texture's level of detail in the current draw (`Renderer.draw`)."""
-        self.shadow_focus_m: np.ndarray | None = None
-        """(N, 3) world points the current draw sees (its view frustum's corners); a sun's shadow map
-        covers only the part of the scene whose shadows can fall among them."""
+        self.shadow_view: View | None = None
+        """The view (and `shadow_clip_m` its near and far planes, m) a sun's cascaded shadow maps are fitted
+        to in the current draw: the `ShadowFit`'s, or the draw's own."""
+        self.shadow_clip_m: tuple[float, float] = (NEAR_CLIP_M, 1.0)
         self.shadow_bounds_m: tuple[np.ndarray, np.ndarray] | None = None
         """(low, high) world box the current draw's shadow maps span instead of the scene's bounds (a
         `ShadowFit`'s), or None."""
-        self.light_matrices: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-        """Each light's shadow camera (V, P) in the current draw, by the light node's id; emptied when a
-        draw renders its shadow maps (`Renderer.draw`), so that the maps and the lookups share it."""
+        self._sun_cascades: dict[int, list[tuple[np.ndarray, np.ndarray]]] = {}
+        """Per sun's node (by id): its cascades' (V, P) in the last shadow-map pass, finest first."""
+        self._cascade = 0
+        """The cascade whose map `_shadow_mapping_pass` draws (and whose matrices pyrender binds: 0)."""
+        self._cascade_textures: dict[int, tuple[weakref.ref, list]] = {}
+        """Per sun (by id, with a weak reference to tell a reused id): the depth textures of its cascades
+        after the first (the first is pyrender's `shadow_texture`)."""
+        self.light_matrices: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
+        """Each light's shadow camera (V, P) in the current draw, by the light node's id and cascade; emptied
+        when a draw renders its shadow maps (`Renderer.draw`), so that the maps and the lookups share it."""
 
     def _get_light_cam_matrices(self, scene, light_node, flags):
-        """A light's shadow camera (V, P), worked out once per draw (`light_matrices`): pyrender asks for it
-        for every primitive it shades."""
-        key = id(light_node)
+        """A light's shadow camera (V, P), worked out once per draw and cascade (`light_matrices`): pyrender
+        asks for it for every primitive it shades."""
+        key = (id(light_node), self._cascade)
         if key not in self.light_matrices:
             self.light_matrices[key] = self._light_cam_matrices(scene, light_node, flags)
         return self.light_matrices[key]
 
     def _light_cam_matrices(self, scene, light_node, flags):
-        """A sun's shadow camera fitted to what the draw sees (pyrender's covers a square twice the
-        scene's diagonal, wasting most of its texels): an orthographic box along the light whose
-        cross-section is the overlap, in the light's axes, of the scene's bounds and the view frustum,
-        and whose depth spans the whole scene (casters outside the view still cast into it)."""
+        """A sun's shadow camera: the current cascade's (`sun_cascade_matrices`: fitted to what the draw's
+        shadow fit sees, where pyrender's covers a square twice the scene's diagonal, wasting most of its
+        texels)."""
         light = light_node.light
         bounds = scene.bounds if self.shadow_bounds_m is None else self.shadow_bounds_m
         if isinstance(light, SpotLight) and self.shadow_bounds_m is not None:
@@ -354,19 +361,20 @@ class _PassRenderer(pyrender.Renderer):
             return np.linalg.inv(scene.get_pose(light_node)), P
         if not isinstance(light, DirectionalLight):
             return super()._get_light_cam_matrices(scene, light_node, flags)
-        return directional_shadow_matrices(
-            scene.get_pose(light_node)[:3, :3], box_corners(*bounds, np.eye(4)), self.shadow_focus_m
-        )
+        return self._sun_cascades[id(light_node)][self._cascade]
 
     def _compute_max_n_lights(self, flags):
         """Room in the shader for the lights `camgen.config.scene.MAX_LIGHTS` allows (pyrender: 4 each).
 
-        Sun and spot limits stay pyrender's when shadows are on: each shadow map takes a texture unit.
+        With shadows on, pyrender shares the texture units left by the materials among the kinds of light
+        that cast them, one a shadow map; a sun takes `SUN_CASCADES` (so the shader's samplers fit the units).
         """
         directional, spot, _ = super()._compute_max_n_lights(flags)
         return [
-            directional if flags & RenderFlags.SHADOWS_DIRECTIONAL else MAX_LIGHTS["sun"],
-            spot if flags & RenderFlags.SHADOWS_SPOT else MAX_LIGHTS["spot"],
+            min(directional // SUN_CASCADES, MAX_LIGHTS["sun"])
+            if flags & RenderFlags.SHADOWS_DIRECTIONAL
+            else MAX_LIGHTS["sun"],
+            min(spot, MAX_LIGHTS["spot"]) if flags & RenderFlags.SHADOWS_SPOT else MAX_LIGHTS["spot"],
             MAX_LIGHTS["point"],
         ]
 
@@ -391,10 +399,52 @@ class _PassRenderer(pyrender.Renderer):
     def render_shadow_maps(self, scene, flags: int) -> None:
         GL.glFrontFace(GL.GL_CCW)  # the shadow cameras are pyrender's own, with rows bottom-up
         for node in scene.light_nodes:
-            if (isinstance(node.light, DirectionalLight) and flags & RenderFlags.SHADOWS_DIRECTIONAL) or (
-                isinstance(node.light, SpotLight) and flags & RenderFlags.SHADOWS_SPOT
-            ):
+            if isinstance(node.light, DirectionalLight) and flags & RenderFlags.SHADOWS_DIRECTIONAL:
+                bounds = scene.bounds if self.shadow_bounds_m is None else self.shadow_bounds_m
+                self._sun_cascades[id(node)] = sun_cascade_matrices(
+                    scene.get_pose(node)[:3, :3], bounds, self.shadow_view, *self.shadow_clip_m, SHADOW_TEX_SZ
+                )
+                own = node.light.shadow_texture
+                for k, texture in enumerate([own, *self._cascade_maps(node.light)]):
+                    node.light._shadow_texture = texture  # pyrender's setter would delete the one it replaces
+                    self._cascade = k
+                    self._shadow_mapping_pass(scene, node, flags)
+                node.light._shadow_texture, self._cascade = own, 0
+            elif isinstance(node.light, SpotLight) and flags & RenderFlags.SHADOWS_SPOT:
                 self._shadow_mapping_pass(scene, node, flags)
+
+    def _cascade_maps(self, light) -> list:
+        """A sun's depth textures for its cascades after the first, made at its first use (and those of
+        suns that are gone, deleted)."""
+        for key, (ref, textures) in list(self._cascade_textures.items()):
+            if ref() is None:
+                for texture in textures:
+                    texture.delete()
+                del self._cascade_textures[key]
+        cached = self._cascade_textures.get(id(light))
+        if cached is not None and cached[0]() is light:
+            return cached[1]
+        textures = [
+            pyrender.Texture(width=SHADOW_TEX_SZ, height=SHADOW_TEX_SZ, source_channels="D", data_format=GL.GL_FLOAT)
+            for _ in range(SUN_CASCADES - 1)
+        ]
+        for texture in textures:
+            texture._add_to_context()
+        self._cascade_textures[id(light)] = (weakref.ref(light), textures)
+        return textures
+
+    def _bind_lighting(self, scene, program, node, flags):
+        """pyrender's lighting uniforms (with each sun's first cascade), and each sun's other cascades."""
+        super()._bind_lighting(scene, program, node, flags)
+        if not flags & RenderFlags.SHADOWS_DIRECTIONAL:
+            return
+        suns = [n for n in scene.light_nodes if isinstance(n.light, DirectionalLight)]  # pyrender's order
+        for i, sun in enumerate(suns):
+            cascades = self._sun_cascades[id(sun)]
+            for k, texture in enumerate(self._cascade_maps(sun.light), start=1):
+                V, P = cascades[k]
+                self._bind_texture(texture, f"directional_lights[{i}].cascade_maps[{k - 1}]", program)
+                program.set_uniform(f"directional_lights[{i}].cascade_matrices[{k - 1}]", P @ V)
 
     def _bind_spot_profiles(self, scene, program) -> None:
         """Each spot light's `intensity_profile` (`SpotProfile`: an IES lamp's table) for the lit
@@ -621,14 +671,12 @@ class Renderer:
         renderer._update_context(scene, flags)
         near_m, far_m = clip_range_m or _scene_clip_range_m(scene, view.T_world_from_cam)
         if flags != RenderFlags.NONE:
+            renderer.shadow_clip_m = (near_m, far_m)
             if shadow_fit is None:
-                renderer.shadow_bounds_m = None
-                renderer.shadow_focus_m = seen_part_of_box_m(view, near_m, far_m, *scene.bounds)
+                renderer.shadow_bounds_m, renderer.shadow_view = None, view
             else:
                 renderer.shadow_bounds_m = (shadow_fit.low_m, shadow_fit.high_m)
-                renderer.shadow_focus_m = seen_part_of_box_m(
-                    shadow_fit.view, near_m, far_m, shadow_fit.low_m, shadow_fit.high_m
-                )
+                renderer.shadow_view = shadow_fit.view
             if not shadow_maps_kept:
                 renderer.light_matrices.clear()
                 renderer.render_shadow_maps(scene, flags)
@@ -946,6 +994,82 @@ def directional_shadow_matrices(
         ]
     )
     return V, P
+
+
+SUN_CASCADES = 3
+"""Shadow maps per sun, each over a slice of the fitted view's depth (cascaded shadow maps). One map over
+the whole view left the sun's texels 4-30 output pixels wide on the ground nearest the example cameras (2-8
+cm texels against 0.3-0.7 cm pixels at the image's bottom edge), the filter's 4-texel ramp a 12 cm blur at
+a pedestrian's feet; the first of three cascades makes them 0.7-5 pixels (0.3-1.7 cm texels). The shader
+(`linear_mesh.frag`, SUN_EXTRA_CASCADES) holds the other SUN_CASCADES - 1 maps."""
+
+CASCADE_SPLIT_LOG_WEIGHT = 0.75
+"""Weight of the logarithmic split distance against the uniform one (Zhang et al. 2006, "Parallel-split
+shadow maps for large-scale virtual environments", their practical split scheme: z_i = λ n (f/n)^(i/N) +
+(1 − λ)(n + (f − n) i/N), with λ about 0.5-0.8)."""
+
+CASCADE_NEAR_M = 1.0
+"""The split scheme's near distance, m (the draw's near plane is 5 cm, which would squeeze the logarithmic
+splits against the lens; a fixed camera films nothing it needs shadows on nearer than this)."""
+
+CASCADE_TEXEL_STEPS_PER_OCTAVE = 8
+"""A cascade's texel is rounded up to 2^(k/8) m, and its rectangle snapped to whole texels, so that as a PTZ
+camera pans its maps keep their texel grid fixed in the light's frame and shadow edges do not shimmer
+(stable cascades: the texels move only when the view's extent crosses a step of 9 %)."""
+
+
+def cascade_splits_m(near_m: float, far_m: float, count: int) -> np.ndarray:
+    """(count + 1,) view depths, m, bounding each cascade's slice: Zhang et al.'s practical split scheme
+    (`CASCADE_SPLIT_LOG_WEIGHT`) between `near_m` and `far_m`."""
+    i = np.arange(count + 1) / count
+    log = near_m * (far_m / near_m) ** i
+    uniform = near_m + (far_m - near_m) * i
+    return CASCADE_SPLIT_LOG_WEIGHT * log + (1.0 - CASCADE_SPLIT_LOG_WEIGHT) * uniform
+
+
+def _texel_snapped(low: np.ndarray, high: np.ndarray, size_texels: int) -> tuple[np.ndarray, np.ndarray]:
+    """A rectangle holding [low, high] (per axis) whose texels are on the ladder
+    `CASCADE_TEXEL_STEPS_PER_OCTAVE` and whose corner sits on a whole texel of the light's frame."""
+    steps = CASCADE_TEXEL_STEPS_PER_OCTAVE
+    texel = 2.0 ** (np.ceil(np.log2((high - low) / (size_texels - 1)) * steps) / steps)
+    snapped_low = np.floor(low / texel) * texel
+    return snapped_low, snapped_low + size_texels * texel
+
+
+def sun_cascade_matrices(
+    R_world_from_light: np.ndarray,
+    box_m: tuple[np.ndarray, np.ndarray],
+    view: View,
+    near_m: float,
+    far_m: float,
+    size_texels: int,
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """`SUN_CASCADES` (V, P) pairs of a sun's shadow maps, finest first: each `directional_shadow_matrices`
+    fitted to the part of the box [low, high] (every caster) that `view` sees between two split depths
+    (`cascade_splits_m`, over the depths of the part of the box it sees), its rectangle snapped to whole
+    texels (`_texel_snapped`). The last slice ends at the farthest seen point, so every seen point lies in one
+    of the maps; the shader takes the finest map that holds a point with its filter's reach."""
+    low_m, high_m = box_m
+    corners = box_corners(low_m, high_m, np.eye(4))
+    seen = seen_part_of_box_m(view, near_m, far_m, low_m, high_m)
+    T_cam_from_world = np.linalg.inv(view.T_world_from_cam)
+    depths = seen @ T_cam_from_world[:3, :3].T + T_cam_from_world[:3, 3]
+    farthest = float(np.clip(depths[:, 2].max(), near_m, far_m))
+    nearest = max(near_m, CASCADE_NEAR_M)
+    splits = cascade_splits_m(nearest, max(farthest, 2.0 * nearest), SUN_CASCADES)
+    splits[0] = near_m  # the first slice holds everything nearer too
+    matrices = []
+    for k in range(SUN_CASCADES):
+        focus = seen_part_of_box_m(view, splits[k], splits[k + 1], low_m, high_m)
+        V, P = directional_shadow_matrices(R_world_from_light, corners, focus)
+        left, right = (-1 - P[0, 3]) / P[0, 0], (1 - P[0, 3]) / P[0, 0]
+        bottom, top = (-1 - P[1, 3]) / P[1, 1], (1 - P[1, 3]) / P[1, 1]
+        (left, bottom), (right, top) = _texel_snapped(np.array([left, bottom]), np.array([right, top]), size_texels)
+        P = P.copy()
+        P[0, 0], P[0, 3] = 2 / (right - left), -(right + left) / (right - left)
+        P[1, 1], P[1, 3] = 2 / (top - bottom), -(top + bottom) / (top - bottom)
+        matrices.append((V, P))
+    return matrices
 
 
 def _upload_deformed(graph) -> None:

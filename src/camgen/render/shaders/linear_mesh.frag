@@ -25,6 +25,10 @@ struct SpotLight {
     #endif
 };
 
+// camgen: a sun's shadow maps after its first, each coarser than the one before (cascades split along the
+// view's depth: camgen.render.renderer.sun_cascade_matrices, whose SUN_CASCADES is one more than this).
+const int SUN_EXTRA_CASCADES = 2;
+
 struct DirectionalLight {
     vec3 color;
     float intensity;
@@ -33,6 +37,8 @@ struct DirectionalLight {
     #ifdef DIRECTIONAL_LIGHT_SHADOWS
     sampler2D shadow_map;
     mat4 light_matrix;
+    sampler2D cascade_maps[SUN_EXTRA_CASCADES];
+    mat4 cascade_matrices[SUN_EXTRA_CASCADES];
     #endif
 };
 
@@ -366,11 +372,13 @@ float shadow_calc_spot(mat4 light_matrix, sampler2D shadow_map, vec3 light_posit
 }
 
 // camgen: a sun's shadow map is orthographic (camgen.render.renderer.directional_shadow_matrices), so
-// its bias is set in metres: 5 mm plus three texels of the surface's depth slope, converted to depth
-// units through the map's own scale (rows of light_matrix = P·V, V a rotation). Three texels: the PCF
-// kernel (texture2DShadowPCF) compares texels up to 2 texels from the lookup along each map axis, 2√2
-// along a diagonal, and a lit surface must not shadow itself there (with 1.5 texels a flat sunlit ground
-// under a high sun showed stripes down to 0.85 of its light). pyrender's bias, 0.001 (1 − n·l) of the
+// its bias is set in metres: 5 mm plus four texels of the surface's depth slope, converted to depth
+// units through the map's own scale (rows of light_matrix = P·V, V a rotation). The PCF kernel
+// (texture2DShadowPCF) compares texels up to 2 texels from the lookup along each map axis, 2√2 along a
+// diagonal, and a lit surface must not shadow itself there (with 1.5 texels a flat sunlit ground under a
+// high sun showed stripes down to 0.85 of its light; with 3, the far cascade of a 400 m ground 72 m away
+// one row of dots at 0.998: the rasterised depth of a plane clipped far outside the map slopes a little
+// off). The texel is the coarser of the map's two axes'. pyrender's bias, 0.001 (1 − n·l) of the
 // map's depth range, grew with the scene: tens of centimetres of detached shadow on a large site.
 float shadow_calc_ortho(mat4 light_matrix, sampler2D shadow_map, float nl)
 {
@@ -380,15 +388,25 @@ float shadow_calc_ortho(mat4 light_matrix, sampler2D shadow_map, float nl)
     float scale_x = length(vec3(light_matrix[0][0], light_matrix[1][0], light_matrix[2][0]));
     float scale_z = length(vec3(light_matrix[0][2], light_matrix[1][2], light_matrix[2][2]));
     vec2 size = vec2(textureSize(shadow_map, 0));
-    float texel_m = 2.0 / (size.x * scale_x);
+    float scale_y = length(vec3(light_matrix[0][1], light_matrix[1][1], light_matrix[2][1]));
+    float texel_m = max(2.0 / (size.x * scale_x), 2.0 / (size.y * scale_y));
     float tan_incidence = sqrt(max(1.0 - nl * nl, 0.0)) / max(nl, 0.1);
-    float bias_m = 0.005 + 3.0 * texel_m * tan_incidence;
+    float bias_m = 0.005 + 4.0 * texel_m * tan_incidence;
     float compare = light_coords.z - bias_m * 0.5 * scale_z;
     float shadow = texture2DShadowPCF(shadow_map, size, light_coords.xy, compare);
     if (light_coords.z > 1.0) {
         shadow = 0.0;
     }
     return shadow;
+}
+
+// camgen: whether a sun's (orthographic) map holds the point with the filter's reach (texture2DShadowPCF
+// reaches 2 texels from the lookup; 3 kept): the shader takes the finest cascade that does.
+bool in_sun_cascade(mat4 light_matrix, sampler2D shadow_map)
+{
+    vec2 ndc = (light_matrix * vec4(frag_position, 1.0)).xy;
+    float margin = 2.0 * 3.0 / float(textureSize(shadow_map, 0).x);
+    return all(lessThan(abs(ndc), vec2(1.0 - margin)));
 }
 
 ///////////////////////////////////////////////////////////////////////////////
@@ -458,11 +476,16 @@ void main()
         // Compute shadow
 #ifdef DIRECTIONAL_LIGHT_SHADOWS
         float nl = clamp(dot(n,l), 0.0, 1.0);
-        float shadow = shadow_calc_ortho(
-            directional_lights[i].light_matrix,
-            directional_lights[i].shadow_map,
-            nl
-        );
+        float shadow;
+        if (in_sun_cascade(directional_lights[i].light_matrix, directional_lights[i].shadow_map)) {
+            shadow = shadow_calc_ortho(directional_lights[i].light_matrix, directional_lights[i].shadow_map, nl);
+        } else if (in_sun_cascade(directional_lights[i].cascade_matrices[0], directional_lights[i].cascade_maps[0])) {
+            shadow = shadow_calc_ortho(
+                directional_lights[i].cascade_matrices[0], directional_lights[i].cascade_maps[0], nl);
+        } else {
+            shadow = shadow_calc_ortho(
+                directional_lights[i].cascade_matrices[1], directional_lights[i].cascade_maps[1], nl);
+        }
         res = res * (1.0 - shadow);
 #endif
         color.xyz += res;
