@@ -398,6 +398,7 @@ class _PassRenderer(pyrender.Renderer):
 
     def render_shadow_maps(self, scene, flags: int) -> None:
         GL.glFrontFace(GL.GL_CCW)  # the shadow cameras are pyrender's own, with rows bottom-up
+        self._sun_cascades.clear()  # this draw's suns only (earlier scenes' nodes are gone)
         for node in scene.light_nodes:
             if isinstance(node.light, DirectionalLight) and flags & RenderFlags.SHADOWS_DIRECTIONAL:
                 bounds = scene.bounds if self.shadow_bounds_m is None else self.shadow_bounds_m
