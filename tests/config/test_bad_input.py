@@ -593,11 +593,11 @@ CASES = [
         "but a bicycle carries no licence plate",
     ),
     (
-        "bicycle_lights_on",
+        "driver_on_a_motorcycle",
         "scene",
-        edit(SCENE, "    class: person\n", "    class: bicycle\n    vehicle: {lights_on: true} #<\n"),
-        "actors[0].vehicle.lights_on",
-        "the procedural bicycle has no lamps",
+        edit(SCENE, "    class: person\n", "    class: motorcycle\n    vehicle: {driver: true} #<\n"),
+        "actors[0].vehicle.driver",
+        "is set, but a motorcycle's rider is a person actor of its own",
     ),
     (
         "motorcycle_body_on_a_bicycle",

@@ -306,14 +306,18 @@ def test_riders_and_their_two_wheelers_are_annotated_apart(renderer, tmp_path):
     assert mot[tracks["bicycle_rider"]["id"]] == mot[tracks["motorcycle_rider"]["id"]] == MOT_PERSON_ON_VEHICLE == 2
 
 
-def test_a_motorcycle_lights_its_lamps_and_a_bicycle_has_none():
+def test_a_motorcycle_lights_its_lamps_and_a_bicycle_its_front_and_rear_lamps():
     (bike, _), (moto, _) = _rigs(_scene())
     surfaces = {part.surface for part in moto.model.parts}
     assert {"head", "tail", "brake", "plates"} <= surfaces
-    assert not {"head", "tail", "brake", "plates"} & {part.surface for part in bike.model.parts}
-    moto.lights_on = True
+    bike_surfaces = {part.surface for part in bike.model.parts}
+    assert not {"head", "tail", "brake", "plates"} & bike_surfaces
+    assert {"cycle_head", "cycle_tail"} <= bike_surfaces
+    assert not any(bike.lamps(1.0).values())
+    moto.lights_on = bike.lights_on = True
     lit = moto.lamps(1.0)
     assert lit["head"] and lit["tail"] and not lit["brake"] and not any(k.startswith("indicator") for k in lit)
+    assert bike.lamps(1.0)["cycle_head"] and bike.lamps(1.0)["cycle_tail"]
 
 
 @pytest.mark.opengl

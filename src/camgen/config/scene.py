@@ -639,8 +639,12 @@ class VehicleIdentity(Model):
     """The registration on both plates (a motorcycle's one rear plate, in two lines; a bicycle has none);
     null draws one in the UK's current format, "AB12 CDE"."""
     lights_on: bool = False
-    """Head and tail lamps lit (they emit light; brake lamps and indicators follow the driving). A
-    bicycle has no lamps."""
+    """Head and tail lamps lit (they emit light; brake lamps and indicators follow the driving); a bicycle's
+    front white and rear red lamps."""
+    driver: bool | None = None
+    """A car's, truck's or bus's driver seated at the wheel, seen through the glass (part of the vehicle,
+    not annotated as a person: `camgen.vehicles.cabin`); null: a driver when the vehicle drives its
+    route, none when it is parked. A bicycle's or motorcycle's rider is a person actor that `rides` it."""
 
     @field_validator("plate_text")
     @classmethod
@@ -786,8 +790,12 @@ class Actor(Model):
                 "vehicle.plate_text",
                 f"is {self.vehicle.plate_text!r}, but a bicycle carries no licence plate; remove plate_text",
             )
-        if self.cls == "bicycle" and self.vehicle is not None and self.vehicle.lights_on:
-            raise invalid("vehicle.lights_on", "is true, but the procedural bicycle has no lamps; remove lights_on")
+        if self.cls in RIDDEN_CLASSES and self.vehicle is not None and self.vehicle.driver is not None:
+            raise invalid(
+                "vehicle.driver",
+                f"is set, but a {self.cls}'s rider is a person actor of its own (class: person, rides: "
+                f"{self.name}); remove driver",
+            )
         return self
 
     def _check_rider(self) -> None:

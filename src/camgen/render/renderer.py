@@ -500,26 +500,45 @@ class _PassRenderer(pyrender.Renderer):
         draw_flags = flags if lit else RenderFlags.DEPTH_ONLY
         program_flags = ProgramFlags.USE_MATERIAL if lit else ProgramFlags.NONE
         program = None
-        for node in nodes:
-            if not node.mesh.is_visible:
-                continue
-            for primitive in node.mesh.primitives:
-                program = self._get_primitive_program(primitive, draw_flags, program_flags)
-                program._bind()
-                program.set_uniform("V", V)
-                program.set_uniform("P", P)
-                program.set_uniform("instance_id", instance_ids[node], unsigned=True)
-                if lit:
-                    program.set_uniform("cam_pos", cam_position)
-                    program.set_uniform("texture_lod_bias", self.texture_lod_bias)
-                    self._bind_lighting(scene, program, node, flags)
-                    self._bind_spot_profiles(scene, program)
-                    self._bind_and_draw_primitive(primitive, scene.get_pose(node), program, draw_flags)
-                else:
-                    _draw_geometry(primitive, scene.get_pose(node), program)
-                self._reset_active_textures()
+        for node, primitive in _draw_order(scene, nodes, cam_position, lit):
+            program = self._get_primitive_program(primitive, draw_flags, program_flags)
+            program._bind()
+            program.set_uniform("V", V)
+            program.set_uniform("P", P)
+            program.set_uniform("instance_id", instance_ids[node], unsigned=True)
+            if lit:
+                program.set_uniform("cam_pos", cam_position)
+                program.set_uniform("texture_lod_bias", self.texture_lod_bias)
+                program.set_uniform("transmissive", int(primitive.material.alphaMode == "BLEND"))
+                self._bind_lighting(scene, program, node, flags)
+                self._bind_spot_profiles(scene, program)
+                self._bind_and_draw_primitive(primitive, scene.get_pose(node), program, draw_flags)
+            else:
+                _draw_geometry(primitive, scene.get_pose(node), program)
+            self._reset_active_textures()
         if program is not None:
             program._unbind()
+
+
+def _draw_order(scene, nodes, cam_position: np.ndarray, lit: bool) -> list:
+    """(node, primitive) pairs in the order a draw takes them: the nodes' order, except that a lit draw
+    takes blended primitives (vehicle glass: `camgen.render.scene_graph.vehicle_mesh`) after every opaque
+    one, the farthest node's first and a node's in its own order (a vehicle's inner glass faces before its
+    outer ones), so that each blends over whatever lies behind it. A draw of depth and ids only takes
+    glass as the opaque surface it is to the annotations."""
+    pairs = [(node, primitive) for node in nodes if node.mesh.is_visible for primitive in node.mesh.primitives]
+    if not lit:
+        return pairs
+    opaque = [pair for pair in pairs if pair[1].material.alphaMode != "BLEND"]
+    blended = [pair for pair in pairs if pair[1].material.alphaMode == "BLEND"]
+
+    def distance_m(pair) -> float:
+        node = pair[0]
+        pose = scene.get_pose(node)
+        centre = pose[:3, :3] @ node.mesh.centroid + pose[:3, 3]
+        return float(np.linalg.norm(centre - cam_position))
+
+    return opaque + sorted(blended, key=distance_m, reverse=True)  # a stable sort: ties keep their order
 
 
 def _draw_geometry(primitive, pose: np.ndarray, program) -> None:

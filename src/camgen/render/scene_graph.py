@@ -526,16 +526,24 @@ def person_mesh(rig: PersonRig) -> pyrender.Mesh:
 
 
 GLASS_RGB = (0.012, 0.014, 0.016)
-"""Tinted glass seen from outside against a dark cabin: a near-black base, glossy (roughness 0.05), so
-the sun's and the sky's specular reflections carry its look."""
+"""Glass's reflection of the diffuse sky at normal incidence as an albedo (its Fresnel reflectance of
+about 4 % over a sky that fills about a third of a window's view): a near-black base, glossy (roughness
+0.05), so the sun's and the sky's specular reflections carry its look; the renderer raises the sky's
+reflection with the Fresnel factor towards grazing views and lets the transmitted cabin through
+(`camgen.vehicles.cabin`, the shader's `transmissive` path)."""
+CABIN_ROUGHNESS = 0.8
+"""The cabin's lining and its driver: rough dielectrics (fabric, plastics, skin)."""
 VEHICLE_SURFACES = {
     "glass": ((*GLASS_RGB, 1.0), 0.0, 0.05),
+    "cabin": ((1.0, 1.0, 1.0, 1.0), 0.0, CABIN_ROUGHNESS),
     "gear": ((1.0, 1.0, 1.0, 1.0), 0.3, 0.6),
     "head": ((0.55, 0.56, 0.58, 1.0), 0.0, 0.15),
     "tail": ((0.25, 0.01, 0.01, 1.0), 0.0, 0.2),
     "brake": ((0.25, 0.01, 0.01, 1.0), 0.0, 0.2),
     "indicator_left": ((0.45, 0.2, 0.02, 1.0), 0.0, 0.2),
     "indicator_right": ((0.45, 0.2, 0.02, 1.0), 0.0, 0.2),
+    "cycle_head": ((0.55, 0.56, 0.58, 1.0), 0.0, 0.15),
+    "cycle_tail": ((0.25, 0.01, 0.01, 1.0), 0.0, 0.2),
 }
 """Base colour (linear, alpha), metallic and roughness of a vehicle's surfaces other than its paint:
 the running gear (tyres, rims, plate backings) takes its colours per vertex and one compromise between
@@ -544,8 +552,9 @@ show their lens colour (clear, red, amber) and emit `camgen.vehicles.LAMP_LUMINA
 
 
 def _lamp(surface: str) -> str | None:
-    """The lamp a surface is (head, tail, brake, indicator_left, indicator_right), or None."""
-    return surface if surface in ("head", "tail", "brake") or surface.startswith("indicator") else None
+    """The lamp a surface is (head, tail, brake, indicator_left, indicator_right, a bicycle's cycle_head and
+    cycle_tail), or None."""
+    return surface if surface in LAMP_LUMINANCE_CD_M2 or surface.startswith("indicator") else None
 
 
 def _lamp_emission(surface: str, lit: bool) -> tuple[float, float, float]:
@@ -577,7 +586,12 @@ def vehicle_mesh(rig: VehicleRig) -> pyrender.Mesh:
         else:
             colour, metallic, roughness = VEHICLE_SURFACES[part.surface]
             material = pyrender.MetallicRoughnessMaterial(
-                baseColorFactor=colour, metallicFactor=metallic, roughnessFactor=roughness
+                baseColorFactor=colour,
+                metallicFactor=metallic,
+                roughnessFactor=roughness,
+                # Glass blends over the cabin behind it (per-vertex opacity 1 − transmittance), drawn after
+                # every opaque surface (`camgen.render.renderer`).
+                alphaMode="BLEND" if part.surface == "glass" else "OPAQUE",
             )
         lamp = _lamp(part.surface)
         if lamp is not None:

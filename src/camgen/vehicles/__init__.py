@@ -2,15 +2,15 @@
 trucks, buses, bicycles and motorcycles.
 
 `vehicle_rig` turns a scene's car, truck, bus, bicycle or motorcycle actor without a shape into what
-the renderer draws
-and the annotations read: a `VehicleModel` (`camgen.vehicles.body`: shell, glass, wheels, lamps,
-plates) of a `VehicleLook` drawn from the actor's identity seed (`camgen.vehicles.look`), posed along
-its route at any time — the wheels turned by the distance travelled (angle = distance / wheel
-radius) and the front wheels steered by the route's steering angle where the route has one
-(`steer_rad_at`; straight ahead otherwise). A two-wheeler (`camgen.vehicles.two_wheeler`,
-`TwoWheelerRig`) turns its fork and handlebar about its raked steering axis and a bicycle its crank and
-pedals with the rear wheel through its gearing; it tells its rider (`camgen.actors.riding`) where the
-seat, the grips and the pedals or footpegs are at any time. Nothing here touches OpenGL or files.
+the renderer draws and the annotations read: a `VehicleModel` (`camgen.vehicles.body`: shell, glass,
+cabin and driver (`camgen.vehicles.cabin`), wheels, lamps, plates) of a `VehicleLook` drawn from the
+actor's identity seed (`camgen.vehicles.look`), posed along its route at any time — the wheels turned
+by the distance travelled (angle = distance / wheel radius) and the front wheels steered by the route's
+steering angle where the route has one (`steer_rad_at`; straight ahead otherwise). A two-wheeler
+(`camgen.vehicles.two_wheeler`, `TwoWheelerRig`) leans into turns by the balance angle, turns its fork
+and handlebar about its raked steering axis and a bicycle its crank and pedals with the rear wheel
+through its gearing; it tells its rider (`camgen.actors.riding`) where the seat, the grips and the
+pedals or footpegs are at any time. Nothing here touches OpenGL or files.
 """
 
 from __future__ import annotations
@@ -47,16 +47,28 @@ from camgen.vehicles.two_wheeler import (
 VEHICLE_SPAWN_KEY = 0x7665_6869
 """First spawn key of an identity seed derived from the scene's seed (ASCII "vehi")."""
 
-LAMP_LUMINANCE_CD_M2 = {"head": 20_000.0, "tail": 600.0, "brake": 5_000.0, "indicator": 4_000.0}
+LAMP_LUMINANCE_CD_M2 = {
+    "head": 20_000.0,
+    "tail": 600.0,
+    "brake": 5_000.0,
+    "indicator": 4_000.0,
+    "cycle_head": 7_500.0,
+    "cycle_tail": 2_500.0,
+}
 """Luminance of a lit lamp's lens as a camera off its axis sees it, cd/m²: a low beam's 10–20 kcd
 peak (UN ECE R112) falls to a few hundred cd away from the beam over its ~0.02 m² lens; a rear
 position lamp gives 4–17 cd, a stop lamp 60–185 cd and a rear indicator 50–350 cd (UN ECE R7 and
-R6) over 0.02–0.04 m²."""
+R6) over 0.02–0.04 m². A bicycle's lamps (the Road Vehicles Lighting Regulations 1989, as amended in
+2005: a white front and a red rear lamp when ridden between sunset and sunrise, a flashing one of at
+least 4 cd): about 10 cd over the front lamp's 13.5 cm² lens and 4 cd over the rear lamp's 17.5 cm²
+(estimates at the regulations' minimum; LED cycle lamps are often brighter on their axis)."""
 LAMP_COLOUR_RGB = {
     "head": (1.0, 1.0, 1.0),
     "tail": (4.7, 0.0, 0.0),
     "brake": (4.7, 0.0, 0.0),
     "indicator": (1.6, 0.75, 0.0),
+    "cycle_head": (1.0, 1.0, 1.0),
+    "cycle_tail": (4.7, 0.0, 0.0),
 }
 """Linear colour of each lamp's light scaled to unit luminance (Y = 0.2126 R + 0.7152 G + 0.0722 B):
 white, red (ECE R48's red: sRGB red) and amber."""
@@ -64,6 +76,12 @@ INDICATOR_HZ = 1.5
 """Indicator flashes per second (UN ECE R48: 90 ± 30 per minute), lit half of each period."""
 INDICATOR_STEER_RAD = 0.05
 """Steering angle beyond which the indicator of that side flashes, rad."""
+GRAVITY_M_S2 = 9.80665
+ROLL_WINDOW_S = 0.6
+"""A two-wheeler's lean is the balance angle averaged over this window centred on the time (`lean_rad`):
+a rider rolls into a turn over about half a second (Cossalter, *Motorcycle Dynamics*, 2006, ch. 7: roll
+rates of 20–60°/s when entering a bend), where the route's curvature steps at an arc's ends."""
+ROLL_SAMPLES = 7
 
 
 def identity_seed(actor: Actor, *, scene_seed: int, actor_index: int) -> int:
@@ -84,8 +102,17 @@ def vehicle_look(actor: Actor, *, scene_seed: int, actor_index: int) -> VehicleL
 
 
 @lru_cache(maxsize=64)
-def _model(look: VehicleLook) -> VehicleModel:
-    return build_vehicle(look)
+def _model(look: VehicleLook, driver: bool = False) -> VehicleModel:
+    return build_vehicle(look, driver=driver)
+
+
+def has_driver(actor: Actor, route: Route) -> bool:
+    """Whether a car, truck or bus actor has a driver at its wheel: as its `vehicle.driver` says, else
+    when its route moves it (a parked vehicle is empty)."""
+    block = actor.vehicle
+    if block is not None and block.driver is not None:
+        return block.driver
+    return bool(route.moves)
 
 
 def wheel_spin_rad(distance_m: float, wheel_radius_m: float) -> float:
@@ -107,6 +134,11 @@ def ackermann_rad(steer_rad: float, wheelbase_m: float, track_m: float) -> tuple
 def _rot_z(angle: float) -> np.ndarray:
     c, s = math.cos(angle), math.sin(angle)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _rot_x(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
 def _rot_y(angle: float) -> np.ndarray:
@@ -249,13 +281,28 @@ class TwoWheelerRig(VehicleRig):
         spin = wheel_spin_rad(self.route.distance_at(time_s), self.look.wheel_radius_m)
         return spin / chain_ratio(self.look)
 
+    def lean_rad(self, time_s: float) -> float:
+        """The roll angle at `time_s`, rad, positive leaning left (into a left turn): the steady-turn
+        balance angle φ = atan(v² κ / g) of the route's speed v and curvature κ (Cossalter, *Motorcycle
+        Dynamics*, 2006, §4.1, thin tyres: gravity and the centrifugal force resultant through the
+        contact line), averaged over `ROLL_WINDOW_S` centred on the time; 0 on a route without speeds
+        and curvatures (straight legs)."""
+        speed = getattr(self.route, "speed_at", None)
+        curvature = getattr(self.route, "curvature_at", None)
+        if speed is None or curvature is None:
+            return 0.0
+        times = time_s + ROLL_WINDOW_S * np.linspace(-0.5, 0.5, ROLL_SAMPLES)
+        v, kappa = np.asarray(speed(times), np.float64), np.asarray(curvature(times), np.float64)
+        return float(np.mean(np.arctan(v**2 * kappa / GRAVITY_M_S2)))
+
     def pose(self, time_s: float) -> tuple[np.ndarray, np.ndarray]:
         """(T_world_from_vehicle (4, 4), T_vehicle_from_bone (B, 4, 4)) at `time_s`, bones as
-        `camgen.vehicles.two_wheeler.BONES` (a motorcycle has the first three)."""
+        `camgen.vehicles.two_wheeler.BONES` (a motorcycle has the first three). The vehicle rolls by
+        `lean_rad` about its contact line (its frame's x axis, on the ground)."""
         xy, heading = self.route.at(time_s)
         look, model = self.look, self.model
         T = np.eye(4)
-        T[:3, :3] = _rot_z(float(heading))
+        T[:3, :3] = _rot_z(float(heading)) @ _rot_x(-self.lean_rad(time_s))
         T[:2, 3] = np.asarray(xy, dtype=np.float64) - look.rear_axle_x_m * T[:2, 0]
         spin = _rot_y(wheel_spin_rad(self.route.distance_at(time_s), look.wheel_radius_m))
         steer = np.eye(4)  # about the steering axis through the head tube
@@ -276,8 +323,11 @@ class TwoWheelerRig(VehicleRig):
         return T, bones
 
     def lamps(self, time_s: float) -> dict[str, bool]:
+        """A motorcycle's head, tail and brake lamps as a car's (no indicators); a bicycle's front and
+        rear lamps when its lights are on."""
         lit = super().lamps(time_s)
-        return {key: value for key, value in lit.items() if not key.startswith("indicator")}
+        lit = {key: value for key, value in lit.items() if not key.startswith("indicator")}
+        return lit | {"cycle_head": self.lights_on, "cycle_tail": self.lights_on}
 
     def rider_targets(self, time_s: float) -> RiderTargets:
         """Where the rider's body meets the two-wheeler at `time_s`, in the world."""
@@ -336,7 +386,7 @@ def vehicle_rig(
     if look.body_type in TWO_WHEELERS:
         saddle_mm = round(1000 * (DEFAULT_SADDLE_M if saddle_m is None else saddle_m))
         return TwoWheelerRig(_two_wheeler(look, saddle_mm), route, lights_on=lights_on)
-    return VehicleRig(_model(look), route, lights_on=lights_on)
+    return VehicleRig(_model(look, has_driver(actor, route)), route, lights_on=lights_on)
 
 
 def vehicle_rigs(scene: Scene, routes: dict[str, Route]) -> dict[str, VehicleRig]:
@@ -380,6 +430,7 @@ __all__ = [
     "VehicleRig",
     "ackermann_rad",
     "handlebar_rad",
+    "has_driver",
     "identity_seed",
     "plate_texture",
     "saddle_for_rider",

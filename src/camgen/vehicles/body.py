@@ -132,15 +132,18 @@ class Part:
 
     name: str
     surface: str
-    """Which material draws it: paint, glass, gear (tyres, rims and plate backings, coloured per vertex),
-    plates (the front plate's image over the rear's), head, tail, brake, indicator_left, indicator_right."""
+    """Which material draws it: paint, glass (its opacity per vertex), gear (tyres, rims and plate
+    backings, coloured per vertex), cabin (the interior lining and the driver, coloured per vertex),
+    plates (the front plate's image over the rear's), head, tail, brake, indicator_left,
+    indicator_right, cycle_head, cycle_tail."""
     vertices_m: np.ndarray
     normals: np.ndarray
     faces: np.ndarray
     wheel: np.ndarray
     texcoords: np.ndarray | None = None
     colours: np.ndarray | None = None
-    """(V, 3) linear albedo per vertex (the gear's rubber, alloy and black plastic)."""
+    """(V, 3) linear albedo per vertex (the gear's rubber, alloy and black plastic), or (V, 4) with the
+    opacity 1 − transmittance (glass)."""
 
 
 @dataclass
@@ -469,19 +472,23 @@ def lamps_and_plates(look: VehicleLook) -> tuple[list[Part], dict[str, np.ndarra
     return lamps, corners, [_merge("plates", "plates", [front, rear])], _part("plate_backings", "trim", backings)
 
 
-def build_vehicle(look: VehicleLook) -> VehicleModel:
-    """The vehicle of `look`, at rest in its own frame."""
+def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
+    """The vehicle of `look`, at rest in its own frame; `driver`: with its driver seated at the wheel
+    (`camgen.vehicles.cabin`). The glass lets the cabin (its dark lining, and the driver) show through."""
+    from camgen.vehicles.cabin import driver_part, glass_part, inner_glass_part, lining_part
+
     vertices, faces, normals, kind = shell(look)
-    parts = []
-    for surface, k in (("paint", 0), ("glass", 1)):
-        chosen = faces[kind == k]
-        if len(chosen) == 0:
-            continue
-        used, remapped = np.unique(chosen, return_inverse=True)
-        parts.append(
-            Part(f"body_{surface}", surface, vertices[used], normals[used], remapped.reshape(-1, 3),
-                 np.full(len(used), -1, np.int8))
-        )  # fmt: skip
+    paint = faces[kind == 0]
+    used, remapped = np.unique(paint, return_inverse=True)
+    parts = [
+        Part("body_paint", "paint", vertices[used], normals[used], remapped.reshape(-1, 3),
+             np.full(len(used), -1, np.int8))
+    ]  # fmt: skip
+    if (kind == 1).any():
+        glass = glass_part(look, vertices, normals, faces[kind == 1])
+        parts += [inner_glass_part(glass), glass]  # the far panes first (the renderer keeps the order)
+    cabin = [lining_part(vertices, normals, paint)] + ([driver_part(look)] if driver else [])
+    parts.append(_merge("cabin", "cabin", cabin))
     tyre, rim = wheel_meshes(look.wheel_radius_m, TYRE_WIDTH_SHARE * look.width_m)
     tyres = _part("tyres", "gear", [(tyre, w) for w in range(4)], smooth=True)
     rims = _part("rims", "gear", [(piece, w) for w in range(4) for piece in rim])

@@ -24,7 +24,8 @@ high saddle (`BAR_DROP_M`, `STEM_RISE_M`).
 Motorcycle geometry (a standard 500 cc, Honda CB500F 2022 specifications): rake 25.5°, trail 0.102 m,
 seat height 0.785 m, 17-inch wheels, footpegs about 0.33 m over the ground below the seat's front; head
 and tail lamps (emitting as a car's when lit, `camgen.vehicles.LAMP_LUMINANCE_CD_M2`) and one rear plate
-(`camgen.vehicles.plate.motorcycle_plate_image`).
+(`camgen.vehicles.plate.motorcycle_plate_image`). A bicycle carries a white front and a red rear lamp
+(`camgen.vehicles.LAMP_LUMINANCE_CD_M2`'s cycle_head and cycle_tail).
 """
 
 from __future__ import annotations
@@ -89,6 +90,10 @@ CHROME_RGB = (0.55, 0.55, 0.56)
 ENGINE_RGB = (0.06, 0.06, 0.065)
 CYLINDER_RGB = (0.30, 0.30, 0.31)
 SEAT_RGB = (0.025, 0.025, 0.025)
+CYCLE_FRONT_LAMP_M = (0.05, 0.045, 0.03)
+"""A bicycle's front lamp's box, m: its length along x, then the lens's width and height (13.5 cm²)."""
+CYCLE_REAR_LAMP_M = (0.03, 0.035, 0.05)
+"""The rear lamp's box, m (a 17.5 cm² lens)."""
 
 
 @dataclass
@@ -274,9 +279,17 @@ def build_bicycle(look: VehicleLook, saddle_m: float = DEFAULT_SADDLE_M) -> TwoW
     wheels = _spoked_wheel(R, BICYCLE_TYRE_M, FRONT) + _spoked_wheel(R, BICYCLE_TYRE_M, REAR)
     gear = _coloured("running_gear", "gear", fork + cockpit + rest + crank + wheels)
     seat = saddle_top + np.array([-SEAT_BEHIND_SADDLE_TOP_M, 0.0, 0.0])
+    # Lamps (Road Vehicles Lighting Regulations 1989): a white one clipped to the bar beside the stem, a red
+    # one on the seat post under the saddle, each a small box whose end is its lens.
+    front_lamp = _block(CYCLE_FRONT_LAMP_M, bar + _v(0.035, 0.05, -0.035))
+    rear_lamp = _block(CYCLE_REAR_LAMP_M, seat_top - 0.02 * seat_dir - _v(0.035, 0, 0))
+    lamps = [
+        _part("front_lamp", "cycle_head", [(front_lamp, STEERING)]),
+        _part("rear_lamp", "cycle_tail", [(rear_lamp, -1)]),
+    ]
     return TwoWheelerModel(
         look=look,
-        parts=[paint, gear],
+        parts=[paint, gear, *lamps],
         wheel_centres_m=np.array([front, rear]),
         plate_corners_m={},
         steer_point_m=head_top,

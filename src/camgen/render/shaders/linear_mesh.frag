@@ -125,6 +125,9 @@ uniform vec3 cam_pos;
 // samples of a pixel (motion blur's jittered draws) takes -log2(s), the level an s x supersampled draw
 // picks; without it its textures came out a mip level blurrier than the same frame without motion blur.
 uniform float texture_lod_bias;
+// camgen: glass (a blended material): the base colour's alpha is the opacity 1 - T at normal incidence
+// (T the pane's visible transmittance, camgen.vehicles.cabin); see the end of main.
+uniform int transmissive;
 uniform vec3 ambient_light;
 uniform uint instance_id;
 
@@ -571,7 +574,20 @@ void main()
 #endif
     color.xyz += emissive;
 
-    out_radiance = vec4(color.xyz, color.a * base_color.a);
+    float out_alpha = color.a * base_color.a;
+    if (transmissive != 0) {
+        // camgen glass, blended as a * colour + (1 - a) * behind: the reflection R plus the transmitted
+        // T (1 - F) of what lies behind, F Schlick's Fresnel reflectance at the view angle. The sky's
+        // reflection (the ambient term, the base colour's share at normal incidence) grows with F where
+        // the reflected ray goes up to the sky; a window seen from above reflects the darker ground.
+        vec3 v_glass = normalize(cam_pos - frag_position);
+        float f_view = min_roughness + (1.0 - min_roughness) * pow(1.0 - clamp(abs(dot(n, v_glass)), 0.0, 1.0), 5.0);
+        float sky_share = clamp(0.5 + 2.5 * reflect(-v_glass, n).z, 0.0, 1.0);
+        color.xyz += base_color.xyz * ambient_light * (f_view / min_roughness - 1.0) * sky_share;
+        out_alpha = 1.0 - (1.0 - base_color.a) * (1.0 - f_view);
+        color.xyz /= out_alpha;
+    }
+    out_radiance = vec4(color.xyz, out_alpha);
     out_depth_m = vec4(frag_depth_m, 0.0, 0.0, 1.0);
     out_instance_id = instance_id;
 

@@ -1,0 +1,248 @@
+"""A car's, van's, truck's or bus's cabin: the dark interior seen through its glass, the glass's
+transmittance, and a seated driver.
+
+Glass (`glass_transmittance`): the share of visible light each pane passes at normal incidence. In the UK
+the windscreen must let at least 75 % of the light through and the front side windows at least 70 %
+(GOV.UK, "Tinted vehicle windows: the law", under the Road Vehicles (Construction and Use) Regulations
+1986); UN ECE Regulation 43 asks at least 70 % of the glazing the driver needs to see ahead. Clear
+laminated windscreens pass about 78 % (78 % here), toughened side glass about 72 % (72 %). Behind the
+driver no minimum applies: SUVs and vans usually carry factory "privacy" glass passing 20–30 % (25 %
+here); other cars' rear glass is the side glass's. The renderer draws glass (`glass_part`; its inner
+faces, `inner_glass_part`, for a view through two panes) as the reflection its material gives plus the
+transmitted share (1 − F) × T of what lies behind it, F the Fresnel reflectance (about 4 % per surface
+at normal incidence, rising to 1 at grazing), so that the dark cabin lets the reflection dominate
+(`camgen.render.scene_graph.GLASS_RGB`, the shader's `transmissive` path).
+
+Interior (`lining_part`): the shell's painted faces again, facing inwards, in a dark trim colour
+(`INTERIOR_RGB`): the roof lining, door cards, floor and seats as one dark surface, so that the glass
+shows a cabin rather than the road through the car. It lies just inside the shell and faces inwards, so
+the vehicle's silhouette, depth and instance mask are the shell's.
+
+Driver (`driver_part`): a procedural person (`camgen.actors`) drawn from the vehicle's identity seed,
+always an adult without a bag, seated by `camgen.actors.driving` at the seat of the body type's package
+(`SEATS`), on the right for a right-hand-drive vehicle (`drive_side`: a UK-format plate), decimated to
+`DRIVER_FACES` triangles and rigid with the body (its vertices belong to the body, `Part.wheel` −1). It
+is part of the vehicle's instance and is never annotated as a person of its own: MOT17 annotates only
+people who are visible and not inside vehicles, and the driver is only seen through glass. It lies inside
+the closed shell, so the vehicle's box and mask are the same with or without it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import trimesh
+
+from camgen.vehicles.body import ARCH_GAP_M, PROFILES, Part, _bottom_m, _interp_top
+from camgen.vehicles.look import VehicleLook
+from camgen.vehicles.plate import UK_PLATE_PATTERN
+
+DRIVER_SPAWN_KEY = 0x6472_6976
+"""Spawn key of a vehicle's driver's identity seed from the vehicle's (ASCII "driv")."""
+DRIVER_FACES = 1200
+"""Triangles of a driver (the person mesh has about 7000): the driver is seen small, through glass."""
+INTERIOR_RGB = (0.035, 0.035, 0.038)
+"""Linear albedo of the cabin's inside (dark grey plastics, fabric and carpet: 3–5 %)."""
+DRIVER_LATERAL_SHARE = 0.205
+"""The driver's seat centreline off the vehicle's centreline, as a share of the width (0.37 m of a
+1.80 m car; 0.52 m of a 2.55 m bus)."""
+LINING_INSET_M = 0.035
+"""How far inside the shell the lining lies, m: behind the inner halves of the lamps sunk into the shell's
+ends (`camgen.vehicles.body.LAMP_DEPTH_M` / 2), which would otherwise show inside the cabin."""
+CLEARANCE_M = 0.07
+"""Space the seat keeps between the driver's head and the roof, and the heels and the shell's underside, m."""
+TOE_M = 0.20
+"""How far the shoe reaches ahead of the pedal's tread under the ball of the foot, with room to spare, m."""
+
+WINDSCREEN_T = 0.78
+FRONT_SIDE_T = 0.72
+PRIVACY_T = 0.25
+PRIVACY_BODIES = ("suv", "van")
+
+
+@dataclass(frozen=True)
+class Seat:
+    """A body type's driver package, m and rad (SAE J1100 names: H5 the H-point's height above the
+    ground, H30 above the heel point on the floor, A40 the back angle from the vertical)."""
+
+    h_point_z_m: float
+    """H5."""
+    seat_height_m: float
+    """H30: the H-point over the floor where the heels rest."""
+    back_angle_rad: float
+    """A40."""
+    head_behind_windscreen_m: float
+    """How far the head joint sits behind the windscreen's upper edge (a bus's: its front end), m."""
+
+
+SEATS: dict[str, Seat] = {
+    "hatchback": Seat(0.50, 0.27, math.radians(25.0), 0.25),
+    "sedan": Seat(0.50, 0.26, math.radians(25.0), 0.25),
+    "estate": Seat(0.50, 0.26, math.radians(25.0), 0.25),
+    "suv": Seat(0.66, 0.33, math.radians(23.0), 0.25),
+    "pickup": Seat(0.78, 0.33, math.radians(23.0), 0.25),
+    "van": Seat(0.98, 0.40, math.radians(20.0), 0.15),
+    "box_truck": Seat(1.45, 0.43, math.radians(18.0), 0.55),
+    "bus": Seat(1.10, 0.45, math.radians(15.0), 1.00),
+}
+"""Driver packages per body type. H30 and A40 within SAE J1100's ranges for passenger cars (H30 about
+0.25–0.30 m, A40 about 22–27°; "class A" vehicles) and for upright seating in vans, trucks and buses
+(H30 0.35–0.45 m, A40 15–20°, "class B"). H5 are estimates from makers' package drawings: saloons and
+hatchbacks put the H-point about 0.50 m above the ground, SUVs 0.6–0.7 m, pickups and vans 0.75–1.0 m,
+a 7.5 t truck's cab about 1.4–1.5 m and a low-floor city bus's raised driver's seat about 1.1 m. The
+seat's place along the vehicle follows the glass (`head_behind_windscreen_m`: the head in the front side
+window, behind the windscreen), not the wheels: the procedural shell's greenhouse sits further forward
+over the front wheels than a real car's, so the pedals then go where its floor is free of the wheel arch
+and the hidden legs bend to them."""
+
+
+def drive_side(look: VehicleLook) -> str:
+    """Which side the driver sits: "right" for a right-hand-drive vehicle (a UK-format plate,
+    `camgen.vehicles.plate`), else "left" (a plate pinned in another format: most of the world drives
+    left-hand-drive vehicles)."""
+    return "right" if UK_PLATE_PATTERN.match(look.plate_text) else "left"
+
+
+def glass_transmittance(look: VehicleLook, centre_m: np.ndarray, windscreen: np.ndarray) -> np.ndarray:
+    """(F,) visible transmittance of glass faces with centres `centre_m` (F, 3), `windscreen` (F,) bool:
+    the windscreen's, the front side windows' (ahead of `driver_zone_x_m`), and behind them the rear
+    glass's (privacy glass on SUVs and vans)."""
+    front = centre_m[:, 0] > driver_zone_x_m(look)
+    rear_t = PRIVACY_T if look.body_type in PRIVACY_BODIES else FRONT_SIDE_T
+    return np.where(windscreen, WINDSCREEN_T, np.where(front, FRONT_SIDE_T, rear_t))
+
+
+def windscreen_x_m(look: VehicleLook) -> tuple[float, float]:
+    """(upper edge, lower edge) of the windscreen along the vehicle, m (`camgen.vehicles.body.PROFILES`): a
+    bus's upright windscreen is its front end."""
+    profile = PROFILES[look.body_type]
+    if profile.windscreen == (0.0, 0.0):
+        return look.length_m / 2, look.length_m / 2
+    return (profile.windscreen[0] - 0.5) * look.length_m, (profile.windscreen[1] - 0.5) * look.length_m
+
+
+def driver_zone_x_m(look: VehicleLook) -> float:
+    """Where the front side windows end: 0.45 m behind the driver's head (at the B-pillar)."""
+    return windscreen_x_m(look)[0] - SEATS[look.body_type].head_behind_windscreen_m - 0.45
+
+
+def _floor_m(look: VehicleLook, x_m: float, seat: Seat) -> float:
+    """The height the heels rest at with the ball of the foot at `x_m`: H5 − H30, or `CLEARANCE_M` over the
+    shell's underside under the foot where that is higher (over a wheel arch)."""
+    arch = look.wheel_radius_m + ARCH_GAP_M
+    foot = np.linspace(x_m - 0.25, x_m + 0.12, 8)
+    axles = (look.front_axle_x_m, look.rear_axle_x_m)
+    return max(seat.h_point_z_m - seat.seat_height_m, float(_bottom_m(look, foot, axles, arch).max()) + CLEARANCE_M)
+
+
+def _pedal_x_m(look: VehicleLook, reach_x_m: float) -> float:
+    """The pedals: where the legs reach (`reach_x_m`), but in a car whose windscreen starts over the front
+    wheels (a bonnet ahead) not over the front wheel arch: behind it (the knees bend more)."""
+    arch = look.wheel_radius_m + ARCH_GAP_M
+    front = look.front_axle_x_m
+    bonnet = windscreen_x_m(look)[1] < front + arch
+    if bonnet and reach_x_m > front - arch - TOE_M:
+        return front - arch - TOE_M
+    return min(reach_x_m, look.length_m / 2 - 0.25)
+
+
+def _roof_z_m(look: VehicleLook, x_m: float) -> float:
+    return float(_interp_top(PROFILES[look.body_type], np.array([x_m / look.length_m + 0.5]))[0]) * look.height_m
+
+
+def driver_appearance(look: VehicleLook):
+    """The driver's look from the vehicle's identity seed: an adult (a child drawn is drawn again as an
+    adult), no bag."""
+    from camgen.actors.appearance import draw_appearance
+
+    seed = int(np.random.SeedSequence(look.identity_seed, spawn_key=(DRIVER_SPAWN_KEY,)).generate_state(1)[0])
+    appearance = draw_appearance(seed, pinned={"bag": "none"})
+    if appearance.age_group == "child":
+        appearance = draw_appearance(seed, pinned={"bag": "none", "age_group": "adult"})
+    return appearance
+
+
+def seated_driver(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(vertices (V, 3), normals (V, 3), faces (F, 3), colours (V, 3)) of the vehicle's driver seated at
+    its wheel, in the vehicle's frame, full detail: the head `head_behind_windscreen_m` behind the
+    windscreen, the hands on the wheel, the feet on the pedals (`_pedal_x_m`); the seat drops by as much as
+    the head would come within `CLEARANCE_M` of the roof."""
+    from camgen.actors.driving import Controls, pedal_x_m, seated_joints_m, seated_vertices, steering_wheel_m
+    from camgen.actors.person import build_person
+    from camgen.actors.skeleton import INDEX
+
+    model = build_person(driver_appearance(look))
+    seat = SEATS[look.body_type]
+    side = -1.0 if drive_side(look) == "right" else 1.0  # y points left
+    y = side * DRIVER_LATERAL_SHARE * look.width_m
+    head_x = windscreen_x_m(look)[0] - seat.head_behind_windscreen_m
+    h_z = seat.h_point_z_m
+    hip_y = abs(float(model.joints_m[INDEX["thigh_l"], 1]))
+    for _ in range(3):
+        origin = np.array([0.0, y, h_z])
+        h_point = origin + np.array(
+            [head_x - seated_joints_m(model, origin, seat.back_angle_rad)[INDEX["head"], 0], 0, 0]
+        )
+        floor_z = _floor_m(look, pedal_x_m(model, h_point, h_z - seat.seat_height_m), seat)
+        pedal_x = _pedal_x_m(look, pedal_x_m(model, h_point, floor_z))
+        floor_z = _floor_m(look, pedal_x, seat)
+        _, grips = steering_wheel_m(model, h_point, seat.back_angle_rad)
+        feet = np.array([[pedal_x, y + hip_y, floor_z], [pedal_x, y - hip_y, floor_z]])
+        vertices, normals = seated_vertices(model, Controls(h_point, grips, feet), seat.back_angle_rad)
+        top = int(np.argmax(vertices[:, 2]))
+        excess = float(vertices[top, 2]) - (_roof_z_m(look, float(vertices[top, 0])) - CLEARANCE_M)
+        if excess <= 0:
+            break
+        h_z -= excess
+    colours = np.asarray(model.colours[:, :3], dtype=np.float64)
+    return vertices.astype(np.float64), normals.astype(np.float64), np.asarray(model.faces), colours
+
+
+def driver_part(look: VehicleLook) -> Part:
+    """The seated driver (`seated_driver`) decimated to about `DRIVER_FACES` triangles, as a part of the
+    body with per-vertex colours (surface "cabin")."""
+    from camgen.actors.person import _decimate
+
+    vertices, _, faces, colours = seated_driver(look)
+    unused = np.zeros((len(vertices), 4))
+    fraction = min(1.0, DRIVER_FACES / len(faces))
+    vertices, faces, colours, _, _ = _decimate(vertices, faces, colours, unused.astype(np.int64), unused, fraction)
+    normals = trimesh.Trimesh(vertices, faces, process=False).vertex_normals
+    return Part("driver", "cabin", vertices, np.asarray(normals), faces, np.full(len(vertices), -1, np.int8),
+                colours=colours)  # fmt: skip
+
+
+def lining_part(vertices_m: np.ndarray, normals: np.ndarray, paint_faces: np.ndarray) -> Part:
+    """The shell's painted faces turned inwards (reversed winding and normals), `LINING_INSET_M` inside it,
+    coloured `INTERIOR_RGB`."""
+    used, remapped = np.unique(paint_faces, return_inverse=True)
+    faces = remapped.reshape(-1, 3)[:, ::-1]
+    inset = vertices_m[used] - LINING_INSET_M * normals[used]
+    return Part("interior", "cabin", inset, -normals[used], np.ascontiguousarray(faces),
+                np.full(len(used), -1, np.int8), colours=np.tile(INTERIOR_RGB, (len(used), 1)))  # fmt: skip
+
+
+def glass_part(look: VehicleLook, vertices_m: np.ndarray, normals: np.ndarray, faces: np.ndarray) -> Part:
+    """The shell's glass faces with their own vertices (each face's transmittance exact), coloured (1, 1, 1,
+    1 − T): the opacity the renderer blends with (`glass_transmittance`). The windscreen is the glass
+    facing forward at the front."""
+    corners = faces.reshape(-1)
+    centre = vertices_m[faces].mean(axis=1)
+    windscreen = (normals[faces].mean(axis=1)[:, 0] > 0.35) & (centre[:, 0] > 0)
+    transmittance = glass_transmittance(look, centre, windscreen)
+    colours = np.ones((len(corners), 4))
+    colours[:, 3] = np.repeat(1.0 - transmittance, 3)
+    return Part("body_glass", "glass", vertices_m[corners], normals[corners], np.arange(len(corners)).reshape(-1, 3),
+                np.full(len(corners), -1, np.int8), colours=colours)  # fmt: skip
+
+
+def inner_glass_part(glass: Part) -> Part:
+    """The glass's inner faces (reversed winding and normals): a window seen from inside the cabin, through
+    another (the far side's), which the outer faces, facing away, do not draw; drawn before the outer
+    glass, it lets a view through two panes pass T² of what lies beyond."""
+    faces = np.ascontiguousarray(glass.faces[:, ::-1])
+    return Part(
+        "body_glass_inside", "glass", glass.vertices_m, -glass.normals, faces, glass.wheel, colours=glass.colours
+    )
