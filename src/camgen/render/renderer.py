@@ -680,6 +680,7 @@ class Renderer:
         self._make_current()
         scene = graph.scene
         nodes = graph.environment_nodes + graph.actor_nodes if nodes is None else list(nodes)
+        nodes = front_to_back(graph, nodes, view.T_world_from_cam[:3, 3])
         lit = "radiance" in passes
         renderer = self._renderer
         renderer.texture_lod_bias = float(texture_lod_bias)
@@ -744,6 +745,32 @@ class Renderer:
         if "depth_m" not in requested:
             out.depth_m = None
         return out
+
+
+def front_to_back(graph, nodes: list, camera_m: np.ndarray) -> list:
+    """`nodes` in the order a draw shades them: the still environment (what a kept background holds) before
+    whatever moves (`SceneGraph.moving_nodes`), each group nearest first by the centre of its world box.
+
+    A fragment hidden by one already drawn fails the depth test before it is shaded (early depth test), so
+    near-to-far order shades fewer fragments: on llvmpipe (2 cores under load, best of 4) a 1446×852
+    radiance draw of the parking lot took 565 ms instead of 668 ms (the plaza's facade camera 769 ms
+    instead of 995 ms), with identical pixels except where two surfaces meet at exactly equal depth (2 to
+    12 pixels of the examples' frames), where the first
+    drawn wins. Still before moving keeps those ties as a kept background draws them: a frame composited
+    over a kept background equals the whole draw (`camgen.render.sequence`). A mesh with a blended
+    (see-through) material comes after every opaque one, farthest first, so what lies behind it is drawn
+    before it is blended over."""
+    moving = {id(node) for node in getattr(graph, "moving_nodes", graph.actor_nodes)}
+    scene = graph.scene
+
+    def key(node) -> tuple[bool, bool, float]:
+        low, high = node.mesh.bounds
+        pose = scene.get_pose(node)
+        distance_m = float(np.linalg.norm(pose[:3, :3] @ ((low + high) / 2.0) + pose[:3, 3] - camera_m))
+        see_through = bool(node.mesh.is_transparent)
+        return see_through, id(node) in moving, -distance_m if see_through else distance_m
+
+    return sorted(nodes, key=key)
 
 
 SKY_STEP_PX = 8
