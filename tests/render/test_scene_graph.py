@@ -69,9 +69,9 @@ def test_lights_are_bound_in_the_order_the_scene_lists_them_so_a_frame_is_the_sa
     np.testing.assert_array_equal(a, b)
 
 
-def test_a_draw_shades_the_still_environment_near_to_far_then_what_moves_then_see_through_meshes():
+def test_a_draw_shades_the_still_environment_near_to_far_then_what_moves_near_to_far():
     # camgen.render.renderer.front_to_back: near first lets the depth test drop hidden fragments before they
-    # are shaded; still before moving keeps a kept background's ties; blended meshes last, far first.
+    # are shaded; still before moving keeps a kept background's ties.
     from camgen.render.renderer import front_to_back
     from camgen.render.scene_graph import build_scene_graph
 
@@ -95,8 +95,3 @@ def test_a_draw_shades_the_still_environment_near_to_far_then_what_moves_then_se
     assert names[: len(still)] == ["environment:box_1", "environment:box_2", "environment:box_0"]
     near, far = graph.actor_nodes[1].name, graph.actor_nodes[0].name
     assert names[len(still) :] == [near, far]
-    # A see-through (blended) mesh comes after every opaque one.
-    graph.environment_nodes[1].mesh.primitives[0].material.alphaMode = "BLEND"
-    graph.environment_nodes[1].mesh.primitives[0].material.baseColorFactor = np.array([1.0, 1.0, 1.0, 0.5])
-    names = [node.name for node in front_to_back(graph, graph.environment_nodes + graph.actor_nodes, camera_m)]
-    assert names[-1] == "environment:box_1"

@@ -757,18 +757,15 @@ def front_to_back(graph, nodes: list, camera_m: np.ndarray) -> list:
     instead of 995 ms), with identical pixels except where two surfaces meet at exactly equal depth (2 to
     12 pixels of the examples' frames), where the first
     drawn wins. Still before moving keeps those ties as a kept background draws them: a frame composited
-    over a kept background equals the whole draw (`camgen.render.sequence`). A mesh with a blended
-    (see-through) material comes after every opaque one, farthest first, so what lies behind it is drawn
-    before it is blended over."""
+    over a kept background equals the whole draw (`camgen.render.sequence`). Blended (see-through)
+    primitives are then taken after every opaque one, farthest first (`_draw_order`)."""
     moving = {id(node) for node in getattr(graph, "moving_nodes", graph.actor_nodes)}
     scene = graph.scene
 
-    def key(node) -> tuple[bool, bool, float]:
+    def key(node) -> tuple[bool, float]:
         low, high = node.mesh.bounds
         pose = scene.get_pose(node)
-        distance_m = float(np.linalg.norm(pose[:3, :3] @ ((low + high) / 2.0) + pose[:3, 3] - camera_m))
-        see_through = bool(node.mesh.is_transparent)
-        return see_through, id(node) in moving, -distance_m if see_through else distance_m
+        return id(node) in moving, float(np.linalg.norm(pose[:3, :3] @ ((low + high) / 2.0) + pose[:3, 3] - camera_m))
 
     return sorted(nodes, key=key)
 
