@@ -59,7 +59,11 @@ class Controls:
 
 class Driver(Rider):
     """A seated driver's pose: a rider whose trunk reclines by the seat back instead of leaning to the
-    bar, its targets fixed in the vehicle's frame."""
+    bar, its targets fixed in the vehicle's frame, its knees raised towards the dashboard (`knee_pole`:
+    the thighs rise from the seat to pedals below it, and a knee pushed forward would meet the footwell's
+    front, the wheel arch)."""
+
+    knee_pole = np.array([0.5, 0.15, 1.0])
 
     def __init__(self, model: PersonModel, controls: Controls, back_angle_rad: float):
         from camgen.vehicles import RiderTargets  # the shared target record (vehicles import actors, lazily)

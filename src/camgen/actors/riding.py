@@ -57,6 +57,9 @@ class Rider:
 
     `targets(time_s)` gives a `camgen.vehicles.RiderTargets` (the vehicle's frame, seat, grips, feet)."""
 
+    knee_pole = KNEE_POLE
+    """Which way the left knee points, in the vehicle's frame (mirrored for the right)."""
+
     def __init__(self, model: PersonModel, targets: Callable, route: Route):
         self.model, self.targets, self.route = model, targets, route
         J = model.joints_m
@@ -138,7 +141,7 @@ class Rider:
             # The foot level along the vehicle, the ball on the tread.
             ball = targets.feet_m[k] + np.array([0.0, 0.0, self.ball_height_m])
             ankle = ball + R @ self.ankle_from_ball[side]
-            knee_pole = R @ (KNEE_POLE * mirror)
+            knee_pole = R @ (self.knee_pole * mirror)
             self._chain(local, G, (f"thigh_{side}", f"calf_{side}", f"foot_{side}"), ankle, knee_pole, R)
         return Pose(T_pelvis, local)
 

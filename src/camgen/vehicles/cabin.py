@@ -53,8 +53,12 @@ LINING_INSET_M = 0.035
 ends (`camgen.vehicles.body.LAMP_DEPTH_M` / 2), which would otherwise show inside the cabin."""
 CLEARANCE_M = 0.07
 """Space the seat keeps between the driver's head and the roof, and the heels and the shell's underside, m."""
-TOE_M = 0.20
-"""How far the shoe reaches ahead of the pedal's tread under the ball of the foot, with room to spare, m."""
+FOOTWELL_FROM_H_POINT_M = 0.25
+"""The driver's legs farther than this ahead of the H-point and under the beltline are under the dashboard
+and left out, m (the knees of a seated driver are 0.4–0.55 m ahead of the hips)."""
+SEAT_STEP_M = 0.04
+"""How far the seat slides back at a time while the legs would meet the shell's underside, m."""
+SEAT_TRIES = 10
 
 WINDSCREEN_T = 0.78
 FRONT_SIDE_T = 0.72
@@ -78,11 +82,11 @@ class Seat:
 
 
 SEATS: dict[str, Seat] = {
-    "hatchback": Seat(0.50, 0.27, math.radians(25.0), 0.25),
-    "sedan": Seat(0.50, 0.26, math.radians(25.0), 0.25),
-    "estate": Seat(0.50, 0.26, math.radians(25.0), 0.25),
-    "suv": Seat(0.66, 0.33, math.radians(23.0), 0.25),
-    "pickup": Seat(0.78, 0.33, math.radians(23.0), 0.25),
+    "hatchback": Seat(0.50, 0.27, math.radians(25.0), 0.12),
+    "sedan": Seat(0.50, 0.26, math.radians(25.0), 0.12),
+    "estate": Seat(0.50, 0.26, math.radians(25.0), 0.12),
+    "suv": Seat(0.66, 0.33, math.radians(23.0), 0.12),
+    "pickup": Seat(0.78, 0.33, math.radians(23.0), 0.12),
     "van": Seat(0.98, 0.40, math.radians(20.0), 0.15),
     "box_truck": Seat(1.45, 0.43, math.radians(18.0), 0.55),
     "bus": Seat(1.10, 0.45, math.radians(15.0), 1.00),
@@ -94,8 +98,8 @@ hatchbacks put the H-point about 0.50 m above the ground, SUVs 0.6–0.7 m, pick
 a 7.5 t truck's cab about 1.4–1.5 m and a low-floor city bus's raised driver's seat about 1.1 m. The
 seat's place along the vehicle follows the glass (`head_behind_windscreen_m`: the head in the front side
 window, behind the windscreen), not the wheels: the procedural shell's greenhouse sits further forward
-over the front wheels than a real car's, so the pedals then go where its floor is free of the wheel arch
-and the hidden legs bend to them."""
+over the front wheels than a real car's, and its wheel arches span its whole width, so the legs under
+the dashboard, hidden there, are left out (`FOOTWELL_FROM_H_POINT_M`)."""
 
 
 def drive_side(look: VehicleLook) -> str:
@@ -137,17 +141,6 @@ def _floor_m(look: VehicleLook, x_m: float, seat: Seat) -> float:
     return max(seat.h_point_z_m - seat.seat_height_m, float(_bottom_m(look, foot, axles, arch).max()) + CLEARANCE_M)
 
 
-def _pedal_x_m(look: VehicleLook, reach_x_m: float) -> float:
-    """The pedals: where the legs reach (`reach_x_m`), but in a car whose windscreen starts over the front
-    wheels (a bonnet ahead) not over the front wheel arch: behind it (the knees bend more)."""
-    arch = look.wheel_radius_m + ARCH_GAP_M
-    front = look.front_axle_x_m
-    bonnet = windscreen_x_m(look)[1] < front + arch
-    if bonnet and reach_x_m > front - arch - TOE_M:
-        return front - arch - TOE_M
-    return min(reach_x_m, look.length_m / 2 - 0.25)
-
-
 def _roof_z_m(look: VehicleLook, x_m: float) -> float:
     return float(_interp_top(PROFILES[look.body_type], np.array([x_m / look.length_m + 0.5]))[0]) * look.height_m
 
@@ -167,8 +160,12 @@ def driver_appearance(look: VehicleLook):
 def seated_driver(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(vertices (V, 3), normals (V, 3), faces (F, 3), colours (V, 3)) of the vehicle's driver seated at
     its wheel, in the vehicle's frame, full detail: the head `head_behind_windscreen_m` behind the
-    windscreen, the hands on the wheel, the feet on the pedals (`_pedal_x_m`); the seat drops by as much as
-    the head would come within `CLEARANCE_M` of the roof."""
+    windscreen, the hands on the wheel, the feet on pedals where the legs reach them. The legs under the dashboard
+    (`FOOTWELL_FROM_H_POINT_M` ahead of the H-point, under the beltline) are left out: hidden there in any
+    view, and where the shell's wheel arches, which span its whole width (a real footwell lies between
+    them), would meet them. The seat drops by as much as the head would come within `CLEARANCE_M` of the
+    roof, and slides back `SEAT_STEP_M` at a time while what is left comes within `CLEARANCE_M` of the
+    shell's underside (up or along)."""
     from camgen.actors.driving import Controls, pedal_x_m, seated_joints_m, seated_vertices, steering_wheel_m
     from camgen.actors.person import build_person
     from camgen.actors.skeleton import INDEX
@@ -180,24 +177,34 @@ def seated_driver(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray
     head_x = windscreen_x_m(look)[0] - seat.head_behind_windscreen_m
     h_z = seat.h_point_z_m
     hip_y = abs(float(model.joints_m[INDEX["thigh_l"], 1]))
-    for _ in range(3):
+    axles, arch = (look.front_axle_x_m, look.rear_axle_x_m), look.wheel_radius_m + ARCH_GAP_M
+    belt_z = PROFILES[look.body_type].belt * look.height_m
+    for _ in range(SEAT_TRIES):
         origin = np.array([0.0, y, h_z])
-        h_point = origin + np.array(
-            [head_x - seated_joints_m(model, origin, seat.back_angle_rad)[INDEX["head"], 0], 0, 0]
-        )
+        back = head_x - seated_joints_m(model, origin, seat.back_angle_rad)[INDEX["head"], 0]
+        h_point = origin + np.array([back, 0.0, 0.0])
         floor_z = _floor_m(look, pedal_x_m(model, h_point, h_z - seat.seat_height_m), seat)
-        pedal_x = _pedal_x_m(look, pedal_x_m(model, h_point, floor_z))
+        pedal_x = pedal_x_m(model, h_point, floor_z)
         floor_z = _floor_m(look, pedal_x, seat)
         _, grips = steering_wheel_m(model, h_point, seat.back_angle_rad)
         feet = np.array([[pedal_x, y + hip_y, floor_z], [pedal_x, y - hip_y, floor_z]])
         vertices, normals = seated_vertices(model, Controls(h_point, grips, feet), seat.back_angle_rad)
-        top = int(np.argmax(vertices[:, 2]))
-        excess = float(vertices[top, 2]) - (_roof_z_m(look, float(vertices[top, 0])) - CLEARANCE_M)
-        if excess <= 0:
+        footwell = (vertices[:, 0] > h_point[0] + FOOTWELL_FROM_H_POINT_M) & (vertices[:, 2] < belt_z - 0.05)
+        kept = vertices[~footwell]
+        top = int(np.argmax(kept[:, 2]))
+        excess = float(kept[top, 2]) - (_roof_z_m(look, float(kept[top, 0])) - CLEARANCE_M)
+        steps = CLEARANCE_M * np.array([-1.0, 0.0, 1.0])
+        underside = np.max([_bottom_m(look, kept[:, 0] + dx, axles, arch) for dx in steps], axis=0)
+        low = float(np.max(underside + CLEARANCE_M - kept[:, 2]))
+        if excess <= 0 and low <= 0:
             break
-        h_z -= excess
-    colours = np.asarray(model.colours[:, :3], dtype=np.float64)
-    return vertices.astype(np.float64), normals.astype(np.float64), np.asarray(model.faces), colours
+        h_z -= max(excess, 0.0)
+        head_x -= SEAT_STEP_M if low > 0 else 0.0
+    faces = np.asarray(model.faces)
+    faces = faces[~footwell[faces].any(axis=1)]
+    used, remapped = np.unique(faces, return_inverse=True)
+    colours = np.asarray(model.colours[used, :3], dtype=np.float64)
+    return (vertices[used].astype(np.float64), normals[used].astype(np.float64), remapped.reshape(-1, 3), colours)
 
 
 def driver_part(look: VehicleLook) -> Part:
