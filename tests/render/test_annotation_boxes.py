@@ -4,7 +4,8 @@ A car-sized box and a walker cross a 640×480 view through a strong barrel lens 
 through a distortion-free one. On every frame where an actor is wholly in view and unoccluded, the box
 of its projected mesh (`camgen.annotate.boxes.amodal_box`, through `project_points`) and the tight
 box of its pixels in the instance pass after the lens agree within 1 px on every side. Measured worst
-side: printed with -s.
+side: printed with -s. Each actor's unoccluded draw in its own window (`Annotator._alone_in_window`)
+counts what a whole-frame draw through the lens counts.
 """
 
 from __future__ import annotations
@@ -70,6 +71,14 @@ def test_amodal_box_matches_the_mask_of_a_fully_visible_object(renderer, k1):
             state = camera.states[index]
             frame = drawer.frame(index, state)
             annotations = annotator.annotate(state, lens.apply(state, frame.passes))
+            # Each actor drawn alone in its own window (the default) counts what a whole-frame draw through
+            # the lens counts (an identity `post` takes that path), keypoints included.
+            whole = annotator.annotate(state, lens.apply(state, frame.passes), post=lambda image: image)
+            for obj, reference in zip(annotations.objects, whole.objects, strict=True):
+                assert (obj.name, obj.unoccluded_pixels) == (reference.name, reference.unoccluded_pixels)
+                assert obj.visibility == reference.visibility
+                if reference.keypoints is not None:
+                    np.testing.assert_array_equal(obj.keypoints, reference.keypoints)
             for obj in annotations.objects:
                 if obj.visibility < 1.0 or obj.truncation > 0 or obj.visible_box is None:
                     continue

@@ -107,6 +107,7 @@ class Annotator:
         instance image after the lens onto the stream (the virtual PTZ's crop and scale), applied to
         the unoccluded draws too; the stream's camera matrix is then the state's `output_K_px`."""
         camera, graph = self.camera, self.graph
+        direct = post is None  # the stream is the lens's output: each actor is drawn alone in its own window
         post = post or (lambda ids: ids)
         W, H = camera.output_size_px or (camera.width_px, camera.height_px)
         K = np.array(state.K_px if state.output_K_px is None else state.output_K_px)
@@ -137,10 +138,13 @@ class Annotator:
             # how near its own surface is at each pixel, which hides keypoints on its far side).
             skeleton = rig is not None and rig.keypoints_m is not None
             alone_passes = ("depth_m", "instance_id") if skeleton else ("instance_id",)
-            alone = self.renderer.draw(graph, view, alone_passes, nodes=[node], clip_range_m=clip)
-            lensed = self.lens.apply(state, Passes(depth_m=alone.depth_m, instance_id=alone.instance_id))
-            unoccluded = post(lensed.instance_id)
-            unoccluded_pixels = int(np.count_nonzero(unoccluded == track_id))
+            if direct:
+                unoccluded_pixels, own_depth = self._alone_in_window(state, view, node, alone_passes, clip, clipped)
+            else:
+                alone = self.renderer.draw(graph, view, alone_passes, nodes=[node], clip_range_m=clip)
+                lensed = self.lens.apply(state, Passes(depth_m=alone.depth_m, instance_id=alone.instance_id))
+                unoccluded_pixels = int(np.count_nonzero(post(lensed.instance_id) == track_id))
+                own_depth = None if not skeleton else post(np.where(lensed.depth_m > 0, lensed.depth_m, np.inf))
             seen = visible.get(track_id)
             pixels = 0 if seen is None else seen.pixels
             keypoints = keypoints_world = None
@@ -150,7 +154,6 @@ class Annotator:
                 corners_world = box_corners(*rig.heading_box())
             if skeleton:
                 keypoints_world = rig.keypoints_m
-                own_depth = post(np.where(lensed.depth_m > 0, lensed.depth_m, np.inf))
                 keypoints = keypoint_visibility(
                     keypoints_world, T, K, distortion, instance, track_id, W, H, own_depth_m=own_depth
                 )
@@ -180,3 +183,33 @@ class Annotator:
                 )
             )
         return result
+
+    def _alone_in_window(self, state: CameraState, view, node, passes: tuple[str, ...], clip, box) -> tuple:
+        """An actor drawn alone, only where it can show: the output pixels of its amodal `box` (pixel edges,
+        clipped to the image) grown by `WINDOW_PAD_PX`, drawn as the crop of the render that those pixels
+        take their ids and depth from (`LensStages.source_pixels`; `Renderer.draw`'s crop gives the whole
+        draw's pixels bit for bit). The number of its unoccluded pixels, and (with depth) its camera z at
+        every output pixel, +inf where it is not: what a whole-frame draw through the lens gives, at a cost
+        that follows the actor's size instead of the frame's."""
+        W, H = self.camera.output_size_px or (self.camera.width_px, self.camera.height_px)
+        x0, y0 = max(0, int(np.floor(box[0])) - WINDOW_PAD_PX), max(0, int(np.floor(box[1])) - WINDOW_PAD_PX)
+        x1, y1 = min(W, int(np.ceil(box[2])) + WINDOW_PAD_PX), min(H, int(np.ceil(box[3])) + WINDOW_PAD_PX)
+        rows, cols = self.lens.source_pixels(state, (x0, y0, x1, y1))
+        top, left = int(rows.min()), int(cols.min())
+        crop = (left, top, int(cols.max()) + 1, int(rows.max()) + 1)
+        alone = self.renderer.draw(self.graph, view, passes, nodes=[node], clip_range_m=clip, crop_px=crop)
+        rows, cols = rows - top, cols - left
+        track_id = self.graph.instance_ids[node]
+        pixels = int(np.count_nonzero(alone.instance_id[rows, cols] == track_id))
+        if alone.depth_m is None:
+            return pixels, None
+        own_depth = np.full((H, W), np.inf, np.float32)
+        depth = alone.depth_m[rows, cols]
+        own_depth[y0:y1, x0:x1] = np.where(depth > 0, depth, np.inf)
+        return pixels, own_depth
+
+
+WINDOW_PAD_PX = 2
+"""Pixels added around an actor's amodal box for its unoccluded draw: the box bounds its vertices' (and
+a rigid mesh's edges') projection; rasterisation and the nearest-pixel lens lookup reach at most a pixel
+past it, one more is spare."""

@@ -345,7 +345,7 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                     )
 
                 with clock("annotate"):
-                    annotated = annotator.annotate(state, stream, post=to_stream)
+                    annotated = annotator.annotate(state, stream, post=None if window is None else to_stream)
                     sequence.add(annotated)
                     if cuts_reid_crops(stages) and rgb8 is not None:
                         result.files += write_reid_crops(

@@ -117,6 +117,17 @@ class LensStages:
             out.radiance = out.radiance * self.vignetting_gain(state, undistorted)[..., None]
         return out
 
+    def source_pixels(self, state: CameraState, window_px: tuple[int, int, int, int]) -> tuple[np.ndarray, np.ndarray]:
+        """Rows and columns (each (y1 − y0, x1 − x0) int) of the render pixel that each output pixel of
+        `window_px` (x0, y0, x1, y1; x1, y1 exclusive) takes its depth and id from: `apply`'s nearest pixel
+        through the lens, or without a lens stage the same pixel shifted by the render's margin."""
+        x0, y0, x1, y1 = window_px
+        if "optics.remap" in self.stages:
+            rows, cols = self.cache.get(self.geometry(state)).nearest_index
+            return rows[y0:y1, x0:x1], cols[y0:y1, x0:x1]
+        left, top, _, _ = self.camera.render.margin_px
+        return np.meshgrid(np.arange(y0, y1) + top, np.arange(x0, x1) + left, indexing="ij")
+
     def scene_radiance(self, state: CameraState, radiance: np.ndarray) -> np.ndarray:
         """Render-size radiance → the output frame, placed by the lens's distortion alone (the reference
         channel's map for every channel, as depth and ids): no blur, lateral CA or vignetting; the

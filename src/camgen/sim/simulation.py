@@ -573,7 +573,8 @@ class Simulation:
 
             with clock("annotate"):
                 lensed = pipeline.lens.apply(state, Passes(instance_id=frame.passes.instance_id))
-                truth = annotator.annotate(state, Passes(instance_id=to_stream(lensed.instance_id)), post=to_stream)
+                stream = Passes(instance_id=to_stream(lensed.instance_id))
+                truth = annotator.annotate(state, stream, post=None if window is None else to_stream)
         clock.end_frame()
         return CameraObservation(
             name=camera_job.name,
