@@ -870,14 +870,19 @@ def far_ground_radiance(graph, view: View, below: np.ndarray) -> np.ndarray:
     from_coarse = _grid_interpolated(nodes_c, us_c, vs_c, view, at=(us_f, vs_f))
     scale = np.maximum(nodes_f.max(axis=-1), 1e-30)
     far_off = np.abs(from_coarse - nodes_f).max(axis=-1) / scale > FAR_GROUND_TOLERANCE
-    # A fine cell (between nodes j, j + 1 in both directions) is evaluated pixel by pixel where a corner is
-    # far off; pixel (u, v) lies in the cell of the last node at or before it.
-    corner = far_off[:-1, :-1] | far_off[:-1, 1:] | far_off[1:, :-1] | far_off[1:, 1:]
     out = _grid_interpolated(nodes_f.astype(np.float32), us_f, vs_f, view)
-    if corner.any():
-        cell_u = np.clip(np.searchsorted(us_f, np.arange(view.width_px), side="right") - 1, 0, len(us_f) - 2)
-        cell_v = np.clip(np.searchsorted(vs_f, np.arange(view.height_px), side="right") - 1, 0, len(vs_f) - 2)
-        rows, cols = np.nonzero(corner[np.ix_(cell_v, cell_u)] & below)
+    if far_off.any():
+        # A pixel is evaluated where a node its interpolation reads is far off: the nodes at or before and
+        # at or after it on each axis (its cell's four corners; on a grid line, only that line's two), so a
+        # crop whose edges lie on grid lines decides each pixel as the whole view does.
+        columns, rows = np.arange(view.width_px), np.arange(view.height_px)
+        u_nodes = (np.searchsorted(us_f, columns, side="right") - 1, np.searchsorted(us_f, columns, side="left"))
+        v_nodes = (np.searchsorted(vs_f, rows, side="right") - 1, np.searchsorted(vs_f, rows, side="left"))
+        exact = np.zeros(below.shape, bool)
+        for v in v_nodes:
+            for u in u_nodes:
+                exact |= far_off[np.ix_(v, u)]
+        rows, cols = np.nonzero(exact & below)
         out[rows, cols] = _far_ground_exact(graph, view, rows, cols)
     return out
 
