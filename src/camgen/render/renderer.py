@@ -656,7 +656,8 @@ class Renderer:
         `keep_as` (same view and passes) to start from instead of an empty frame: the new nodes are
         depth-tested against it, exactly as if everything were drawn together, provided both draws
         use the same `clip_range_m` (near, far in m; default: from the scene's current bounds, which
-        move with the actors). Nodes are drawn in the order given (default: environment, then actors).
+        move with the actors). Nodes are shaded still before moving, each near to far (`front_to_back`),
+        whatever the order given, and see-through (blended) primitives after every opaque one (`_draw_order`).
         `shadow_fit`: what the shadow maps are fitted to (default: this view and the scene's current
         bounds); draws sharing one shade every surface they both see alike. `crop_px`: draw only the
         pixels (x0, y0, x1, y1) of `view` (x1, y1 exclusive; passes of that size), at a cost that follows
