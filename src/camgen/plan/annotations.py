@@ -107,7 +107,8 @@ class Annotator:
         instance image after the lens onto the stream (the virtual PTZ's crop and scale), applied to
         the unoccluded draws too; the stream's camera matrix is then the state's `output_K_px`."""
         camera, graph = self.camera, self.graph
-        direct = post is None  # the stream is the lens's output: each actor is drawn alone in its own window
+        # The stream is the lens's output (no virtual PTZ): each actor is drawn alone in its own window.
+        direct = post is None and state.window_px is None
         post = post or (lambda ids: ids)
         W, H = camera.output_size_px or (camera.width_px, camera.height_px)
         K = np.array(state.K_px if state.output_K_px is None else state.output_K_px)
