@@ -188,8 +188,8 @@ class _RememberingProgram(ShaderProgram):
             return
         if isinstance(value, np.ndarray):
             held = (value.dtype.str, value.shape, value.tobytes(), unsigned)
-        else:
-            held = (type(value), value, unsigned)
+        else:  # a float by its bits: −0.0 is not 0.0 to OpenGL's copy of it
+            held = (type(value), value.hex() if isinstance(value, float) else value, unsigned)
         if self.values.get(name) == held:
             return
         try:  # pyrender's dispatch (shader_program.py), without its second location lookup
