@@ -272,7 +272,7 @@ def _rigid_box(extents_m, centre_m, colour, joint: str) -> _Piece:
     return _Piece(points, np.asarray(box.faces), np.broadcast_to(np.asarray(colour), (count, 3)), index, weight)
 
 
-def _decimate(points, faces, colours, joint_index, joint_weight, fraction: float):
+def decimate(points, faces, colours, joint_index, joint_weight, fraction: float):
     """The mesh reduced to `fraction` of its vertices by quadric edge collapses; each kept vertex takes
     the colour and skinning of the nearest of the vertices merged into it (a chain of collapses can
     merge vertices far apart, so their mean would be wrong)."""
@@ -404,7 +404,7 @@ def build_person(appearance: Appearance) -> PersonModel:
     rng = np.random.default_rng(np.random.SeedSequence(appearance.identity_seed, spawn_key=(FABRIC_SPAWN_KEY,)))
     pieces = [replace(p, colours=p.colours * _fabric_variation(p.points_m, rng=rng)[:, None]) for p in pieces]
     offsets = np.cumsum([0] + [len(p.points_m) for p in pieces[:-1]])
-    points_m, faces, colours, joint_index, joint_weight = _decimate(
+    points_m, faces, colours, joint_index, joint_weight = decimate(
         np.concatenate([p.points_m for p in pieces]),
         np.concatenate([p.faces + o for p, o in zip(pieces, offsets, strict=True)]),
         np.concatenate([p.colours for p in pieces]),

@@ -210,12 +210,12 @@ def seated_driver(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray
 def driver_part(look: VehicleLook) -> Part:
     """The seated driver (`seated_driver`) decimated to about `DRIVER_FACES` triangles, as a part of the
     body with per-vertex colours (surface "cabin")."""
-    from camgen.actors.person import _decimate
+    from camgen.actors.person import decimate
 
     vertices, _, faces, colours = seated_driver(look)
     unused = np.zeros((len(vertices), 4))
     fraction = min(1.0, DRIVER_FACES / len(faces))
-    vertices, faces, colours, _, _ = _decimate(vertices, faces, colours, unused.astype(np.int64), unused, fraction)
+    vertices, faces, colours, _, _ = decimate(vertices, faces, colours, unused.astype(np.int64), unused, fraction)
     normals = trimesh.Trimesh(vertices, faces, process=False).vertex_normals
     return Part("driver", "cabin", vertices, np.asarray(normals), faces, np.full(len(vertices), -1, np.int8),
                 colours=colours)  # fmt: skip
