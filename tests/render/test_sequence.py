@@ -59,7 +59,7 @@ def test_static_background_composite_equals_full_render(workspace, renderer):
         composite = CameraRenderer(renderer, *_graph_and(job, camera, supersampling=supersampling))
         full = CameraRenderer(renderer, *_graph_and(job, camera, supersampling=supersampling, static_background=False))
         try:
-            for index in (0, 3, 7, 9):
+            for index in (0, 7):  # at 7 the car is in view
                 a, b = composite.frame(index).passes, full.frame(index).passes
                 if index == 7:
                     assert (a.instance_id == 2).sum() > 100  # the car is in view
