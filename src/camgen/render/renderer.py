@@ -18,14 +18,17 @@ luminance in cd/m² (see `camgen.render.scene_graph`); unclamped. depth_m: dista
 axis (camera z), m, +inf where no geometry is hit. instance_id: uint32, 0 for background.
 
 The sky fills the pixels no surface covers, except where their ray goes down to the scene's far ground
-(`camgen.render.scene_graph.FarGround`: the ground plane continued to the horizon), which fills those;
-fog (`camgen.world.fog`) then blends every radiance pixel towards the horizon sky by its distance, which
-a draw with fog renders beside the radiance even when depth_m is not asked for (and does not return).
+(`camgen.render.scene_graph.FarGround`: the ground plane continued to the horizon), which fills those,
+and shows through glass in the share the glass transmits (the radiance target's alpha is coverage,
+`composite_background`); fog (`camgen.world.fog`) then blends every radiance pixel towards the horizon
+sky by its distance (behind glass, by both the glass's and the background's), which a draw with fog renders
+beside the radiance even when depth_m is not asked for (and does not return).
 """
 
 from __future__ import annotations
 
 import math
+import sys
 import weakref
 from dataclasses import dataclass
 from pathlib import Path
@@ -229,8 +232,10 @@ class _Framebuffer:
 
     def __init__(self, width_px: int, height_px: int, passes: tuple[str, ...]):
         self.width_px, self.height_px, self.passes = width_px, height_px, passes
-        self.sky_mask: np.ndarray | None = None
-        """(H, W) bool after a `read` of radiance: where no surface was drawn (the sky)."""
+        self.coverage: np.ndarray | None = None
+        """(H, W) float32 after a `read` of radiance: the alpha of the radiance target, 0 where no surface
+        was drawn (the sky and the far ground), 1 over any opaque surface, and 1 − τ where only glass lies in
+        front of the background, τ the product of its panes' transmittances (`_blend_with_coverage`)."""
         self.fbo = GL.glGenFramebuffers(1)
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.fbo)
         self.renderbuffers = []
@@ -258,7 +263,7 @@ class _Framebuffer:
 
     def clear(self, sky_luminance_cd_m2: float) -> None:
         if "radiance" in self.passes:
-            # Alpha 0 marks the sky: every surface drawn writes alpha 1 (`read` returns the mask).
+            # Alpha 0 marks the sky: every opaque surface writes alpha 1, glass its coverage (`read`).
             GL.glClearBufferfv(GL.GL_COLOR, 0, np.array([sky_luminance_cd_m2] * 3 + [0.0], np.float32))
         if "depth_m" in self.passes:
             GL.glClearBufferfv(GL.GL_COLOR, 1, np.full(4, _NO_DEPTH, np.float32))
@@ -290,7 +295,7 @@ class _Framebuffer:
                 data = GL.glReadPixels(x, y, w, h, GL.GL_RGBA, GL.GL_FLOAT)
                 rgba = np.frombuffer(data, np.float32).reshape(h, w, 4)
                 out.radiance = np.ascontiguousarray(rgba[..., :3])
-                self.sky_mask = rgba[..., 3] == 0.0
+                self.coverage = np.ascontiguousarray(rgba[..., 3])
             elif name == "depth_m":
                 data = GL.glReadPixels(x, y, w, h, GL.GL_RED, GL.GL_FLOAT)
                 depth = np.frombuffer(data, np.float32).reshape(h, w).copy()
@@ -490,6 +495,29 @@ class _PassRenderer(pyrender.Renderer):
         self._profile_textures[id(scene)] = (weakref.ref(scene), texture)
         return texture
 
+    def _bind_and_draw_primitive(self, primitive, pose, program, flags):
+        """pyrender's draw of a primitive, except for blended ones (glass): the shadow-map pass (the only
+        depth-only caller here) skips them, and a lit draw blends their alpha as coverage.
+
+        Glass casts no shadow: it passes about 75 % of the light (`camgen.vehicles.cabin`), so a cabin lit
+        through unshadowed glass is nearer the truth than one that only the ambient term reaches (pyrender's
+        shadow pass draws every primitive, and a car's windows blocked all sun and lamp light inside).
+        pyrender blends with glBlendFunc(SRC_ALPHA, ONE_MINUS_SRC_ALPHA), which leaves a² + (1 − a)·behind
+        in alpha; for the duration of the draw its glBlendFunc becomes glBlendFuncSeparate with alpha's
+        factors (ONE, ONE_MINUS_SRC_ALPHA), so alpha becomes a + (1 − a)·behind: 1 − τ after every pane,
+        τ the product of their transmittances (`Renderer.draw` composites the background behind it).
+        Opaque primitives are drawn by pyrender unchanged."""
+        if primitive.material.alphaMode != "BLEND":
+            return super()._bind_and_draw_primitive(primitive, pose, program, flags)
+        if flags & RenderFlags.DEPTH_ONLY:
+            return None
+        module = sys.modules[pyrender.Renderer.__module__]
+        own_blend_func, module.glBlendFunc = module.glBlendFunc, _blend_with_coverage
+        try:
+            return super()._bind_and_draw_primitive(primitive, pose, program, flags)
+        finally:
+            module.glBlendFunc = own_blend_func
+
     def forward(self, scene, nodes, instance_ids, V, P, cam_position, flags: int, lit: bool) -> None:
         GL.glEnable(GL.GL_DEPTH_TEST)
         GL.glDepthMask(GL.GL_TRUE)
@@ -518,6 +546,12 @@ class _PassRenderer(pyrender.Renderer):
             self._reset_active_textures()
         if program is not None:
             program._unbind()
+
+
+def _blend_with_coverage(source_factor, destination_factor) -> None:
+    """pyrender's blend factors for colour, and (ONE, ONE_MINUS_SRC_ALPHA) for alpha (coverage: the
+    target's alpha accumulates 1 − ∏(1 − a), `_PassRenderer._bind_and_draw_primitive`)."""
+    GL.glBlendFuncSeparate(source_factor, destination_factor, GL.GL_ONE, GL.GL_ONE_MINUS_SRC_ALPHA)
 
 
 def _draw_order(scene, nodes, cam_position: np.ndarray, lit: bool) -> list:
@@ -657,7 +691,9 @@ class Renderer:
         depth-tested against it, exactly as if everything were drawn together, provided both draws
         use the same `clip_range_m` (near, far in m; default: from the scene's current bounds, which
         move with the actors). Nodes are shaded still before moving, each near to far (`front_to_back`),
-        whatever the order given, and see-through (blended) primitives after every opaque one (`_draw_order`).
+        whatever the order given, and see-through (blended) primitives after every opaque one (`_draw_order`);
+        the sky and the far ground, filled in after the draw, show through glass (`composite_background`),
+        and fog lies before and behind it (`fogged_radiance`).
         `shadow_fit`: what the shadow maps are fitted to (default: this view and the scene's current
         bounds); draws sharing one shade every surface they both see alike. `crop_px`: draw only the
         pixels (x0, y0, x1, y1) of `view` (x1, y1 exclusive; passes of that size), at a cost that follows
@@ -731,18 +767,13 @@ class Renderer:
         if not read:
             return Passes()
         out = target.read(crop_px)
-        if out.radiance is not None and getattr(graph, "sky", "uniform") != "uniform" and target.sky_mask.any():
-            out.radiance[target.sky_mask] = sky_view(graph, view)[target.sky_mask]
-        ground_depth_m = None
-        if out.radiance is not None and getattr(graph, "far_ground", None) is not None and target.sky_mask.any():
-            ground_depth_m = far_ground_depth_m(graph.far_ground, view)
-            ground_depth_m[~target.sky_mask] = np.inf
-            below = np.isfinite(ground_depth_m)
-            if below.any():
-                np.copyto(out.radiance, far_ground_radiance(graph, view, below), where=below[..., None])
-        if out.radiance is not None and fog_visibility_m is not None:
-            depth_m = out.depth_m if ground_depth_m is None else np.minimum(out.depth_m, ground_depth_m)
-            out.radiance = fogged_radiance(graph, view, out.radiance, depth_m, fog_visibility_m)
+        if out.radiance is not None:
+            behind = composite_background(graph, view, out.radiance, target.coverage)
+            if fog_visibility_m is not None:
+                depth_m = out.depth_m
+                if behind.open_depth_m is not None:
+                    depth_m = np.minimum(depth_m, behind.open_depth_m)
+                out.radiance = fogged_radiance(graph, view, out.radiance, depth_m, fog_visibility_m, behind)
         if "depth_m" not in requested:
             out.depth_m = None
         return out
@@ -942,6 +973,64 @@ def far_ground_brdf_radiance(graph, rays: np.ndarray) -> np.ndarray:
     return out
 
 
+@dataclass
+class Behind:
+    """What a draw's background (the sky and the far ground, filled in after the draw) puts behind its
+    pixels (`composite_background`)."""
+
+    open_depth_m: np.ndarray | None
+    """(H, W) camera-z depth of the far ground at the pixels that show nothing else, +inf elsewhere (and
+    under the sky); None without a far ground or where the draw shows no background at all."""
+    rows: np.ndarray
+    """(N,) rows and `cols` (N,) columns of the pixels that see the background through glass only."""
+    cols: np.ndarray
+    transmittance: np.ndarray
+    """(N,) float32 τ there: the product of the panes' transmittances, 1 − the target's alpha."""
+    radiance: np.ndarray
+    """(N, 3) float32 B there: the sky's or the far ground's radiance behind the glass."""
+    depth_m: np.ndarray
+    """(N,) float32 camera-z depth of that background: the far ground's, +inf for the sky."""
+
+
+def composite_background(graph, view: View, radiance: np.ndarray, coverage: np.ndarray) -> Behind:
+    """Fill in the background behind a draw's `radiance` (H, W, 3; in place) from the target's alpha
+    `coverage` (H, W; `_Framebuffer.coverage`): the CIE sky (`sky_view`) or the far ground
+    (`far_ground_radiance`) where it is 0, exactly, and where glass lies over the background
+    (0 < alpha < 1), radiance += τ·(B − clear): the draw blended the panes over the clear colour (the
+    uniform `sky_luminance_cd_m2`), which the background B replaces in the share τ = 1 − alpha of it
+    that the glass transmits. Returns what fog needs (`fogged_radiance`)."""
+    open_sky = coverage == 0.0
+    rows, cols = np.nonzero((coverage > 0.0) & (coverage < 1.0))
+    clear = np.float32(graph.sky_luminance_cd_m2)
+    any_background = bool(len(rows)) or bool(open_sky.any())
+    if getattr(graph, "sky", "uniform") != "uniform" and any_background:
+        sky = sky_view(graph, view)
+        if open_sky.any():
+            radiance[open_sky] = sky[open_sky]
+        behind = sky[rows, cols]
+    else:
+        behind = np.full((len(rows), 3), clear, np.float32)
+    behind_depth_m = np.full(len(rows), np.inf, np.float32)
+    open_depth_m = None
+    if getattr(graph, "far_ground", None) is not None and any_background:
+        ground_depth_m = far_ground_depth_m(graph.far_ground, view)
+        behind_depth_m = ground_depth_m[rows, cols]
+        seen = open_sky.copy()
+        seen[rows, cols] = True
+        ground_depth_m[~seen] = np.inf
+        below = np.isfinite(ground_depth_m)
+        if below.any():
+            ground = far_ground_radiance(graph, view, below)
+            np.copyto(radiance, ground, where=(below & open_sky)[..., None])
+            under = np.isfinite(behind_depth_m)
+            behind[under] = ground[rows[under], cols[under]]
+        ground_depth_m[~open_sky] = np.inf
+        open_depth_m = ground_depth_m
+    transmittance = 1.0 - coverage[rows, cols]
+    radiance[rows, cols] += transmittance[:, None] * (behind - clear)
+    return Behind(open_depth_m, rows, cols, transmittance, behind, behind_depth_m)
+
+
 def ray_lengths(view: View) -> np.ndarray:
     """(H, W) float32 length of the ray through each pixel per metre of camera z, |K⁻¹(u, v, 1)|:
     distance = depth_m × this."""
@@ -959,12 +1048,36 @@ def horizon_airlight(graph, view: View) -> np.ndarray:
     return _sky_on_grid(graph, view, horizontal=True)
 
 
-def fogged_radiance(graph, view: View, radiance: np.ndarray, depth_m: np.ndarray, visibility_m: float) -> np.ndarray:
-    """`radiance` of `view` seen through the graph's fog (`camgen.world.fog.apply_fog`), the distance of
-    each pixel from its depth (camera z, +inf for the sky)."""
-    from camgen.world.fog import apply_fog
+def fogged_radiance(
+    graph, view: View, radiance: np.ndarray, depth_m: np.ndarray, visibility_m: float, behind: Behind | None = None
+) -> np.ndarray:
+    """`radiance` of `view` seen through the graph's fog (`camgen.world.fog.apply_fog`, Koschmieder 1924),
+    the distance of each pixel from its depth (camera z, +inf for the sky).
 
-    return apply_fog(radiance, depth_m * ray_lengths(view), horizon_airlight(graph, view), visibility_m)
+    Where glass lies over the background (`behind`, from `composite_background`), fog lies both between
+    the camera and the glass (d_g) and between the glass and the background (d_B), and the glass passes
+    τ of what reaches it. With t_g = exp(−3.912 d_g / V), t_B = exp(−3.912 d_B / V) (0 for the sky),
+    A the airlight, R the glass's own (reflected) radiance and B the background's: the light reaching the
+    glass from behind is B·t_B/t_g + A·(1 − t_B/t_g) (Koschmieder over d_B − d_g), and the camera sees
+
+        L = t_g·(R + τ·(B·t_B/t_g + A·(1 − t_B/t_g))) + (1 − t_g)·A
+          = t_g·R + τ·(t_B·B + (t_g − t_B)·A) + (1 − t_g)·A.
+
+    The composited pixel R + τ·B fogged as a surface at d_g gives t_g·(R + τ·B) + (1 − t_g)·A, so the
+    pixel takes τ·(t_g − t_B)·(A − B) more."""
+    from camgen.world.fog import apply_fog, transmittance
+
+    lengths = ray_lengths(view)
+    airlight = horizon_airlight(graph, view)
+    out = apply_fog(radiance, depth_m * lengths, airlight, visibility_m)
+    if behind is not None and len(behind.rows):
+        rows, cols = behind.rows, behind.cols
+        t_glass = transmittance(depth_m[rows, cols] * lengths[rows, cols], visibility_m)
+        t_behind = transmittance(behind.depth_m * lengths[rows, cols], visibility_m)
+        air = airlight[rows, cols] if airlight.ndim == 3 else airlight
+        share = (behind.transmittance * (t_glass - t_behind)).astype(np.float32)
+        out[rows, cols] += share[:, None] * (air - behind.radiance)
+    return out
 
 
 SHADOW_MARGIN_M = 0.5

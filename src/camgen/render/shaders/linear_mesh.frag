@@ -574,7 +574,11 @@ void main()
 #endif
     color.xyz += emissive;
 
-    float out_alpha = color.a * base_color.a;
+    // camgen: alpha is coverage. An opaque surface writes 1 whatever its base colour's alpha (glTF 2.0's
+    // OPAQUE: the alpha value is ignored); glass blends its alpha as a + (1 - a) * behind (the renderer's
+    // glBlendFuncSeparate), so the target's alpha ends as 1 - (the product of the panes' transmittances)
+    // over the background and 1 over any surface: Renderer.draw composites the sky and far ground behind.
+    float out_alpha = 1.0;
     if (transmissive != 0) {
         // camgen glass, blended as a * colour + (1 - a) * behind: the reflection R plus the transmitted
         // T (1 - F) of what lies behind, F Schlick's Fresnel reflectance at the view angle. The sky's
