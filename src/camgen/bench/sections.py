@@ -652,7 +652,6 @@ def _vehicles(repo: Path) -> Section:
                 "with their scores.\n\n"
                 + plots.link("vehicle_detections.jpg", "vehicle detections on each example camera")
             )
-        text.append(_table(results))
         return "\n\n".join(text)
 
     return Section(
