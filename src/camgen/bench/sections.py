@@ -647,7 +647,8 @@ def _vehicles(repo: Path) -> Section:
             sheet.parent.mkdir(parents=True, exist_ok=True)
             cv2.imwrite(str(sheet), contact_sheet(samples), [cv2.IMWRITE_JPEG_QUALITY, 85])
             text.append(
-                "The middle scored frame of each camera: vehicles that count in green, ignored ones in grey, "
+                f"Scored frame {FRAMES_PER_CAMERA // 2 + 1} of {FRAMES_PER_CAMERA} of each camera: vehicles that "
+                "count in green, ignored ones in grey, "
                 f"YOLOv4-tiny at 416×416 in red and {WIDE_INPUT_WIDTH_PX} px wide in blue, "
                 "with their scores.\n\n"
                 + plots.link("vehicle_detections.jpg", "vehicle detections on each example camera")
