@@ -95,6 +95,7 @@ def test_list_names_every_section(capsys):
         "tradeoffs",
         "growth",
         "people",
+        "vehicles",
         "sim",
         "coverage",
         "other",
