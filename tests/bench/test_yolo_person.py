@@ -9,7 +9,6 @@ the detection test onnxruntime too and OpenGL; they are skipped with the reason 
 from __future__ import annotations
 
 import importlib.util
-import itertools
 import json
 import sys
 import types
@@ -89,32 +88,6 @@ def test_a_higher_threshold_is_a_filter_of_one_decoding():
     filtered = [b for b in decode(output, identity, score_threshold=0.25) if b[4] > 0.5]
     direct = decode(output, identity, score_threshold=0.5)
     assert len(direct) > 20 and filtered == direct
-
-
-@pytest.mark.parametrize("size_px", [(2688, 1520), (3840, 2160), (1920, 1080), (700, 641)])
-def test_tiles_cover_the_frame_with_the_overlap(size_px):
-    width_px, height_px = size_px
-    origins = yolo_person.tile_origins(width_px, height_px)
-    covered = np.zeros((height_px, width_px), bool)
-    for x, y in origins:
-        assert 0 <= x <= width_px - 640 and 0 <= y <= height_px - 640
-        covered[y : y + 640, x : x + 640] = True
-    assert covered.all()
-    for axis in (0, 1):  # neighbouring tiles overlap by at least 20 % of a tile
-        starts = sorted({o[axis] for o in origins})
-        assert all(b - a <= 0.8 * 640 for a, b in itertools.pairwise(starts))
-    assert yolo_person.tile_origins(640, 360) == [(0, 0)]
-
-
-def test_merge_unites_boxes_that_mostly_overlap_the_smaller_one():
-    boxes = [
-        (100, 100, 150, 250, 0.9),  # a whole person
-        (100, 100, 150, 180, 0.5),  # its upper half from a tile cut at y = 180: all inside, merged
-        (120, 90, 170, 240, 0.6),  # shifted by 20 px: intersection 30×140 over 50×150 = 0.56, merged
-        (140, 100, 190, 250, 0.7),  # beside it: intersection 10×150 over 50×150 = 0.2, kept
-    ]
-    merged = yolo_person.merge(boxes)
-    assert merged == [(100, 90, 170, 250, 0.9), (140, 100, 190, 250, 0.7)]
 
 
 def test_missing_weights_name_the_fix(monkeypatch):

