@@ -132,13 +132,14 @@ def _ratio(numerator: int, denominator: int) -> str:
     return "—" if denominator == 0 else f"{numerator / denominator:.2f} ({numerator}/{denominator})"
 
 
-def detection_table(scores: list[DetectionScore]) -> str:
-    """One row per scene and camera; recall and precision (with their counts) for each detector."""
+def detection_table(scores: list[DetectionScore], counted: str = "people ≥ 96 px, ≥ 70 % visible") -> str:
+    """One row per scene and camera; recall and precision (with their counts) for each detector;
+    `counted` heads the column of the objects that count (`DetectionScore.people`)."""
     detectors = list(dict.fromkeys(s.detector for s in scores))
     rows: dict[tuple[str, str], dict[str, DetectionScore]] = {}
     for s in scores:
         rows.setdefault((s.scene, s.camera), {})[s.detector] = s
-    header = "| scene | camera | people ≥ 96 px, ≥ 70 % visible |" + "".join(
+    header = f"| scene | camera | {counted} |" + "".join(
         f" {d} recall | {d} precision |" for d in detectors
     )
     lines = [header, "|---|---|---:|" + "---:|---:|" * len(detectors)]

@@ -117,18 +117,28 @@ def ground_truth(coco: dict, image_id: int, person_id: int) -> tuple[list, list]
 
 
 def score_sequence(
-    directory: Path, scorers: Sequence[Scorer], *, sample_frame: int | None = None
+    directory: Path,
+    scorers: Sequence[Scorer],
+    *,
+    sample_frame: int | None = None,
+    truth: Callable[[dict, int], tuple[list, list]] | None = None,
 ) -> tuple[dict[str, tuple[int, int, int, int]], np.ndarray | None]:
-    """Per scorer, (people, hits, detections, false alarms) over a rendered camera folder (frames +
-    coco.json); and the frame at position `sample_frame` of the folder with the ground truth and each
-    scorer's boxes drawn (`draw_detections`), None without one."""
+    """Per scorer, (counted objects, hits, detections, false alarms) over a rendered camera folder
+    (frames + coco.json); and the frame at position `sample_frame` of the folder with the ground truth
+    and each scorer's boxes drawn (`draw_detections`), None without one. `truth(coco, image_id)`: the
+    boxes that count and those ignored (default: people, `ground_truth`)."""
     coco = json.loads((directory / "coco.json").read_text(encoding="utf-8"))
-    person_id = next(c["id"] for c in coco["categories"] if c["name"] == "person")
+    if truth is None:
+        person_id = next(c["id"] for c in coco["categories"] if c["name"] == "person")
+
+        def truth(coco, image_id):
+            return ground_truth(coco, image_id, person_id)
+
     sums = {scorer.name: np.zeros(4, dtype=int) for scorer in scorers}
     sample = None
     for position, image in enumerate(coco["images"]):
         frame = cv2.imread(str(directory / image["file_name"]))
-        counted, ignored = ground_truth(coco, image["id"], person_id)
+        counted, ignored = truth(coco, image["id"])
         runs: dict[int, list[Box]] = {}
         found_by = {}
         for scorer in scorers:
@@ -197,6 +207,29 @@ def person_detection_scores(
     """Render each example scene with people (every camera, frames spread over the sequence) and
     score each detector on the same frames (`detection_scorers` by default). With `samples`, the
     middle rendered frame of each camera, boxes drawn, goes into it by (scene, camera)."""
+    if scorers is None:
+        scorers, _ = detection_scorers()
+
+    def with_people(scene) -> bool:
+        return any(actor.cls == "person" for actor in scene.actors)
+
+    return detection_scores(repo, frames_per_camera, scorers, samples, wanted=with_people, prefix="realism")
+
+
+def detection_scores(
+    repo: Path,
+    frames_per_camera: int,
+    scorers: Sequence[Scorer],
+    samples: dict[tuple[str, str], np.ndarray] | None,
+    *,
+    wanted: Callable,
+    truth: Callable[[dict, int], tuple[list, list]] | None = None,
+    prefix: str,
+) -> list[DetectionScore]:
+    """Render each example scene that is `wanted` (every camera, `frames_per_camera` frames spread over
+    the sequence, in a temporary folder named camgen-bench-PREFIX-…) and score each of `scorers` on the
+    same frames against `truth` (`score_sequence`). With `samples`, the middle rendered frame of each
+    camera, boxes drawn, goes into it by (scene, camera)."""
     from camgen.bench.e2e_cases import spread_frames
     from camgen.bench.render_cases import _renderer
     from camgen.config import load_scene
@@ -204,24 +237,22 @@ def person_detection_scores(
     from camgen.plan import PlanSettings, compile_scene
     from camgen.plan.execute import execute
 
-    if scorers is None:
-        scorers, _ = detection_scorers()
     scores = []
     for path in sorted((repo / "scenes").glob("*.yaml")):
         loaded = load_scene(path)
-        if not any(actor.cls == "person" for actor in loaded.scene.actors):
+        if not wanted(loaded.scene):
             continue
         outputs = Outputs(video=False, frames="png", annotations=["coco"], camera_metadata=False)
         scene = loaded.scene.model_copy(update={"outputs": outputs})
         job = compile_scene(type(loaded)(**{**loaded.__dict__, "scene": scene}), PlanSettings())
-        out = Path(tempfile.mkdtemp(prefix="camgen-bench-realism-"))
+        out = Path(tempfile.mkdtemp(prefix=f"camgen-bench-{prefix}-"))
         frames = spread_frames(job.frame_count, frames_per_camera)
         try:
             execute(job, out, renderer=_renderer(), frames=frames, resolve_path=path.parent.joinpath)
             for camera in job.cameras:
                 (folder,) = [p for p in out.glob(f"*/{camera.name}") if p.is_dir()]
                 sums, sample = score_sequence(
-                    folder, scorers, sample_frame=len(frames) // 2 if samples is not None else None
+                    folder, scorers, sample_frame=len(frames) // 2 if samples is not None else None, truth=truth
                 )
                 for name, (people, hits, detections, false_alarms) in sums.items():
                     scores.append(DetectionScore(path.stem, camera.name, people, hits, detections, false_alarms, name))

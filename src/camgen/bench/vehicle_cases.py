@@ -11,17 +11,13 @@ count; smaller or more occluded ones are ignore regions; a detection matches at 
 
 from __future__ import annotations
 
-import json
-import shutil
-import tempfile
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 from camgen.bench.harness import Case
-from camgen.bench.people_cases import _ratio
-from camgen.bench.realism import DetectionScore, Scorer, draw_detections, score_frame
+from camgen.bench.people_cases import detection_table
+from camgen.bench.realism import DetectionScore, Scorer, detection_scores
 
 MIN_HEIGHT_PX = 48
 """Issue 20's threshold for a vehicle that counts."""
@@ -82,71 +78,24 @@ def vehicle_scorers() -> tuple[list[Scorer], str | None]:
     ], None
 
 
-def score_camera(directory: Path, scorers, *, sample_frame: int | None = None):
-    """Per scorer, (vehicles, hits, detections, false alarms) over a rendered camera folder (frames +
-    coco.json), and the frame at position `sample_frame` with the truth and each scorer's boxes drawn."""
-    coco = json.loads((directory / "coco.json").read_text(encoding="utf-8"))
-    sums = {scorer.name: np.zeros(4, dtype=int) for scorer in scorers}
-    sample = None
-    for position, image in enumerate(coco["images"]):
-        frame = cv2.imread(str(directory / image["file_name"]))
-        counted, ignored = ground_truth(coco, image["id"])
-        found_by = {}
-        for scorer in scorers:
-            found = [box for box in scorer.detect(frame) if box[4] > scorer.min_score]
-            hits, false_alarms = score_frame(found, counted, ignored)
-            sums[scorer.name] += (len(counted), hits, len(found), false_alarms)
-            found_by[scorer.name] = found
-        if position == sample_frame:
-            sample = draw_detections(frame, counted, ignored, found_by)
-    return {name: tuple(int(v) for v in total) for name, total in sums.items()}, sample
-
-
 def vehicle_detection_scores(
     repo: Path, frames_per_camera: int = FRAMES_PER_CAMERA, *, scorers=None, samples: dict | None = None
 ) -> list[DetectionScore]:
     """Render each example scene with vehicles by day (no `environment.night_sky`), every camera,
     frames spread over the sequence, and score each scorer on the same frames. `DetectionScore.people`
     holds the vehicles that count. With `samples`, the middle frame of each camera, boxes drawn."""
-    from camgen.bench.e2e_cases import spread_frames
-    from camgen.bench.render_cases import _renderer
-    from camgen.config import load_scene
-    from camgen.config.scene import Outputs
-    from camgen.plan import PlanSettings, compile_scene
-    from camgen.plan.execute import execute
 
     if scorers is None:
         scorers, _ = vehicle_scorers()
     if not scorers:
         return []
-    scores = []
-    for path in sorted((repo / "scenes").glob("*.yaml")):
-        loaded = load_scene(path)
-        if loaded.scene.environment.night_sky is not None:
-            continue
-        if not any(actor.cls in VEHICLE_CATEGORIES for actor in loaded.scene.actors):
-            continue
-        outputs = Outputs(video=False, frames="png", annotations=["coco"], camera_metadata=False)
-        scene = loaded.scene.model_copy(update={"outputs": outputs})
-        job = compile_scene(type(loaded)(**{**loaded.__dict__, "scene": scene}), PlanSettings())
-        out = Path(tempfile.mkdtemp(prefix="camgen-bench-vehicles-"))
-        frames = spread_frames(job.frame_count, frames_per_camera)
-        try:
-            execute(job, out, renderer=_renderer(), frames=frames, resolve_path=path.parent.joinpath)
-            for camera in job.cameras:
-                (folder,) = [p for p in out.glob(f"*/{camera.name}") if p.is_dir()]
-                sums, sample = score_camera(
-                    folder, scorers, sample_frame=len(frames) // 2 if samples is not None else None
-                )
-                for name, (vehicles, hits, detections, false_alarms) in sums.items():
-                    scores.append(
-                        DetectionScore(path.stem, camera.name, vehicles, hits, detections, false_alarms, name)
-                    )
-                if samples is not None and sample is not None:
-                    samples[(path.stem, camera.name)] = sample
-        finally:
-            shutil.rmtree(out, ignore_errors=True)
-    return scores
+
+    def by_day_with_vehicles(scene) -> bool:
+        return scene.environment.night_sky is None and any(a.cls in VEHICLE_CATEGORIES for a in scene.actors)
+
+    return detection_scores(
+        repo, frames_per_camera, scorers, samples, wanted=by_day_with_vehicles, truth=ground_truth, prefix="vehicles"
+    )
 
 
 def vehicle_cases(repo: Path, scores: list[DetectionScore], samples: dict | None = None) -> list[Case]:
@@ -161,18 +110,4 @@ def vehicle_cases(repo: Path, scores: list[DetectionScore], samples: dict | None
 
 def vehicle_table(scores: list[DetectionScore]) -> str:
     """One row per scene and camera; recall and precision (with their counts) for each scorer."""
-    detectors = list(dict.fromkeys(s.detector for s in scores))
-    rows: dict[tuple[str, str], dict[str, DetectionScore]] = {}
-    for s in scores:
-        rows.setdefault((s.scene, s.camera), {})[s.detector] = s
-    header = f"| scene | camera | vehicles ≥ {MIN_HEIGHT_PX} px, ≥ {100 * MIN_VISIBILITY:.0f} % visible |" + "".join(
-        f" {d} recall | {d} precision |" for d in detectors
-    )
-    lines = [header, "|---|---|---:|" + "---:|---:|" * len(detectors)]
-    for (scene, camera), by in rows.items():
-        cells = []
-        for d in detectors:
-            s = by[d]
-            cells += [_ratio(s.hits, s.people), _ratio(s.hits, s.hits + s.false_alarms)]
-        lines.append(f"| {scene} | {camera} | {next(iter(by.values())).people} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+    return detection_table(scores, f"vehicles ≥ {MIN_HEIGHT_PX} px, ≥ {100 * MIN_VISIBILITY:.0f} % visible")
