@@ -131,7 +131,11 @@ def board_spec(job) -> str:
 # --- rendered checkerboards (1–3) ------------------------------------------------------------------
 
 
-@pytest.fixture(scope="module", params=RENDERED_PROFILES)
+# The mustache lens is the slow variant (`make test-slow`): `make test` round-trips the barrel lens.
+@pytest.fixture(
+    scope="module",
+    params=[name if name == "barrel" else pytest.param(name, marks=pytest.mark.slow) for name in RENDERED_PROFILES],
+)
 def rendered(request, board_views):
     """(profile name, its YAML, planned job, folder of the 8-bit views, first fit), rendered once a session
     (`board_views`, shared with tests/render/test_lens_calibration.py)."""

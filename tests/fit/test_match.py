@@ -193,7 +193,8 @@ def checked_bins(fit: MatchFit) -> np.ndarray:
     return (fit.reference.count >= COUNT_MIN) & fit.reference.usable
 
 
-@pytest.mark.parametrize("source", ["png_fit", "video_fit"])
+# The PNG round trip's render check is the slow variant (`make test-slow`); the video one goes through the codec too.
+@pytest.mark.parametrize("source", [pytest.param("png_fit", marks=pytest.mark.slow), "video_fit"])
 def test_round_trip_reproduces_the_reference_nlf(source: str, request: pytest.FixtureRequest) -> None:
     fit: MatchFit = request.getfixturevalue(source)
     checked = checked_bins(fit)

@@ -74,7 +74,13 @@ CA_CORNERS_AVERAGED = 12
 
 # The other order than tests/fit/test_lens.py's (barrel, mustache): when both files start together, each renders
 # a different lens first and then finds the other's views made (`board_views`), instead of waiting on one.
-@pytest.fixture(scope="module", params=list(reversed(DISTORTIONS)))
+# The pincushion lens is the slow variant (`make test-slow`): barrel and mustache bracket it.
+@pytest.fixture(
+    scope="module",
+    params=[
+        pytest.param(name, marks=pytest.mark.slow) if name == "pincushion" else name for name in reversed(DISTORTIONS)
+    ],
+)
 def lens_calibration(request, board_views):
     """(job, corners found per view, calibration) of one distortion profile, rendered once a session
     (`board_views`, shared with tests/fit/test_lens.py, across test processes)."""
