@@ -188,6 +188,7 @@ def refit(rendered, renderer):
 @pytest.mark.opengl
 # One lens, the one with the most coefficients (k1, k2, p1, p2) to carry through the profile: each re-render
 # costs about 30 s of CI's test time, and the mustache lens goes through the same writer and loader.
+@pytest.mark.slow  # `make test-slow`; make test keeps the round trip above and the written fragment's checks
 @pytest.mark.parametrize("rendered", ["barrel"], indirect=True)
 def test_the_fitted_profile_renders_views_that_fit_to_the_same_lens(rendered, refit):
     name, _, _, _, first = rendered

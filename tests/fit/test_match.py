@@ -217,7 +217,8 @@ def test_round_trip_reproduces_the_reference_nlf(source: str, request: pytest.Fi
     assert np.nanmax(np.abs(verification.structure_error)) < 0.05 and abs(verification.blockiness_error) < 0.05
 
 
-@pytest.mark.parametrize("source", ["png_fit", "video_fit"])
+# The PNG variant is the slow one (`make test-slow`); the video one recovers them through the codec too.
+@pytest.mark.parametrize("source", [pytest.param("png_fit", marks=pytest.mark.slow), "video_fit"])
 def test_round_trip_recovers_the_noise_parameters(source: str, truth: Profile, request: pytest.FixtureRequest) -> None:
     fit: MatchFit = request.getfixturevalue(source)
     fitted = fit.profile.sensor
