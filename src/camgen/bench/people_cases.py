@@ -139,9 +139,7 @@ def detection_table(scores: list[DetectionScore], counted: str = "people ≥ 96 
     rows: dict[tuple[str, str], dict[str, DetectionScore]] = {}
     for s in scores:
         rows.setdefault((s.scene, s.camera), {})[s.detector] = s
-    header = f"| scene | camera | {counted} |" + "".join(
-        f" {d} recall | {d} precision |" for d in detectors
-    )
+    header = f"| scene | camera | {counted} |" + "".join(f" {d} recall | {d} precision |" for d in detectors)
     lines = [header, "|---|---|---:|" + "---:|---:|" * len(detectors)]
     for (scene, camera), by in rows.items():
         cells = []
@@ -165,6 +163,26 @@ def total(scores: list[DetectionScore], detector: str = "HOG") -> DetectionScore
         detections=sum(s.detections for s in mine),
         false_alarms=sum(s.false_alarms for s in mine),
     )
+
+
+def overall_scores(scores: list[DetectionScore]) -> str:
+    """Each detector's recall and precision over every scene and camera, as one line of text."""
+    parts = []
+    for detector in dict.fromkeys(s.detector for s in scores):
+        everything = total(scores, detector)
+        parts.append(
+            f"{detector}: recall **{everything.recall:.2f}** ({everything.hits} of {everything.people}), "
+            f"precision {everything.precision:.2f}"
+        )
+    return "; ".join(parts)
+
+
+def write_contact_sheet(path: Path, samples: dict) -> None:
+    """`contact_sheet(samples)` as a JPEG (quality 85) at `path`, its folder made if missing."""
+    import cv2
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    cv2.imwrite(str(path), contact_sheet(samples), [cv2.IMWRITE_JPEG_QUALITY, 85])
 
 
 def contact_sheet(samples: dict, tile_width_px: int = 480, columns: int = 3) -> np.ndarray:

@@ -510,7 +510,14 @@ def _growth(repo: Path) -> Section:
 def _people(repo: Path) -> Section:
     from camgen.annotate.detection import UPSCALE
     from camgen.bench import yolo_person
-    from camgen.bench.people_cases import DETECTION_CASE, PEOPLE, contact_sheet, detection_table, people_cases, total
+    from camgen.bench.people_cases import (
+        DETECTION_CASE,
+        PEOPLE,
+        detection_table,
+        overall_scores,
+        people_cases,
+        write_contact_sheet,
+    )
     from camgen.bench.realism import FRAMES_PER_CAMERA, MIN_HEIGHT_PX, MIN_VISIBILITY
 
     scores: list = []
@@ -541,26 +548,15 @@ def _people(repo: Path) -> Section:
         missing = yolo_person.available()
         if scores:
             detectors = list(dict.fromkeys(s.detector for s in scores))
-            overall = []
-            for detector in detectors:
-                everything = total(scores, detector)
-                overall.append(
-                    f"{detector}: recall **{everything.recall:.2f}** ({everything.hits} of {everything.people}), "
-                    f"precision {everything.precision:.2f}"
-                )
             text.append(
-                "Over every scene: " + "; ".join(overall) + ". Before camgen drew people (a white cylinder), "
+                "Over every scene: " + overall_scores(scores) + ". Before camgen drew people (a white cylinder), "
                 "no real-photo detector found any."
             )
             if not any(d.startswith(yolo) for d in detectors):
                 text.append(f"{yolo} was not run: {missing}")
             text.append(detection_table(scores))
         if samples:
-            import cv2
-
-            sheet = plots.path("people_detections.jpg")
-            sheet.parent.mkdir(parents=True, exist_ok=True)
-            cv2.imwrite(str(sheet), contact_sheet(samples), [cv2.IMWRITE_JPEG_QUALITY, 85])
+            write_contact_sheet(plots.path("people_detections.jpg"), samples)
             text.append(
                 "The middle scored frame of each camera: people that count in green, ignored people in grey, "
                 f"HOG in red, {yolo} ≥ {yolo_person.SCORE_THRESHOLD:g} in blue (its boxes ≥ "
@@ -593,7 +589,7 @@ def _people(repo: Path) -> Section:
 
 def _vehicles(repo: Path) -> Section:
     from camgen.bench import yolo_vehicle
-    from camgen.bench.people_cases import contact_sheet, total
+    from camgen.bench.people_cases import overall_scores, write_contact_sheet
     from camgen.bench.vehicle_cases import (
         FRAMES_PER_CAMERA,
         MIN_HEIGHT_PX,
@@ -627,21 +623,10 @@ def _vehicles(repo: Path) -> Section:
         if missing is not None and not scores:
             text.append(f"YOLOv4-tiny was not run: {missing}")
         if scores:
-            overall = []
-            for detector in dict.fromkeys(s.detector for s in scores):
-                everything = total(scores, detector)
-                overall.append(
-                    f"{detector}: recall **{everything.recall:.2f}** ({everything.hits} of {everything.people}), "
-                    f"precision {everything.precision:.2f}"
-                )
-            text.append("Over every scene: " + "; ".join(overall) + ".")
+            text.append("Over every scene: " + overall_scores(scores) + ".")
             text.append(vehicle_table(scores))
         if samples:
-            import cv2
-
-            sheet = plots.path("vehicle_detections.jpg")
-            sheet.parent.mkdir(parents=True, exist_ok=True)
-            cv2.imwrite(str(sheet), contact_sheet(samples), [cv2.IMWRITE_JPEG_QUALITY, 85])
+            write_contact_sheet(plots.path("vehicle_detections.jpg"), samples)
             text.append(
                 f"Scored frame {FRAMES_PER_CAMERA // 2 + 1} of {FRAMES_PER_CAMERA} of each camera: vehicles that "
                 "count in green, ignored ones in grey, "
