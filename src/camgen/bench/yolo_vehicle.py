@@ -1,4 +1,4 @@
-"""A YOLOv4-tiny vehicle detector trained on real photographs (COCO), run in NumPy.
+"""A YOLOv4-tiny detector of vehicles and people trained on real photographs (COCO), run in NumPy.
 
 The weights are AlexeyAB's YOLOv4-tiny (Bochkovskiy, Wang & Liao 2020, "YOLOv4: Optimal Speed and
 Accuracy of Object Detection"; the darknet release `yolov4-tiny.weights`, trained on MS COCO 2017:
@@ -17,10 +17,11 @@ w = anchor_w · exp(t_w) / W_net, objectness σ(t_o) and class probabilities σ(
 class being σ(t_o)·σ(t_c) (darknet's `get_yolo_detections`).
 
 The frame is resized to the network's input without keeping its aspect (darknet's default
-`resize_image`; `letter_box` is off in the cfg and in `darknet detector test`), RGB in [0, 1]. A box's
-vehicle score is its largest score over `VEHICLE_CLASSES` (bicycle, car, motorbike, bus, truck); boxes
-above `SCORE_THRESHOLD` are suppressed greedily across those classes at IoU `NMS_IOU`, so a vehicle
-called both "car" and "truck" is one detection.
+`resize_image`; `letter_box` is off in the cfg and in `darknet detector test`), RGB in [0, 1]. A
+`CocoDetector` reports a set of COCO classes as one: a box's score is its largest score over those
+classes, and boxes above `SCORE_THRESHOLD` are suppressed greedily across them at IoU `NMS_IOU`.
+`VehicleDetector` takes `VEHICLE_CLASSES` (bicycle, car, motorbike, bus, truck), so a vehicle called
+both "car" and "truck" is one detection; `PersonDetector` takes COCO's "person".
 """
 
 from __future__ import annotations
@@ -41,6 +42,10 @@ NMS_IOU = 0.45
 """IoU above which a lower-scored box is suppressed: darknet's `nms` in `test_detector`."""
 VEHICLE_CLASSES = ("bicycle", "car", "motorbike", "bus", "truck")
 """COCO classes that are road vehicles (darknet's `coco.names` spelling)."""
+PERSON_CLASSES = ("person",)
+"""COCO's person class (darknet's `coco.names` spelling)."""
+STRIDE_PX = 32
+"""YOLOv4-tiny's coarsest stride: its input sides must be multiples of it."""
 BN_EPSILON = 1e-6
 """Darknet adds this to √σ², not to σ² (`normalize_cpu`)."""
 LEAKY_SLOPE = 0.1
@@ -216,41 +221,93 @@ class DarknetNetwork:
         return boxes, scores
 
 
-class VehicleDetector:
-    """YOLOv4-tiny (COCO) vehicles in 8-bit BGR frames.
+def aspect_input_px(width_px: int, height_px: int, input_width_px: int) -> tuple[int, int]:
+    """A network input `input_width_px` wide with the frame's aspect: (`input_width_px`, the height
+    rounded to a multiple of `STRIDE_PX`, at least one stride)."""
+    height = round(input_width_px * height_px / width_px / STRIDE_PX)
+    return input_width_px, STRIDE_PX * max(1, height)
+
+
+class CocoDetector:
+    """YOLOv4-tiny (COCO) boxes of some COCO classes, taken as one class, in 8-bit BGR frames.
 
     ``detector(bgr)`` returns (x0, y0, x1, y1, score) boxes in pixel-edge coordinates of the frame,
-    clipped to it, highest score first, above `score_threshold`, as `yolo_person.decode` does.
-    `input_px` (width, height, multiples of 32) is the network's input; the cfg's 416 × 416 by default.
+    clipped to it, highest score first, above `score_threshold`, as `yolo_person.decode` does; a box's
+    score is its largest score over `classes` (names as in darknet's `coco.names`).
+    The network's input is `input_px` (width, height, multiples of 32; the cfg's 416 × 416 by default),
+    or, with `aspect_width_px`, `aspect_input_px` of each frame: that wide, at the frame's aspect.
     """
 
     name = "YOLOv4-tiny"
 
-    def __init__(self, *, score_threshold: float = SCORE_THRESHOLD, input_px: tuple[int, int] | None = None) -> None:
+    def __init__(
+        self,
+        classes: tuple[str, ...],
+        *,
+        score_threshold: float = SCORE_THRESHOLD,
+        input_px: tuple[int, int] | None = None,
+        aspect_width_px: int | None = None,
+    ) -> None:
+        if input_px is not None and aspect_width_px is not None:
+            raise ValueError("give input_px or aspect_width_px, not both")
         folder = model_dir()
         self.network = DarknetNetwork(
             (folder / "yolov4-tiny.cfg").read_text(encoding="utf-8"), (folder / "yolov4-tiny.weights").read_bytes()
         )
         names = (folder / "coco.names").read_text(encoding="utf-8").split("\n")
-        self.class_ids = [names.index(name) for name in VEHICLE_CLASSES]
+        unknown = [name for name in classes if name not in names]
+        if unknown:
+            raise ValueError(f"{', '.join(unknown)}: not COCO classes of coco.names")
+        self.class_ids = [names.index(name) for name in classes]
         self.input_px = input_px or (int(self.network.net["width"]), int(self.network.net["height"]))
+        self.aspect_width_px = aspect_width_px
         self.score_threshold = score_threshold
+
+    def input_size_px(self, width_px: int, height_px: int) -> tuple[int, int]:
+        """The network input (width, height) a frame of this size is resized to."""
+        if self.aspect_width_px is None:
+            return self.input_px
+        return aspect_input_px(width_px, height_px, self.aspect_width_px)
 
     def raw(self, bgr: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
         """Per yolo layer, boxes (centre, size in input pixels) and all 80 class scores."""
-        resized = cv2.resize(bgr, self.input_px, interpolation=cv2.INTER_LINEAR)
+        size = self.input_size_px(bgr.shape[1], bgr.shape[0])
+        resized = cv2.resize(bgr, size, interpolation=cv2.INTER_LINEAR)
         return self.network(resized[..., ::-1].transpose(2, 0, 1).astype(np.float32) / 255.0)
 
     def __call__(self, bgr: np.ndarray) -> list[tuple[float, float, float, float, float]]:
         height_px, width_px = bgr.shape[:2]
+        input_w, input_h = self.input_size_px(width_px, height_px)
         layers = self.raw(bgr)
         boxes = np.concatenate([b for b, _ in layers])
         scores = np.concatenate([s[:, self.class_ids] for _, s in layers])
         # Input pixels to frame pixels: each axis by its own factor (the resize did not keep the aspect).
-        boxes = boxes * np.array([width_px / self.input_px[0], height_px / self.input_px[1]] * 2, np.float32)
+        boxes = boxes * np.array([width_px / input_w, height_px / input_h] * 2, np.float32)
         return decode(
             np.concatenate([boxes.T, scores.T]),
             Letterbox(1.0, 0, 0, width_px, height_px),
             score_threshold=self.score_threshold,
             nms_iou=NMS_IOU,
+        )
+
+
+class VehicleDetector(CocoDetector):
+    """YOLOv4-tiny (COCO) vehicles (`VEHICLE_CLASSES` as one class) in 8-bit BGR frames (`CocoDetector`)."""
+
+    def __init__(self, *, score_threshold: float = SCORE_THRESHOLD, input_px: tuple[int, int] | None = None) -> None:
+        super().__init__(VEHICLE_CLASSES, score_threshold=score_threshold, input_px=input_px)
+
+
+class PersonDetector(CocoDetector):
+    """YOLOv4-tiny (COCO) people in 8-bit BGR frames (`CocoDetector` of `PERSON_CLASSES`)."""
+
+    def __init__(
+        self,
+        *,
+        score_threshold: float = SCORE_THRESHOLD,
+        input_px: tuple[int, int] | None = None,
+        aspect_width_px: int | None = None,
+    ) -> None:
+        super().__init__(
+            PERSON_CLASSES, score_threshold=score_threshold, input_px=input_px, aspect_width_px=aspect_width_px
         )
