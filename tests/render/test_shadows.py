@@ -227,3 +227,26 @@ def test_open_sunlit_ground_does_not_shadow_itself(renderer, azimuth_deg):
     assert ground.mean() > 0.5
     ratio = green[True][ground] / green[False][ground]
     assert ratio.min() > 0.999, f"darkest ground pixel at {ratio.min():.4f} of its light"
+
+
+def test_sun_cascades_split_what_a_camera_above_every_caster_sees():
+    """A camera 20 m straight above ground whose casters reach 3 m sees nothing nearer than 17 m: the split
+    depths run over the seen part's depths, so every cascade covers part of it, each with texels no coarser
+    than one map over all of it. Splitting from 1 m left the two nearer slices empty, fitted to the frustum's
+    corners high above the ground (texels 1.1 cm against 0.15-0.3 cm), and the shader, taking the first map
+    that holds a point, read the ground from those."""
+    from camgen.render.renderer import seen_part_of_box_m, sun_cascade_matrices
+
+    low, high = np.array([-10.0, -10.0, 0.0]), np.array([10.0, 10.0, 3.0])
+    view = _overhead(-3.58)
+    z = np.array([math.cos(math.radians(40.0)), 0.0, math.sin(math.radians(40.0))])  # towards the sun
+    x = np.cross([0.0, 1.0, 0.0], z)
+    R = np.column_stack([x / np.linalg.norm(x), [0.0, 1.0, 0.0], z])
+    seen = seen_part_of_box_m(view, 0.05, 40.0, low, high)
+    corners = np.array([[a, b, c] for a in (low[0], high[0]) for b in (low[1], high[1]) for c in (low[2], high[2])])
+    _, P_one = directional_shadow_matrices(R, corners, seen)
+    one_texel_m = 2.0 / (min(P_one[0, 0], P_one[1, 1]) * 2048)
+    for V, P in sun_cascade_matrices(R, (low, high), view, 0.05, 40.0, 2048):
+        assert 2.0 / (min(P[0, 0], P[1, 1]) * 2048) <= one_texel_m * 2 ** (1 / 8)  # the texel ladder's step
+        ndc = np.c_[seen, np.ones(len(seen))] @ (P @ V).T
+        assert np.any(np.all(np.abs(ndc[:, :2]) <= 1.0, axis=1))  # it holds some of what the view sees

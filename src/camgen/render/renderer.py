@@ -1172,8 +1172,9 @@ shadow maps for large-scale virtual environments", their practical split scheme:
 (1 − λ)(n + (f − n) i/N), with λ about 0.5-0.8)."""
 
 CASCADE_NEAR_M = 1.0
-"""The split scheme's near distance, m (the draw's near plane is 5 cm, which would squeeze the logarithmic
-splits against the lens; a fixed camera films nothing it needs shadows on nearer than this)."""
+"""The split scheme's nearest near distance, m (the draw's near plane is 5 cm, which would squeeze the
+logarithmic splits against the lens; a fixed camera films nothing it needs shadows on nearer than this), and
+the least depth its splits span (`sun_cascade_matrices`)."""
 
 CASCADE_TEXEL_STEPS_PER_OCTAVE = 8
 """A cascade's texel is rounded up to 2^(k/8) m, and its rectangle snapped to whole texels, so that as a PTZ
@@ -1209,17 +1210,20 @@ def sun_cascade_matrices(
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """`SUN_CASCADES` (V, P) pairs of a sun's shadow maps, finest first: each `directional_shadow_matrices`
     fitted to the part of the box [low, high] (every caster) that `view` sees between two split depths
-    (`cascade_splits_m`, over the depths of the part of the box it sees), its rectangle snapped to whole
-    texels (`_texel_snapped`). The last slice ends at the farthest seen point, so every seen point lies in one
-    of the maps; the shader takes the finest map that holds a point with its filter's reach."""
+    (`cascade_splits_m`, over the depths of the part of the box it sees, from its nearest, but no nearer than
+    `CASCADE_NEAR_M`), its rectangle snapped to whole texels (`_texel_snapped`). The last slice ends at the
+    farthest seen point, so every seen point lies in one of the maps; the shader takes the first map that
+    holds a point with its filter's reach, the finest where each slice sees part of the box (a camera above
+    every caster sees none of it nearer than its height over them; splits from 1 m there left the nearer
+    slices empty, fitted to the frustum's corners in the air, and the ground was read from those)."""
     low_m, high_m = box_m
     corners = box_corners(low_m, high_m, np.eye(4))
     seen = seen_part_of_box_m(view, near_m, far_m, low_m, high_m)
     T_cam_from_world = np.linalg.inv(view.T_world_from_cam)
     depths = seen @ T_cam_from_world[:3, :3].T + T_cam_from_world[:3, 3]
     farthest = float(np.clip(depths[:, 2].max(), near_m, far_m))
-    nearest = max(near_m, CASCADE_NEAR_M)
-    splits = cascade_splits_m(nearest, max(farthest, 2.0 * nearest), SUN_CASCADES)
+    nearest = max(near_m, CASCADE_NEAR_M, float(depths[:, 2].min()))
+    splits = cascade_splits_m(nearest, max(farthest, nearest + CASCADE_NEAR_M), SUN_CASCADES)
     splits[0] = near_m  # the first slice holds everything nearer too
     matrices = []
     for k in range(SUN_CASCADES):
