@@ -12,9 +12,16 @@ consistently wound surface (watertight). Its faces are split by position and nor
 glass (side windows between the pillars, windscreen, rear window; a bus's and a van's glazed ends),
 one primitive each, sharing the shell's vertices: together they stay watertight.
 
-Wheels are a tyre (a closed cylinder, `WHEEL_SECTIONS` sides) and a rim (hub and five spokes standing
-proud of the tyre's sidewall, so that a turning wheel shows it) in the wheel's own frame (axle along
-y). Lamps are thin boxes half sunk into the shell's ends; plates are quads 5 mm in front of them.
+Wheels are a tyre (a closed cylinder, `WHEEL_SECTIONS` sides) and a rim (hub, five spokes and the rim's
+outer ring at the rim's diameter, `RIM_SHARE`, standing proud of the tyre's sidewall, so that a turning
+wheel shows it) in the wheel's own frame (axle along y). Lamps are thin boxes half sunk into the shell's
+ends; plates are quads 5 mm in front of them.
+
+Underneath: the shell's faces that face the ground are the underbody (`UNDERBODY_RGB`: underseal and
+plastic undertrays, not the paint), and the ground under the floor, which sees the sky only through the
+gap under the sills, is drawn dark (`ground_shade`): a uniform ambient term would otherwise light the
+ground under a car as brightly as the open road, and a car under an overcast sky would stand on no
+shadow at all.
 """
 
 from __future__ import annotations
@@ -26,7 +33,7 @@ import numpy as np
 import trimesh
 
 from camgen.vehicles.look import VehicleLook
-from camgen.vehicles.plate import PLATE_SIZE_M
+from camgen.vehicles.plate import PLATE_SIZE_M, UK_PLATE_PATTERN
 
 UPPER_POINTS = 15
 LOWER_POINTS = 15
@@ -41,6 +48,23 @@ ARCH_GAP_M = 0.04
 """Clearance between a tyre and its wheel arch, m."""
 TYRE_WIDTH_SHARE = 0.115
 """Tyre section over the vehicle's width (205 mm of a 1.8 m car; 275 mm of a 2.55 m bus)."""
+RIM_SHARE = {
+    "hatchback": 381.0 / 621.5,
+    "sedan": 406.4 / 631.9,
+    "estate": 406.4 / 631.9,
+    "suv": 431.8 / 724.3,
+    "pickup": 431.8 / 776.3,
+    "van": 406.4 / 685.9,
+    "box_truck": 444.5 / 767.0,
+    "bus": 571.5 / 956.5,
+}
+"""The rim's diameter over the tyre's outer diameter for each body type's tyre (`camgen.vehicles.look`:
+ETRTO designations, outer diameter = rim × 25.4 mm + 2 × section × aspect): 185/65 R15 381 of 621.5 mm,
+205/55 R16 406.4 of 631.9, 225/65 R17 431.8 of 724.3, 265/65 R17 431.8 of 776.3, 215/65 R16C 406.4 of
+685.9, 215/75 R17.5 444.5 of 767, 275/70 R22.5 571.5 of 956.5: the rim fills 0.56–0.64 of the wheel."""
+RIM_LIP_SHARE = 0.08
+"""Radial width of the rim's visible outer ring (flange and lip, about 25 mm on a 16-inch rim), as a
+share of the tyre's radius."""
 
 
 @dataclass(frozen=True)
@@ -57,6 +81,10 @@ class Profile:
     """u-bands of paint that interrupt the side glass (B, C pillars)."""
     windscreen: tuple[float, float] = (0.0, 0.0)
     rear_window: tuple[float, float] = (0.0, 0.0)
+    doors: tuple[tuple[float, float], ...] = ()
+    """u-bands of glazed doors on the nearside (the kerb's side: `nearside_sign`), glass from
+    `door_glass_bottom` up to the side windows' top, whatever the beltline and pillars."""
+    door_glass_bottom: float = 0.2
     front_cap_glass: tuple[float, float] | None = None
     """z-band of the front end that is glass (a bus's or a truck cab's upright windscreen)."""
     rear_cap_glass: tuple[float, float] | None = None
@@ -117,11 +145,18 @@ PROFILES: dict[str, Profile] = {
     ),
     "bus": Profile(
         top=((0, 0.93), (0.01, 0.98), (0.02, 1.0), (0.98, 1.0), (0.99, 0.98), (1, 0.93)),
-        belt=0.37, side_glass=(0.025, 0.975), pillars=tuple((0.025 + 0.105 * k, 0.037 + 0.105 * k) for k in range(10)),
+        belt=0.43, side_glass=(0.025, 0.975), pillars=tuple((0.025 + 0.105 * k, 0.037 + 0.105 * k) for k in range(10)),
+        doors=((0.47, 0.58), (0.87, 0.985)), door_glass_bottom=0.2,
         front_cap_glass=(0.33, 0.90), rear_cap_glass=(0.55, 0.88), clearance_m=0.30, end_lift=0.10,
         tumblehome=0.02, corner_share=0.012, end_width=0.90,
     ),
 }  # fmt: skip
+"""The bus is a two-door low-floor city bus after Mercedes-Benz's "The Citaro: Technical Information"
+(Citaro 628.083, 2 doors): 11,950 mm long, 3,076 mm high with its air conditioning, floor 370 mm above
+the road and the waistline (the side windows' lower edge) 950 mm above the floor, so the beltline is
+1,320 mm up, 0.43 of the height; front overhang 2,705 mm with door 1 (1,250 mm clear) in it ahead of
+the front wheel, door 2 between the axles (here centred on the wheelbase, an estimate), both glazed
+leaves on the nearside."""
 
 
 @dataclass
@@ -321,6 +356,12 @@ def _glass(profile: Profile, look: VehicleLook, vertices, faces, quads: int) -> 
     glass |= above_belt & side & within(profile.side_glass) & ~pillar
     upper = (np.abs(n[:, 1]) < 0.45) & (z > profile.belt + 0.02)
     glass |= upper & (within(profile.windscreen) | within(profile.rear_window))
+    if profile.doors:
+        door = np.zeros(len(faces), dtype=bool)
+        for band in profile.doors:
+            door |= within(band)
+        nearside = n[:, 1] * nearside_sign(look) > 0.75
+        glass |= door & nearside & (z > profile.door_glass_bottom) & (z < top - 0.03)
     cap = np.arange(len(faces)) >= 2 * quads
     for band, front in ((profile.front_cap_glass, True), (profile.rear_cap_glass, False)):
         if band is None:
@@ -328,6 +369,12 @@ def _glass(profile: Profile, look: VehicleLook, vertices, faces, quads: int) -> 
         end = cap & ((centre[:, 0] > 0) == front)
         glass |= end & (z > band[0]) & (z < band[1])
     return glass.astype(np.int8)
+
+
+def nearside_sign(look: VehicleLook) -> float:
+    """+1 when the kerb side is the vehicle's left (+y: driven on the left, a UK-format plate,
+    `camgen.vehicles.plate`), −1 when it is its right."""
+    return 1.0 if UK_PLATE_PATTERN.match(look.plate_text) else -1.0
 
 
 def _box(size_m, centre_m) -> trimesh.Trimesh:
@@ -384,20 +431,45 @@ RIM_RGB = (0.45, 0.45, 0.46)
 """Linear albedo of a painted alloy wheel (silver)."""
 TRIM_RGB = (0.03, 0.03, 0.03)
 """Linear albedo of black plastic trim."""
+UNDERBODY_RGB = (0.04, 0.04, 0.04)
+"""Linear albedo of a car's underside: black PVC underbody protection and plastic undertrays (3–5 %,
+like black trim), not the body colour: the paint shop sprays the underbody with underseal."""
+UNDERBODY_NORMAL_Z = -0.5
+"""Shell faces whose outward normal points further down than this (more than 30° below the horizontal)
+are underbody."""
+GROUND_SHADE_RGB = (0.008, 0.008, 0.008)
+"""Linear albedo the ground under the floor is drawn with: a road's 0.1–0.25 times the share of the sky
+it still sees through the gap under the sills. A point d inside a gap of height c sees the sky up to an
+elevation α = atan(c / d); the 2-D view factor of a horizontal strip element to a band between angles
+φ1 and φ2 from its normal is (sin φ2 − sin φ1) / 2 (Howell, *A Catalog of Radiation Heat Transfer
+Configuration Factors*), so to the sky band up to α, (1 − cos α) / 2: 0.15 at d = c, 0.03 at d = 3c and,
+with both sides open, 0.014 under the middle of a car (c 0.15 m, 0.9 m to either sill). The ground under
+the floor is lit by a few per cent of what lights the open road."""
+GROUND_SHADE_Z_M = 0.02
+"""Height of the shaded ground under a vehicle, m: above every example scene's road planes (z 0–0.011 m)
+and below any vehicle's sill."""
 
 
-def wheel_meshes(radius_m: float, width_m: float) -> tuple[trimesh.Trimesh, list[trimesh.Trimesh]]:
-    """A tyre (a closed cylinder) and its rim (hub and five spokes, 8 mm proud of both sidewalls), in
-    the wheel's frame: axle along y, centred on the origin."""
+def wheel_meshes(
+    radius_m: float, width_m: float, rim_share: float = RIM_SHARE["sedan"]
+) -> tuple[trimesh.Trimesh, list[trimesh.Trimesh]]:
+    """A tyre (a closed cylinder) and its rim (hub, five spokes and the rim's outer ring
+    `RIM_LIP_SHARE` wide at `rim_share` of the tyre's radius, 8 mm proud of both sidewalls), in the
+    wheel's frame: axle along y, centred on the origin."""
     to_y = trimesh.transformations.rotation_matrix(np.pi / 2, (1, 0, 0))
     tyre = trimesh.creation.cylinder(radius=radius_m, height=width_m, sections=WHEEL_SECTIONS)
     tyre.apply_transform(to_y)
     proud = width_m + 0.016
     hub = trimesh.creation.cylinder(radius=0.22 * radius_m, height=proud, sections=16)
     hub.apply_transform(to_y)
-    rim = [hub]
+    rim_m = rim_share * radius_m
+    ring = trimesh.creation.annulus(
+        r_min=rim_m - RIM_LIP_SHARE * radius_m, r_max=rim_m, height=proud, sections=WHEEL_SECTIONS
+    )
+    ring.apply_transform(to_y)
+    rim = [hub, ring]
     for k in range(5):
-        spoke = _box((0.62 * radius_m, proud - 0.004, 0.11 * radius_m), (0.31 * radius_m, 0.0, 0.0))
+        spoke = _box((rim_m - 0.01 * radius_m, proud - 0.004, 0.11 * radius_m), (rim_m / 2, 0.0, 0.0))
         spoke.apply_transform(trimesh.transformations.rotation_matrix(2 * np.pi * k / 5, (0, 1, 0)))
         rim.append(spoke)
     return tyre, rim
@@ -472,6 +544,28 @@ def lamps_and_plates(look: VehicleLook) -> tuple[list[Part], dict[str, np.ndarra
     return lamps, corners, [_merge("plates", "plates", [front, rear])], _part("plate_backings", "trim", backings)
 
 
+def ground_shade(look: VehicleLook) -> Part:
+    """The ground under the vehicle's floor as the vehicle shades it (`GROUND_SHADE_RGB`): a quad
+    `GROUND_SHADE_Z_M` up, facing up, between the axles and between the tyres' outer faces, colours per
+    vertex. It stays within the four tyres' contact lines (raised 2 cm), so the vehicle's box and
+    silhouette are the ones its body and wheels give in any view; the ground under the overhangs sees
+    the sky through the open end and is left as it is."""
+    x0, x1 = look.rear_axle_x_m, look.front_axle_x_m
+    y = (look.track_m + TYRE_WIDTH_SHARE * look.width_m) / 2
+    z = GROUND_SHADE_Z_M
+    vertices = np.array([(x0, -y, z), (x1, -y, z), (x1, y, z), (x0, y, z)])
+    faces = np.array([(0, 1, 2), (0, 2, 3)])  # counter-clockwise seen from above
+    return Part("ground_shade", "gear", vertices, np.tile((0.0, 0.0, 1.0), (4, 1)), faces,
+                np.full(4, -1, np.int8), colours=np.tile(GROUND_SHADE_RGB, (4, 1)))  # fmt: skip
+
+
+def underbody_faces(vertices_m: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(F,) bool: which of `faces` face the ground (their normal's z below `UNDERBODY_NORMAL_Z`)."""
+    corners = vertices_m[faces]
+    n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    return n[:, 2] < UNDERBODY_NORMAL_Z * np.maximum(np.linalg.norm(n, axis=1), 1e-12)
+
+
 def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
     """The vehicle of `look`, at rest in its own frame; `driver`: with its driver seated at the wheel
     (`camgen.vehicles.cabin`). The glass lets the cabin (its dark lining, and the driver) show through."""
@@ -479,24 +573,28 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
 
     vertices, faces, normals, kind = shell(look)
     paint = faces[kind == 0]
-    used, remapped = np.unique(paint, return_inverse=True)
+    below = underbody_faces(vertices, paint)
+    used, remapped = np.unique(paint[~below], return_inverse=True)
     parts = [
         Part("body_paint", "paint", vertices[used], normals[used], remapped.reshape(-1, 3),
              np.full(len(used), -1, np.int8))
     ]  # fmt: skip
+    used, remapped = np.unique(paint[below], return_inverse=True)
+    underbody = Part("underbody", "gear", vertices[used], normals[used], remapped.reshape(-1, 3),
+                     np.full(len(used), -1, np.int8), colours=np.tile(UNDERBODY_RGB, (len(used), 1)))  # fmt: skip
     if (kind == 1).any():
         glass = glass_part(look, vertices, normals, faces[kind == 1])
         parts += [inner_glass_part(glass), glass]  # the far panes first (the renderer keeps the order)
     cabin = [lining_part(vertices, normals, paint)] + ([driver_part(look)] if driver else [])
     parts.append(_merge("cabin", "cabin", cabin))
-    tyre, rim = wheel_meshes(look.wheel_radius_m, TYRE_WIDTH_SHARE * look.width_m)
+    tyre, rim = wheel_meshes(look.wheel_radius_m, TYRE_WIDTH_SHARE * look.width_m, RIM_SHARE[look.body_type])
     tyres = _part("tyres", "gear", [(tyre, w) for w in range(4)], smooth=True)
     rims = _part("rims", "gear", [(piece, w) for w in range(4) for piece in rim])
     lamps, plate_corners, plates, backings = lamps_and_plates(look)
     for piece, rgb in ((tyres, TYRE_RGB), (rims, RIM_RGB), (backings, TRIM_RGB)):
         piece.colours = np.tile(rgb, (len(piece.vertices_m), 1))
     # Each primitive costs a draw call per pass (the renderer's per-draw overhead dominates a vehicle's):
-    # tyres, rims and plate backings share one.
-    parts.append(_merge("running_gear", "gear", [tyres, rims, backings]))
+    # tyres, rims, plate backings, the underbody and the shaded ground share one.
+    parts.append(_merge("running_gear", "gear", [tyres, rims, backings, underbody, ground_shade(look)]))
     parts += lamps + plates
     return VehicleModel(look=look, parts=parts, wheel_centres_m=wheel_centres(look), plate_corners_m=plate_corners)

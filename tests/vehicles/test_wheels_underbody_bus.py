@@ -1,0 +1,139 @@
+"""Wheels, underbody and the bus's glass against published references.
+
+- Each wheel's rim ring lies at the rim's diameter of its body type's tyre (ETRTO designation, the
+  rim's diameter in inches × 25.4 mm over the tyre's outer diameter), computed here from the
+  designations themselves, and the outer diameter agrees with `look.BODY_TYPES`' wheel radius.
+- The shell's faces that face the ground are drawn as the black underbody, never in the paint, and
+  paint, glass and underbody together are still the closed shell.
+- The shaded ground under a vehicle lies between its axles and tyres, under its floor: the vehicle's
+  extent in every direction is the same with and without it (so its box in any view is too).
+- The bus: its beltline at the Citaro's 950 mm waistline over a 370 mm floor (1.32 m of 3.076 m), two
+  glazed doors on the nearside only (the left for a UK-format plate), none on the offside.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from camgen.vehicles.body import (
+    PROFILES,
+    RIM_RGB,
+    RIM_SHARE,
+    STATION_SPACING_M,
+    UNDERBODY_RGB,
+    build_vehicle,
+    nearside_sign,
+    shell,
+    wheel_meshes,
+)
+from camgen.vehicles.look import BODY_TYPES, draw_look
+
+TYRES = {
+    "hatchback": (185, 65, 15),
+    "sedan": (205, 55, 16),
+    "estate": (205, 55, 16),
+    "suv": (225, 65, 17),
+    "pickup": (265, 65, 17),
+    "van": (215, 65, 16),
+    "box_truck": (215, 75, 17.5),
+    "bus": (275, 70, 22.5),
+}
+"""ETRTO designations (section mm / aspect % R rim inches) of each body type's typical tyre."""
+CLASS_OF = {"van": "truck", "box_truck": "truck", "bus": "bus"}
+
+
+def _look(body: str, seed: int = 1, **pinned):
+    return draw_look(seed, CLASS_OF.get(body, "car"), pinned={"body_type": body, **pinned})
+
+
+@pytest.mark.parametrize("body", sorted(TYRES))
+def test_rim_ring_lies_at_the_rim_diameter_of_the_tyre(body):
+    section_mm, aspect_pct, rim_in = TYRES[body]
+    rim_mm = 25.4 * rim_in
+    outer_mm = rim_mm + 2 * section_mm * aspect_pct / 100
+    assert BODY_TYPES[body].wheel_radius_m == pytest.approx(outer_mm / 2000, abs=0.002)
+    look = _look(body)
+    model = build_vehicle(look)
+    gear = next(part for part in model.parts if part.name == "running_gear")
+    rim = (gear.wheel == 0) & np.all(np.isclose(gear.colours, RIM_RGB), axis=1)
+    radius = np.hypot(*gear.vertices_m[rim][:, [0, 2]].T)  # a wheel's vertices are in its own frame
+    assert radius.max() == pytest.approx(look.wheel_radius_m * rim_mm / outer_mm, rel=0.01)
+    # A ring, not only spokes: rim vertices all round the circle at the rim's diameter.
+    outer = gear.vertices_m[rim][radius > 0.99 * radius.max()]
+    angles = np.sort(np.arctan2(outer[:, 2], outer[:, 0]))
+    assert np.diff(np.concatenate([angles, [angles[0] + 2 * np.pi]])).max() < np.radians(15)
+    tyre, _ = wheel_meshes(look.wheel_radius_m, 0.2, RIM_SHARE[body])
+    assert tyre.is_watertight
+
+
+@pytest.mark.parametrize("body", sorted(PROFILES))
+def test_faces_facing_the_ground_are_underbody_and_the_shell_stays_closed(body):
+    look = _look(body)
+    model = build_vehicle(look)
+    parts = {part.name: part for part in model.parts}
+    paint = parts["body_paint"]
+    corners = paint.vertices_m[paint.faces]
+    n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    assert n[:, 2].min() >= -0.5 - 1e-9  # no paint faces the ground
+    gear = parts["running_gear"]
+    dark = np.all(np.isclose(gear.colours, UNDERBODY_RGB), axis=1)
+    # The underbody faces of the running gear, with the paint and the glass: the whole closed shell.
+    under = gear.faces[dark[gear.faces].all(axis=1)]
+    assert len(under) > 10
+    pieces = [
+        trimesh.Trimesh(paint.vertices_m, paint.faces, process=False),
+        trimesh.Trimesh(parts["body_glass"].vertices_m, parts["body_glass"].faces, process=False),
+        trimesh.Trimesh(gear.vertices_m, under, process=False),
+    ]
+    union = trimesh.util.concatenate(pieces)
+    union.merge_vertices()
+    _, faces, _, _ = shell(look)
+    assert union.is_watertight and len(union.faces) == len(faces)
+
+
+@pytest.mark.parametrize("body", ["hatchback", "suv", "van", "bus"])
+def test_the_shaded_ground_stays_under_the_vehicle(body):
+    look = _look(body)
+    model = build_vehicle(look)
+    gear = next(part for part in model.parts if part.name == "running_gear")
+    low = gear.vertices_m[:, 2] < 0.05
+    shade = low & (gear.wheel == -1)
+    assert shade.sum() == 4
+    # Under the floor: below the sill, inside the axles and the tyres' outer faces.
+    quad = gear.vertices_m[shade]
+    assert quad[:, 2].max() < PROFILES[body].clearance_m
+    assert np.all(np.abs(quad[:, 1]) <= look.width_m / 2)
+    everything = np.concatenate([part.vertices_m for part in model.parts if part.name != "running_gear"])
+    # The wheels at rest: their vertices are in their own frames, centred on each wheel's centre.
+    wheels = gear.vertices_m[gear.wheel >= 0] + model.wheel_centres_m[gear.wheel[gear.wheel >= 0]]
+    without = np.concatenate([everything, wheels])
+    with_quad = np.concatenate([without, quad])
+    assert np.array_equal(with_quad.min(axis=0)[:2], without.min(axis=0)[:2])
+    assert np.array_equal(with_quad.max(axis=0), without.max(axis=0))
+    assert with_quad.min(axis=0)[2] == without.min(axis=0)[2]
+
+
+def test_the_bus_has_the_citaros_beltline_and_doors_on_the_nearside():
+    assert PROFILES["bus"].belt == pytest.approx((370 + 950) / 3076, abs=0.005)
+    for plate, side in (("AB12 CDE", 1.0), ("B-XY 123", -1.0)):
+        look = _look("bus", plate_text=plate)
+        assert nearside_sign(look) == side
+        vertices, faces, _, glass = shell(look)
+        corners = vertices[faces[glass == 1]]
+        normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+        low = corners.mean(axis=1)[:, 2] < PROFILES["bus"].belt * look.height_m
+        u = corners.mean(axis=1)[:, 0] / look.length_m + 0.5
+        near = normal[:, 1] * side > 0.75
+        low_side = low & (np.abs(normal[:, 1]) > 0.75)
+        # Side glass below the beltline only in the doors, on the nearside, and in both doors.
+        assert not (low_side & ~near).any()
+        for u0, u1 in PROFILES["bus"].doors:
+            assert (low_side & near & (u > u0) & (u < u1)).sum() >= 4
+        # (a triangle's centre may lie half a station outside the band its quad's centre is in)
+        slack = STATION_SPACING_M / look.length_m
+        doors = np.any([(u > a - slack) & (u < b + slack) for a, b in PROFILES["bus"].doors], axis=0)
+        assert not (low_side & ~doors).any()
