@@ -15,9 +15,13 @@ Distributions and their sources:
   place; Market-1501's campus population is 98 % teen/adult: Lin et al. 2019).
 - Build (MakeHuman weight parameter) from a BMI-like spread: Beta(4, 4) around the average; muscle
   Beta(5, 5).
-- Skin: the Monk Skin Tone scale's ten swatches, decoded to linear sRGB and scaled so that its light
-  end meets the ColorChecker 2005 "light skin" patch (0.568, 0.293, 0.218) and its dark end the
-  "dark skin" patch's luminance (colour-science's ColorChecker data, D65).
+- Skin: ten tones indexed as the Monk Skin Tone scale's (Monk 2019), each a reflectance in geometric
+  steps through the ColorChecker 2005 "light skin" (0.568, 0.293, 0.218) and "dark skin" (0.173,
+  0.082, 0.057) patches (colour-science's ColorChecker data, D65; the patches were matched to the
+  spectral reflectance of real skin, McCamy et al. 1976) at tones 2 and 7. The Monk swatches
+  themselves are display colours for annotators: decoded to linear sRGB their light tones are nearly
+  grey (R : G : B = 1 : 0.85 : 0.60 at tone 4, against 1 : 0.52 : 0.38 for the light-skin patch), too
+  little red for skin, so they index the tones but do not colour them.
 - Hair colour by region-free frequencies (black/dark brown 65 %, brown 20 %, blond 8 %, red 2 %,
   with grey rising with age: Panhard et al. 2012); long hair for 78.5 % of women and 0.6 % of men,
   backpack 25.7 %, handbag 10.8 %, skirt or dress 29.7 % of women (Market-1501 attributes, Lin et
@@ -64,35 +68,15 @@ LOWER_COLOURS = {
     "winter": {"black": 46.1, "blue": 30.0, "gray": 9.3, "white": 7.8, "brown": 4.6, "red": 1.7, "green": 0.4},
 }  # fmt: skip
 
-# Monk Skin Tone scale (Monk 2019), linear sRGB of its swatches, light to dark; scaled below.
-_MST_LINEAR = np.array(
-    [
-        (0.922, 0.847, 0.776),
-        (0.896, 0.799, 0.708),
-        (0.930, 0.823, 0.631),
-        (0.823, 0.701, 0.491),
-        (0.680, 0.509, 0.305),
-        (0.352, 0.209, 0.093),
-        (0.223, 0.107, 0.056),
-        (0.117, 0.053, 0.034),
-        (0.042, 0.031, 0.023),
-        (0.022, 0.018, 0.014),
-    ]
-)
 _LIGHT_SKIN = np.array((0.568, 0.293, 0.218))
 _DARK_SKIN = np.array((0.173, 0.082, 0.057))
 
 
 def skin_rgb(tone: int) -> tuple[float, float, float]:
-    """Linear albedo of Monk skin tone 1…10: the swatch's chromaticity at a reflectance level through
-    the ColorChecker light-skin (at tone 2) and dark-skin (at tone 7) patches' luminances, in
-    geometric steps (a display swatch is brighter than skin reflects)."""
-    swatch = _MST_LINEAR[tone - 1]
-    luminance = lambda rgb: float(np.dot(rgb, (0.2126, 0.7152, 0.0722)))  # noqa: E731
-    light, dark = luminance(_LIGHT_SKIN), luminance(_DARK_SKIN)
-    # Reflectance level: the ColorChecker anchors at tones 2 and 7, geometric steps between and beyond.
-    level = light * (dark / light) ** ((tone - 2) / 5)
-    rgb = swatch / luminance(swatch) * level
+    """Linear albedo of Monk skin tone 1…10: per channel, geometric steps through the ColorChecker
+    light-skin patch at tone 2 and the dark-skin patch at tone 7, ρ(t) = ρ_light · (ρ_dark / ρ_light)^((t − 2) / 5),
+    extrapolated beyond them (tone 1 lighter, 8–10 darker)."""
+    rgb = _LIGHT_SKIN * (_DARK_SKIN / _LIGHT_SKIN) ** ((tone - 2) / 5)
     return tuple(float(c) for c in np.clip(rgb, 0.003, 0.9))
 
 
@@ -225,7 +209,9 @@ def draw_appearance(seed: int, *, season: Season = "mixed", pinned: dict[str, ob
         else {"tshirt": 65, "shirt": 25, "jacket": 10, "coat": 0}
     )
     top: Top = _choice(rng, top_table)  # type: ignore[assignment]
-    long_sleeves = bool(top in ("jacket", "coat") or (top == "shirt" and u[8] < 0.6))
+    # Sleeves follow the top that is worn, pinned or drawn: a jacket or coat has long sleeves.
+    worn_top = pinned.get("top", top)
+    long_sleeves = bool(worn_top in ("jacket", "coat") or (worn_top == "shirt" and u[8] < 0.6))
     skirt_p = 0.297 if sex == "female" and age_group != "child" else (0.15 if sex == "female" else 0.0)
     shorts_p = 0.0 if winter else (0.45 if age_group == "child" else 0.35)
     bottom: Bottom = "skirt" if u[9] < skirt_p else ("shorts" if u[10] < shorts_p else "trousers")

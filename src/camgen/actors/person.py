@@ -55,6 +55,14 @@ _BONE_TO_JOINT = {"Root": "pelvis"} | {
 # Garment thickness: how far each garment stands off the tights helper, m.
 TOP_OFFSET_M = {"tshirt": 0.004, "shirt": 0.008, "jacket": 0.022, "coat": 0.028}
 TROUSERS_OFFSET_M = 0.010
+WAISTBAND_UNDER_TOP_M = 0.05
+"""How far trousers and skirts' briefs reach up under a top's hem, m (more than the tallest helper
+face there, about 4 cm), standing off the body half as far as the top does."""
+TROUSERS_HEM_EASE_M = 0.025
+"""How much further trousers stand off the leg at the ankle than at the knee, m: a straight trouser leg
+hangs from the knee, its hem about 42–46 cm round (a men's straight-leg opening of 21–23 cm laid
+flat) about an ankle of 22–25 cm (ANSUR II, Gordon et al. 2014), i.e. about 3 cm out all round;
+following the leg's taper like tights, trousers read as leggings."""
 SKIRT_OFFSET_M = 0.02
 SKIRT_LEG_FOLLOW = 0.5
 SHOE_OFFSET_M = 0.012
@@ -196,8 +204,12 @@ def _regions(points_m: np.ndarray, joint: np.ndarray, joints_m: np.ndarray, look
         y < elbow_y, (y - shoulder_y) / (elbow_y - shoulder_y), 1 + (y - elbow_y) / (wrist_y - elbow_y)
     )
     sleeve = 1.85 if look.long_sleeves else 0.45
+    # A top's hem is a level line around the body (a garment's hemline is cut level to the floor): it
+    # covers the tops of the thighs where they reach above it, and never runs down between the legs.
+    # (By the vertices' dominant joint alone, the pelvis's vertices reach the crotch while the outer hip
+    # follows the thighs, and the hem would dip to the crotch like a leotard's.)
     hem_z = hip_z - (0.10 if look.top in ("jacket", "coat") else 0.04)
-    top = ((torso | (neck & (z < joints_m[J["neck_01"], 2] + 0.01))) & (z >= hem_z)) | (
+    top = (((torso | legs) | (neck & (z < joints_m[J["neck_01"], 2] + 0.01))) & (z >= hem_z)) | (
         (upper_arm | lower_arm) & (along_arm <= sleeve)
     )
     if look.bottom == "trousers":
@@ -206,9 +218,13 @@ def _regions(points_m: np.ndarray, joint: np.ndarray, joints_m: np.ndarray, look
         leg_end_z = knee_z + 0.35 * (hip_z - knee_z)
     else:  # a skirt: the tights only as far as the skirt's own helper reaches
         leg_end_z = hip_z - 0.02
-    bottom = ~top & (((torso & (z < waist_z + 0.02)) | legs) & (z >= leg_end_z))
+    # The trousers (or briefs) reach `WAISTBAND_UNDER_TOP_M` up under the top's hem: ending where the
+    # top begins, the ring of helper faces between the two would belong to neither, a slit through the
+    # body (the skin under both is not drawn) that showed the ground through the waist.
+    under_top = z < hem_z + WAISTBAND_UNDER_TOP_M
+    bottom = (~top | under_top) & (((torso & (z < waist_z + 0.02)) | legs) & (z >= leg_end_z))
     if look.bottom == "skirt":  # briefs under the skirt, in its colour
-        bottom |= ~top & (torso | legs) & (z < waist_z + 0.02) & (z >= hip_z - 0.12)
+        bottom |= (~top | under_top) & (torso | legs) & (z < waist_z + 0.02) & (z >= hip_z - 0.12)
     shoes = feet | (legs & (z < ankle_z + 0.01))
     return {"top": top, "bottom": bottom, "shoes": shoes}
 
@@ -226,8 +242,8 @@ class _Piece:
 
 def _surface(vertices_m, faces, keep_vertex, colour, offset_m=0.0) -> _Piece | None:
     """The faces of an hm08 surface all of whose vertices are kept, pushed out by `offset_m` along their
-    normals (a garment's thickness), with the skinning of the vertices they use. `colour`: one (3,)
-    albedo, or (V, 3) per hm08 vertex."""
+    normals (a garment's thickness: one value, or (V,) per hm08 vertex), with the skinning of the
+    vertices they use. `colour`: one (3,) albedo, or (V, 3) per hm08 vertex."""
     keep_face = keep_vertex[faces].all(axis=1)
     sub = faces[keep_face]
     if len(sub) == 0:
@@ -237,7 +253,10 @@ def _surface(vertices_m, faces, keep_vertex, colour, offset_m=0.0) -> _Piece | N
     remap[used] = np.arange(len(used))
     local_faces = remap[sub]
     points = vertices_m[used]
-    if offset_m:
+    offset_m = np.asarray(offset_m, dtype=np.float64)
+    if offset_m.ndim:
+        offset_m = offset_m[used, None]
+    if np.any(offset_m):
         points = points + offset_m * trimesh.Trimesh(points, local_faces, process=False).vertex_normals
     colour = np.asarray(colour, dtype=np.float64)
     rgb = colour[used] if colour.ndim == 2 else np.broadcast_to(colour, (len(used), 3))
@@ -319,6 +338,14 @@ def _hairline(vertices_m, joints_m, markers_m, on_head) -> np.ndarray:
     return on_head & (forehead | crown_and_nape)
 
 
+def _trousers_offset_m(vertices_m: np.ndarray, joints_m: np.ndarray) -> np.ndarray:
+    """(V,) how far trousers stand off each hm08 vertex: `TROUSERS_OFFSET_M` down to the knee, then
+    `TROUSERS_HEM_EASE_M` more, linearly, by the ankle (a straight leg hanging from the knee)."""
+    knee_z, ankle_z = joints_m[INDEX["calf_l"], 2], joints_m[INDEX["foot_l"], 2]
+    below_knee = np.clip((knee_z - vertices_m[:, 2]) / (knee_z - ankle_z), 0.0, 1.0)
+    return TROUSERS_OFFSET_M + TROUSERS_HEM_EASE_M * below_knee
+
+
 def _skin_and_garments(look: Appearance, vertices_m, joints_m, markers_m) -> list[_Piece | None]:
     """The body (the faces a garment leaves bare), the garments on the tights and skirt helpers, hair."""
     base = mh.base_mesh()
@@ -346,10 +373,15 @@ def _skin_and_garments(look: Appearance, vertices_m, joints_m, markers_m) -> lis
     shown = body_faces[(~covered)[body_faces].any(axis=1)]
     everything = np.ones(len(vertices_m), bool)
     top_rgb = CLOTH_RGB[look.top_colour]
+    trousers_offset_m = np.where(
+        cover["top"],
+        np.minimum(_trousers_offset_m(vertices_m, joints_m), TOP_OFFSET_M[look.top] / 2),
+        _trousers_offset_m(vertices_m, joints_m),
+    )
     pieces = [
         _surface(vertices_m, shown, everything, body_rgb),
         _surface(vertices_m, tights, cover["top"], top_rgb, TOP_OFFSET_M[look.top]),
-        _surface(vertices_m, tights, cover["bottom"], CLOTH_RGB[look.bottom_colour], TROUSERS_OFFSET_M),
+        _surface(vertices_m, tights, cover["bottom"], CLOTH_RGB[look.bottom_colour], trousers_offset_m),
         _surface(vertices_m, tights, cover["shoes"], CLOTH_RGB[look.shoe_colour], SHOE_OFFSET_M),
     ]
     if look.bottom == "skirt" or look.top == "coat":  # the skirt helper, its hem raised to the length
@@ -388,8 +420,12 @@ def _carried(look: Appearance, vertices_m, joints_m) -> list[_Piece]:
         colour = CLOTH_RGB["black" if look.top_colour != "black" else "blue"]
         return [_rigid_box((depth, width, height), centre, colour, "spine_03")]
     if look.bag == "handbag":
+        # Beside the hip, outside the trunk and thigh: the arms are left out, since in the rest A-pose
+        # the hands hang at hip height a forearm's length out from it (the bag would float there).
         hip_z = joints_m[INDEX["thigh_l"], 2]
-        side_y = float(vertices_m[np.abs(vertices_m[:, 2] - hip_z) < 0.04, 1].max()) + 0.05
+        dominant = np.array(JOINTS)[_skin_weights()[0][:, 0]]
+        trunk = np.isin(dominant, ("pelvis", "spine_01", "thigh_l", "thigh_r"))
+        side_y = float(vertices_m[trunk & (np.abs(vertices_m[:, 2] - hip_z) < 0.04), 1].max()) + 0.05
         return [_rigid_box((0.26, 0.08, 0.22), (0.0, side_y, hip_z - 0.02), CLOTH_RGB["brown"], "pelvis")]
     return []
 
