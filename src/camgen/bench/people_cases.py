@@ -1,9 +1,9 @@
 """People: what a real-photo detector finds on camgen's frames, and what posing people costs.
 
-- Detection (`camgen.bench.realism`): OpenCV's HOG people detector (INRIA Person: real photographs)
-  and, with the `detect` extra, YOLOv8 (COCO, fine-tuned on UAH FPDS: real photographs) on the same
-  frames spread over every example scene with people, every camera; recall and precision of people
-  ≥ 96 px tall and ≥ 70 % visible, per detector.
+- Detection (`camgen.bench.realism`): OpenCV's HOG people detector (INRIA Person: real photographs),
+  YOLOv4-tiny's person class (MS COCO: real photographs) and, with the `detect` extra, YOLOv8 (COCO,
+  fine-tuned on UAH FPDS: real photographs) on the same frames spread over every example scene with
+  people, every camera; recall and precision of people ≥ 96 px tall and ≥ 70 % visible, per detector.
 - Cost: the plaza with 50 procedural people drawn at 1080p (radiance, shadows on) with every person
   posed and skinned before each draw, against the same draw of people standing as they were; and
   each part alone: posing (gait, forward kinematics, keypoints), skinning (one sparse product for
@@ -55,7 +55,7 @@ def _crowd_graph(repo: Path):
     return graph, View(K, T, 1920, 1080)
 
 
-DETECTION_CASE = "person detection (HOG, YOLOv8-FPDS) over the example scenes"
+DETECTION_CASE = "person detection (HOG, YOLOv4-tiny, YOLOv8-FPDS) over the example scenes"
 
 
 def people_cases(

@@ -27,9 +27,12 @@ beside the radiance even when depth_m is not asked for (and does not return).
 
 from __future__ import annotations
 
+import itertools
 import math
 import sys
 import weakref
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -338,9 +341,11 @@ class _PassRenderer(pyrender.Renderer):
         """Per sun's node (by id): its cascades' (V, P) in the last shadow-map pass, finest first."""
         self._cascade = 0
         """The cascade whose map `_shadow_mapping_pass` draws (and whose matrices pyrender binds: 0)."""
-        self._cascade_textures: dict[int, tuple[weakref.ref, list]] = {}
-        """Per sun (by id, with a weak reference to tell a reused id): the depth textures of its cascades
-        after the first (the first is pyrender's `shadow_texture`)."""
+        self.shadow_map_texels = SHADOW_TEX_SZ
+        """Texels per side of each sun's shadow maps in the current draw (`shadow_map_size_texels`)."""
+        self._sun_maps: dict[int, tuple[weakref.ref, dict[int, list]]] = {}
+        """Per sun (by id, with a weak reference to tell a reused id), per map size: the depth textures of its
+        cascades made here (at `SHADOW_TEX_SZ`, those after the first, which is pyrender's `shadow_texture`)."""
         self.light_matrices: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
         """Each light's shadow camera (V, P) in the current draw, by the light node's id and cascade; emptied
         when a draw renders its shadow maps (`Renderer.draw`), so that the maps and the lookups share it."""
@@ -402,13 +407,15 @@ class _PassRenderer(pyrender.Renderer):
         return flags
 
     def render_shadow_maps(self, scene, flags: int) -> None:
+        """Every shadow-casting light's maps for the current draw (each sun's at `shadow_map_texels`, within
+        `sized_shadow_maps`)."""
         GL.glFrontFace(GL.GL_CCW)  # the shadow cameras are pyrender's own, with rows bottom-up
         self._sun_cascades.clear()  # this draw's suns only (earlier scenes' nodes are gone)
         for node in scene.light_nodes:
             if isinstance(node.light, DirectionalLight) and flags & RenderFlags.SHADOWS_DIRECTIONAL:
                 bounds = scene.bounds if self.shadow_bounds_m is None else self.shadow_bounds_m
                 self._sun_cascades[id(node)] = sun_cascade_matrices(
-                    scene.get_pose(node)[:3, :3], bounds, self.shadow_view, *self.shadow_clip_m, SHADOW_TEX_SZ
+                    scene.get_pose(node)[:3, :3], bounds, self.shadow_view, *self.shadow_clip_m, self.shadow_map_texels
                 )
                 own = node.light.shadow_texture
                 for k, texture in enumerate([own, *self._cascade_maps(node.light)]):
@@ -419,25 +426,63 @@ class _PassRenderer(pyrender.Renderer):
             elif isinstance(node.light, SpotLight) and flags & RenderFlags.SHADOWS_SPOT:
                 self._shadow_mapping_pass(scene, node, flags)
 
+    @contextmanager
+    def sized_shadow_maps(self, scene, flags: int) -> Iterator[None]:
+        """For its duration, each sun's `shadow_texture` (which pyrender's shadow pass draws into and its
+        lighting binds) is its first cascade's map at `shadow_map_texels`; pyrender's own (made at
+        `SHADOW_TEX_SZ` by `_update_context`, which keeps track of it) is put back after. Spot lights keep
+        pyrender's (`shadow_map_size_texels` says why)."""
+        swapped = []
+        if flags & RenderFlags.SHADOWS_DIRECTIONAL:
+            for node in scene.directional_light_nodes:
+                swapped.append((node.light, node.light._shadow_texture))
+                node.light._shadow_texture = self._sun_cascade_maps(node.light)[0]  # pyrender's setter deletes
+        try:
+            yield
+        finally:
+            for light, own in swapped:
+                light._shadow_texture = own
+
+    def _configure_shadow_mapping_viewport(self, light, flags):
+        """pyrender's set-up of a shadow pass, over the map's own size (pyrender's: `SHADOW_TEX_SZ`)."""
+        super()._configure_shadow_mapping_viewport(light, flags)
+        GL.glViewport(0, 0, light.shadow_texture.width, light.shadow_texture.height)
+
     def _cascade_maps(self, light) -> list:
-        """A sun's depth textures for its cascades after the first, made at its first use (and those of
-        suns that are gone, deleted)."""
-        for key, (ref, textures) in list(self._cascade_textures.items()):
+        """A sun's depth textures for its cascades after the first, at `shadow_map_texels`."""
+        return self._sun_cascade_maps(light)[1:]
+
+    def _sun_cascade_maps(self, light) -> list:
+        """A sun's depth textures, one per cascade, at `shadow_map_texels` (at `SHADOW_TEX_SZ` the first is
+        pyrender's own `shadow_texture`). Made at their first use, kept per size; those of suns that are
+        gone, deleted."""
+        for key, (ref, by_size) in list(self._sun_maps.items()):
             if ref() is None:
-                for texture in textures:
+                for texture in itertools.chain(*by_size.values()):
                     texture.delete()
-                del self._cascade_textures[key]
-        cached = self._cascade_textures.get(id(light))
-        if cached is not None and cached[0]() is light:
-            return cached[1]
-        textures = [
-            pyrender.Texture(width=SHADOW_TEX_SZ, height=SHADOW_TEX_SZ, source_channels="D", data_format=GL.GL_FLOAT)
-            for _ in range(SUN_CASCADES - 1)
-        ]
-        for texture in textures:
-            texture._add_to_context()
-        self._cascade_textures[id(light)] = (weakref.ref(light), textures)
-        return textures
+                del self._sun_maps[key]
+        cached = self._sun_maps.get(id(light))
+        if cached is None or cached[0]() is not light:
+            cached = self._sun_maps[id(light)] = (weakref.ref(light), {})
+        size = self.shadow_map_texels
+        own = [light.shadow_texture] if size == SHADOW_TEX_SZ else []
+        made = cached[1].get(size)
+        if made is None:
+            made = cached[1][size] = [
+                pyrender.Texture(width=size, height=size, source_channels="D", data_format=GL.GL_FLOAT)
+                for _ in range(SUN_CASCADES - len(own))
+            ]
+            for texture in made:
+                texture._add_to_context()
+        return own + made
+
+    def delete(self):
+        """pyrender's resources, and the suns' shadow maps made here."""
+        for _, by_size in self._sun_maps.values():
+            for texture in itertools.chain(*by_size.values()):
+                texture.delete()
+        self._sun_maps.clear()
+        super().delete()
 
     def _bind_lighting(self, scene, program, node, flags):
         """pyrender's lighting uniforms (with each sun's first cascade), and each sun's other cascades."""
@@ -735,9 +780,11 @@ class Renderer:
             else:
                 renderer.shadow_bounds_m = (shadow_fit.low_m, shadow_fit.high_m)
                 renderer.shadow_view = shadow_fit.view
+            renderer.shadow_map_texels = shadow_map_size_texels(renderer.shadow_view)
             if not shadow_maps_kept:
                 renderer.light_matrices.clear()
-                renderer.render_shadow_maps(scene, flags)
+                with renderer.sized_shadow_maps(scene, flags):
+                    renderer.render_shadow_maps(scene, flags)
 
         size = (view.width_px, view.height_px)
         target = self._framebuffer(("main", keep_as), *size, passes)
@@ -759,7 +806,8 @@ class Renderer:
 
         P = gl_projection(view.K_px, view.width_px, view.height_px, near_m, far_m)
         V = np.linalg.inv(pose_gl)
-        renderer.forward(scene, nodes, graph.instance_ids, V, P, pose_gl[:3, 3], flags, lit)
+        with renderer.sized_shadow_maps(scene, flags):
+            renderer.forward(scene, nodes, graph.instance_ids, V, P, pose_gl[:3, 3], flags, lit)
         GL.glFlush()
         if crop_px is not None:
             GL.glDisable(GL.GL_SCISSOR_TEST)
@@ -1164,7 +1212,40 @@ SUN_CASCADES = 3
 the whole view left the sun's texels 4-30 output pixels wide on the ground nearest the example cameras (2-8
 cm texels against 0.3-0.7 cm pixels at the image's bottom edge), the filter's 4-texel ramp a 12 cm blur at
 a pedestrian's feet; the first of three cascades makes them 0.7-5 pixels (0.3-1.7 cm texels). The shader
-(`linear_mesh.frag`, SUN_EXTRA_CASCADES) holds the other SUN_CASCADES - 1 maps."""
+(`linear_mesh.frag`, SUN_EXTRA_CASCADES) holds the other SUN_CASCADES - 1 maps. (Figures at the example cameras'
+own sizes with 2048-texel maps; `shadow_map_size_texels` keeps them in pixels for smaller renders.)"""
+
+SHADOW_MAP_TEXELS_PER_PX = 1.0
+"""A shadow map has at least this many texels per side for each pixel on the larger side of the view it is
+fitted to (`shadow_map_size_texels`). The example cameras' renders (their sensors and the plan's margin,
+2004-4420 px across) have 0.46-1.02 with pyrender's 2048-texel maps; the cascades' texels were measured on
+them (`SUN_CASCADES`)."""
+
+SHADOW_MAP_MIN_TEXELS = 256
+"""The smallest shadow map, texels per side (a 160×120 test render's 160 rounds up to it): below it the
+fixed margins in texels (the PCF filter's reach of 2 and the cascade test's 3 on each side) would take 5 %
+of the map and more."""
+
+
+def shadow_map_size_texels(view: View) -> int:
+    """Texels per side of every shadow map of draws whose shadows are fitted to `view`: the power of two
+    that gives at least `SHADOW_MAP_TEXELS_PER_PX` per pixel of the view's larger side, from
+    `SHADOW_MAP_MIN_TEXELS` to pyrender's `SHADOW_TEX_SZ` (any view over 1024 px across gets 2048, as before).
+
+    A cascade's rectangle is fitted to what the view sees (`sun_cascade_matrices`), the same region of the
+    world whatever the view's pixel count L (its larger side) for a given field of view; so its texel is
+    that rectangle's width over N texels, while a pixel at distance d spans d / f_px with f_px ∝ L: the
+    texel in pixels grows as L / N. So N ∝ L keeps a texel's width in pixels, hence a shadow's sharpness,
+    no worse than the example cameras' at their own sizes; the filter's reach and the depth biases are in
+    texels (`linear_mesh.frag`, which reads each map's size), so a shadow's soft edge keeps its width in
+    pixels too. Draws sharing a `ShadowFit` share its view, hence their maps' size (a supersampled draw's
+    samples share the output pixel's maps). Spot lights keep `SHADOW_TEX_SZ`: a spot's map spans its cone,
+    whatever the view, so a small render zoomed in on a lamp's pool sees its texels as large as a large one
+    does (a 160×120 view at 2.5 mm a pixel, tests/render/test_spot_shadows.py, has 2.8 cm texels at 2048)."""
+    needed = SHADOW_MAP_TEXELS_PER_PX * max(view.width_px, view.height_px)
+    size = 2 ** math.ceil(math.log2(needed))
+    return int(min(SHADOW_TEX_SZ, max(SHADOW_MAP_MIN_TEXELS, size)))
+
 
 CASCADE_SPLIT_LOG_WEIGHT = 0.75
 """Weight of the logarithmic split distance against the uniform one (Zhang et al. 2006, "Parallel-split
@@ -1284,4 +1365,13 @@ def clip_planes_m(farthest_m: float) -> tuple[float, float]:
     return NEAR_CLIP_M, max(2.0 * NEAR_CLIP_M, farthest_m * 1.01 + 1.0)
 
 
-__all__ = ["PASSES", "Passes", "Renderer", "ShadowFit", "View", "gl_camera_pose", "gl_projection"]
+__all__ = [
+    "PASSES",
+    "Passes",
+    "Renderer",
+    "ShadowFit",
+    "View",
+    "gl_camera_pose",
+    "gl_projection",
+    "shadow_map_size_texels",
+]

@@ -56,6 +56,7 @@ from camgen.render.renderer import (
     ShadowFit,
     View,
     clip_planes_m,
+    shadow_map_size_texels,
     sun_cascade_matrices,
 )
 from camgen.render.scene_graph import SceneGraph, build_scene_graph
@@ -532,14 +533,15 @@ def _shadow_texel_m(scene, node, fit: ShadowFit, clip_m, box_m, corners_m: np.nd
     """A light's shadow-map texel, m, at a caster whose box corners are `corners_m` (N, 3): across a sun's
     coarsest cascade (fitted as `Renderer.draw` fits them to `fit` and the clip range `clip_m`; its shadow
     may fall where any of them is read), or a spot light's field of view over the map's texels times the
-    caster's farthest distance from it."""
+    caster's farthest distance from it (a sun's maps have the fit's size, `shadow_map_size_texels`)."""
     from pyrender.constants import SHADOW_TEX_SZ
     from pyrender.light import DirectionalLight
 
     light, pose = node.light, scene.get_pose(node)
     if isinstance(light, DirectionalLight):
-        cascades = sun_cascade_matrices(pose[:3, :3], box_m, fit.view, *clip_m, SHADOW_TEX_SZ)
-        return max(2.0 / (min(P[0, 0], P[1, 1]) * SHADOW_TEX_SZ) for _, P in cascades)
+        size_texels = shadow_map_size_texels(fit.view)
+        cascades = sun_cascade_matrices(pose[:3, :3], box_m, fit.view, *clip_m, size_texels)
+        return max(2.0 / (min(P[0, 0], P[1, 1]) * size_texels) for _, P in cascades)
     fov = min(2.0 * light.outerConeAngle + math.pi / 16.0, math.pi)
     distance_m = float(np.linalg.norm(corners_m - pose[:3, 3], axis=1).max())
     return 2.0 * math.tan(fov / 2.0) / SHADOW_TEX_SZ * distance_m
