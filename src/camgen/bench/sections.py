@@ -577,7 +577,8 @@ def _people(repo: Path) -> Section:
             write_contact_sheet(plots.path("people_detections.jpg"), samples)
             legend = ", ".join(f"{name} in {colour}" for name, colour in zip(detectors, COLOUR_NAMES, strict=False))
             text.append(
-                "The middle scored frame of each camera: people that count in green, ignored people in grey, "
+                f"Scored frame {FRAMES_PER_CAMERA // 2 + 1} of {FRAMES_PER_CAMERA} of each camera: people that "
+                "count in green, ignored people in grey, "
                 f"{legend}, with their scores (a higher threshold's boxes are the lower one's, drawn again).\n\n"
                 + plots.link("people_detections.jpg", "detections on each example camera")
             )
