@@ -349,6 +349,8 @@ class _PassRenderer(pyrender.Renderer):
         self.light_matrices: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
         """Each light's shadow camera (V, P) in the current draw, by the light node's id and cascade; emptied
         when a draw renders its shadow maps (`Renderer.draw`), so that the maps and the lookups share it."""
+        self._shadow_pass: tuple | None = None
+        """(light node, flags) of the shadow map being drawn (`_shadow_mapping_pass`), else None."""
 
     def _get_light_cam_matrices(self, scene, light_node, flags):
         """A light's shadow camera (V, P), worked out once per draw and cascade (`light_matrices`): pyrender
@@ -442,6 +444,28 @@ class _PassRenderer(pyrender.Renderer):
         finally:
             for light, own in swapped:
                 light._shadow_texture = own
+
+    def _shadow_mapping_pass(self, scene, light_node, flags):
+        """pyrender's draw of one shadow map, over the nodes that reach it (`_sorted_mesh_nodes`)."""
+        self._shadow_pass = (light_node, flags)
+        try:
+            super()._shadow_mapping_pass(scene, light_node, flags)
+        finally:
+            self._shadow_pass = None
+
+    def _sorted_mesh_nodes(self, scene):
+        """pyrender's mesh nodes in its order, for its shadow pass (their only user here), less those whose
+        box lies wholly beyond one of the planes bounding the map's view (`mesh_reaches_clip_volume`): every
+        triangle of such a node is clipped, so it would write no texel of the map (the same depths without
+        it), while its vertices would be transformed and its draw calls made all the same. A sun's cascade
+        over the nearest slice of the view holds few of a site's meshes (and the vertex work of a person's or
+        a vehicle's many triangles is the largest cost of the pass on llvmpipe)."""
+        nodes = super()._sorted_mesh_nodes(scene)
+        if self._shadow_pass is None:
+            return nodes
+        V, P = self._get_light_cam_matrices(scene, *self._shadow_pass)  # pyrender's pass asked first: cached
+        P_V = P @ V
+        return [node for node in nodes if mesh_reaches_clip_volume(node.mesh, scene.get_pose(node), P_V)]
 
     def _configure_shadow_mapping_viewport(self, light, flags):
         """pyrender's set-up of a shadow pass, over the map's own size (pyrender's: `SHADOW_TEX_SZ`)."""
@@ -591,6 +615,24 @@ class _PassRenderer(pyrender.Renderer):
             self._reset_active_textures()
         if program is not None:
             program._unbind()
+
+
+def mesh_reaches_clip_volume(mesh, pose: np.ndarray, P_V: np.ndarray) -> bool:
+    """False when the box of `mesh` (placed at `pose`) lies wholly beyond one of the six planes of the clip
+    volume of the projection `P_V` (−w ≤ x, y, z ≤ w): then every primitive of it is clipped away and draws
+    nothing. Each plane is a half-space in homogeneous coordinates, which holds the whole box when it holds
+    its eight corners, whether the projection is orthographic (a sun's map) or perspective (a spot light's).
+    A texel's centre lies half a texel inside the map's edge, far more than float rounding. Instanced
+    primitives say True: pyrender's bounds of them take the instances' translations only."""
+    low, high = np.full(3, np.inf), np.full(3, -np.inf)
+    for primitive in mesh.primitives:
+        if primitive.poses is not None:
+            return True
+        low, high = np.minimum(low, primitive.bounds[0]), np.maximum(high, primitive.bounds[1])
+    corners = box_corners(low, high, pose)
+    clip = corners @ P_V[:, :3].T + P_V[:, 3]
+    w = clip[:, 3:]
+    return not (np.any(np.all(clip[:, :3] > w, axis=0)) or np.any(np.all(clip[:, :3] < -w, axis=0)))
 
 
 def _blend_with_coverage(source_factor, destination_factor) -> None:
