@@ -13,7 +13,6 @@ its public API (`from camgen.plan import Job, PlanSettings`).
 from __future__ import annotations
 
 import hashlib
-import json
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
@@ -159,9 +158,13 @@ class Job(Frozen):
     job_id: str = ""
 
     def content_hash(self) -> str:
-        """SHA-256 of the canonical JSON of everything but the id itself."""
-        payload = self.model_dump(mode="json", by_alias=True, exclude={"job_id"})
-        text = json.dumps(payload, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+        """SHA-256 of the compact JSON of everything but the id itself.
+
+        The JSON is pydantic's serialisation: fields in their declared order, mappings in the order they
+        were given (a scene whose YAML lists a mapping's keys in another order is another job, rendered
+        again rather than resumed). It replaced a key-sorted `json.dumps` of `model_dump`, which took 24 s
+        of an hour-long sequence's plan (90,000 frames' states) against about 1 s."""
+        text = self.model_dump_json(by_alias=True, exclude={"job_id"})
         return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
     def to_json(self) -> str:
