@@ -100,7 +100,7 @@ def test_mot_sequence_is_laid_out_as_mot17_and_scores_perfectly_against_itself(s
 def test_det_lines_are_mot17s():
     sequence = SequenceAnnotations(name="s", fps=10, width_px=160, height_px=120, frame_count=1, detections=True)
     sequence.add_detections(0, [(10.0, 20.0, 30.5, 60.0, 1.25)])
-    assert sequence.detections == ["1,-1,11.000,21.000,20.500,40.000,1.2500,-1,-1,-1"]
+    assert list(sequence.detections) == ["1,-1,11.000,21.000,20.500,40.000,1.2500,-1,-1,-1"]
 
 
 def test_yolo_labels_are_the_coco_boxes_normalised(sequence):

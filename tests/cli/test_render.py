@@ -36,6 +36,7 @@ def test_render_writes_video_passes_and_job(workspace, capsys):
     states = [json.loads(line) for line in (camera_dir / "camera.jsonl").read_text().splitlines()]
     assert [s["frame"] for s in states] == [0, 1, 2, 3]
     assert {"exposure_time_s", "gain_db", "K_px", "distortion", "T_world_from_cam", "pan_deg"} <= set(states[0])
+    assert not (camera_dir / ".spool").exists()  # the per-frame lines were spooled there, then removed
     # Auto-exposure starts settled on the view: the first frame is already at the target level.
     assert states[0]["metered_level_frac"] == pytest.approx(0.18, rel=0.05)
     assert 20 < frames[0].mean() < 235

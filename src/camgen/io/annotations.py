@@ -43,6 +43,7 @@ name).
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from pathlib import Path
 
 import cv2
@@ -85,9 +86,64 @@ temporal noise there (2.2 DN), at a fifth of the PNG's size; the usual 4:2:0 sub
 3.6 DN RMS and up to 129 DN at coloured edges, and quality 100 quadruples the file for 0.8 DN."""
 
 
+class LineSpool:
+    """Text lines kept in order: in memory, or (given a path) appended to a file as they come, so that a
+    long sequence's annotations take no memory that grows with its frames (issue 23)."""
+
+    def __init__(self, path: Path | None = None):
+        self.path = path
+        self._lines: list[str] | None = [] if path is None else None
+        self._handle = None
+        self._count = 0
+
+    def append(self, line: str) -> None:
+        if self._lines is not None:
+            self._lines.append(line)
+        else:
+            if self._handle is None:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                self._handle = open(self.path, "w", encoding="utf-8")  # open until `close`
+            self._handle.write(line + "\n")
+        self._count += 1
+
+    def __len__(self) -> int:
+        return self._count
+
+    def __iter__(self) -> Iterator[str]:
+        if self._lines is not None:
+            yield from self._lines
+            return
+        if self._handle is None:
+            return
+        self._handle.flush()
+        with open(self.path, encoding="utf-8") as lines:
+            for line in lines:
+                yield line[:-1]
+
+    def write(self, path: Path, *, separator: str = "\n", end: str = "\n") -> Path:
+        """Write the lines to `path` (atomically), joined by `separator` and followed by `end`."""
+        with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as out:
+            self.write_into(out, separator=separator)
+            out.write(end)
+        return path
+
+    def write_into(self, out, *, separator: str) -> None:
+        for i, line in enumerate(self):
+            out.write(line if i == 0 else separator + line)
+
+    def close(self) -> None:
+        """Close and delete the spool file (after the outputs were written from it)."""
+        if self._handle is not None:
+            self._handle.close()
+            self._handle = None
+        if self.path is not None:
+            self.path.unlink(missing_ok=True)
+
+
 class SequenceAnnotations:
     """Collects a camera's annotations frame by frame (masks become RLE at once, so no frame's
-    instance image is kept) and writes the MOTChallenge and COCO files at the end."""
+    instance image is kept; each frame's lines go to memory or, with `spool_dir`, to files) and writes
+    the MOTChallenge and COCO files at the end."""
 
     def __init__(
         self,
@@ -100,21 +156,31 @@ class SequenceAnnotations:
         frame_suffix: str | None = None,
         image_suffix: str = ".jpg",
         detections: bool = False,
+        spool_dir: Path | None = None,
     ):
         """`frame_suffix`: the extension of the frame files written beside (frames/NNNNNN.ext, frames
         counted from 0), or None when only the video holds the frames (its frame `frame_index`).
         `image_suffix`: the extension of the MOT and YOLO images (`IMAGE_SUFFIXES`). `detections`:
-        whether det/det.txt is written (`add_detections` fills it)."""
+        whether det/det.txt is written (`add_detections` fills it). `spool_dir`: a folder to append
+        each frame's lines to as they come (deleted by `close`), instead of memory: a long sequence's
+        annotations then take no memory that grows with its frames; the files written are the same bytes."""
         self.name, self.fps, self.width_px, self.height_px = name, fps, width_px, height_px
         self.frame_count, self.frame_suffix, self.image_suffix = frame_count, frame_suffix, image_suffix
-        self.mot: list[str] = []
-        self.detections: list[str] | None = [] if detections else None
+
+        def spool(name: str) -> LineSpool:
+            return LineSpool(None if spool_dir is None else spool_dir / f"{name}.lines")
+
+        self.mot = spool("mot")
+        """MOT gt.txt lines."""
+        self.detections: LineSpool | None = spool("det") if detections else None
         """MOT det.txt lines, or None when no detections are written."""
-        self.images: list[dict] = []
-        self.annotations: list[dict] = []
+        self.images = spool("images")
+        """COCO's images, a compact JSON object per line."""
+        self.annotations = spool("annotations")
+        """COCO's annotations, a compact JSON object per line."""
         self.tracks: dict[int, dict] = {}
         """Track id → the TAO-style track record, with the identity's attribute labels for people."""
-        self.keypoint_lines: list[str] = []
+        self.keypoint_lines = spool("keypoints")
         """One JSON line per frame with people: their keypoints in the image and in the world."""
 
     def describe(
@@ -141,7 +207,7 @@ class SequenceAnnotations:
         }
         if self.frame_suffix is not None:  # relative to coco.json
             image["file_name"] = f"frames/{frame.frame:06d}{self.frame_suffix}"
-        self.images.append(image)
+        self.images.append(_compact(image))
         people = [
             {
                 "track_id": obj.track_id,
@@ -152,7 +218,7 @@ class SequenceAnnotations:
             if obj.keypoints is not None
         ]
         if people:
-            self.keypoint_lines.append(json.dumps({"frame": frame.frame + 1, "people": people}, separators=(",", ":")))
+            self.keypoint_lines.append(_compact({"frame": frame.frame + 1, "people": people}))
         crowds = crowd_groups(frame.objects, frame.instance_id)
         crowded = {track_id for group in crowds for track_id in group}
         for group in crowds:
@@ -169,25 +235,27 @@ class SequenceAnnotations:
                 continue
             vx0, vy0, vx1, vy1 = obj.visible_box
             self.annotations.append(
-                {
-                    "id": len(self.annotations) + 1,
-                    "image_id": image_id,
-                    "video_id": 1,
-                    "category_id": COCO_CATEGORY_IDS[obj.cls],
-                    "track_id": obj.track_id,
-                    "instance_name": obj.name,
-                    "bbox": [vx0, vy0, vx1 - vx0, vy1 - vy0],
-                    "area": obj.visible_pixels,
-                    "segmentation": rle(frame.instance_id == obj.track_id),
-                    "iscrowd": 0,
-                    "amodal_bbox": [x0, y0, round(x1 - x0, 4), round(y1 - y0, 4)],
-                    "visibility": round(obj.visibility, 6),
-                    "truncation": round(obj.truncation, 6),
-                    "bbox_3d_world_m": np.round(obj.box_3d_world_m, 6).tolist(),
-                    "bbox_3d_cam_m": np.round(obj.box_3d_cam_m, 6).tolist(),
-                    **_keypoint_fields(obj),
-                    **({"plates": list(obj.plates)} if getattr(obj, "plates", ()) else {}),
-                }
+                _compact(
+                    {
+                        "id": len(self.annotations) + 1,
+                        "image_id": image_id,
+                        "video_id": 1,
+                        "category_id": COCO_CATEGORY_IDS[obj.cls],
+                        "track_id": obj.track_id,
+                        "instance_name": obj.name,
+                        "bbox": [vx0, vy0, vx1 - vx0, vy1 - vy0],
+                        "area": obj.visible_pixels,
+                        "segmentation": rle(frame.instance_id == obj.track_id),
+                        "iscrowd": 0,
+                        "amodal_bbox": [x0, y0, round(x1 - x0, 4), round(y1 - y0, 4)],
+                        "visibility": round(obj.visibility, 6),
+                        "truncation": round(obj.truncation, 6),
+                        "bbox_3d_world_m": np.round(obj.box_3d_world_m, 6).tolist(),
+                        "bbox_3d_cam_m": np.round(obj.box_3d_cam_m, 6).tolist(),
+                        **_keypoint_fields(obj),
+                        **({"plates": list(obj.plates)} if getattr(obj, "plates", ()) else {}),
+                    }
+                )
             )
 
     def _add_crowd(self, image_id: int, instance_id: np.ndarray, track_ids: list[int]) -> None:
@@ -197,17 +265,19 @@ class SequenceAnnotations:
         rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
         x0, x1, y0, y1 = int(cols[0]), int(cols[-1]) + 1, int(rows[0]), int(rows[-1]) + 1
         self.annotations.append(
-            {
-                "id": len(self.annotations) + 1,
-                "image_id": image_id,
-                "video_id": 1,
-                "category_id": COCO_CATEGORY_IDS["person"],
-                "bbox": [x0, y0, x1 - x0, y1 - y0],
-                "area": int(np.count_nonzero(mask)),
-                "segmentation": rle(mask),
-                "iscrowd": 1,
-                "crowd_track_ids": sorted(track_ids),
-            }
+            _compact(
+                {
+                    "id": len(self.annotations) + 1,
+                    "image_id": image_id,
+                    "video_id": 1,
+                    "category_id": COCO_CATEGORY_IDS["person"],
+                    "bbox": [x0, y0, x1 - x0, y1 - y0],
+                    "area": int(np.count_nonzero(mask)),
+                    "segmentation": rle(mask),
+                    "iscrowd": 1,
+                    "crowd_track_ids": sorted(track_ids),
+                }
+            )
         )
 
     def add_detections(self, frame_index: int, boxes) -> None:
@@ -253,23 +323,31 @@ class SequenceAnnotations:
         )
         return path
 
-    def coco_document(self) -> dict:
-        return {
+    def _coco_parts(self) -> tuple[dict, dict]:
+        """The COCO document's keys before its images and annotations, and after them."""
+        head = {
             "info": {"description": f"camgen sequence {self.name}"},
             "videos": [{"id": 1, "name": self.name, "width": self.width_px, "height": self.height_px}],
-            "images": self.images,
-            "annotations": self.annotations,
+        }
+        tail = {
             "categories": [_category(category_id, name) for name, category_id in COCO_CATEGORY_IDS.items()],
             "tracks": [self.tracks[key] for key in sorted(self.tracks)],
         }
+        return head, tail
+
+    def coco_document(self) -> dict:
+        """The whole COCO document in memory (what `write_coco` writes)."""
+        head, tail = self._coco_parts()
+        images = [json.loads(line) for line in self.images]
+        annotations = [json.loads(line) for line in self.annotations]
+        return {**head, "images": images, "annotations": annotations, **tail}
 
     def write_mot(self, directory: Path) -> list[Path]:
         """`gt/gt.txt` and `seqinfo.ini` under `directory` (img1/ is written frame by frame,
         `write_mot_image`), `det/det.txt` when detections were asked for, and `gt/keypoints.jsonl` when
         people were annotated: per frame (counted from 1, as gt.txt) each person's track id, its COCO
         keypoints (x, y, v) and its 3-D keypoints in the world, m."""
-        gt = directory / "gt" / "gt.txt"
-        write_text_atomic(gt, "".join(line + "\n" for line in self.mot))
+        gt = _write_lines(self.mot, directory / "gt" / "gt.txt")
         seqinfo = directory / "seqinfo.ini"
         write_text_atomic(
             seqinfo,
@@ -279,18 +357,37 @@ class SequenceAnnotations:
         )
         written = [gt, seqinfo]
         if self.detections is not None:
-            det = directory / "det" / "det.txt"
-            write_text_atomic(det, "".join(line + "\n" for line in self.detections))
-            written.append(det)
-        if self.keypoint_lines:
-            keypoints = directory / "gt" / "keypoints.jsonl"
-            write_text_atomic(keypoints, "\n".join(self.keypoint_lines) + "\n")
-            written.append(keypoints)
+            written.append(_write_lines(self.detections, directory / "det" / "det.txt"))
+        if len(self.keypoint_lines):
+            written.append(_write_lines(self.keypoint_lines, directory / "gt" / "keypoints.jsonl"))
         return written
 
     def write_coco(self, path: Path) -> Path:
-        write_text_atomic(path, json.dumps(self.coco_document(), separators=(",", ":")))
+        """coco.json, compact: streamed from the images' and annotations' lines, the same bytes as
+        `json.dumps(self.coco_document(), separators=(",", ":"))`."""
+        head, tail = self._coco_parts()
+        with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as out:
+            out.write(_compact(head)[:-1] + ',"images":[')
+            self.images.write_into(out, separator=",")
+            out.write('],"annotations":[')
+            self.annotations.write_into(out, separator=",")
+            out.write("]," + _compact(tail)[1:])
         return path
+
+    def close(self) -> None:
+        """Delete the spool files (`spool_dir`), once the outputs are written or abandoned."""
+        for lines in (self.mot, self.detections, self.images, self.annotations, self.keypoint_lines):
+            if lines is not None:
+                lines.close()
+
+
+def _compact(value) -> str:
+    return json.dumps(value, separators=(",", ":"))
+
+
+def _write_lines(lines: LineSpool, path: Path) -> Path:
+    """One line per entry, each ended by a newline (an empty file for none)."""
+    return lines.write(path, end="\n" if len(lines) else "")
 
 
 REID_SIZE_PX = (64, 128)

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from camgen.annotate.detection import detect_people, hog_detector
-from camgen.io.annotations import IMAGE_SUFFIXES, SequenceAnnotations, write_reid_crops
+from camgen.io.annotations import IMAGE_SUFFIXES, LineSpool, SequenceAnnotations, write_reid_crops
 from camgen.io.dng import SRGB_FROM_XYZ, write_dng
 from camgen.io.files import atomic_path, write_text_atomic
 from camgen.io.flow import write_flo, write_scene_flow
@@ -235,7 +235,10 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
     )
     lens = pipeline.lens if pipeline is not None else LensStages(camera, context.maps)
     video = None
-    metadata: list[str] = []
+    # Per-frame lines (camera.jsonl, the annotations) go to files under the camera's folder as they come,
+    # not into memory: a long sequence renders in flat memory (issue 23). Deleted when the camera ends.
+    spool_dir = directory / ".spool"
+    metadata = LineSpool(spool_dir / "camera.lines")
     camera_renderer = CameraRenderer(context.renderer, build_scene_graph(job.scene, resolve_path), camera)
     annotator = sequence = detector = None
     formats = ()
@@ -261,6 +264,7 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
             frame_suffix=None if frames_format is None else FRAME_SUFFIX[frames_format],
             image_suffix=IMAGE_SUFFIXES[params.get("images", "jpg")],
             detections=detector is not None,
+            spool_dir=spool_dir,
         )
         graph = camera_renderer.graph
         actor_nodes = zip(graph.actors, graph.actor_nodes, strict=True)
@@ -397,9 +401,8 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
             result.files.append(directory / "video.mp4")
         if radiance_files is not None and result.frames:
             result.files.append(radiance_files.close())
-        if metadata:
-            write_text_atomic(directory / "camera.jsonl", "\n".join(metadata) + "\n")
-            result.files.append(directory / "camera.jsonl")
+        if len(metadata):
+            result.files.append(metadata.write(directory / "camera.jsonl"))
         if sequence is not None:
             with clock("annotate"):
                 if "mot" in formats:
@@ -417,6 +420,11 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
         raise
     finally:
         camera_renderer.close()
+        metadata.close()
+        if sequence is not None:
+            sequence.close()
+        if spool_dir.is_dir():
+            spool_dir.rmdir()
     result.total_s = time.perf_counter() - started
     return result
 
