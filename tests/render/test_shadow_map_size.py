@@ -55,7 +55,7 @@ def edges(renderer) -> dict[int, tuple[float, float]]:
         )
     )
     found = {}
-    for width_px in (200, 1600):
+    for width_px in (400, 1600):
         radiance = renderer.draw(graph, _overhead(width_px), ("radiance",)).radiance
         luminance = radiance @ np.array([0.2126, 0.7152, 0.0722])
         shaded, lit = np.percentile(luminance, 5), np.percentile(luminance, 95)
@@ -73,7 +73,8 @@ def test_small_renders_take_small_maps_and_large_ones_pyrenders_own():
     """Sizes follow the larger side; any view over 1024 px across (1080p and up) keeps 2048 texels."""
     from pyrender.constants import SHADOW_TEX_SZ
 
-    assert shadow_map_size_texels(_overhead(200)) == 256
+    assert shadow_map_size_texels(_overhead(160)) == 512  # the least
+    assert shadow_map_size_texels(_overhead(400)) == 512
     assert shadow_map_size_texels(_overhead(640)) == 1024
     for width, height in ((1280, 720), (1920, 1080), (1080, 1920), (3840, 2160)):
         view = View(camera_matrix(1000.0, 1000.0, width / 2, height / 2), np.eye(4), width, height)
@@ -82,15 +83,15 @@ def test_small_renders_take_small_maps_and_large_ones_pyrenders_own():
 
 def test_a_small_renders_shadow_edge_is_where_and_as_sharp_as_a_large_renders(edges):
     """A 3 m wall, 20 cm thick, under a sun 40° high: its shadow's edge is a straight line 3.675 m behind its
-    axis. Seen from 20 m straight down, 200 px across (256-texel maps) and 1600 px across (2048 texels), each
+    axis. Seen from 20 m straight down, 400 px across (512-texel maps) and 1600 px across (2048 texels), each
     render's edge lies within a pixel of the closed form, the small one within a pixel of the large one's
     scaled down, and its ramp is no wider in its pixels than the large one's in its own, plus one."""
     columns = {width_px: (width_px - 1) / 2 for width_px in edges}  # the closed form's edge: the image centre
     for width_px, (column, _) in edges.items():
         print(f"{width_px} px: edge at column {column:.2f} (closed form {columns[width_px]:.2f})")
         assert column == pytest.approx(columns[width_px], abs=1.0)
-    (small, small_ramp), (large, large_ramp) = edges[200], edges[1600]
-    scale = 200 / 1600
+    (small, small_ramp), (large, large_ramp) = edges[400], edges[1600]
+    scale = 400 / 1600
     assert small == pytest.approx((large + 0.5) * scale - 0.5, abs=1.0)
-    print(f"10-90 % ramp: {small_ramp:.0f} px at 200 px, {large_ramp:.0f} px at 1600 px")
+    print(f"10-90 % ramp: {small_ramp:.0f} px at 400 px, {large_ramp:.0f} px at 1600 px")
     assert small_ramp <= large_ramp + 1

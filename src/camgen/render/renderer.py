@@ -1263,10 +1263,12 @@ fitted to (`shadow_map_size_texels`). The example cameras' renders (their sensor
 2004-4420 px across) have 0.46-1.02 with pyrender's 2048-texel maps; the cascades' texels were measured on
 them (`SUN_CASCADES`)."""
 
-SHADOW_MAP_MIN_TEXELS = 256
-"""The smallest shadow map, texels per side (a 160×120 test render's 160 rounds up to it): below it the
-fixed margins in texels (the PCF filter's reach of 2 and the cascade test's 3 on each side) would take 5 %
-of the map and more."""
+SHADOW_MAP_MIN_TEXELS = 512
+"""The smallest shadow map, texels per side. Smaller maps save nothing measurable (a 160×120 draw of the
+parking lot: 126-128 ms of CPU at 256 and 512 texels, 156 ms at 2048; the passes cost their draw calls), while
+the filter's 4-texel kernel grows in the world: at 256 texels (5 cm) it ate most of the light a car's windows
+let onto the ground in a 160×120 view (tests/render/test_glass_background.py: 13 fully lit pixels, 36 at 512,
+67 at 2048)."""
 
 
 def shadow_map_size_texels(view: View) -> int:
