@@ -98,6 +98,7 @@ def test_list_names_every_section(capsys):
         "vehicles",
         "sim",
         "coverage",
+        "long",
         "other",
         "device",
     ]

@@ -111,6 +111,23 @@ def growth_plot(
     return _save(figure, path)
 
 
+def memory_plot(path: Path, title: str, resident_mb: Sequence[float], warmup: int, slope_kb: float) -> Path:
+    """Resident memory after each frame, with the least-squares line over the frames after `warmup`."""
+    figure, axes = _figure(6.4, 3.2)
+    frames = np.arange(1, len(resident_mb) + 1)
+    axes.plot(frames, resident_mb, "-", color=_colour(0), label="resident memory")
+    after = frames[warmup:]
+    if len(after) > 1:
+        intercept = float(np.mean(np.asarray(resident_mb)[warmup:]) - slope_kb / 1e3 * np.mean(after))
+        axes.plot(after, intercept + slope_kb / 1e3 * after, "--", color=_colour(1), label=f"{slope_kb:+.1f} kB/frame")
+    axes.set_xlabel("frame")
+    axes.set_ylabel("MB")
+    axes.set_title(title, fontsize=10)
+    axes.legend(fontsize=8)
+    axes.grid(True, alpha=0.3)
+    return _save(figure, path)
+
+
 def _colour(i: int):
     """Distinct colours for up to 20 series (matplotlib's tab20, dark shades first)."""
     from matplotlib import colormaps
