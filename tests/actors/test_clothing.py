@@ -77,9 +77,9 @@ def test_every_helper_face_at_the_waist_belongs_to_the_top_or_the_trousers(dress
 
 
 def test_a_trouser_leg_is_as_wide_at_the_hem_as_a_straight_leg_trousers(dressed):
-    """The trouser shell's girth 3 cm above the ankle: 38–50 cm (a straight leg's 42–46 cm hem opening,
-    ASTM D6240's men's size tables; tights over this ankle measure about 25 cm)."""
-    look, vertices, joints, _, cover = dressed
+    """The trouser shell's girth 3 cm above the ankle: 38–50 cm (a straight leg's hem opening of 42–46 cm,
+    21–23 cm laid flat in trousers' size charts; following the tights' taper it was 32 cm)."""
+    _, vertices, joints, _, cover = dressed
     tights = mh.base_mesh().faces_by_group["helper-tights"]
     piece = person._surface(vertices, tights, cover["bottom"], (0, 0, 0), person._trousers_offset_m(vertices, joints))
     ankle_z = joints[INDEX["foot_l"], 2]

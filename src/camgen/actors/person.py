@@ -60,9 +60,9 @@ WAISTBAND_UNDER_TOP_M = 0.05
 face there, about 4 cm), standing off the body half as far as the top does."""
 TROUSERS_HEM_EASE_M = 0.025
 """How much further trousers stand off the leg at the ankle than at the knee, m: a straight trouser leg
-hangs from the knee, its hem about 42–46 cm round (a men's straight-leg opening of 21–23 cm laid
-flat) about an ankle of 22–25 cm (ANSUR II, Gordon et al. 2014), i.e. about 3 cm out all round;
-following the leg's taper like tights, trousers read as leggings."""
+hangs from the knee, its hem about 42–46 cm round (the 21–23 cm leg opening laid flat of trousers' size
+charts) about an ankle some 22–25 cm round (ANSUR II's ankle circumference, Gordon et al. 2014),
+i.e. about 3 cm out all round; following the leg's taper like tights, trousers read as leggings."""
 SKIRT_OFFSET_M = 0.02
 SKIRT_LEG_FOLLOW = 0.5
 SHOE_OFFSET_M = 0.012
