@@ -1,4 +1,4 @@
-"""A shadow map's pass leaves out the meshes whose box lies beyond its view (`mesh_reaches_clip_volume`): the
+"""A shadow map's pass leaves out the meshes whose box lies beyond its view (`meshes_reach_clip_volume`): the
 maps, and the frames shaded from them, are the same bit for bit."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from camgen.render.renderer import View, gl_projection, mesh_reaches_clip_volume
+from camgen.render.renderer import View, gl_projection, meshes_reach_clip_volume
 from tests.render.conftest import camera_matrix, look_at, scene_from
 
 
@@ -38,7 +38,7 @@ def test_a_box_is_left_out_only_when_none_of_it_is_in_the_view(kind):
     P_V = _projections()[kind]
     rng = np.random.default_rng(11)
     grid = np.stack(np.meshgrid(*[np.linspace(0.0, 1.0, 11)] * 3, indexing="ij"), axis=-1).reshape(-1, 3)
-    said = []
+    meshes, poses, inside = [], [], []
     for _ in range(300):
         low = rng.uniform([-20.0, -20.0, -25.0], [15.0, 15.0, 5.0])
         high = low + rng.uniform(0.1, 8.0, 3)
@@ -48,17 +48,24 @@ def test_a_box_is_left_out_only_when_none_of_it_is_in_the_view(kind):
         pose[:3, 3] = rng.uniform(-5.0, 5.0, 3)
         points = (low + grid * (high - low)) @ pose[:3, :3].T + pose[:3, 3]
         clip = np.c_[points, np.ones(len(points))] @ P_V.T
-        inside = np.all(np.abs(clip[:, :3]) <= clip[:, 3:], axis=1).any()
-        reaches = mesh_reaches_clip_volume(_Mesh(_Primitive(low, high)), pose, P_V)
-        assert reaches or not inside
-        said.append(reaches)
-    assert 30 < sum(said) < 270, sum(said)
+        inside.append(np.all(np.abs(clip[:, :3]) <= clip[:, 3:], axis=1).any())
+        split = low + rng.uniform(0.0, 1.0, 3) * (high - low)  # two primitives sharing the box
+        meshes.append(
+            _Mesh(_Primitive(low, np.maximum(split, low + 0.05)), _Primitive(np.minimum(split, high - 0.05), high))
+        )
+        poses.append(pose)
+    reaches = meshes_reach_clip_volume(meshes, np.array(poses), P_V)
+    assert np.all(reaches | ~np.array(inside))
+    assert 30 < reaches.sum() < 270, reaches.sum()
 
 
 def test_instanced_primitives_are_always_drawn():
     """pyrender's bounds of instances add their translations only (not their rotations or scales)."""
-    far_away = _Primitive([1000.0, 1000.0, 1000.0], [1001.0, 1001.0, 1001.0], poses=np.eye(4)[None])
-    assert mesh_reaches_clip_volume(_Mesh(far_away), np.eye(4), _projections()["orthographic"])
+    far_away = _Primitive([1000.0, 1000.0, 1000.0], [1001.0, 1001.0, 1001.0])
+    instanced = _Primitive([1000.0, 1000.0, 1000.0], [1001.0, 1001.0, 1001.0], poses=np.eye(4)[None])
+    meshes = [_Mesh(far_away), _Mesh(far_away, instanced)]
+    reaching = meshes_reach_clip_volume(meshes, np.array([np.eye(4)] * 2), _projections()["orthographic"])
+    assert reaching.tolist() == [False, True]
 
 
 @pytest.mark.opengl

@@ -455,7 +455,7 @@ class _PassRenderer(pyrender.Renderer):
 
     def _sorted_mesh_nodes(self, scene):
         """pyrender's mesh nodes in its order, for its shadow pass (their only user here), less those whose
-        box lies wholly beyond one of the planes bounding the map's view (`mesh_reaches_clip_volume`): every
+        box lies wholly beyond one of the planes bounding the map's view (`meshes_reach_clip_volume`): every
         triangle of such a node is clipped, so it would write no texel of the map (the same depths without
         it), while its vertices would be transformed and its draw calls made all the same. A sun's cascade
         over the nearest slice of the view holds few of a site's meshes (and the vertex work of a person's or
@@ -464,8 +464,9 @@ class _PassRenderer(pyrender.Renderer):
         if self._shadow_pass is None:
             return nodes
         V, P = self._get_light_cam_matrices(scene, *self._shadow_pass)  # pyrender's pass asked first: cached
-        P_V = P @ V
-        return [node for node in nodes if mesh_reaches_clip_volume(node.mesh, scene.get_pose(node), P_V)]
+        poses = np.array([scene.get_pose(node) for node in nodes]).reshape(-1, 4, 4)
+        reaching = meshes_reach_clip_volume([node.mesh for node in nodes], poses, P @ V)
+        return [node for node, reaches in zip(nodes, reaching, strict=True) if reaches]
 
     def _configure_shadow_mapping_viewport(self, light, flags):
         """pyrender's set-up of a shadow pass, over the map's own size (pyrender's: `SHADOW_TEX_SZ`)."""
@@ -617,22 +618,28 @@ class _PassRenderer(pyrender.Renderer):
             program._unbind()
 
 
-def mesh_reaches_clip_volume(mesh, pose: np.ndarray, P_V: np.ndarray) -> bool:
-    """False when the box of `mesh` (placed at `pose`) lies wholly beyond one of the six planes of the clip
-    volume of the projection `P_V` (−w ≤ x, y, z ≤ w): then every primitive of it is clipped away and draws
-    nothing. Each plane is a half-space in homogeneous coordinates, which holds the whole box when it holds
-    its eight corners, whether the projection is orthographic (a sun's map) or perspective (a spot light's).
-    A texel's centre lies half a texel inside the map's edge, far more than float rounding. Instanced
-    primitives say True: pyrender's bounds of them take the instances' translations only."""
-    low, high = np.full(3, np.inf), np.full(3, -np.inf)
-    for primitive in mesh.primitives:
-        if primitive.poses is not None:
-            return True
-        low, high = np.minimum(low, primitive.bounds[0]), np.maximum(high, primitive.bounds[1])
-    corners = box_corners(low, high, pose)
-    clip = corners @ P_V[:, :3].T + P_V[:, 3]
-    w = clip[:, 3:]
-    return not (np.any(np.all(clip[:, :3] > w, axis=0)) or np.any(np.all(clip[:, :3] < -w, axis=0)))
+def meshes_reach_clip_volume(meshes: list, poses: np.ndarray, P_V: np.ndarray) -> np.ndarray:
+    """(N,) bool: for each mesh (placed at its pose, `poses` (N, 4, 4)), False when its box lies wholly beyond
+    one of the six planes of the clip volume of the projection `P_V` (−w ≤ x, y, z ≤ w): then every primitive
+    of it is clipped away and draws nothing. Each plane is a half-space in homogeneous coordinates, which holds
+    the whole box when it holds its eight corners, whether the projection is orthographic (a sun's map) or
+    perspective (a spot light's). A texel's centre lies half a texel inside the map's edge, far more than
+    float rounding. Meshes with instanced primitives say True: pyrender's bounds of instances take their
+    translations only."""
+    boxes = np.zeros((len(meshes), 2, 3))
+    instanced = np.zeros(len(meshes), dtype=bool)
+    for k, mesh in enumerate(meshes):
+        instanced[k] = any(primitive.poses is not None for primitive in mesh.primitives)
+        if not instanced[k]:  # each primitive's own bounds: pyrender resets them when its vertices change
+            bounds = np.array([primitive.bounds for primitive in mesh.primitives])
+            boxes[k] = bounds[:, 0].min(axis=0), bounds[:, 1].max(axis=0)
+    corner = (np.arange(8)[:, None] >> np.arange(3)) & 1  # (8, 3): which end of each axis
+    local = np.where(corner, boxes[:, 1:2], boxes[:, 0:1])  # (N, 8, 3)
+    world = local @ np.transpose(poses[:, :3, :3], (0, 2, 1)) + poses[:, None, :3, 3]
+    clip = world @ P_V[:, :3].T + P_V[:, 3]  # (N, 8, 4)
+    w = clip[..., 3:]
+    beyond = np.all(clip[..., :3] > w, axis=1) | np.all(clip[..., :3] < -w, axis=1)  # (N, 3)
+    return instanced | ~np.any(beyond, axis=1)
 
 
 def _blend_with_coverage(source_factor, destination_factor) -> None:
