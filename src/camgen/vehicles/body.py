@@ -10,7 +10,10 @@ plan, rounded at the four corners. The underside follows the ground clearance an
 over each wheel. Both ends are closed by ladder-triangulated caps, so the shell is one closed,
 consistently wound surface (watertight). Its faces are split by position and normal into paint and
 glass (side windows between the pillars, windscreen, rear window; a bus's and a van's glazed ends),
-one primitive each, sharing the shell's vertices: together they stay watertight.
+one primitive each, sharing the shell's vertices: together they stay watertight. Each window of the
+tube is then redrawn as whole rows of section points over its stations (`_window_rows`), so that its
+outline runs along the mesh's rows and stations, as the beltline does, instead of stepping between rows
+from one station to the next.
 
 Wheels are a tyre (a closed cylinder, `WHEEL_SECTIONS` sides) and a rim (hub, five spokes and the rim's
 outer ring at the rim's diameter, `RIM_SHARE`, standing proud of the tyre's sidewall, so that a turning
@@ -333,7 +336,79 @@ def _vertex_normals(vertices: np.ndarray, faces: np.ndarray, count: int) -> np.n
 
 def _glass(profile: Profile, look: VehicleLook, vertices, faces, quads: int) -> np.ndarray:
     """1 for each face of glass, 0 for paint. The tube's two triangles of a quad (faces k and
-    k + `quads`) are judged together, by the quad's centre and normal."""
+    k + `quads`) are judged together, by the quad's centre and normal (`_glass_by_quad`); then each
+    window of the tube (side windows, windscreen, rear window) is made to follow rows of section points
+    (`_window_rows`), so that its outline runs along the mesh's edges instead of stepping between rows
+    from one station to the next."""
+    glass, windows = _glass_by_quad(profile, look, vertices, faces, quads)
+    count = UPPER_POINTS + LOWER_POINTS
+    grid = lambda flags: flags[:quads].reshape(-1, count)  # noqa: E731  (station, quad of the section)
+    side, *screens = (_window_rows(grid(window)) for window in windows)
+    # Where a windscreen or rear window goes on past the side windows' end, the side window's end would
+    # leave a notch of paint under the screen's edge. Over such a stretch either the screen keeps above
+    # the side windows' top row (its edge runs on from theirs) or, where the whole stretch has its
+    # beltline (no bonnet), the side windows' rows are glass too (the screen reaches down to it),
+    # whichever leaves the glass's area nearer the per-quad judgement's.
+    corners = vertices[faces[:quads]]
+    area = grid(np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1))
+    k = np.arange(count)
+    rows = side.any(axis=0)
+    top_row = np.flatnonzero(rows[: (UPPER_POINTS + 1) // 2])
+    above = (np.minimum(k, UPPER_POINTS - 1 - k) > (top_row.max() if top_row.size else -1)) & (k < UPPER_POINTS)
+    belt = np.abs(vertices[::count, 2][: quads // count + 1] - profile.belt * look.height_m) < 1e-9
+    belted = belt[:-1] & belt[1:]
+    tube = side.copy()
+    for screen, judged in zip(screens, windows[1:], strict=True):
+        judged = grid(judged) | grid(windows[0])
+        for start, stop in _runs(screen.any(axis=1)):
+            here = slice(start, stop)
+            if not side[max(start - 1, 0) : stop + 1].any():
+                tube[here] |= screen[here]
+                continue
+            beyond = ~side[here].any(axis=1)
+            cut = screen[here] & (~beyond[:, None] | above[None, :])
+            fill = screen[here] | rows[None, :]
+            want = (area[here] * judged[here]).sum()
+            options = (cut, fill) if belted[here].all() else (cut,)
+            tube[here] |= min(options, key=lambda option: abs((area[here] * (option | side[here])).sum() - want))
+    doors = grid(glass) & ~np.any([grid(w) for w in windows], axis=0)  # a bus's doors reach below the belt
+    tube |= doors
+    glass[:quads] = tube.reshape(-1)
+    glass[quads : 2 * quads] = tube.reshape(-1)
+    return glass.astype(np.int8)
+
+
+def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
+    """(start, stop) of each run of True in `flags`."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], flags.astype(np.int8), [0]])))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+
+
+def _window_rows(window: np.ndarray) -> np.ndarray:
+    """(S − 1, N) bool: the quads of one window (`window`, judged per quad), redrawn as whole rows. Each
+    station's band that holds any of the window keeps it; the window spans, on both sides alike, the
+    rows of the upper arc from its lowest to its highest row that most of those bands span (the median),
+    mirror images about the roof's centre (quad k of the upper arc mirrors quad `UPPER_POINTS` − 1 − k).
+    Section points are evenly spaced along each upper arc (`_sections`), so a row's points run smoothly
+    along the vehicle: its edges become lines of the mesh (the beltline already is one)."""
+    upper = window[:, :UPPER_POINTS]
+    bands = upper.any(axis=1)
+    if not bands.any():
+        return np.zeros_like(window)
+    k = np.arange(UPPER_POINTS)
+    near = np.minimum(k, UPPER_POINTS - 1 - k)  # rows counted from the belt on either side
+    first = np.where(upper, near[None, :], UPPER_POINTS).min(axis=1)[bands]
+    last = np.where(upper & (k < (UPPER_POINTS + 1) // 2)[None, :], k[None, :], -1).max(axis=1)[bands]
+    lo, hi = int(np.median(first)), int(np.median(last))
+    rows = (near >= lo) & (np.minimum(k, UPPER_POINTS - 1 - k) <= hi)
+    out = np.zeros_like(window)
+    out[:, :UPPER_POINTS] = bands[:, None] & rows[None, :]
+    return out
+
+
+def _glass_by_quad(profile: Profile, look: VehicleLook, vertices, faces, quads: int):
+    """(glass (F,) bool, [side windows, windscreen and rear window (F,) bool]): each quad judged by its
+    centre and normal."""
     L, H = look.length_m, look.height_m
     corners = vertices[faces]
     centre = corners.mean(axis=1)
@@ -353,9 +428,10 @@ def _glass(profile: Profile, look: VehicleLook, vertices, faces, quads: int) -> 
     pillar = np.zeros(len(faces), dtype=bool)
     for band in profile.pillars:
         pillar |= within(band)
-    glass |= above_belt & side & within(profile.side_glass) & ~pillar
+    side_windows = above_belt & side & within(profile.side_glass) & ~pillar
     upper = (np.abs(n[:, 1]) < 0.45) & (z > profile.belt + 0.02)
-    glass |= upper & (within(profile.windscreen) | within(profile.rear_window))
+    screens = [upper & within(profile.windscreen), upper & within(profile.rear_window)]
+    glass |= side_windows | screens[0] | screens[1]
     if profile.doors:
         door = np.zeros(len(faces), dtype=bool)
         for band in profile.doors:
@@ -368,7 +444,7 @@ def _glass(profile: Profile, look: VehicleLook, vertices, faces, quads: int) -> 
             continue
         end = cap & ((centre[:, 0] > 0) == front)
         glass |= end & (z > band[0]) & (z < band[1])
-    return glass.astype(np.int8)
+    return glass, [side_windows, *screens]
 
 
 def nearside_sign(look: VehicleLook) -> float:
