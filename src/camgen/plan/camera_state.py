@@ -11,14 +11,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
 
 from camgen.config.profile import Profile
 from camgen.config.scene import Camera
 from camgen.isp.eptz import eptz_window_px, output_camera_matrix, window_centre_px
-from camgen.job import CameraState, Matrix3, Matrix4
+from camgen.job import CameraState
 from camgen.motion.pose import R_world_from_cam, T_world_from_cam
 from camgen.optics.intrinsics import corner_radius_normalized, corner_radius_px
 
@@ -31,23 +30,6 @@ class LensState:
     f_number: float
     distortion: np.ndarray
     K: np.ndarray
-
-    @cached_property
-    def K_px(self) -> Matrix3:
-        """K as the state's nested tuple, made once: a long sequence's states share it."""
-        return matrix_tuple(self.K)
-
-    @cached_property
-    def distortion_tuple(self) -> tuple[float, ...]:
-        return tuple(float(x) for x in self.distortion)
-
-
-NO_DISTORTION = (0.0,) * 8
-
-
-def matrix_tuple(matrix: np.ndarray) -> tuple:
-    """A matrix as nested tuples of Python floats, as the job stores it."""
-    return tuple(map(tuple, np.asarray(matrix, dtype=np.float64).tolist()))
 
 
 def lens_state(profile: Profile, focal_length_mm: float) -> LensState:
@@ -72,7 +54,7 @@ def camera_state(
     tilt_deg: float,
     zoom_x: float,
     lens: LensState,
-    T_world_from_cam_: np.ndarray | Matrix4,
+    T_world_from_cam_: np.ndarray,
     focus_distance_m: float,
     exposure_time_s: float,
     gain_db: float,
@@ -92,8 +74,8 @@ def camera_state(
         Where the (mechanical or virtual) head points, degrees, and its magnification.
     lens : LensState
         The lens at the frame's focal length (`lens_state`).
-    T_world_from_cam_ : (4, 4) ndarray, or its `matrix_tuple`
-        The camera's pose (`head_pose`). Pass the tuple to share one pose among many frames' states.
+    T_world_from_cam_ : (4, 4) ndarray
+        The camera's pose (`head_pose`).
     apply_distortion : bool
         Whether the plan resamples the pixels through the distortion; if not, the state's distortion
         is zero (the state describes the pixels as delivered).
@@ -101,33 +83,32 @@ def camera_state(
         A virtual PTZ's sensor and stream sizes, px: the state then carries the window the stream
         shows and the stream's camera matrix.
     """
+    applied = lens.distortion if apply_distortion else np.zeros(8)
     window = output_K = None
     if eptz_sizes_px is not None:
         sensor_size, output_size = eptz_sizes_px
-        applied = lens.distortion if apply_distortion else np.zeros(8)
         centre = window_centre_px(pan_deg, tilt_deg, lens.K, applied)
-        window = tuple(int(x) for x in eptz_window_px(centre, zoom_x, sensor_size, output_size))
-        output_K = matrix_tuple(output_camera_matrix(lens.K, window, output_size))
-    pose = T_world_from_cam_ if isinstance(T_world_from_cam_, tuple) else matrix_tuple(T_world_from_cam_)
+        window = eptz_window_px(centre, zoom_x, sensor_size, output_size)
+        output_K = tuple(map(tuple, output_camera_matrix(lens.K, window, output_size).tolist()))
     return CameraState(
-        frame=int(frame),
-        time_s=float(time_s),
-        pan_deg=float(pan_deg),
-        tilt_deg=float(tilt_deg),
-        zoom_x=float(zoom_x),
-        focal_length_mm=float(lens.focal_length_mm),
-        f_number=float(lens.f_number),
-        focus_distance_m=float(focus_distance_m),
-        exposure_time_s=float(exposure_time_s),
-        gain_db=float(gain_db),
-        K_px=lens.K_px,
-        distortion=lens.distortion_tuple if apply_distortion else NO_DISTORTION,
-        T_world_from_cam=pose,
-        pan_deg_s=float(pan_deg_s),
-        tilt_deg_s=float(tilt_deg_s),
-        log_zoom_per_s=float(log_zoom_per_s),
-        ptz_mode=None if ptz_mode is None else str(ptz_mode),
-        follow_target=None if follow_target is None else str(follow_target),
+        frame=frame,
+        time_s=time_s,
+        pan_deg=pan_deg,
+        tilt_deg=tilt_deg,
+        zoom_x=zoom_x,
+        focal_length_mm=lens.focal_length_mm,
+        f_number=lens.f_number,
+        focus_distance_m=focus_distance_m,
+        exposure_time_s=exposure_time_s,
+        gain_db=gain_db,
+        K_px=tuple(map(tuple, lens.K.tolist())),
+        distortion=tuple(float(x) for x in applied),
+        T_world_from_cam=tuple(map(tuple, T_world_from_cam_.tolist())),
+        pan_deg_s=pan_deg_s,
+        tilt_deg_s=tilt_deg_s,
+        log_zoom_per_s=log_zoom_per_s,
+        ptz_mode=ptz_mode,
+        follow_target=follow_target,
         window_px=window,
         output_K_px=output_K,
     )

@@ -43,7 +43,7 @@ from camgen.optics.remap import SUPPORT_PX, LensGeometry, border_points_px, sour
 from camgen.optics.vignetting import aperture_weight, relative_illumination
 from camgen.plan.budget import check_job_size
 from camgen.plan.camera_state import LensState as _LensState
-from camgen.plan.camera_state import camera_image_speed_px_s, camera_state, head_pose, lens_state, matrix_tuple
+from camgen.plan.camera_state import camera_image_speed_px_s, camera_state, head_pose, lens_state
 from camgen.plan.ptz import head_track, holding_track, installed_focal_length_mm
 from camgen.plan.visibility import Bounds, box_corners, local_bounds, placement, visible_depth_range_m
 from camgen.props import prop_box_corners
@@ -449,14 +449,13 @@ def _compile_camera(
     if np.isfinite(frame_coc_px).any():
         k = int(frames - 1 - np.argmax(frame_coc_px[::-1]))
         ls, (near, far) = frame_lens[k], depth_of_view[view_keys[k]]
-        if frame_coc_px[k] >= coc_px:
-            coc_px = float(frame_coc_px[k])
-            dof_reason = (
-                f"blur circle up to {coc_px:.3g} px over depths {near:.3g}–{far:.3g} m "
-                f"(f = {ls.focal_length_mm:.4g} mm, N = {ls.f_number:.3g}, focus {focus_per_frame[k]:.3g} m, "
-                f"{focus_reasons[k]}{', autofocus lag' if autofocus_s > 0 and automatic_focus else ''}"
-                f"{f', frame {k}' if len(depth_of_view) > 1 else ''})"
-            )
+        coc_px = float(frame_coc_px[k])
+        dof_reason = (
+            f"blur circle up to {coc_px:.3g} px over depths {near:.3g}–{far:.3g} m "
+            f"(f = {ls.focal_length_mm:.4g} mm, N = {ls.f_number:.3g}, focus {focus_per_frame[k]:.3g} m, "
+            f"{focus_reasons[k]}{', autofocus lag' if autofocus_s > 0 and automatic_focus else ''}"
+            f"{f', frame {k}' if len(depth_of_view) > 1 else ''})"
+        )
     decisions.append(
         _decision(
             "optics.depth_of_field",
@@ -756,7 +755,6 @@ def _compile_camera(
 
     output_size = tuple(camera.eptz.output_size_px) if virtual else None
 
-    pose_tuple_of = {key: matrix_tuple(pose) for key, pose in pose_of.items()}  # shared by the frames of a view
     template_of: dict = {}
 
     def frame_state(k: int, ls: _LensState) -> CameraState:
@@ -784,7 +782,7 @@ def _compile_camera(
         state = camera_state(
             **per_frame,
             lens=ls,
-            T_world_from_cam_=pose_tuple_of[view_keys[k]],
+            T_world_from_cam_=pose_of[view_keys[k]],
             exposure_time_s=exposure.exposure_time_s,
             gain_db=exposure.gain_db,
             apply_distortion=include["optics.distortion"],
