@@ -120,11 +120,11 @@ class LineSpool:
             for line in lines:
                 yield line[:-1]
 
-    def write(self, path: Path, *, separator: str = "\n", end: str = "\n") -> Path:
-        """Write the lines to `path` (atomically), joined by `separator` and followed by `end`."""
+    def write(self, path: Path) -> Path:
+        """Write the lines to `path` (atomically), each ended by a newline (an empty file for none)."""
         with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as out:
-            self.write_into(out, separator=separator)
-            out.write(end)
+            for line in self:
+                out.write(line + "\n")
         return path
 
     def write_into(self, out, *, separator: str) -> None:
@@ -347,7 +347,7 @@ class SequenceAnnotations:
         `write_mot_image`), `det/det.txt` when detections were asked for, and `gt/keypoints.jsonl` when
         people were annotated: per frame (counted from 1, as gt.txt) each person's track id, its COCO
         keypoints (x, y, v) and its 3-D keypoints in the world, m."""
-        gt = _write_lines(self.mot, directory / "gt" / "gt.txt")
+        gt = self.mot.write(directory / "gt" / "gt.txt")
         seqinfo = directory / "seqinfo.ini"
         write_text_atomic(
             seqinfo,
@@ -357,9 +357,9 @@ class SequenceAnnotations:
         )
         written = [gt, seqinfo]
         if self.detections is not None:
-            written.append(_write_lines(self.detections, directory / "det" / "det.txt"))
+            written.append(self.detections.write(directory / "det" / "det.txt"))
         if len(self.keypoint_lines):
-            written.append(_write_lines(self.keypoint_lines, directory / "gt" / "keypoints.jsonl"))
+            written.append(self.keypoint_lines.write(directory / "gt" / "keypoints.jsonl"))
         return written
 
     def write_coco(self, path: Path) -> Path:
@@ -383,11 +383,6 @@ class SequenceAnnotations:
 
 def _compact(value) -> str:
     return json.dumps(value, separators=(",", ":"))
-
-
-def _write_lines(lines: LineSpool, path: Path) -> Path:
-    """One line per entry, each ended by a newline (an empty file for none)."""
-    return lines.write(path, end="\n" if len(lines) else "")
 
 
 REID_SIZE_PX = (64, 128)
