@@ -30,20 +30,27 @@ STREET_SIZE_PX = (640, 360)
 STREET_FRAMES = 4
 """Frames per end-to-end street run: one warm-up and three timed."""
 
-PROFILE = """\
-description: bench camera, 640×360
-sensor: {width_px: 640, height_px: 360, pixel_pitch_um: 6.0, cfa: RGGB, full_well_e: 10000,
-         conversion_gain_dn_per_e: 0.4, black_level_dn: 64, noise: {read_noise_e: 2.0}}
-lens: {focal_length_mm: 4.0, f_number: 2.0}
-"""
+
+def bench_profile(width_px: int, height_px: int, pixel_pitch_um: float) -> str:
+    """The street's camera profile (YAML text): a 4 mm f/2 lens on an RGGB sensor of this size and pitch."""
+    return (
+        f"description: bench camera, {width_px}×{height_px}\n"
+        f"sensor: {{width_px: {width_px}, height_px: {height_px}, pixel_pitch_um: {pixel_pitch_um}, cfa: RGGB, "
+        "full_well_e: 10000,\n"
+        "         conversion_gain_dn_per_e: 0.4, black_level_dn: 64, noise: {read_noise_e: 2.0}}\n"
+        "lens: {focal_length_mm: 4.0, f_number: 2.0}\n"
+    )
 
 
-def street_scene(actors: int, cameras: int) -> str:
+PROFILE = bench_profile(*STREET_SIZE_PX, 6.0)
+
+
+def street_scene(actors: int, cameras: int, *, duration_s: float = 2, fps: float = 10) -> str:
     """A 40 m street with `actors` box walkers crossing it at staggered depths, seen by `cameras`
-    cameras spread along the kerb, all looking across it."""
+    cameras spread along the kerb, all looking across it (profile `street`: `bench_profile`)."""
     lines = [
-        "duration_s: 2",
-        "fps: 10",
+        f"duration_s: {duration_s:g}",
+        f"fps: {fps:g}",
         "environment:",
         "  meshes: [{type: plane, name: ground, size_m: [60, 40]}]",
         "lights: [{type: ambient, illuminance_lux: 800}, {type: sun, illuminance_lux: 20000, azimuth_deg: 200}]",
