@@ -13,8 +13,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-
 from camgen.bench.harness import Case
 from camgen.bench.people_cases import detection_table
 from camgen.bench.realism import DetectionScore, Scorer, detection_scores
@@ -50,11 +48,6 @@ def ground_truth(coco: dict, image_id: int) -> tuple[list, list]:
     return counted, ignored
 
 
-def wide_input_px(width_px: int, height_px: int) -> tuple[int, int]:
-    """(`WIDE_INPUT_WIDTH_PX`, the frame's aspect's height rounded to a multiple of 32)."""
-    return WIDE_INPUT_WIDTH_PX, max(32, 32 * round(WIDE_INPUT_WIDTH_PX * height_px / width_px / 32))
-
-
 def vehicle_scorers() -> tuple[list[Scorer], str | None]:
     """YOLOv4-tiny at 416 × 416 and at the frame's aspect `WIDE_INPUT_WIDTH_PX` wide, when its weights
     are installed; and why not (None when they are)."""
@@ -64,17 +57,10 @@ def vehicle_scorers() -> tuple[list[Scorer], str | None]:
     if missing is not None:
         return [], missing
     square = yolo_vehicle.VehicleDetector()
-    wide: dict[tuple[int, int], yolo_vehicle.VehicleDetector] = {}
-
-    def at_aspect(frame: np.ndarray):
-        size = wide_input_px(frame.shape[1], frame.shape[0])
-        if size not in wide:
-            wide[size] = yolo_vehicle.VehicleDetector(input_px=size)
-        return wide[size](frame)
-
+    wide = yolo_vehicle.VehicleDetector(aspect_width_px=WIDE_INPUT_WIDTH_PX)  # `yolo_vehicle.aspect_input_px`
     return [
         Scorer(f"{square.name} 416×416", square),
-        Scorer(f"{square.name} {WIDE_INPUT_WIDTH_PX} wide", at_aspect),
+        Scorer(f"{wide.name} {WIDE_INPUT_WIDTH_PX} wide", wide),
     ], None
 
 

@@ -294,8 +294,16 @@ class CocoDetector:
 class VehicleDetector(CocoDetector):
     """YOLOv4-tiny (COCO) vehicles (`VEHICLE_CLASSES` as one class) in 8-bit BGR frames (`CocoDetector`)."""
 
-    def __init__(self, *, score_threshold: float = SCORE_THRESHOLD, input_px: tuple[int, int] | None = None) -> None:
-        super().__init__(VEHICLE_CLASSES, score_threshold=score_threshold, input_px=input_px)
+    def __init__(
+        self,
+        *,
+        score_threshold: float = SCORE_THRESHOLD,
+        input_px: tuple[int, int] | None = None,
+        aspect_width_px: int | None = None,
+    ) -> None:
+        super().__init__(
+            VEHICLE_CLASSES, score_threshold=score_threshold, input_px=input_px, aspect_width_px=aspect_width_px
+        )
 
 
 class PersonDetector(CocoDetector):
