@@ -186,10 +186,12 @@ def test_the_driver_shows_through_the_windscreen_and_changes_nothing_else(windsc
     grown = cv2.dilate(mask.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
     # Nothing outside the driver's projection changes, bit for bit.
     assert np.array_equal(passes["driver"].radiance[~grown], passes["empty"].radiance[~grown])
-    # Through the windscreen (the part of its projection not hidden by paint), the driver shows.
+    # Through the windscreen (the part of its projection not hidden by paint), the driver shows. The A-pillar
+    # (`camgen.vehicles.body._screen_pillars`) hides the driver's near shoulder from this front three-quarter
+    # view: 372 of 1367 px seen (507 before the pillars).
     seen = mask & changed
     print(f"driver's projection {mask.sum()} px, seen through the glass {seen.sum()} px")
-    assert seen.sum() >= 0.3 * mask.sum() and seen.sum() >= 150
+    assert seen.sum() >= 0.25 * mask.sum() and seen.sum() >= 150
     relative = np.abs(luminance["driver"] - luminance["empty"])[seen] / luminance["empty"][seen]
     print(f"change where seen: median {np.median(relative):.3f}, 90th percentile {np.percentile(relative, 90):.3f}")
     assert np.median(relative) > 0.05 and np.percentile(relative, 90) > 0.2

@@ -84,6 +84,20 @@ def _area_m2(vertices: np.ndarray, faces: np.ndarray) -> float:
     return float(trimesh.Trimesh(vertices, faces, process=False).area)
 
 
+def _pillar_quads(vertices: np.ndarray, faces: np.ndarray, glass: np.ndarray) -> np.ndarray:
+    """(F,) bool: paint quads of the shell's upper arc with glass on both sides along their section (the
+    pillars between a screen and the side windows under its edges)."""
+    count = UPPER_POINTS + LOWER_POINTS
+    quads = (len(vertices) // count - 1) * count
+    grid = glass[:quads].reshape(-1, count).astype(bool)
+    k = np.arange(1, UPPER_POINTS - 1)
+    pillar = np.zeros_like(grid)
+    pillar[:, k] = ~grid[:, k] & grid[:, k - 1] & grid[:, k + 1]
+    flags = np.zeros(len(faces), dtype=bool)
+    flags[:quads] = flags[quads : 2 * quads] = pillar.reshape(-1)
+    return flags
+
+
 def _per_quad(look, vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """(F,) int8: the shell's glass judged quad by quad by its centre and normal (as the shell once was)."""
     quads = (len(vertices) // (UPPER_POINTS + LOWER_POINTS) - 1) * (UPPER_POINTS + LOWER_POINTS)
@@ -100,12 +114,14 @@ def test_window_outlines_run_along_the_mesh_without_steps(body):
         sharp, steps, crossings = stair_steps(*outline(vertices, faces, glass))
         print(f"{body} seed {seed}: {sharp} sharp turns, {steps} in stairs, {crossings} crossings")
         assert steps + crossings <= MOST_STEPS, (body, seed, sharp, steps, crossings)
-        # The glass covers about what judging each quad by its centre and normal gives (sedan +0.9 %, estate
-        # +0.6 %, hatchback -0.9 %, SUV -1.5 %, van -1.6 %, bus 0.0 %; the box truck's cab +7.5 % and the
-        # pickup's windscreen -10 %, where the screen runs on past the side windows: `body._glass`).
+        # The glass and the A- and C-pillars between its screens and side windows cover about what judging
+        # each quad by its centre and normal gives, which has no pillars there (seeds 1, 2: sedan -3.7 %,
+        # estate -1.7 %, hatchback -2.7/-5.1 %, SUV -3.3 %, van -2.8 %, bus 0.0 %; the box truck's cab +7.5 %
+        # and the pickup's windscreen -12.8 %, where the screen runs on past the side windows and its pillar
+        # with it: `body._glass`, `body._screen_pillars`).
         by_quad = _per_quad(look, vertices, faces)
-        area = _area_m2(vertices, faces[glass == 1])
-        assert area == pytest.approx(_area_m2(vertices, faces[by_quad == 1]), rel=0.12)
+        area = _area_m2(vertices, faces[(glass == 1) | _pillar_quads(vertices, faces, glass)])
+        assert area == pytest.approx(_area_m2(vertices, faces[by_quad == 1]), rel=0.14)
 
 
 def test_a_staircase_is_caught():
