@@ -608,6 +608,7 @@ class _PassRenderer(pyrender.Renderer):
                 program.set_uniform("cam_pos", cam_position)
                 program.set_uniform("texture_lod_bias", self.texture_lod_bias)
                 program.set_uniform("transmissive", int(primitive.material.alphaMode == "BLEND"))
+                program.set_uniform("clearcoat", int(getattr(primitive.material, "clearcoat", False)))
                 self._bind_lighting(scene, program, node, flags)
                 self._bind_spot_profiles(scene, program)
                 self._bind_and_draw_primitive(primitive, scene.get_pose(node), program, draw_flags)

@@ -525,6 +525,17 @@ def person_mesh(rig: PersonRig) -> pyrender.Mesh:
     return pyrender.Mesh(primitives=[primitive])
 
 
+class ClearcoatMaterial(pyrender.MetallicRoughnessMaterial):
+    """A glTF metallic-roughness material under a smooth clear coat (a car's paint: a pigmented base coat
+    under 35–50 µm of clear lacquer). The shader (`linear_mesh.frag`, its `clearcoat` path) adds the coat's
+    mirror reflection of the sky and the ground, Schlick's Fresnel factor of the view angle times the
+    environment along the reflected ray, and takes that share off the base's ambient (diffuse) light, as
+    glTF's KHR_materials_clearcoat layers a coat of IOR 1.5 (F0 = 0.04) over the base. Other materials
+    (people, the ground, props) keep their diffuse-only ambient term."""
+
+    clearcoat = True
+
+
 GLASS_RGB = (0.012, 0.014, 0.016)
 """Glass's reflection of the diffuse sky at normal incidence as an albedo (its Fresnel reflectance of
 about 4 % over a sky that fills about a third of a window's view): a near-black base, glossy (roughness
@@ -572,7 +583,7 @@ def vehicle_mesh(rig: VehicleRig) -> pyrender.Mesh:
     primitives = []
     for part, piece in zip(rig.model.parts, rig.parts, strict=True):
         if part.surface == "paint":
-            material = pyrender.MetallicRoughnessMaterial(
+            material = ClearcoatMaterial(
                 baseColorFactor=(*paint.color_rgb, 1.0), metallicFactor=paint.metallic, roughnessFactor=paint.roughness
             )
         elif part.surface == "plates":  # a car's front plate over its rear one; a motorcycle's one plate

@@ -128,6 +128,8 @@ uniform float texture_lod_bias;
 // camgen: glass (a blended material): the base colour's alpha is the opacity 1 - T at normal incidence
 // (T the pane's visible transmittance, camgen.vehicles.cabin); see the end of main.
 uniform int transmissive;
+// camgen: a clear-coated material (camgen.render.scene_graph.ClearcoatMaterial: a car's paint); see clearcoat_ambient.
+uniform int clearcoat;
 uniform vec3 ambient_light;
 uniform uint instance_id;
 
@@ -412,6 +414,37 @@ bool in_sun_cascade(mat4 light_matrix, sampler2D shadow_map)
     return all(lessThan(abs(ndc), vec2(1.0 - margin)));
 }
 
+// camgen: the ambient light of a clear-coated material (a car's paint). The coat is a smooth dielectric of
+// refractive index 1.5 over the base: Schlick's Fresnel reflectance F = F0 + (1 - F0)(1 - n.v)^5, F0 = 0.04
+// (glTF KHR_materials_clearcoat), mirrors the environment along the reflected ray, and the base's diffuse
+// ambient term keeps the share (1 - F) (the light the coat lets in and out; the layering of Filament's clear
+// coat model, Guy & Agopian, "Physically Based Rendering in Filament", 2018, section 4.9). The environment
+// is the sky above the horizon, radiance ambient_light (a uniform sky of illuminance E has radiance E / pi,
+// camgen.render.scene_graph), and below it the ground, a Lambertian surface of albedo
+// CLEARCOAT_GROUND_ALBEDO lit by that sky and the suns, blended over the reflected ray's elevation as the
+// glass's reflection is (sky_share: fully sky from 4.6 deg up, ground from 11.5 deg down: buildings and
+// trees break the horizon). At normal incidence the coat adds 4 % of the sky; at grazing views (a roof or
+// bonnet seen from a distant camera, a car's flanks towards the horizon) it mirrors most of it, which is
+// what makes a painted body read as a car's; sides facing the camera from above mirror the darker ground.
+const float CLEARCOAT_F0 = 0.04;
+// Asphalt's albedo, 0.05 fresh to 0.10-0.18 aged (Pomerantz et al., "Cooler paving materials", LBNL-49283,
+// 2002); 0.15 for a mix of road and pavement.
+const float CLEARCOAT_GROUND_ALBEDO = 0.15;
+
+vec3 clearcoat_ambient(vec3 n, vec3 diffuse_ambient)
+{
+    vec3 v = normalize(cam_pos - frag_position);
+    float f_coat = CLEARCOAT_F0 + (1.0 - CLEARCOAT_F0) * pow(1.0 - clamp(dot(n, v), 0.0, 1.0), 5.0);
+    float sky_share = clamp(0.5 + 2.5 * reflect(-v, n).z, 0.0, 1.0);
+    vec3 ground_irradiance = PI * ambient_light;
+    for (int i = 0; i < n_directional_lights; i++) {
+        ground_irradiance += directional_lights[i].intensity * directional_lights[i].color
+            * max(-directional_lights[i].direction.z, 0.0);
+    }
+    vec3 ground = CLEARCOAT_GROUND_ALBEDO * ground_irradiance / PI;
+    return (1.0 - f_coat) * diffuse_ambient + f_coat * mix(ground, ambient_light, sky_share);
+}
+
 ///////////////////////////////////////////////////////////////////////////////
 // MAIN
 ///////////////////////////////////////////////////////////////////////////////
@@ -554,7 +587,11 @@ void main()
 #endif
         color.xyz += res;
     }
-    color.xyz += base_color.xyz * ambient_light;
+    if (clearcoat != 0) {
+        color.xyz += clearcoat_ambient(n, base_color.xyz * ambient_light);
+    } else {
+        color.xyz += base_color.xyz * ambient_light;
+    }
 
     // Calculate lighting from environment
 #ifdef USE_IBL

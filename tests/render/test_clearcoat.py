@@ -1,0 +1,126 @@
+"""A car's clear-coated paint (`camgen.render.scene_graph.ClearcoatMaterial`, the shader's `clearcoat_ambient`):
+under a uniform sky the paint's radiance is the coat's mirror reflection F·L_env plus the base's diffuse
+ambient (1 − F)·ρ·A, F Schlick's Fresnel reflectance of the view angle with F0 = 0.04 (a dielectric of index
+1.5), the environment the sky (radiance A = E/π) above the horizon and the ground (albedo 0.15 under that sky)
+below it. Checked against that closed form on a black sedan's flat roof seen from straight above and at a
+grazing 70° (where it mirrors four times more sky) and on its flank seen from 45° above (which mirrors the
+ground); the ground plane, which has no coat, stays Lambertian (ρ·A at any view)."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from camgen.render.renderer import View
+from camgen.render.scene_graph import build_scene_graph
+from camgen.vehicles.body import PROFILES
+from camgen.vehicles.look import PAINTS, draw_look
+from tests.render.conftest import camera_matrix, look_at, scene_from
+
+pytestmark = pytest.mark.opengl
+
+AMBIENT_LUX = 15000.0
+GROUND_RHO = 0.1
+F0 = 0.04
+GROUND_ALBEDO = 0.15
+"""The shader's CLEARCOAT_F0 and CLEARCOAT_GROUND_ALBEDO."""
+SIZE_PX, F_PX = 64, 300.0
+DISTANCE_M = 6.0
+K_PX = camera_matrix(F_PX, F_PX, (SIZE_PX - 1) / 2, (SIZE_PX - 1) / 2)
+
+
+def schlick(cos_theta: float) -> float:
+    return F0 + (1.0 - F0) * (1.0 - cos_theta) ** 5
+
+
+def _scene():
+    return scene_from(
+        environment={
+            "sky": "uniform",
+            "sky_luminance_cd_m2": AMBIENT_LUX / math.pi,
+            "shadows": False,
+            "meshes": [
+                {"type": "plane", "name": "ground", "size_m": [60, 60], "material": {"color_rgb": [GROUND_RHO] * 3}}
+            ],
+        },
+        lights=[{"type": "ambient", "illuminance_lux": AMBIENT_LUX}],
+        actors=[
+            {
+                "name": "car",
+                "class": "car",
+                "vehicle": {"seed": 1, "body_type": "sedan", "colour": "black", "driver": False},
+                "path": {"waypoints_m": [[0, 0]]},
+            }
+        ],
+    )
+
+
+@pytest.fixture(scope="module")
+def coat(renderer):
+    """{view name: (radiance (H, W, 3), the target's pixel (x, y), the cosine of the view angle)}."""
+    graph = build_scene_graph(_scene())
+    T_vehicle = graph.vehicles[0].T_world_from_vehicle
+    look = draw_look(1, "car", pinned={"body_type": "sedan", "colour": "black"})
+    flat = [u for u, z in PROFILES["sedan"].top if z == 1.0]
+    roof = np.array([(np.mean(flat) - 0.5) * look.length_m, 0.0, look.height_m, 1.0])
+    # The flank at the middle of the wheelbase, half-way up the section (its widest point: normal ±y).
+    side_x = (look.front_axle_x_m + look.rear_axle_x_m) / 2
+    flank = np.array([side_x, -look.width_m / 2, (look.height_m + PROFILES["sedan"].clearance_m) / 2, 1.0])
+
+    # Seen from the car's right (−y): the roof from straight above and from 20° up (70° off its normal), the flank from
+    # 45° up.
+    def towards(elevation_deg: float) -> tuple[float, float, float]:
+        return (0.0, -math.cos(math.radians(elevation_deg)), math.sin(math.radians(elevation_deg)))
+
+    targets = {"above": (roof, (0.0, 0.0, 1.0)), "grazing": (roof, towards(20.0)), "flank": (flank, towards(45.0))}
+    out = {}
+    for name, (point, direction) in targets.items():
+        target = (T_vehicle @ point)[:3]
+        position = target + DISTANCE_M * np.asarray(direction)
+        T = look_at(position, target) if name != "above" else _straight_down(position)
+        passes = renderer.draw(graph, View(K_PX, T, SIZE_PX, SIZE_PX), ("radiance",))
+        T_cam = np.linalg.inv(T)
+        pixel, _ = cv2.projectPoints(target[None], cv2.Rodrigues(T_cam[:3, :3])[0], T_cam[:3, 3], K_PX, None)
+        normal = np.array([0.0, 0.0, 1.0]) if name != "flank" else -T_vehicle[:3, 1]
+        out[name] = (passes.radiance, np.round(pixel.reshape(2)).astype(int), float(np.dot(normal, direction)))
+    return out
+
+
+def _straight_down(position: np.ndarray) -> np.ndarray:
+    """T_world_from_cam looking straight down, image right = world +x."""
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]])
+    T[:3, 3] = position
+    return T
+
+
+def _at(radiance: np.ndarray, pixel: np.ndarray) -> np.ndarray:
+    x, y = pixel
+    return np.median(radiance[y - 1 : y + 2, x - 1 : x + 2].reshape(-1, 3), axis=0)
+
+
+@pytest.mark.parametrize("name", ["above", "grazing", "flank"])
+def test_paint_is_a_fresnel_weighted_mirror_of_sky_and_ground_over_its_diffuse_base(coat, name):
+    radiance, pixel, cos_theta = coat[name]
+    sky = AMBIENT_LUX / math.pi
+    rho = np.asarray(PAINTS["black"].color_rgb)
+    F = schlick(cos_theta)
+    environment = sky if name != "flank" else GROUND_ALBEDO * sky  # the flank seen from above mirrors the ground
+    expected = (1.0 - F) * rho * sky + F * environment
+    print(name, f"cos {cos_theta:.3f} F {F:.4f}", _at(radiance, pixel), expected)
+    np.testing.assert_allclose(_at(radiance, pixel), expected, rtol=0.03)
+
+
+def test_a_roof_mirrors_more_sky_at_grazing_views(coat):
+    above = _at(*coat["above"][:2])[1]
+    grazing = _at(*coat["grazing"][:2])[1]
+    assert grazing > 2.5 * above  # F 0.04 -> 0.30 at 70° off the normal: 0.057 -> 0.17 of A for black paint
+
+
+def test_the_ground_has_no_coat(coat):
+    radiance, _, _ = coat["grazing"]
+    ground = radiance[:3, :8].reshape(-1, 3)  # the plane beyond the car, above its roof in the view
+    np.testing.assert_allclose(np.median(ground, axis=0), GROUND_RHO * AMBIENT_LUX / math.pi, rtol=0.02)
