@@ -9,6 +9,8 @@ The round trip is the acceptance test: a known profile films a static scene thro
 
 from __future__ import annotations
 
+import contextlib
+import io
 import math
 from pathlib import Path
 
@@ -173,8 +175,41 @@ def video_frames(reference_video: Path) -> list[np.ndarray]:
 
 
 @pytest.fixture(scope="module")
-def png_fit(png_frames: list[np.ndarray], base: Profile) -> MatchFit:
-    return fit_match(png_frames, base, seed=3, bins=BINS)
+def fit_match_command(png_directory: Path, base: Profile, tmp_path_factory: pytest.TempPathFactory) -> dict:
+    """`camgen fit match` on the PNG folder, end to end: the base profile as YAML (with `VIDEO_CODEC`, which
+    the fitted profile must keep; a folder of images is simulated without a codec, so the profile's codec
+    changes no number of the fit), --bins BINS --seed 3. Its exit code, printout, output path, and the
+    MatchFit its `fit_match` call returned (recorded on the way, not replaced): `png_fit`. The command's
+    test and the PNG fit's own checks share this one fit (two such fits cost CI about 40 s)."""
+    import camgen.fit.match
+
+    directory = tmp_path_factory.mktemp("fit_match_command")
+    base_path = directory / "base.yaml"
+    document = base.model_copy(update={"codec": VIDEO_CODEC}).model_dump(mode="json")
+    base_path.write_text(yaml.safe_dump(document), encoding="utf-8")
+    output = directory / "fitted.yaml"
+    argv = ["fit", "match", "--reference", str(png_directory), "--profile", str(base_path), "-o", str(output)]
+    calls = []
+
+    def recording_fit_match(frames, profile, **options):
+        frames = list(frames)
+        calls.append({"frames": frames, "profile": profile, "options": options})
+        calls[-1]["fit"] = fit_match(frames, profile, **options)
+        return calls[-1]["fit"]
+
+    printed = io.StringIO()
+    with pytest.MonkeyPatch.context() as patch, contextlib.redirect_stdout(printed):
+        patch.setattr(camgen.fit.match, "fit_match", recording_fit_match)
+        code = main([*argv, "--bins", str(BINS), "--seed", "3"])
+    (call,) = calls
+    return {"code": code, "printed": printed.getvalue(), "output": output, **call}
+
+
+@pytest.fixture(scope="module")
+def png_fit(fit_match_command: dict) -> MatchFit:
+    """`fit_match(png_frames, base, seed=3, bins=BINS)`, as `camgen fit match` called it on the PNG folder
+    (the same frames and the same base but for its codec: `fit_match_command`)."""
+    return fit_match_command["fit"]
 
 
 @pytest.fixture(scope="module")
@@ -542,18 +577,20 @@ def test_report_png(png_fit: MatchFit, tmp_path: Path) -> None:
 
 
 def test_camgen_fit_match_writes_a_profile_that_reproduces_the_reference(
-    png_directory: Path, base: Profile, truth: Profile, tmp_path: Path, capsys: pytest.CaptureFixture
+    fit_match_command: dict, png_frames: list[np.ndarray], base: Profile, truth: Profile
 ) -> None:
     """The command end to end on a folder of frames: the base profile as YAML, and a fitted profile that
     extends the base and loads. (The video round trip is `video_fit`'s; the command's video wiring is
     checked by the next test without a second 30-s fit.)"""
-    base_path = tmp_path / "base.yaml"
-    document = base.model_copy(update={"codec": VIDEO_CODEC}).model_dump(mode="json")
-    base_path.write_text(yaml.safe_dump(document), encoding="utf-8")
-    output = tmp_path / "fitted.yaml"
-    argv = ["fit", "match", "--reference", str(png_directory), "--profile", str(base_path), "-o", str(output)]
-    assert main([*argv, "--seed", "3"]) == 0
-    printed = capsys.readouterr().out
+    assert fit_match_command["code"] == 0
+    printed, output = fit_match_command["printed"], fit_match_command["output"]
+    # The command read the folder as png_frames and passed the base and the options through (what
+    # `png_fit` stands for).
+    assert len(fit_match_command["frames"]) == len(png_frames) == FRAMES
+    assert all(np.array_equal(a, b) for a, b in zip(fit_match_command["frames"], png_frames, strict=True))
+    assert fit_match_command["profile"] == base.model_copy(update={"codec": VIDEO_CODEC})
+    options = fit_match_command["options"]
+    assert (options["seed"], options["bins"], options["codec"], options["fit_denoise"]) == (3, BINS, None, False)
     fitted = load_profile(output).profile
     assert fitted.sensor.full_well_e == pytest.approx(truth.sensor.full_well_e, rel=0.10)
     assert fitted.codec == VIDEO_CODEC  # from the base
