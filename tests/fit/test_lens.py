@@ -137,17 +137,17 @@ def board_spec(job) -> str:
     params=[name if name == "barrel" else pytest.param(name, marks=pytest.mark.slow) for name in RENDERED_PROFILES],
 )
 def rendered(request, board_views):
-    """(profile name, its YAML, planned job, folder of the 8-bit views, first fit), rendered once a session
-    (`board_views`, shared with tests/render/test_lens_calibration.py)."""
+    """(profile name, its YAML, planned job, folder of the 8-bit views, what was found in it, first fit),
+    rendered once a session (`board_views`, shared with tests/render/test_lens_calibration.py)."""
     name = request.param
     directory, job, _ = board_views(name)
-    _, fit = fit_folder(directory / "images", board_spec(job), pixel_pitch_um=PIXEL_PITCH_UM)
-    return name, lens_profile(distortion=DISTORTIONS[name]), job, directory, fit
+    found, fit = fit_folder(directory / "images", board_spec(job), pixel_pitch_um=PIXEL_PITCH_UM)
+    return name, lens_profile(distortion=DISTORTIONS[name]), job, directory, found, fit
 
 
 @pytest.mark.opengl
 def test_round_trip_recovers_the_lens(rendered):
-    name, _, job, _, fit = rendered
+    name, _, job, _, _, fit = rendered
     state = job.cameras[0].states[0]
     K_truth, truth = np.array(state.K_px), DISTORTIONS[name]
     k1, k2, p1, p2 = fit.distortion[:4]
@@ -173,7 +173,7 @@ def test_round_trip_recovers_the_lens(rendered):
 def refit(rendered, renderer):
     """`camgen fit lens --profile` on the first views writes a profile extending the rendered one; the same
     poses rendered through it are fitted again."""
-    name, _, job, directory, _ = rendered
+    name, _, job, directory, _, _ = rendered
     fitted = directory / "profiles" / f"{name}_fitted.yaml"
     argv = ["fit", "lens", "--images", str(directory / "images"), "--board", board_spec(job)]
     argv += ["--pixel-pitch-um", str(PIXEL_PITCH_UM), "--profile", str(directory / "profiles" / f"{name}.yaml")]
@@ -191,7 +191,7 @@ def refit(rendered, renderer):
 @pytest.mark.slow  # `make test-slow`; make test keeps the round trip above and the written fragment's checks
 @pytest.mark.parametrize("rendered", ["barrel"], indirect=True)
 def test_the_fitted_profile_renders_views_that_fit_to_the_same_lens(rendered, refit):
-    name, _, _, _, first = rendered
+    name, _, _, _, _, first = rendered
     job, second = refit
     state = job.cameras[0].states[0]
     # The fragment reached the renderer: its camera is the first fit's (to the fragment's rounding).
@@ -206,10 +206,10 @@ def test_the_fitted_profile_renders_views_that_fit_to_the_same_lens(rendered, re
 
 @pytest.mark.opengl
 def test_a_view_without_a_board_and_a_corrupted_view_are_rejected(rendered, tmp_path):
-    _, _, job, directory, clean = rendered
+    _, _, job, directory, clean_found, clean = rendered
     images = tmp_path / "images"
-    shutil.copytree(directory / "images", images)
-    view = cv2.imread(str(images / "view_05.png"), cv2.IMREAD_GRAYSCALE)
+    images.mkdir()
+    view = cv2.imread(str(directory / "images" / "view_05.png"), cv2.IMREAD_GRAYSCALE)
     height, width = view.shape
     y, x = np.mgrid[0:height, 0:width].astype(np.float32)
     # A non-projective 3 px wave: the board is still found, but no lens or pose explains its corners.
@@ -218,7 +218,20 @@ def test_a_view_without_a_board_and_a_corrupted_view_are_rejected(rendered, tmp_
     rng = np.random.default_rng(5)
     cv2.imwrite(str(images / "noise.png"), rng.integers(0, 256, (height, width), dtype=np.uint8))
 
-    found, fit = fit_folder(images, board_spec(job), pixel_pitch_um=PIXEL_PITCH_UM)
+    # The folder of the clean views with these two added, as `fit_folder` would read it: the clean views'
+    # detections are the fixture's (`detect_in_folder` finds each image on its own; detecting the 12 clean
+    # views again cost about 10 s), the two added images are detected here, and all are taken in name order.
+    added = detect_in_folder(images, parse_board(board_spec(job)))
+    assert added.size_px == clean_found.size_px
+    found = BoardImages(
+        tuple(sorted(clean_found.detections + added.detections, key=lambda d: d.name)),
+        tuple(sorted(clean_found.unusable + added.unusable)),
+        clean_found.size_px,
+    )
+    assert [d.name for d in found.detections] == sorted(
+        [p.name for p in (directory / "images").glob("*.png")] + ["view_05_warped.png"]
+    )
+    fit = fit_lens(found.detections, found.size_px, unusable=found.unusable, pixel_pitch_um=PIXEL_PITCH_UM)
     reasons = dict(fit.rejected)
     print(f"rejected: {fit.rejected}")
     assert set(reasons) == {"noise.png", "view_05_warped.png"}
