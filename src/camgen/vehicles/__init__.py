@@ -54,6 +54,7 @@ LAMP_LUMINANCE_CD_M2 = {
     "indicator": 4_000.0,
     "cycle_head": 7_500.0,
     "cycle_tail": 2_500.0,
+    "destination": 2_000.0,
 }
 """Luminance of a lit lamp's lens as a camera off its axis sees it, cd/m²: a low beam's 10–20 kcd
 peak (UN ECE R112) falls to a few hundred cd away from the beam over its ~0.02 m² lens; a rear
@@ -61,7 +62,10 @@ position lamp gives 4–17 cd, a stop lamp 60–185 cd and a rear indicator 50�
 R6) over 0.02–0.04 m². A bicycle's lamps (the Road Vehicles Lighting Regulations 1989, as amended in
 2005: a white front and a red rear lamp when ridden between sunset and sunrise, a flashing one of at
 least 4 cd): about 10 cd over the front lamp's 13.5 cm² lens and 4 cd over the rear lamp's 17.5 cm²
-(estimates at the regulations' minimum; LED cycle lamps are often brighter on their axis)."""
+(estimates at the regulations' minimum; LED cycle lamps are often brighter on their axis). A bus's LED
+destination display (`camgen.vehicles.sign`): its lit dots about 2,000 cd/m² (an estimate: such signs dim
+with the ambient light, and must be read by day behind the windscreen's glass; EN 12966's classes for
+roadside variable-message signs ask 3,100–12,400 cd/m² in direct sun)."""
 LAMP_COLOUR_RGB = {
     "head": (1.0, 1.0, 1.0),
     "tail": (4.7, 0.0, 0.0),
@@ -69,6 +73,7 @@ LAMP_COLOUR_RGB = {
     "indicator": (1.6, 0.75, 0.0),
     "cycle_head": (1.0, 1.0, 1.0),
     "cycle_tail": (4.7, 0.0, 0.0),
+    "destination": (1.6, 0.75, 0.0),
 }
 """Linear colour of each lamp's light scaled to unit luminance (Y = 0.2126 R + 0.7152 G + 0.0722 B):
 white, red (ECE R48's red: sRGB red) and amber."""
@@ -164,6 +169,7 @@ class VehicleRig:
         self._rest_normals = np.concatenate([part.normals for part in model.parts])
         self._wheel = np.concatenate([part.wheel for part in model.parts]).astype(np.int64)
         self._state: tuple | None = None
+        self._has_sign = any(part.surface == "destination" for part in model.parts)
         self.lit: dict[str, bool] = {}
         self.place(0.0)
 
@@ -222,7 +228,7 @@ class VehicleRig:
     def lamps(self, time_s: float) -> dict[str, bool]:
         """Which lamps shine at `time_s`: head and tail lamps when the scene turns them on; brake
         lamps while a vehicle that drives stands at a stop; an indicator flashes on the side the
-        front wheels turn to."""
+        front wheels turn to; a bus's destination display always."""
         standing = self.route.standing(time_s) if self.route.moves else None
         steer = self.steer_rad(time_s)
         flash = (time_s * INDICATOR_HZ) % 1.0 < 0.5
@@ -232,6 +238,7 @@ class VehicleRig:
             "brake": standing is not None and math.isfinite(standing[1]),
             "indicator_left": bool(steer > INDICATOR_STEER_RAD and flash),
             "indicator_right": bool(steer < -INDICATOR_STEER_RAD and flash),
+            "destination": self._has_sign,  # a bus in service shows its route (`camgen.vehicles.sign`)
         }
 
     def heading_box(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -17,8 +17,10 @@ from one station to the next.
 
 Wheels are a tyre (a closed cylinder, `WHEEL_SECTIONS` sides) and a rim (hub, five spokes and the rim's
 outer ring at the rim's diameter, `RIM_SHARE`, standing proud of the tyre's sidewall, so that a turning
-wheel shows it) in the wheel's own frame (axle along y). Lamps are thin boxes half sunk into the shell's
-ends; plates are quads 5 mm in front of them.
+wheel shows it) in the wheel's own frame (axle along y); a bus rolls on steel disc wheels instead (a disc
+with hand holes and a hub of ten nuts, `steel_disc_wheel_meshes`) and shows its route on an LED
+destination display over the windscreen (`destination_sign`, `camgen.vehicles.sign`). Lamps are thin
+boxes half sunk into the shell's ends; plates are quads 5 mm in front of them.
 
 Underneath: the shell's faces that face the ground are the underbody (`UNDERBODY_RGB`: underseal and
 plastic undertrays, not the paint), and the ground under the floor, which sees the sky only through the
@@ -150,7 +152,7 @@ PROFILES: dict[str, Profile] = {
         top=((0, 0.93), (0.01, 0.98), (0.02, 1.0), (0.98, 1.0), (0.99, 0.98), (1, 0.93)),
         belt=0.43, side_glass=(0.025, 0.975), pillars=tuple((0.025 + 0.105 * k, 0.037 + 0.105 * k) for k in range(10)),
         doors=((0.47, 0.58), (0.87, 0.985)), door_glass_bottom=0.2,
-        front_cap_glass=(0.33, 0.90), rear_cap_glass=(0.55, 0.88), clearance_m=0.30, end_lift=0.10,
+        front_cap_glass=(0.33, 0.77), rear_cap_glass=(0.55, 0.88), clearance_m=0.30, end_lift=0.10,
         tumblehome=0.02, corner_share=0.012, end_width=0.90,
     ),
 }  # fmt: skip
@@ -159,7 +161,8 @@ PROFILES: dict[str, Profile] = {
 the road and the waistline (the side windows' lower edge) 950 mm above the floor, so the beltline is
 1,320 mm up, 0.43 of the height; front overhang 2,705 mm with door 1 (1,250 mm clear) in it ahead of
 the front wheel, door 2 between the axles (here centred on the wheelbase, an estimate), both glazed
-leaves on the nearside."""
+leaves on the nearside. The windscreen's glass ends at 0.77 of the height, under the destination display
+(`destination_sign`) that fills the top of a city bus's front."""
 
 
 @dataclass
@@ -173,7 +176,7 @@ class Part:
     """Which material draws it: paint, glass (its opacity per vertex), gear (tyres, rims and plate
     backings, coloured per vertex), cabin (the interior lining and the driver, coloured per vertex),
     plates (the front plate's image over the rear's), head, tail, brake, indicator_left,
-    indicator_right, cycle_head, cycle_tail."""
+    indicator_right, cycle_head, cycle_tail, destination (a bus's lit LED dots)."""
     vertices_m: np.ndarray
     normals: np.ndarray
     faces: np.ndarray
@@ -581,6 +584,47 @@ def wheel_meshes(
     return tyre, rim
 
 
+STEEL_DISC_BODIES = ("bus",)
+"""Body types on steel disc wheels (`steel_disc_wheel_meshes`) instead of a car's five-spoke alloy."""
+STUD_COUNT = 10
+STUD_CIRCLE_M = 0.335
+"""A 22.5-inch commercial vehicle's disc wheel (ISO 4107, the ISO 10-stud fitting): ten M22 studs on a
+335 mm pitch circle round a 281 mm centre bore."""
+HAND_HOLES = 10
+"""Round holes in the wheel's disc between the studs' ring and the rim (hand holes for the valve of the
+inner of a pair of twin tyres and for cooling), dark: the brake drum and the inner wheel behind. Ten of up
+to 70 mm across (makers' 22.5 × 8.25 disc wheels show 8–10 such holes; an estimate from their drawings)."""
+
+
+def steel_disc_wheel_meshes(radius_m: float, width_m: float, rim_share: float) -> tuple[list, list]:
+    """A commercial vehicle's steel disc wheel in the wheel's frame (axle along y): ([the disc with the rim's
+    outer ring, the hub and its `STUD_COUNT` nuts on `STUD_CIRCLE_M`], [its `HAND_HOLES` dark holes]), each
+    piece proud of the tyre's sidewalls as the alloy rim's (`wheel_meshes`). A bus's or truck's wheel shows
+    a flat disc with a ring of round holes and a hub of nuts, not a car's spokes."""
+    to_y = trimesh.transformations.rotation_matrix(np.pi / 2, (1, 0, 0))
+    rim_m = rim_share * radius_m
+    proud = width_m + 0.016
+
+    def disc(r: float, height: float, sections: int = WHEEL_SECTIONS, at=(0.0, 0.0)) -> trimesh.Trimesh:
+        piece = trimesh.creation.cylinder(radius=r, height=height, sections=sections)
+        piece.apply_transform(to_y)
+        piece.apply_translation((at[0], 0.0, at[1]))
+        return piece
+
+    bright = [disc(rim_m, proud), disc(0.14, proud + 0.06, 16)]
+    for k in range(STUD_COUNT):
+        angle = 2 * np.pi * (k + 0.5) / STUD_COUNT
+        at = (STUD_CIRCLE_M / 2 * np.cos(angle), STUD_CIRCLE_M / 2 * np.sin(angle))
+        bright.append(disc(0.016, proud + 0.05, 6, at))
+    hole_ring_m = (STUD_CIRCLE_M / 2 + 0.03 + rim_m - RIM_LIP_SHARE * radius_m) / 2
+    hole_m = min(0.035, (rim_m - RIM_LIP_SHARE * radius_m - STUD_CIRCLE_M / 2 - 0.03) / 2)
+    dark = []
+    for k in range(HAND_HOLES):
+        angle = 2 * np.pi * k / HAND_HOLES
+        dark.append(disc(hole_m, proud + 0.004, 12, (hole_ring_m * np.cos(angle), hole_ring_m * np.sin(angle))))
+    return bright, dark
+
+
 def wheel_centres(look: VehicleLook) -> np.ndarray:
     """(4, 3): front left, front right, rear left, rear right, m."""
     r, t = look.wheel_radius_m, look.track_m / 2
@@ -650,6 +694,51 @@ def lamps_and_plates(look: VehicleLook) -> tuple[list[Part], dict[str, np.ndarra
     return lamps, corners, [_merge("plates", "plates", [front, rear])], _part("plate_backings", "trim", backings)
 
 
+DESTINATION_SIGN_BODIES = ("bus",)
+SIGN_PANEL_MARGIN_M = 0.03
+"""Black border of the destination display's panel around its lit area, m."""
+
+
+def destination_sign(look: VehicleLook) -> tuple[Part, Part]:
+    """A bus's front destination display (`camgen.vehicles.sign`): (its black panel, half sunk into the
+    front end like a plate's backing, surface "trim"; its lit LED dots, one quad per run of lit dots along
+    a row, 5 mm in front of the panel, surface "destination"). The panel's top is the front end's
+    `SIGN_TOP_SHARE` of the height, over the windscreen (`Profile.front_cap_glass`, which ends under it)."""
+    from camgen.vehicles.sign import MATRIX_COLUMNS, MATRIX_ROWS, SIGN_SIZE_M, destination_text, lit_runs, matrix
+
+    width_m, height_m = SIGN_SIZE_M
+    top_m = SIGN_TOP_SHARE * look.height_m
+    centre_z = top_m - SIGN_PANEL_MARGIN_M - height_m / 2
+    x = look.length_m / 2
+    panel = _box(
+        (LAMP_DEPTH_M / 2, width_m + 2 * SIGN_PANEL_MARGIN_M, height_m + 2 * SIGN_PANEL_MARGIN_M),
+        (x, 0.0, centre_z),
+    )
+    runs = lit_runs(matrix(*destination_text(look.identity_seed)))
+    pitch_y, pitch_z = width_m / MATRIX_COLUMNS, height_m / MATRIX_ROWS
+    gap_y, gap_z = (1 - DOT_FILL_SHARE) * pitch_y / 2, (1 - DOT_FILL_SHARE) * pitch_z / 2
+    # Column 0 is the display's left as one reads it from in front: the vehicle's right (−y).
+    y0 = -width_m / 2 + runs[:, 1] * pitch_y + gap_y
+    y1 = -width_m / 2 + runs[:, 2] * pitch_y - gap_y
+    z1 = centre_z + height_m / 2 - runs[:, 0] * pitch_z - gap_z
+    z0 = z1 - pitch_z + 2 * gap_z
+    front = x + LAMP_DEPTH_M / 4 + 0.005
+    corners = np.stack([np.stack([np.full_like(y0, front), y, z], axis=1)
+                        for y, z in ((y0, z0), (y1, z0), (y1, z1), (y0, z1))], axis=1)  # fmt: skip
+    vertices = corners.reshape(-1, 3)
+    faces = 4 * np.arange(len(runs))[:, None, None] + np.array([[0, 1, 2], [0, 2, 3]])  # counter-clockwise from +x
+    dots = Part("destination_dots", "destination", vertices, np.tile((1.0, 0.0, 0.0), (len(vertices), 1)),
+                faces.reshape(-1, 3), np.full(len(vertices), -1, np.int8))  # fmt: skip
+    return _part("destination_panel", "trim", [(panel, -1)]), dots
+
+
+SIGN_TOP_SHARE = 0.90
+"""The destination display's top edge as a share of a bus's height: under the front end's rounded top
+(`PROFILES["bus"]`: 0.93), where the section is still wide enough for the display."""
+DOT_FILL_SHARE = 0.8
+"""Share of a dot's pitch that its LED lights (the dark gaps between a matrix's dots)."""
+
+
 def ground_shade(look: VehicleLook) -> Part:
     """The ground under the vehicle's floor as the vehicle shades it (`GROUND_SHADE_RGB`): a quad
     `GROUND_SHADE_Z_M` up, facing up, between the axles and between the tyres' outer faces, colours per
@@ -693,10 +782,20 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
         parts += [inner_glass_part(glass), glass]  # the far panes first (the renderer keeps the order)
     cabin = [lining_part(vertices, normals, paint)] + ([driver_part(look)] if driver else [])
     parts.append(_merge("cabin", "cabin", cabin))
-    tyre, rim = wheel_meshes(look.wheel_radius_m, TYRE_WIDTH_SHARE * look.width_m, RIM_SHARE[look.body_type])
-    tyres = _part("tyres", "gear", [(tyre, w) for w in range(4)], smooth=True)
+    width_m = TYRE_WIDTH_SHARE * look.width_m
+    tyre, rim = wheel_meshes(look.wheel_radius_m, width_m, RIM_SHARE[look.body_type])
+    dark = [(tyre, w) for w in range(4)]
+    if look.body_type in STEEL_DISC_BODIES:
+        rim, holes = steel_disc_wheel_meshes(look.wheel_radius_m, width_m, RIM_SHARE[look.body_type])
+        dark += [(hole, w) for w in range(4) for hole in holes]
+    tyres = _merge("tyres", "gear", [_part("tyres", "gear", dark[:4], smooth=True)]
+                   + ([_part("holes", "gear", dark[4:])] if len(dark) > 4 else []))  # fmt: skip
     rims = _part("rims", "gear", [(piece, w) for w in range(4) for piece in rim])
     lamps, plate_corners, plates, backings = lamps_and_plates(look)
+    if look.body_type in DESTINATION_SIGN_BODIES:
+        panel, dots = destination_sign(look)
+        backings = _merge("plate_backings", "trim", [backings, panel])
+        lamps.append(dots)
     for piece, rgb in ((tyres, TYRE_RGB), (rims, RIM_RGB), (backings, TRIM_RGB)):
         piece.colours = np.tile(rgb, (len(piece.vertices_m), 1))
     # Each primitive costs a draw call per pass (the renderer's per-draw overhead dominates a vehicle's):
