@@ -5,8 +5,9 @@
   designations themselves, and the outer diameter agrees with `look.BODY_TYPES`' wheel radius.
 - The shell's faces that face the ground are drawn as the black underbody, never in the paint, and
   paint, glass and underbody together are still the closed shell.
-- The shaded ground under a vehicle lies between its axles and tyres, under its floor: the vehicle's
-  extent in every direction is the same with and without it (so its box in any view is too).
+- The shaded ground under a vehicle covers its whole footprint, inside its plan outline: the vehicle's
+  extent in its own frame is the same with and without it (its box in an image leaves it out:
+  tests/vehicles/test_vehicle_render.py).
 - The bus: its beltline at the Citaro's 950 mm waistline over a 370 mm floor (1.32 m of 3.076 m), two
   glazed doors on the nearside only (the left for a UK-format plate), none on the offside.
 """
@@ -22,6 +23,7 @@ from camgen.vehicles.body import (
     RIM_RGB,
     RIM_SHARE,
     STATION_SPACING_M,
+    TYRE_WIDTH_SHARE,
     UNDERBODY_RGB,
     build_vehicle,
     nearside_sign,
@@ -95,25 +97,37 @@ def test_faces_facing_the_ground_are_underbody_and_the_shell_stays_closed(body):
 
 
 @pytest.mark.parametrize("body", ["hatchback", "suv", "van", "bus"])
-def test_the_shaded_ground_stays_under_the_vehicle(body):
+def test_the_shaded_ground_lies_under_the_whole_footprint(body):
     look = _look(body)
     model = build_vehicle(look)
-    gear = next(part for part in model.parts if part.name == "running_gear")
-    low = gear.vertices_m[:, 2] < 0.05
-    shade = low & (gear.wheel == -1)
-    assert shade.sum() == 4
-    # Under the floor: below the sill, inside the axles and the tyres' outer faces.
-    quad = gear.vertices_m[shade]
-    assert quad[:, 2].max() < PROFILES[body].clearance_m
-    assert np.all(np.abs(quad[:, 1]) <= look.width_m / 2)
-    everything = np.concatenate([part.vertices_m for part in model.parts if part.name != "running_gear"])
-    # The wheels at rest: their vertices are in their own frames, centred on each wheel's centre.
-    wheels = gear.vertices_m[gear.wheel >= 0] + model.wheel_centres_m[gear.wheel[gear.wheel >= 0]]
-    without = np.concatenate([everything, wheels])
-    with_quad = np.concatenate([without, quad])
-    assert np.array_equal(with_quad.min(axis=0)[:2], without.min(axis=0)[:2])
-    assert np.array_equal(with_quad.max(axis=0), without.max(axis=0))
-    assert with_quad.min(axis=0)[2] == without.min(axis=0)[2]
+    (shade,) = [part for part in model.parts if part.surface == "shade"]
+    points = shade.vertices_m
+    # On the ground, under the sill, facing up.
+    assert np.all(points[:, 2] < PROFILES[body].clearance_m) and np.all(shade.normals == (0.0, 0.0, 1.0))
+    # From bumper to bumper (the overhangs too), within 5 cm of either end.
+    assert points[:, 0].min() < -look.length_m / 2 + 0.05 and points[:, 0].max() > look.length_m / 2 - 0.05
+    # Inside the shell's plan outline at every station: the shell's own half-width there (its widest section
+    # point), so the vehicle's extent in its own frame is the same with and without the shade.
+    vertices, _, _, _ = shell(look)
+    stations = np.unique(vertices[:, 0])
+    widest = np.array([np.abs(vertices[vertices[:, 0] == x, 1]).max() for x in stations])
+    assert np.all(np.abs(points[:, 1]) <= np.interp(points[:, 0], stations, widest))
+    everything = np.concatenate([part.vertices_m for part in model.parts if part.surface != "shade"])
+    with_shade = np.concatenate([everything, points])
+    assert np.array_equal(with_shade.max(axis=0), everything.max(axis=0))
+    assert np.array_equal(with_shade.min(axis=0)[:2], everything.min(axis=0)[:2])
+    # Its triangles face up (wound counter-clockwise seen from above; those of the steps at the tyres have no
+    # area) and cover most of the plan.
+    corners = points[shade.faces]
+    normal_z = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])[:, 2]
+    assert np.all(normal_z >= 0)
+    assert normal_z.sum() / 2 > 0.75 * look.length_m * look.width_m
+    # Clear of the tyres: over each tyre's length, inside their inner faces (2 cm up, the shade would hide
+    # the tyres' lowest 2 cm from behind).
+    inner = look.track_m / 2 - TYRE_WIDTH_SHARE * look.width_m / 2
+    for axle in (look.front_axle_x_m, look.rear_axle_x_m):
+        over = np.abs(points[:, 0] - axle) < look.wheel_radius_m
+        assert over.any() and np.all(np.abs(points[over, 1]) < inner)
 
 
 def test_the_bus_has_the_citaros_beltline_and_doors_on_the_nearside():

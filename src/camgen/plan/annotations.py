@@ -128,7 +128,7 @@ class Annotator:
                 world = vertices @ pose[:3, :3].T + pose[:3, 3]
                 box = amodal_box(world, edges, T, K, distortion)
             else:  # a dense posed mesh (edges of a few cm): its vertices bound its projection
-                box = points_box(rig.vertices_m, T, K, distortion)
+                box = points_box(getattr(rig, "box_vertices_m", rig.vertices_m), T, K, distortion)
             clipped = None if box is None else clip_box(box, W, H)
             if clipped is None:
                 continue

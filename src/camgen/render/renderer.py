@@ -603,7 +603,8 @@ class _PassRenderer(pyrender.Renderer):
             program._bind()
             program.set_uniform("V", V)
             program.set_uniform("P", P)
-            program.set_uniform("instance_id", instance_ids[node], unsigned=True)
+            unlabelled = getattr(primitive.material, "unlabelled", False)  # scene_graph.ShadeMaterial: background
+            program.set_uniform("instance_id", 0 if unlabelled else instance_ids[node], unsigned=True)
             if lit:
                 program.set_uniform("cam_pos", cam_position)
                 program.set_uniform("texture_lod_bias", self.texture_lod_bias)

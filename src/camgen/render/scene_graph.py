@@ -536,6 +536,14 @@ class ClearcoatMaterial(pyrender.MetallicRoughnessMaterial):
     clearcoat = True
 
 
+class ShadeMaterial(pyrender.MetallicRoughnessMaterial):
+    """The shaded ground under a vehicle (`camgen.vehicles.body.ground_shade`): drawn with the vehicle, written
+    into the instance pass as background (id 0, `camgen.render.renderer`), since it is the road, not the
+    vehicle."""
+
+    unlabelled = True
+
+
 GLASS_RGB = (0.012, 0.014, 0.016)
 """Glass's reflection of the diffuse sky at normal incidence as an albedo (its Fresnel reflectance of
 about 4 % over a sky that fills about a third of a window's view): a near-black base, glossy (roughness
@@ -556,6 +564,7 @@ VEHICLE_SURFACES = {
     "cycle_head": ((0.55, 0.56, 0.58, 1.0), 0.0, 0.15),
     "cycle_tail": ((0.25, 0.01, 0.01, 1.0), 0.0, 0.2),
     "destination": ((0.45, 0.2, 0.02, 1.0), 0.0, 0.2),
+    "shade": ((1.0, 1.0, 1.0, 1.0), 0.0, 1.0),
 }
 """Base colour (linear, alpha), metallic and roughness of a vehicle's surfaces other than its paint:
 the running gear (tyres, rims, plate backings) takes its colours per vertex and one compromise between
@@ -597,7 +606,7 @@ def vehicle_mesh(rig: VehicleRig) -> pyrender.Mesh:
             )
         else:
             colour, metallic, roughness = VEHICLE_SURFACES[part.surface]
-            material = pyrender.MetallicRoughnessMaterial(
+            material = (ShadeMaterial if part.surface == "shade" else pyrender.MetallicRoughnessMaterial)(
                 baseColorFactor=colour,
                 metallicFactor=metallic,
                 roughnessFactor=roughness,

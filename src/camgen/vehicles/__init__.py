@@ -170,6 +170,7 @@ class VehicleRig:
         self._wheel = np.concatenate([part.wheel for part in model.parts]).astype(np.int64)
         self._state: tuple | None = None
         self._has_sign = any(part.surface == "destination" for part in model.parts)
+        self._boxed = np.concatenate([np.full(len(part.vertices_m), part.surface != "shade") for part in model.parts])
         self.lit: dict[str, bool] = {}
         self.place(0.0)
 
@@ -240,6 +241,13 @@ class VehicleRig:
             "indicator_right": bool(steer < -INDICATOR_STEER_RAD and flash),
             "destination": self._has_sign,  # a bus in service shows its route (`camgen.vehicles.sign`)
         }
+
+    @property
+    def box_vertices_m(self) -> np.ndarray:
+        """The posed vertices that bound the vehicle in an image: all but the shaded ground under it
+        (`camgen.vehicles.body.ground_shade`), which shows below a bumper seen from behind but is not the
+        vehicle."""
+        return self.vertices_m[self._boxed]
 
     def heading_box(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(low (3,), high (3,), T_world_from_box (4, 4)): the box around the posed vehicle in its own

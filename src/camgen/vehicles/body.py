@@ -23,10 +23,10 @@ destination display over the windscreen (`destination_sign`, `camgen.vehicles.si
 boxes half sunk into the shell's ends; plates are quads 5 mm in front of them.
 
 Underneath: the shell's faces that face the ground are the underbody (`UNDERBODY_RGB`: underseal and
-plastic undertrays, not the paint), and the ground under the floor, which sees the sky only through the
-gap under the sills, is drawn dark (`ground_shade`): a uniform ambient term would otherwise light the
-ground under a car as brightly as the open road, and a car under an overcast sky would stand on no
-shadow at all.
+plastic undertrays, not the paint), and the ground under the whole footprint, which sees the sky only
+through the gaps under the sills and bumpers, is drawn dark (`ground_shade`): a uniform ambient term would
+otherwise light the ground under a car as brightly as the open road, and a car under an overcast sky, or
+seen from behind, would stand on no shadow at all.
 """
 
 from __future__ import annotations
@@ -176,7 +176,8 @@ class Part:
     """Which material draws it: paint, glass (its opacity per vertex), gear (tyres, rims and plate
     backings, coloured per vertex), cabin (the interior lining and the driver, coloured per vertex),
     plates (the front plate's image over the rear's), head, tail, brake, indicator_left,
-    indicator_right, cycle_head, cycle_tail, destination (a bus's lit LED dots)."""
+    indicator_right, cycle_head, cycle_tail, destination (a bus's lit LED dots), shade (the shaded
+    ground under the vehicle, coloured per vertex, background in the instance pass)."""
     vertices_m: np.ndarray
     normals: np.ndarray
     faces: np.ndarray
@@ -739,19 +740,60 @@ DOT_FILL_SHARE = 0.8
 """Share of a dot's pitch that its LED lights (the dark gaps between a matrix's dots)."""
 
 
+SHADE_MARGIN_M = 0.03
+"""How far inside the body's plan outline the shaded ground stops, m."""
+SHADE_STATIONS = 24
+"""Stations of the shaded ground along the vehicle (its outline follows the plan's rounded corners)."""
+
+
+def plan_half_width_m(look: VehicleLook, x_m: np.ndarray) -> np.ndarray:
+    """The body's half-width in plan at `x_m` (the vehicle's frame), m: the full half-width, narrowing to the
+    flat ends' `end_width` over the rounded corners (`corner_share`; the shell's own plan, `shell`)."""
+    profile = PROFILES[look.body_type]
+    L, W = look.length_m, look.width_m
+    d = np.minimum(x_m + L / 2, L / 2 - x_m)
+    t = np.clip(d / (profile.corner_share * L), 0.0, 1.0)
+    return W / 2 * (profile.end_width + (1 - profile.end_width) * np.sqrt(1 - (1 - t) ** 2))
+
+
 def ground_shade(look: VehicleLook) -> Part:
-    """The ground under the vehicle's floor as the vehicle shades it (`GROUND_SHADE_RGB`): a quad
-    `GROUND_SHADE_Z_M` up, facing up, between the axles and between the tyres' outer faces, colours per
-    vertex. It stays within the four tyres' contact lines (raised 2 cm), so the vehicle's box and
-    silhouette are the ones its body and wheels give in any view; the ground under the overhangs sees
-    the sky through the open end and is left as it is."""
-    x0, x1 = look.rear_axle_x_m, look.front_axle_x_m
-    y = (look.track_m + TYRE_WIDTH_SHARE * look.width_m) / 2
-    z = GROUND_SHADE_Z_M
-    vertices = np.array([(x0, -y, z), (x1, -y, z), (x1, y, z), (x0, y, z)])
-    faces = np.array([(0, 1, 2), (0, 2, 3)])  # counter-clockwise seen from above
-    return Part("ground_shade", "gear", vertices, np.tile((0.0, 0.0, 1.0), (4, 1)), faces,
-                np.full(4, -1, np.int8), colours=np.tile(GROUND_SHADE_RGB, (4, 1)))  # fmt: skip
+    """The ground under the vehicle as the vehicle shades it (`GROUND_SHADE_RGB`): the whole footprint,
+    `SHADE_MARGIN_M` inside the body's plan outline (`plan_half_width_m`), `GROUND_SHADE_Z_M` up, facing up,
+    colours per vertex, surface "shade". Seen from behind or ahead, the ground under the overhangs shows
+    below the bumper, and a real car's is dark there too: the floor and the bumper above it hide most of the
+    sky. That ground is not the vehicle: the renderer writes it into the instance pass as background
+    (`camgen.render.scene_graph.ShadeMaterial`), and the vehicle's box in an image leaves it out
+    (`camgen.vehicles.VehicleRig.box_vertices_m`), so boxes and masks stay the body's and wheels'. It lies
+    inside the plan outline, so the vehicle's extent in its own frame is the same with it or without."""
+    L, r = look.length_m, look.wheel_radius_m
+    inside_tyres = look.track_m / 2 - TYRE_WIDTH_SHARE * look.width_m / 2 - SHADE_MARGIN_M
+    # Over each tyre's length the shade stops at the tyres' inner faces: 2 cm up, it would otherwise hide
+    # the tyres' lowest 2 cm in a view from behind or ahead. Each end of a tyre's stretch is a station taken
+    # twice, the shade's edge stepping there.
+    spans = [(x0 - r - SHADE_MARGIN_M, x0 + r + SHADE_MARGIN_M) for x0 in (look.rear_axle_x_m, look.front_axle_x_m)]
+    stations = np.linspace(-L / 2 + SHADE_MARGIN_M, L / 2 - SHADE_MARGIN_M, SHADE_STATIONS + 1)
+    stations = np.unique(np.concatenate([stations, np.ravel(spans)]))
+    xs, ys = [], []
+    for x_m, plan_m in zip(stations, plan_half_width_m(look, stations) - SHADE_MARGIN_M, strict=True):
+        inner_m = min(plan_m, inside_tyres)
+        if any(np.isclose(x_m, start) for start, _ in spans):
+            xs += [x_m, x_m]
+            ys += [plan_m, inner_m]
+        elif any(np.isclose(x_m, stop) for _, stop in spans):
+            xs += [x_m, x_m]
+            ys += [inner_m, plan_m]
+        else:
+            xs.append(x_m)
+            ys.append(inner_m if any(start < x_m < stop for start, stop in spans) else plan_m)
+    x, y = np.array(xs), np.maximum(np.array(ys), 0.0)
+    z = np.full_like(x, GROUND_SHADE_Z_M)
+    vertices = np.concatenate([np.stack([x, -y, z], axis=1), np.stack([x, y, z], axis=1)])
+    n = len(x)
+    k = np.arange(n - 1)
+    # Counter-clockwise seen from above: (right k, right k + 1, left k + 1) and (right k, left k + 1, left k).
+    faces = np.concatenate([np.stack([k, k + 1, n + k + 1], 1), np.stack([k, n + k + 1, n + k], 1)])
+    return Part("ground_shade", "shade", vertices, np.tile((0.0, 0.0, 1.0), (len(vertices), 1)), faces,
+                np.full(len(vertices), -1, np.int8), colours=np.tile(GROUND_SHADE_RGB, (len(vertices), 1)))  # fmt: skip
 
 
 def underbody_faces(vertices_m: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -799,7 +841,7 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
     for piece, rgb in ((tyres, TYRE_RGB), (rims, RIM_RGB), (backings, TRIM_RGB)):
         piece.colours = np.tile(rgb, (len(piece.vertices_m), 1))
     # Each primitive costs a draw call per pass (the renderer's per-draw overhead dominates a vehicle's):
-    # tyres, rims, plate backings, the underbody and the shaded ground share one.
-    parts.append(_merge("running_gear", "gear", [tyres, rims, backings, underbody, ground_shade(look)]))
-    parts += lamps + plates
+    # tyres, rims, plate backings and the underbody share one.
+    parts.append(_merge("running_gear", "gear", [tyres, rims, backings, underbody]))
+    parts += lamps + plates + [ground_shade(look)]
     return VehicleModel(look=look, parts=parts, wheel_centres_m=wheel_centres(look), plate_corners_m=plate_corners)
