@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 
 import av
+import cv2
 import numpy as np
 import pytest
 import yaml
@@ -63,6 +64,30 @@ def zoom_scene(directory, zoom_x: float):
     return path
 
 
+def find_corners_on_the_board(gray8: np.ndarray, inner: tuple[int, int]) -> np.ndarray | None:
+    """`find_corners` on the part of a view that holds the board, with a margin of 2.5 squares: the board is
+    located by OpenCV's detector on the view at half size (no sub-pixel step), then its corners are found at
+    full size in that part only. Nothing of the plan's camera is used.
+
+    At zoom 2.5 the board covers 12–59 % of these views: detection took 19 s instead of 34 s for the 14
+    views (loaded machine), and its corners calibrate as well: fx −0.075 %, fy −0.080 %, RMS 0.049 px
+    against −0.066 %, −0.072 %, 0.049 px from the whole views (3× supersampling; single corners move by
+    up to 0.08 px, as the detector's result depends on the image it is given). tests/render/test_calibration.py
+    keeps whole views: there, with the distortion free too, its cy moved from +0.31 to +0.42 px (bound 0.5)."""
+    height, width = gray8.shape
+    half = cv2.resize(gray8, (width // 2, height // 2), interpolation=cv2.INTER_AREA)
+    found, coarse = cv2.findChessboardCornersSB(half, inner)
+    if not found:
+        return None
+    corners = coarse.reshape(inner[1], inner[0], 2) * 2 + 0.5  # half-size pixel centres at full size
+    margin_px = 2.5 * float(np.hypot(*np.diff(corners, axis=1).reshape(-1, 2).T).max())
+    (x0, y0), (x1, y1) = corners.reshape(-1, 2).min(axis=0) - margin_px, corners.reshape(-1, 2).max(axis=0) + margin_px
+    x0, y0 = max(0, int(x0)), max(0, int(y0))
+    x1, y1 = min(width, int(np.ceil(x1))), min(height, int(np.ceil(y1)))
+    fine = find_corners(np.ascontiguousarray(gray8[y0:y1, x0:x1]), inner)
+    return None if fine is None else fine + np.float32([x0, y0])
+
+
 @pytest.mark.parametrize("zoom_x", ZOOM_STEPS)
 def test_a_zoom_step_plans_the_focal_length_and_its_camera_matrix(tmp_path, zoom_x):
     """focal length = wide end × zoom_x, and fx, fy = f / pitch: what the rendered zoom step is calibrated against."""
@@ -84,7 +109,7 @@ def test_calibration_at_a_zoom_step_recovers_its_focal_length(renderer, tmp_path
     for camera in job.cameras:
         frame = next(render_camera(renderer, job, camera))
         radiance = crop_to_output(frame.passes.radiance, camera.render)
-        found.append(find_corners(gray8_from_radiance(radiance), inner_corners(board)))
+        found.append(find_corners_on_the_board(gray8_from_radiance(radiance), inner_corners(board)))
     views = [c for c in found if c is not None]
     assert len(views) >= 12
     camera = job.cameras[0]
