@@ -692,7 +692,48 @@ def lamps_and_plates(look: VehicleLook) -> tuple[list[Part], dict[str, np.ndarra
     front, rear = plates
     front.texcoords = front.texcoords * [1.0, 0.5] + [0.0, 0.5]
     rear.texcoords = rear.texcoords * [1.0, 0.5]
+    backings += [(box, -1) for box in _black_trim(look, head_z)]
     return lamps, corners, [_merge("plates", "plates", [front, rear])], _part("plate_backings", "trim", backings)
+
+
+GRILLE_BODIES = ("hatchback", "sedan", "estate", "suv", "pickup", "van", "box_truck")
+"""Body types with a radiator grille and a lower air intake at the front (a city bus's front is its
+windscreen and a flat panel)."""
+DIFFUSER_BODIES = ("hatchback", "sedan", "estate", "suv", "pickup")
+"""Body types with a black lower rear bumper (a diffuser or valance: black grained plastic on most cars
+since the 2010s, and a van's or truck's is a step or a bare chassis)."""
+GRILLE_HEIGHT_M = 0.10
+"""The upper grille's height between the head lamps, m; the lower intake runs from `INTAKE_BOTTOM_M` over the
+bumper's lower edge up past the front plate (estimates from makers' front views: a Golf 8's upper grille
+is a 0.1 m black band between its lamps, its lower intake about 0.2 m tall behind the plate)."""
+INTAKE_BOTTOM_M = 0.04
+INTAKE_SHARE = 0.70
+"""The lower intake's width as a share of the front end's flat face."""
+DIFFUSER_HEIGHT_M = 0.10
+"""Height of the black lower rear bumper over the bumper's lower edge, m."""
+
+
+def _black_trim(look: VehicleLook, head_z_m: float) -> list[trimesh.Trimesh]:
+    """Black plastic on the ends, half sunk like the lamps: the radiator grille between the head lamps and the
+    lower air intake round the front plate (`GRILLE_BODIES`), and the lower rear bumper under the rear plate
+    (`DIFFUSER_BODIES`). Seen from ahead or behind, a car's ends show these dark bands, not one colour."""
+    L, W = look.length_m, look.width_m
+    (rear_low, _), (front_low, front_high) = _end_heights(look)
+    half = W / 2 * PROFILES[look.body_type].end_width
+    pieces = []
+    if look.body_type in GRILLE_BODIES:
+        grille_w = 2 * (half - 0.35)
+        top = min(head_z_m + GRILLE_HEIGHT_M / 2, front_high - 0.02)
+        pieces.append(_box((LAMP_DEPTH_M / 2, grille_w, GRILLE_HEIGHT_M), (L / 2, 0.0, top - GRILLE_HEIGHT_M / 2)))
+        intake_top = min(front_low + 0.10 + PLATE_SIZE_M[1] + 0.04, top - GRILLE_HEIGHT_M - 0.04)
+        bottom = front_low + INTAKE_BOTTOM_M
+        if intake_top > bottom + 0.05:
+            size = (LAMP_DEPTH_M / 2, INTAKE_SHARE * 2 * half, intake_top - bottom)
+            pieces.append(_box(size, (L / 2, 0.0, (intake_top + bottom) / 2)))
+    if look.body_type in DIFFUSER_BODIES:
+        size = (LAMP_DEPTH_M / 2, 2 * (half - 0.04), DIFFUSER_HEIGHT_M)
+        pieces.append(_box(size, (-L / 2, 0.0, rear_low + 0.01 + DIFFUSER_HEIGHT_M / 2)))
+    return pieces
 
 
 DESTINATION_SIGN_BODIES = ("bus",)
