@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import re
 import shutil
@@ -19,6 +20,8 @@ from tests.batch.conftest import make_dataset
 pytestmark = pytest.mark.opengl
 
 FRAMES = ["--frames", "2"]
+needs_ray = pytest.mark.skipif(importlib.util.find_spec("ray") is None, reason="needs camgen[ray]")
+TIMING_KEYS = {"seconds"}
 
 
 def job_files(out: Path) -> dict[str, bytes]:
@@ -30,6 +33,12 @@ def job_files(out: Path) -> dict[str, bytes]:
         for path in sorted(job_dir.rglob("*"))
         if path.is_file()
     }
+
+
+def jobs_without_timing(out: Path) -> list[dict]:
+    """dataset.json's job list, less the per-job wall times."""
+    jobs = json.loads((out / "dataset.json").read_text())["jobs"]
+    return [{key: value for key, value in job.items() if key not in TIMING_KEYS} for job in jobs]
 
 
 def statuses(out: Path) -> dict[str, str]:
@@ -117,3 +126,25 @@ def test_a_failing_job_is_retried_reported_and_the_others_complete(tmp_path, cap
     assert {job["status"] for job in jobs.values()} == {"done"}
     assert "failed walk-wide-seed3 after 2 tries" in capsys.readouterr().err
     assert "| walk-wide-seed3 |" in (out / "DATASET.md").read_text()
+
+
+# Here rather than in tests/batch/test_ray.py (the rest of Ray's tests): the local pool's output it is compared
+# with is this module's `reference`, rendered once for the module (--dist loadfile keeps a module on one process).
+# In its own file the test rendered the pool's output again, a third of its time.
+@needs_ray
+def test_a_local_ray_cluster_writes_the_same_bytes_as_the_local_pool(reference, tmp_path):
+    ray_dir = tmp_path / "ray"
+    ray_dataset = make_dataset(ray_dir)
+    args = ["batch", str(ray_dataset), "-o", str(ray_dir / "out"), "--executor", "ray", "--workers", "2", *FRAMES]
+    assert main(args) == 0
+    assert job_files(ray_dir / "out") == job_files(reference / "out")
+    assert len(job_files(ray_dir / "out")) > 4
+    ray_record = json.loads((ray_dir / "out" / "dataset.json").read_text())
+    assert ray_record["executor"] == "ray"
+    assert {job["status"] for job in ray_record["jobs"]} == {"done"}
+    pool_jobs, ray_jobs = jobs_without_timing(reference / "out"), jobs_without_timing(ray_dir / "out")
+    for job in pool_jobs + ray_jobs:  # the scene's path differs with the workspace
+        job["scene"] = Path(job["scene"]).name
+    assert ray_jobs == pool_jobs
+    assert main(args) == 0  # a second run skips every job, without starting Ray's workers on anything
+    assert {job["status"] for job in json.loads((ray_dir / "out" / "dataset.json").read_text())["jobs"]} == {"skipped"}
