@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from camgen.bench.e2e_cases import spread_frames
+from camgen.bench.e2e_cases import run_frames, spread_frames
 from camgen.bench.variants import at_output_size, one_camera
 from camgen.config import load_scene
 from camgen.plan import compile_scene
@@ -33,3 +33,9 @@ def test_a_virtual_ptz_keeps_its_sensor_and_changes_its_stream():
 def test_spread_frames_start_at_the_first_and_end_at_the_last():
     assert spread_frames(200, 3) == [0, 100, 199]
     assert spread_frames(1, 3) == [0]
+
+
+def test_run_frames_are_consecutive_from_the_middle():
+    assert run_frames(200, 3) == [100, 101, 102]
+    assert run_frames(4, 3) == [1, 2, 3]
+    assert run_frames(2, 5) == [0, 1]

@@ -356,14 +356,23 @@ def test_a_swaying_tree_is_blurred_and_its_moving_region_composites_exactly(rend
     composited = CameraRenderer(renderer, graph, camera)
     state = camera.states[5]
     samples = composited.motion_samples(state)
-    assert samples >= 3
+    assert samples >= 2  # the crown's measured path over the exposure (`_blurred_groups`)
     view = render_view(state, camera.render)
     rects = composited.moving_rects_px(state, view, list(sub_frame_offsets(samples)), composited.shadow_fit(view))
     assert rects, "the swaying tree is a moving region"
     assert sum((x1 - x0) * (y1 - y0) for x0, y0, x1, y1 in rects) < 0.6 * view.width_px * view.height_px
     fast = composited.frame(5).passes.radiance
     reference = CameraRenderer(renderer, graph, camera, moving_regions=False).frame(5).passes.radiance
-    assert np.abs(fast - reference).max() <= 1e-5 * reference.max()
+    # The standing person shifts its weight by less than the blur threshold during the exposure: the
+    # composite draws it sharp at the frame time, the reference blurs every sub-frame; compare elsewhere.
+    tree, person = (graph.moving_nodes.index(n) for n in (graph.swaying[0].node, graph.actor_nodes[0]))
+    assert {k for ks in composited._blurred_groups(state, view).values() for k in ks} == {tree}
+    outside = np.ones((view.height_px, view.width_px), bool)
+    fit = composited.shadow_fit(view)
+    for x0, y0, x1, y1 in composited.moving_rects_px(state, view, [-0.5, 0.0, 0.5], fit, only={person}):
+        outside[y0:y1, x0:x1] = False
+    assert outside.mean() > 0.8
+    assert np.abs(fast - reference)[outside].max() <= 1e-5 * reference.max()
 
 
 @pytest.mark.opengl

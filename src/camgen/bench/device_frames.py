@@ -4,7 +4,7 @@ machine without a GPU, the GPU's own driver through EGL where there is one (`Ren
     python -m camgen.bench.device_frames [--frames N] [--json FILE]
 
 The cases are `camgen bench`'s end-to-end ones (`camgen.bench.e2e_cases.measure`: every output the scene
-plans, frames spread over the sequence, the first a warm-up that is not timed): the parking lot's PTZ at
+plans, consecutive frames from the sequence's middle, the first a warm-up that is not timed): the parking lot's PTZ at
 1080p and the intersection's 4K box camera at its native 3840 × 2160. Where PyAV is not installed (a GPU
 machine that was lent bare), the video output is dropped and the table says so; the rest of the camera
 model (lens, sensor, ISP, frames, annotations) runs as always. The same command on both machines gives
@@ -72,8 +72,9 @@ def recorded_table(directory: Path) -> str:
     files = sorted(directory.glob("*.json")) if directory.is_dir() else []
     intro = (
         "`python -m camgen.bench.device_frames --json FILE` times the speed issue's two reference cameras end "
-        "to end (the parking lot's PTZ at 1080p, the intersection's 4K box camera at 3840 × 2160; frames "
-        "spread over the sequence, the first a warm-up) on whatever OpenGL the process gets. Runs recorded on "
+        "to end (the parking lot's PTZ at 1080p, the intersection's 4K box camera at 3840 × 2160; the first "
+        "frame a warm-up; frames spread over the sequence in the runs of 2026-11-25, consecutive from its "
+        "middle since, as a render draws them) on whatever OpenGL the process gets. Runs recorded on "
         f"other machines are kept in `{RECORDS_DIR}/` and listed here as they were measured; `make bench` does "
         "not re-measure them. Machines and loads differ: compare rows of one run, and this machine's own "
         "sections above."

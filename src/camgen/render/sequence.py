@@ -3,9 +3,11 @@
 - The pinhole render is larger than the output by the plan's margin (for distortion, CA and blur):
   the principal point moves by the left/top margin, so output pixel (u, v) is render pixel
   (u + left, v + top) and the output's own camera matrix still holds after cropping.
-- Supersampling s > 1: radiance is drawn s× finer per axis and box-averaged, which integrates each
-  pixel's area as a sensor pixel does. depth_m and instance_id stay point samples at pixel centres
-  (exact values, no mixed ids), drawn together at 1× in one cheap geometry-only draw.
+- Supersampling s > 1: radiance is the mean of s² draws at 1×, each through one of the s × s sub-pixel
+  positions (`jittered_samples`; textures at the s× draw's mip level), which integrates each pixel's area
+  as a sensor pixel does (the same samples as one draw s× finer, box-averaged). depth_m and instance_id
+  stay point samples at pixel centres (exact values, no mixed ids), drawn together at 1× in one cheap
+  geometry-only draw.
 - Static background: the environment is drawn once per camera and kept on the GPU; each frame starts
   from a copy of it and draws only the actors (and the props swaying in the wind,
   `SceneGraph.moving_nodes`), depth-tested against it.
@@ -28,6 +30,20 @@
   frame 125 (66 %: the 4° dusk sun's shadows are 14 times as long as the casters are high); the parking
   lot's PTZ at its preset (16 sub-frames) 16.9 → 8.3 s (6 %) and 16.5 → 9.6 s (17 %); largest
   difference 3e-7 of the frame's maximum. The s² whole draws and the depth and id pass remain.
+- Still frames (`CameraRenderer._still_radiance`): through a head that holds still during the exposure,
+  each moving node (actor, swaying prop) is blurred by what it needs: the longest path, px, of one of
+  its vertices over the exposure (start, middle, end) sets its sub-frames (`sub_frame_count` with the
+  plan's step and threshold), so a frame with nothing fast in view draws none, and a walker beside a
+  racing car stays sharp (its image moves less than the threshold) while the car is drawn
+  sub-frame by sub-frame in its own rectangles (`moving_rects_px` of that node alone, over its
+  sub-frames and the frame time). Everything else is the base: the s² draws at the frame time. The base
+  is kept for the next frame: under the same view and daylight (`_daylight_state`: lights, ambient,
+  sky, sun), only the rectangles that bound each node that changed between the two frame times (at both,
+  with its shadows) are drawn again, cropped from the whole draws, so a frame is bit for bit the frame
+  drawn alone, whatever came before it (tests/render/test_still_frames.py). With a kept static
+  background (no shadows), the base is drawn whole over it. Measured on the parking lot's camera at
+  1080p (2 cores, load 3-4): 22 s a frame before, 6-9 s after; rectangles 20-35 % of the frame, most
+  of it the six swaying trees and their shadows.
 """
 
 from __future__ import annotations
@@ -210,6 +226,8 @@ class CameraRenderer:
         motion = [stage.params for stage in camera.stages if stage.name == "optics.motion_blur"]
         self._motion = motion[0] if motion else None
         self._nir: SceneGraph | None = None
+        self._kept_base: _KeptBase | None = None
+        """The last still frame's radiance (`_base_radiance`)."""
         """The NIR graph of a night-mode camera (`camgen.render.nir`), built at its first night frame."""
         spec = self.spec
         s = spec.supersampling if "radiance" in spec.passes else 1
@@ -238,14 +256,22 @@ class CameraRenderer:
         return ShadowFit(view, *self._caster_box_m)
 
     def _draw(
-        self, view: View, passes: tuple[str, ...], key: str, fit: ShadowFit | None = None, lod_bias: float = 0.0
+        self,
+        view: View,
+        passes: tuple[str, ...],
+        key: str,
+        fit: ShadowFit | None = None,
+        lod_bias: float = 0.0,
+        maps_kept: bool = False,
     ) -> Passes:
+        """One draw of `view`, over the kept background `key` when the plan keeps one; `maps_kept`: the last
+        draw's shadow maps stand (`Renderer.draw`'s `shadow_maps_kept`)."""
         graph, renderer = self.graph, self.renderer
         fit = self.shadow_fit(view) if fit is None else fit
         # Every draw of this view shares the depth mapping, the shadow fit and the texture detail.
         shared = {"clip_range_m": self.clip_range_m(view), "shadow_fit": fit, "texture_lod_bias": lod_bias}
         if not self.spec.static_background:
-            return renderer.draw(graph, view, passes, **shared)
+            return renderer.draw(graph, view, passes, shadow_maps_kept=maps_kept, **shared)
         kept = f"{self.camera.name}:{key}"
         if kept not in self._kept_views or not _same_view(self._kept_views[kept], view):
             renderer.draw(graph, view, passes, nodes=graph.still_nodes, keep_as=kept, read=False, **shared)
@@ -253,11 +279,20 @@ class CameraRenderer:
         return renderer.draw(graph, view, passes, nodes=graph.moving_nodes, background=kept, **shared)
 
     def motion_samples(self, state: CameraState) -> int:
-        """Sub-frames for this frame's exposure: the plan's largest motion scales with the exposure
-        actually used (the longest possible one is what the plan measured)."""
+        """Sub-frames for this frame's exposure (the most that any part of it needs). Through a head that
+        holds still under lights that hold, what the fastest moving node needs (`_blurred_groups`);
+        otherwise the plan's largest motion, scaled with the exposure actually used (the longest possible
+        one is what the plan measured)."""
         if self._motion is None:
             return 1
+        groups = self._blurred_groups(state, render_view(state, self.spec))
+        return self._plan_samples(state) if groups is None else max(groups, default=1)
+
+    def _plan_samples(self, state: CameraState) -> int:
+        """Sub-frames for this frame's exposure by the plan's bound on the image motion (`motion_samples`)."""
         p = self._motion
+        if p is None:
+            return 1
         camera_px = p["camera_motion_px"][state.frame] if "camera_motion_px" in p else 0.0
         displacement_px = (p["displacement_max_px"] + camera_px) * state.exposure_time_s / p["exposure_longest_s"]
         return sub_frame_count(
@@ -277,7 +312,12 @@ class CameraRenderer:
         view = render_view(state, spec)
         passes = spec.passes
         s = spec.supersampling
-        samples = self.motion_samples(state)
+        groups = self._blurred_groups(state, view) if "radiance" in passes else None
+        if groups is not None and self.moving_regions:
+            radiance = self._still_radiance(state, view, groups)
+            if radiance is not None:
+                return self._finished(state, view, radiance)
+        samples = self._plan_samples(state) if groups is None else max(groups, default=1)
         if s == 1 and samples == 1:
             self.graph.place_actors(state.time_s)
             drawn = self._draw(view, passes, "shared")
@@ -289,14 +329,13 @@ class CameraRenderer:
         result = Passes()
         if "radiance" in passes:
             # (time offset, sub-pixel shift, draw factor, kept-background key) of each sub-frame.
-            if s > 1 and samples > 1:  # the sub-frames carry the area samples too (module docstring)
+            if s > 1:  # the sub-frames carry the area samples (module docstring); sharp: all at the frame time
                 draws = [
-                    (t, dx_px, dy_px, 1, f"radiance jitter {i % s**2}")
+                    (t if samples > 1 else 0.0, dx_px, dy_px, 1, f"radiance jitter {i % s**2}")
                     for i, (t, dx_px, dy_px) in enumerate(jittered_samples(samples, s))
                 ]
             else:
-                key = "radiance" if s == 1 else f"radiance {s}x"
-                draws = [(float(t), 0.0, 0.0, s, key) for t in sub_frame_offsets(samples)]
+                draws = [(float(t), 0.0, 0.0, 1, "radiance") for t in sub_frame_offsets(samples)]
             fit = self.shadow_fit(view)
             rects = None
             if self.moving_regions and len(draws) > 1 and all(factor == 1 for _, _, _, factor, _ in draws):
@@ -305,6 +344,13 @@ class CameraRenderer:
                 result.radiance = self._sub_frame_mean(state, view, draws, fit)
             else:
                 result.radiance = self._composited_mean(state, view, draws, fit, rects, s**2)
+        return self._finished(state, view, result.radiance)
+
+    def _finished(self, state: CameraState, view: View, radiance: np.ndarray | None) -> Frame:
+        """The frame from its drawn daylight radiance (None without a radiance pass): the IR illuminator's
+        light added in night mode, the geometric passes drawn at the frame time, and the rain."""
+        passes, result = self.spec.passes, Passes()
+        result.radiance = radiance
         if "radiance" in passes and state.night_mode:
             result.radiance = result.radiance + self._nir_radiance(view, state)
         geometric = tuple(p for p in passes if p != "radiance")
@@ -314,21 +360,146 @@ class CameraRenderer:
             result.depth_m, result.instance_id = coarse.depth_m, coarse.instance_id
         if "radiance" in passes and self.graph.rain_rate_mm_h is not None:
             result.radiance = self._rain(view, state, result.radiance, result.depth_m)
-        return Frame(index, state.time_s, result)
+        return Frame(state.frame, state.time_s, result)
+
+    def _still_radiance(self, state: CameraState, view: View, groups: dict[int, set[int]]) -> np.ndarray | None:
+        """The frame's radiance through a camera that holds still during the exposure under lights that do
+        not change in it (module docstring: "Still frames"), where `groups` (`_blurred_groups`) need motion
+        blur; None when their moving regions cannot be bounded or cover most of the frame (then the caller
+        draws every sub-frame whole)."""
+        s = self.spec.supersampling
+        fit = self.shadow_fit(view)
+        blurred = {}
+        for samples, nodes in sorted(groups.items()):
+            # The frame time too: outside the rectangles the frame is the base drawn then.
+            offsets = [0.0] + [t for t, _, _ in jittered_samples(samples, s)]
+            rects = self.moving_rects_px(state, view, offsets, fit, only=nodes)
+            if rects is None:
+                return None
+            blurred[samples] = rects
+        area = sum((x1 - x0) * (y1 - y0) for rects in blurred.values() for x0, y0, x1, y1 in rects)
+        if area > MOVING_AREA_MAX_FRACTION * view.width_px * view.height_px:
+            return None
+        radiance = self._base_radiance(state, view, fit).copy()
+        for samples, rects in blurred.items():  # fewest samples first: where two overlap, the most win
+            draws = jittered_samples(samples, s)
+            parts = self._mean_of_draws(state, view, fit, draws, rects)
+            for (x0, y0, x1, y1), part in zip(rects, parts, strict=True):
+                radiance[y0:y1, x0:x1] = part
+        return radiance
+
+    def _blurred_groups(self, state: CameraState, view: View) -> dict[int, set[int]] | None:
+        """The moving nodes (indices into `SceneGraph.moving_nodes`) whose image moves by more than the
+        plan's threshold during the exposure, grouped by the sub-frames each needs (`sub_frame_count` of
+        its longest vertex path, px, over the exposure's start, middle and end); {} when the plan has no
+        motion blur; None when the head moves or a light changes during the exposure."""
+        p, graph, spec = self._motion, self.graph, self.spec
+        exposure_s = state.exposure_time_s
+        ends = (-0.5, 0.0, 0.5)
+        if any(not _same_view(view_at(state, spec, offset * exposure_s), view) for offset in ends):
+            return None
+        if p is None:
+            return {}
+        moving, lights = graph.moving_nodes, []
+        pixels = []
+        for offset in ends:
+            graph.place_actors(state.time_s + offset * exposure_s)
+            lights.append(_light_state(graph.scene))
+            pixels.append([_node_pixels(graph.scene, node, view) for node in moving])
+        if not all(np.array_equal(a, b) for a, b in zip(lights[0], lights[-1], strict=True)):
+            return None
+        groups: dict[int, set[int]] = {}
+        for k in range(len(moving)):
+            (uv0, front0), (uv1, front1), (uv2, front2) = (pixels[i][k] for i in range(3))
+            seen = front0 & front1 & front2 & _near_view(uv1, view)
+            if not seen.any():
+                continue
+            path_px = np.hypot(*(uv1 - uv0)[:, seen]) + np.hypot(*(uv2 - uv1)[:, seen])
+            step_px, most, threshold = p["sample_step_px"], p["samples_max"], p["threshold_px"]
+            samples = sub_frame_count(float(path_px.max()), step_px=step_px, samples_max=most, threshold_px=threshold)
+            if samples > 1:
+                groups.setdefault(samples, set()).add(k)
+        return groups
+
+    def _base_radiance(self, state: CameraState, view: View, fit: ShadowFit) -> np.ndarray:
+        """The radiance at the frame time with s × s area samples per pixel (s² draws at 1×, one through each
+        sub-pixel position, as motion blur's sub-frames sample them), kept for the next frame: when the view
+        and the daylight are the kept one's, only the rectangles that bound what moved between the two
+        (`moving_rects_px` at the two times) are drawn again, each cropped from the whole view's draw (so
+        the same pixels, bit for bit)."""
+        graph, s = self.graph, self.spec.supersampling
+        daylight = _daylight_state(graph)
+        kept, rects = self._kept_base, None
+        if self.spec.static_background:  # the kept environment makes a whole draw cheap
+            kept = None
+        if kept is not None and _same_view(kept.view, view) and _same_arrays(kept.daylight, daylight):
+            rects = self._moving_rects_at(view, [kept.time_s, state.time_s], fit, None)
+        positions = [(0.0, dx_px, dy_px) for _, dx_px, dy_px in jittered_samples(s * s, s)]
+        if rects is None:
+            (radiance,) = self._mean_of_draws(state, view, fit, positions, None)
+        else:
+            radiance = kept.radiance
+            for (x0, y0, x1, y1), part in zip(
+                rects, self._mean_of_draws(state, view, fit, positions, rects), strict=True
+            ):
+                radiance[y0:y1, x0:x1] = part
+        self._kept_base = _KeptBase(view, daylight, state.time_s, radiance)
+        return radiance
+
+    def _mean_of_draws(
+        self, state: CameraState, view: View, fit: ShadowFit, draws: list[tuple[float, float, float]], rects
+    ) -> list[np.ndarray]:
+        """The mean radiance of `draws` (time offset as a fraction of the exposure, sub-pixel shift dx, dy px),
+        each drawn at 1× (standing for s × s samples: textures at the s× draw's mip level), cropped to each
+        of `rects` (x0, y0, x1, y1), one mean per rectangle; `rects` None: the whole view, one mean. The
+        sums run in the order of `draws` whatever the crop, so a crop's mean is the whole view's, bit for
+        bit. Shadow maps are drawn once per placement."""
+        s = self.spec.supersampling
+        crops = [None] if rects is None else rects
+        totals: list[np.ndarray | None] = [None] * len(crops)
+        clip, lod_bias = self.clip_range_m(view), -math.log2(s)
+        placed = None
+        for i, (offset, dx_px, dy_px) in enumerate(draws):
+            maps_kept = offset == placed
+            if not maps_kept:
+                self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
+                placed = offset
+            sub_view = shifted(view, dx_px, dy_px)
+            if rects is None:  # over the kept background of its sub-pixel position, where the plan keeps one
+                part = self._draw(sub_view, ("radiance",), f"radiance jitter {i % s**2}", fit, lod_bias, maps_kept)
+                totals[0] = part.radiance if totals[0] is None else totals[0] + part.radiance
+                continue
+            for k, crop in enumerate(crops):
+                part = self.renderer.draw(
+                    self.graph,
+                    sub_view,
+                    ("radiance",),
+                    clip_range_m=clip,
+                    shadow_fit=fit,
+                    crop_px=crop,
+                    shadow_maps_kept=maps_kept or k > 0,
+                    texture_lod_bias=lod_bias,
+                ).radiance
+                totals[k] = part if totals[k] is None else totals[k] + part
+        return [total / np.float32(len(draws)) for total in totals]
 
     def _sub_frame_mean(self, state: CameraState, view: View, draws: list, fit: ShadowFit) -> np.ndarray:
         """The mean radiance of `draws` (time offset, sub-pixel shift, draw factor, kept-background key),
-        each drawn whole."""
-        spec, total = self.spec, None
+        each drawn whole (shadow maps once per placement)."""
+        spec, total, placed = self.spec, None, None
         for offset, dx_px, dy_px, factor, key in draws:
-            self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
+            maps_kept = offset == placed
+            if not maps_kept:
+                self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
+                placed = offset
             # The head moves during the exposure too.
             sub_view = shifted(view_at(state, spec, offset * state.exposure_time_s), dx_px, dy_px)
             if factor > 1:
                 sub_view = sub_view.scaled(factor)
             # A 1× draw that stands for s × s samples samples textures at the s× draw's mip level.
             lod_bias = math.log2(factor / spec.supersampling)
-            radiance = box_downsample(self._draw(sub_view, ("radiance",), key, fit, lod_bias).radiance, factor)
+            drawn = self._draw(sub_view, ("radiance",), key, fit, lod_bias, maps_kept)
+            radiance = box_downsample(drawn.radiance, factor)
             total = radiance if total is None else total + radiance
         return total / len(draws) if len(draws) > 1 else total
 
@@ -364,7 +535,7 @@ class CameraRenderer:
         return result
 
     def moving_rects_px(
-        self, state: CameraState, view: View, offsets: list[float], fit: ShadowFit
+        self, state: CameraState, view: View, offsets: list[float], fit: ShadowFit, only: set[int] | None = None
     ) -> list[tuple[int, int, int, int]] | None:
         """Rectangles (x0, y0, x1, y1) of `view` outside which no sub-frame of the exposure (at `offsets`,
         fractions of it) differs from another of the same sub-pixel position; None when that cannot be
@@ -378,21 +549,30 @@ class CameraRenderer:
         the near plane are projected, each to a rectangle. Falls back when the head moves (pan, tilt,
         zoom), a light moves or changes, a sun is at or below the horizon, or a spot light is not above a
         moving box."""
-        graph, scene, spec = self.graph, self.graph.scene, self.spec
         exposure_s = state.exposure_time_s
-        if any(not _same_view(view_at(state, spec, offset * exposure_s), view) for offset in offsets):
+        if any(not _same_view(view_at(state, self.spec, offset * exposure_s), view) for offset in offsets):
             return None
+        return self._moving_rects_at(view, [state.time_s + offset * exposure_s for offset in offsets], fit, only)
+
+    def _moving_rects_at(
+        self, view: View, times_s: list[float], fit: ShadowFit, only: set[int] | None
+    ) -> list[tuple[int, int, int, int]] | None:
+        """`moving_rects_px` over the actors placed at `times_s`, through `view` (which holds for them all),
+        for the moving nodes `only` (indices into `SceneGraph.moving_nodes`; None: all of them)."""
+        graph, scene = self.graph, self.graph.scene
         lights_before = _light_state(scene)
         moving = graph.moving_nodes
         boxes: list[list[np.ndarray]] = [[] for _ in moving]
-        first: list[tuple] = []
+        first: dict[int, tuple] = {}
         changed = [False] * len(moving)
-        for step, offset in enumerate(offsets):
-            graph.place_actors(state.time_s + offset * exposure_s)
+        for step, time_s in enumerate(times_s):
+            graph.place_actors(time_s)
             for k, node in enumerate(moving):
+                if only is not None and k not in only:
+                    continue
                 look = _actor_look(scene, node)
                 if step == 0:
-                    first.append(look)
+                    first[k] = look
                 elif not changed[k]:
                     changed[k] = not all(np.array_equal(a, b) for a, b in zip(first[k], look, strict=True))
                 boxes[k].append(box_corners(*node.mesh.bounds, scene.get_pose(node)))
@@ -499,6 +679,55 @@ def _reach(graph: SceneGraph) -> tuple[np.ndarray, np.ndarray]:
     if not points:
         return np.zeros((1, 3)), np.zeros(1)
     return np.concatenate(points), np.concatenate(radii)
+
+
+@dataclass
+class _KeptBase:
+    """The last frame's radiance at its frame time, before any motion blur (`CameraRenderer._base_radiance`)."""
+
+    view: View
+    daylight: list[np.ndarray]
+    time_s: float
+    radiance: np.ndarray
+
+
+def _daylight_state(graph: SceneGraph) -> list[np.ndarray]:
+    """What a draw takes from the lights and the sky: every light's pose, colour and intensity, the ambient
+    light, the sky's luminance and the sun's direction (`SceneGraph.set_daylight` moves them over a dusk)."""
+    sun = graph.sun_direction
+    return [
+        *_light_state(graph.scene),
+        np.asarray(graph.scene.ambient_light, np.float64),
+        np.asarray(graph.sky_luminance_cd_m2, np.float64),
+        np.zeros(0) if sun is None else np.asarray(sun, np.float64),
+    ]
+
+
+def _same_arrays(a: list[np.ndarray], b: list[np.ndarray]) -> bool:
+    return len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
+
+
+def _node_pixels(scene, node, view: View) -> tuple[np.ndarray, np.ndarray]:
+    """Pixels (2, N) of `view` where the vertices of `node`'s mesh, as placed now, project, and whether each
+    lies in front of the near plane (N,)."""
+    positions = [np.asarray(primitive.positions, np.float64) for primitive in node.mesh.primitives]
+    pose = scene.get_pose(node)
+    world = np.concatenate(positions) @ pose[:3, :3].T + pose[:3, 3]
+    T = view.T_world_from_cam
+    camera = (world - T[:3, 3]) @ T[:3, :3]
+    z = camera[:, 2]
+    front = z >= NEAR_CLIP_M
+    z = np.where(front, z, 1.0)
+    K = view.K_px
+    x, y = camera[:, 0] / z, camera[:, 1] / z
+    return np.stack([K[0, 0] * x + K[0, 1] * y + K[0, 2], K[1, 1] * y + K[1, 2]]), front
+
+
+def _near_view(uv: np.ndarray, view: View) -> np.ndarray:
+    """Whether each pixel (2, N) lies within a view's width and height of the view (a vertex that far out
+    can still belong to a triangle that crosses it)."""
+    w, h = view.width_px, view.height_px
+    return (uv[0] > -w) & (uv[0] < 2 * w) & (uv[1] > -h) & (uv[1] < 2 * h)
 
 
 def _light_state(scene) -> list[np.ndarray]:

@@ -1,0 +1,113 @@
+"""Frames through a head that holds still (`CameraRenderer._still_radiance`): the last frame's radiance is kept
+and only what moved since is drawn again, bit for bit the frame drawn alone; motion blur's sub-frames are
+drawn only for the movers whose image moves by more than the plan's threshold during the exposure."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from camgen.config import load_scene
+from camgen.plan import PlanSettings, compile_scene
+from camgen.render.scene_graph import build_scene_graph
+from camgen.render.sequence import CameraRenderer, render_view
+from tests.conftest import write
+from tests.render.test_moving_regions import SMALL_PROFILE
+
+pytestmark = pytest.mark.opengl
+
+SCENE = """\
+duration_s: 3
+fps: 10
+environment:
+  sky: clear
+  meshes:
+    - {type: plane, name: ground, size_m: [60, 60],
+       material: {color_rgb: [0.3, 0.3, 0.3], texture: {type: asphalt, seed: 1}}}
+    - {type: box, name: wall, size_m: [24, 0.5, 3], position_m: [0, 16, 1.5],
+       material: {color_rgb: [0.5, 0.45, 0.4], texture: {type: brick, seed: 2}}}
+lights:
+  - {type: sun, illuminance_lux: 50000, azimuth_deg: 235, elevation_deg: 25}
+  - {type: ambient, illuminance_lux: 3000}
+  - {type: spot, intensity_cd: 40000, position_m: [2, 9, 7], target_m: [2, 9, 0], cone_half_angle_deg: 35}
+actors:
+  - name: racer
+    class: car
+    shape: {type: box, name: body, size_m: [1.6, 0.8, 1.4], position_m: [0, 0, 0.7],
+            material: {color_rgb: [0.8, 0.1, 0.1]}}
+    path: {waypoints_m: [[-60, 9], [30, 9]], speed_m_s: 30, motion: linear}
+  - name: stroller
+    class: person
+    path: {waypoints_m: [[-3, 12], [3, 12]], speed_m_s: 0.3, motion: linear}
+outputs: {annotations: []}
+cameras:
+  - {name: cam, profile: fixed, mount: {position_m: [0, -4, 4], yaw_deg: 90, pitch_deg: -15}}
+"""
+FRAME = 20  # t = 2 s: the racer at x = 0, in front of the camera; at t = 0 it is 60 m to the left, out of view
+
+
+@pytest.fixture(scope="module")
+def job(tmp_path_factory):
+    root = tmp_path_factory.mktemp("still_frames")
+    write(root, "profiles/fixed.yaml", SMALL_PROFILE)
+    job = compile_scene(load_scene(write(root, "scenes/s.yaml", SCENE)), PlanSettings(supersampling=2))
+    assert any(stage.name == "optics.motion_blur" for stage in job.cameras[0].stages)
+    return job
+
+
+def _renderer_of(job, renderer):
+    return CameraRenderer(renderer, build_scene_graph(job.scene), job.cameras[0])
+
+
+def _counting(renderer, monkeypatch) -> list:
+    """The crop of every radiance draw from now on (None: a whole draw)."""
+    crops = []
+    draw = renderer.draw
+
+    def counted(graph, view, passes, **options):
+        if "radiance" in passes:
+            crops.append(options.get("crop_px"))
+        return draw(graph, view, passes, **options)
+
+    monkeypatch.setattr(renderer, "draw", counted)
+    return crops
+
+
+def test_a_frame_after_others_is_bit_for_bit_the_frame_drawn_alone(job, renderer, monkeypatch):
+    alone = _renderer_of(job, renderer).frame(FRAME).passes.radiance
+    after = _renderer_of(job, renderer)
+    after.frame(FRAME - 5)  # a gap: what moved in between is bounded by where it was and is
+    after.frame(FRAME - 1)
+    crops = _counting(renderer, monkeypatch)
+    kept = after.frame(FRAME).passes.radiance
+    assert crops and None not in crops, "the frame was drawn from the kept one, in rectangles only"
+    np.testing.assert_array_equal(kept, alone)
+
+
+def test_a_changed_light_draws_the_frame_whole(job, renderer, monkeypatch):
+    first = _renderer_of(job, renderer)
+    first.frame(FRAME - 1)
+    sun = next(node for node in first.graph.scene.light_nodes if type(node.light).__name__ == "DirectionalLight")
+    sun.light.intensity *= 0.5
+    crops = _counting(renderer, monkeypatch)
+    dimmed = first.frame(FRAME).passes.radiance
+    assert None in crops, "a kept frame under another light is not reused"
+    fresh = _renderer_of(job, renderer)
+    fresh_sun = next(n for n in fresh.graph.scene.light_nodes if type(n.light).__name__ == "DirectionalLight")
+    fresh_sun.light.intensity *= 0.5
+    np.testing.assert_array_equal(dimmed, fresh.frame(FRAME).passes.radiance)
+
+
+def test_only_the_fast_mover_gets_sub_frames_and_only_while_it_is_in_view(job, renderer):
+    drawer = _renderer_of(job, renderer)
+    camera = job.cameras[0]
+    racer, stroller = (drawer.graph.moving_nodes.index(node) for node in drawer.graph.actor_nodes)
+    state = camera.states[FRAME]
+    groups = drawer._blurred_groups(state, render_view(state, camera.render))
+    assert {k for nodes in groups.values() for k in nodes} == {racer}
+    # 30 m/s over the 20 ms exposure is 0.6 m at about 12 m: several pixels, each sub-frame ≤ 1 px apart.
+    assert 3 <= drawer.motion_samples(state) <= drawer._plan_samples(state)
+    start = camera.states[0]
+    assert drawer.motion_samples(start) == 1  # the racer is 60 m to the left
+    assert drawer._plan_samples(start) > 1  # the plan's bound holds for the whole sequence
+    assert stroller not in {k for nodes in groups.values() for k in nodes}
