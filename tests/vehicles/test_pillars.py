@@ -10,7 +10,7 @@ import pytest
 import trimesh
 
 from camgen.config.scene import VEHICLE_BODY_TYPES
-from camgen.vehicles.body import PROFILES, shell
+from camgen.vehicles.body import BLACK_PILLAR_SHARE, PROFILES, UNDERBODY_RGB, build_vehicle, shell
 from camgen.vehicles.look import draw_look
 
 CLASS_OF = {body: cls for cls, bodies in VEHICLE_BODY_TYPES.items() for body in bodies}
@@ -57,3 +57,31 @@ def test_cars_have_front_and_rear_side_windows_on_each_side(body):
         assert len(windows) >= 2, (body, side, len(windows))
     # Windscreen, rear window (or tailgate glass) and at least two side windows a side.
     assert labels.max() + 1 >= 6, (body, labels.max() + 1)
+
+
+@pytest.mark.parametrize("body", ["sedan", "estate", "bus", "hatchback"])
+def test_narrow_pillars_between_side_windows_are_black(body):
+    """A car's B-pillar and a bus's window pillars (bands of `Profile.pillars` at most `BLACK_PILLAR_SHARE`
+    of the length) are black trim (kind 2) in the side windows' rows, above the beltline; a hatchback's wide
+    D-pillar stays paint."""
+    look = draw_look(1, CLASS_OF[body], pinned={"body_type": body})
+    vertices, faces, _, kind = shell(look)
+    centres = vertices[faces].mean(axis=1)
+    u = centres[:, 0] / look.length_m + 0.5
+    black = kind == 2
+    narrow = [band for band in PROFILES[body].pillars if band[1] - band[0] <= BLACK_PILLAR_SHARE]
+    assert black.any() and narrow
+    in_narrow = np.any([(u > lo - 0.01) & (u < hi + 0.01) for lo, hi in narrow], axis=0)
+    assert np.all(in_narrow[black])
+    assert np.all(centres[black, 2] > PROFILES[body].belt * look.height_m)
+    for lo, hi in narrow:  # every narrow band is black on both sides (a bus's glazed doors are glass on one)
+        here = black & (u > lo - 0.01) & (u < hi + 0.01)
+        sides = int((centres[here, 1] > 0).any()) + int((centres[here, 1] < 0).any())
+        assert sides == 2 or (body == "bus" and sides == 1)
+    wide = [band for band in PROFILES[body].pillars if band[1] - band[0] > BLACK_PILLAR_SHARE]
+    for lo, hi in wide:
+        assert not (black & (u > lo + 0.01) & (u < hi - 0.01)).any()
+    # Drawn black: the built vehicle's running gear holds them in the underbody's black plastic.
+    gear = next(part for part in build_vehicle(look).parts if part.name == "running_gear")
+    dark = gear.vertices_m[np.all(np.isclose(gear.colours, UNDERBODY_RGB), axis=1)]
+    assert (dark[:, 2] >= PROFILES[body].belt * look.height_m - 1e-9).sum() >= len(np.unique(faces[black]))

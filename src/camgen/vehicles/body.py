@@ -285,7 +285,7 @@ def _sections(half_width_m: np.ndarray, half_height_m: np.ndarray, belt_rel: np.
 
 def shell(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The body shell: (vertices (V, 3) m, faces (F, 3), per-vertex normals (V, 3), face kind (F,) 0
-    paint, 1 glass), closed and wound counter-clockwise seen from outside."""
+    paint, 1 glass, 2 black trim (`_black_pillars`)), closed and wound counter-clockwise seen from outside."""
     profile = PROFILES[look.body_type]
     L, W, H = look.length_m, look.width_m, look.height_m
     axles = (look.front_axle_x_m, look.rear_axle_x_m)
@@ -378,9 +378,31 @@ def _glass(profile: Profile, look: VehicleLook, vertices, faces, quads: int) -> 
     tube &= ~_screen_pillars(tube, top_row.max() if top_row.size else -1)
     doors = grid(glass) & ~np.any([grid(w) for w in windows], axis=0)  # a bus's doors reach below the belt
     tube |= doors
-    glass[:quads] = tube.reshape(-1)
-    glass[quads : 2 * quads] = tube.reshape(-1)
-    return glass.astype(np.int8)
+    black = _black_pillars(profile, look, vertices, faces, quads, tube, top_row.max() if top_row.size else -1)
+    kind = glass.astype(np.int8)
+    for half in (slice(0, quads), slice(quads, 2 * quads)):
+        kind[half] = np.where(black, 2, tube).reshape(-1)
+    return kind
+
+
+BLACK_PILLAR_SHARE = 0.04
+"""Pillar bands (`Profile.pillars`) at most this share of the length wide are black where they part the side
+windows: a car's B-pillar (and an estate's narrow C-pillar), covered with gloss black trim on most current
+cars, and a city bus's window pillars, hidden behind its flush bonded glazing's black-printed edges. Wider
+bands (a hatchback's or SUV's D-pillar) stay in the paint."""
+
+
+def _black_pillars(profile: Profile, look: VehicleLook, vertices, faces, quads: int, tube, side_top: int):
+    """(S − 1, N) bool: the quads of the narrow pillar bands (`BLACK_PILLAR_SHARE`) in the side windows' rows
+    that are not glass."""
+    narrow = [band for band in profile.pillars if band[1] - band[0] <= BLACK_PILLAR_SHARE]
+    if not narrow or side_top < 0:
+        return np.zeros_like(tube)
+    u = (vertices[faces[:quads]].mean(axis=1)[:, 0] / look.length_m + 0.5).reshape(tube.shape)
+    in_band = np.any([(u > lo) & (u < hi) for lo, hi in narrow], axis=0)
+    k = np.arange(tube.shape[1])
+    rows = (k < UPPER_POINTS) & (np.minimum(k, UPPER_POINTS - 1 - k) <= side_top)
+    return in_band & rows[None, :] & ~tube
 
 
 def _screen_pillars(tube: np.ndarray, side_top: int) -> np.ndarray:
@@ -857,13 +879,14 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
         Part("body_paint", "paint", vertices[used], normals[used], remapped.reshape(-1, 3),
              np.full(len(used), -1, np.int8))
     ]  # fmt: skip
-    used, remapped = np.unique(paint[below], return_inverse=True)
+    # The underbody and the black pillars: black plastic alike (`UNDERBODY_RGB`), one piece of the running gear.
+    used, remapped = np.unique(np.concatenate([paint[below], faces[kind == 2]]), return_inverse=True)
     underbody = Part("underbody", "gear", vertices[used], normals[used], remapped.reshape(-1, 3),
                      np.full(len(used), -1, np.int8), colours=np.tile(UNDERBODY_RGB, (len(used), 1)))  # fmt: skip
     if (kind == 1).any():
         glass = glass_part(look, vertices, normals, faces[kind == 1])
         parts += [inner_glass_part(glass), glass]  # the far panes first (the renderer keeps the order)
-    cabin = [lining_part(vertices, normals, paint)] + ([driver_part(look)] if driver else [])
+    cabin = [lining_part(vertices, normals, faces[kind != 1])] + ([driver_part(look)] if driver else [])
     parts.append(_merge("cabin", "cabin", cabin))
     width_m = TYRE_WIDTH_SHARE * look.width_m
     tyre, rim = wheel_meshes(look.wheel_radius_m, width_m, RIM_SHARE[look.body_type])
