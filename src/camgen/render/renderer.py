@@ -644,6 +644,29 @@ def meshes_reach_clip_volume(meshes: list, poses: np.ndarray, P_V: np.ndarray) -
     return instanced | ~np.any(beyond, axis=1)
 
 
+CROP_CULL_PAD_PX = 2
+"""Pixels a crop's frustum is widened by when meshes are culled against it (`_nodes_reaching_crop`): a mesh
+that reaches a pixel centre of the crop lies at least half a pixel inside it; the rest is spare."""
+
+
+def _nodes_reaching_crop(scene, nodes: list, view: View, crop_px, V: np.ndarray, near_m: float, far_m: float) -> list:
+    """`nodes` (in their order) less those whose box lies wholly outside the frustum of the crop `crop_px` of
+    `view` (the whole view, or the part a scissored draw fills), widened by `CROP_CULL_PAD_PX`
+    (`meshes_reach_clip_volume`): they cannot reach a pixel of the draw, yet llvmpipe would transform, clip
+    and bin every triangle of them. The pixels are the same bit for bit (each primitive is rasterised
+    alone; a culled one wrote none of them). Measured on the 2-core machine under load 5: a held 720p sim
+    step of ptz_follow 0.94 → 0.80 s, a 1080p frame of the parking lot's PTZ 5.8 → 3.3 s (crops only)."""
+    if not nodes:
+        return nodes
+    x0, y0, x1, y1 = crop_px
+    pad = CROP_CULL_PAD_PX
+    part = view.cropped((x0 - pad, y0 - pad, x1 + pad, y1 + pad))
+    P_V = gl_projection(part.K_px, part.width_px, part.height_px, near_m, far_m) @ V
+    poses = np.array([scene.get_pose(node) for node in nodes])
+    reach = meshes_reach_clip_volume([node.mesh for node in nodes], poses, P_V)
+    return [node for node, kept in zip(nodes, reach, strict=True) if kept]
+
+
 def _blend_with_coverage(source_factor, destination_factor) -> None:
     """pyrender's blend factors for colour, and (ONE, ONE_MINUS_SRC_ALPHA) for alpha (coverage: the
     target's alpha accumulates 1 − ∏(1 − a), `_PassRenderer._bind_and_draw_primitive`)."""
@@ -857,6 +880,7 @@ class Renderer:
 
         P = gl_projection(view.K_px, view.width_px, view.height_px, near_m, far_m)
         V = np.linalg.inv(pose_gl)
+        nodes = _nodes_reaching_crop(scene, nodes, view, crop_px or (0, 0, *size), V, near_m, far_m)
         with renderer.sized_shadow_maps(scene, flags):
             renderer.forward(scene, nodes, graph.instance_ids, V, P, pose_gl[:3, 3], flags, lit)
         GL.glFlush()
