@@ -111,3 +111,16 @@ def test_only_the_fast_mover_gets_sub_frames_and_only_while_it_is_in_view(job, r
     assert drawer.motion_samples(start) == 1  # the racer is 60 m to the left
     assert drawer._plan_samples(start) > 1  # the plan's bound holds for the whole sequence
     assert stroller not in {k for nodes in groups.values() for k in nodes}
+
+
+def test_a_metering_frame_is_drawn_sharp(job, renderer):
+    """`sharp`: the frame that auto-exposure meters (at the profile's guessed exposure) draws no sub-frame;
+    it is the frame of the camera planned without motion blur."""
+    camera = job.cameras[0]
+    stages = tuple(s for s in camera.stages if s.name != "optics.motion_blur")
+    sharp_camera = camera.model_copy(update={"stages": stages})
+    metered = _renderer_of(job, renderer).frame(FRAME, sharp=True).passes.radiance
+    blurred = _renderer_of(job, renderer).frame(FRAME).passes.radiance
+    without = CameraRenderer(renderer, build_scene_graph(job.scene), sharp_camera).frame(FRAME).passes.radiance
+    np.testing.assert_array_equal(metered, without)
+    assert np.abs(blurred - metered).max() > 0.05 * metered.max()  # the racer is smeared in the blurred one

@@ -653,14 +653,18 @@ def _compile_camera(
         )
     elif scene.actors and needs_image and not shadow_lights:
         static_reason = (
-            f"the camera moves in {frames - still_frames} of {frames} frames, so every frame is drawn in full"
+            f"the camera moves in {frames - still_frames} of {frames} frames; a frame after a still one redraws "
+            "only what moved (camgen.render.sequence, still frames)"
         )
     elif not scene.actors:
         static_reason = "no actors: the environment alone is drawn each frame"
     elif not needs_image:
         static_reason = "no image output (the geometric passes alone are cheap)"
     else:
-        static_reason = "actors cast shadows on the environment (environment.shadows), so every frame is drawn in full"
+        static_reason = (
+            "actors cast shadows on the environment (environment.shadows); a frame after a still one redraws "
+            "only what moved, with its shadows (camgen.render.sequence, still frames)"
+        )
     decisions.append(Decision(stage="render.static_background", included=static_background, reason=static_reason))
 
     stages.append(

@@ -292,18 +292,17 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
         for index in indices:
             state = camera.states[index] if pipeline is None else pipeline.state_for(index)
             with clock("render"):
-                frame = camera_renderer.frame(index, state)
+                # A frame drawn to meter the view is drawn sharp: its exposure is the profile's guess.
+                frame = camera_renderer.frame(index, state, sharp=converge)
             if converge:
                 # Start as a camera that has watched this view for a while, not from the profile's guess.
                 converge = False
                 pipeline.converge_exposure(state, frame.passes)
                 settled = pipeline.state_for(index)
-                blurred = (
-                    camera_renderer.motion_samples(state) > 1
-                    or camera_renderer.motion_samples(settled) > 1
-                    or camera_renderer.graph.rain_rate_mm_h is not None  # rain streaks span the exposure
-                )
-                if settled.exposure_time_s != state.exposure_time_s and blurred:
+                # Drawn again where the settled exposure blurs, or where rain's streaks span another exposure.
+                rain = camera_renderer.graph.rain_rate_mm_h is not None
+                changed = settled.exposure_time_s != state.exposure_time_s
+                if camera_renderer.motion_samples(settled) > 1 or (rain and changed):
                     with clock("render"):
                         frame = camera_renderer.frame(index, settled)  # the blur spans the settled exposure
                 state = settled

@@ -299,25 +299,26 @@ class CameraRenderer:
             displacement_px, step_px=p["sample_step_px"], samples_max=p["samples_max"], threshold_px=p["threshold_px"]
         )
 
-    def frame(self, index: int, state: CameraState | None = None) -> Frame:
+    def frame(self, index: int, state: CameraState | None = None, *, sharp: bool = False) -> Frame:
         """The planned passes of one frame. With motion blur planned, radiance is the mean of
         `samples` sub-frames spread evenly over the exposure, which is centred on the frame time;
         depth and ids are the scene at the frame time.
 
         `state`: the frame's camera state with the exposure actually used (auto-exposure decides it
-        while rendering); default the plan's state of frame `index`."""
+        while rendering); default the plan's state of frame `index`. `sharp`: no motion blur (a frame drawn
+        only to meter the view, whose exposure is not yet the camera's)."""
         state = self.camera.states[index] if state is None else state
         self.graph.set_daylight(state.time_s)
         spec = self.spec
         view = render_view(state, spec)
         passes = spec.passes
         s = spec.supersampling
-        groups = self._blurred_groups(state, view) if "radiance" in passes else None
+        groups = self._blurred_groups(state, view, blur=not sharp) if "radiance" in passes else None
         if groups is not None and self.moving_regions:
             radiance = self._still_radiance(state, view, groups)
             if radiance is not None:
                 return self._finished(state, view, radiance)
-        samples = self._plan_samples(state) if groups is None else max(groups, default=1)
+        samples = 1 if sharp else self._plan_samples(state) if groups is None else max(groups, default=1)
         if s == 1 and samples == 1:
             self.graph.place_actors(state.time_s)
             drawn = self._draw(view, passes, "shared")
@@ -388,17 +389,17 @@ class CameraRenderer:
                 radiance[y0:y1, x0:x1] = part
         return radiance
 
-    def _blurred_groups(self, state: CameraState, view: View) -> dict[int, set[int]] | None:
+    def _blurred_groups(self, state: CameraState, view: View, blur: bool = True) -> dict[int, set[int]] | None:
         """The moving nodes (indices into `SceneGraph.moving_nodes`) whose image moves by more than the
         plan's threshold during the exposure, grouped by the sub-frames each needs (`sub_frame_count` of
         its longest vertex path, px, over the exposure's start, middle and end); {} when the plan has no
-        motion blur; None when the head moves or a light changes during the exposure."""
+        motion blur or `blur` is False; None when the head moves or a light changes during the exposure."""
         p, graph, spec = self._motion, self.graph, self.spec
         exposure_s = state.exposure_time_s
         ends = (-0.5, 0.0, 0.5)
         if any(not _same_view(view_at(state, spec, offset * exposure_s), view) for offset in ends):
             return None
-        if p is None:
+        if p is None or not blur:
             return {}
         moving, lights = graph.moving_nodes, []
         pixels = []

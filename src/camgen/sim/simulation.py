@@ -535,24 +535,24 @@ class Simulation:
             )
             blur_px[self.frame] = round(speed_px_s * longest_s, 3)
         clock = pipeline.clock
-        with clock("render"):
-            frame = drawer.frame(self.frame, state)
-        if (
+        metering = (
             self.frame == 0
             and camera_job.exposure_mode == "auto"
             and self.job.settings.auto_exposure_start == "converged"
-        ):
+        )
+        with clock("render"):
+            # A frame drawn to meter the view is drawn sharp: its exposure is the profile's guess.
+            frame = drawer.frame(self.frame, state, sharp=metering)
+        if metering:
             # Start as a camera that has watched this view for a while, not from the profile's guess.
             pipeline.converge_exposure(state, frame.passes)
             settled = planned.model_copy(
                 update={"exposure_time_s": pipeline.setting.exposure_time_s, "gain_db": pipeline.setting.gain_db}
             )
-            blurred = (
-                drawer.motion_samples(state) > 1
-                or drawer.motion_samples(settled) > 1
-                or drawer.graph.rain_rate_mm_h is not None  # rain streaks span the exposure
-            )
-            if settled.exposure_time_s != state.exposure_time_s and blurred:
+            # Drawn again where the settled exposure blurs, or where rain's streaks span another exposure.
+            rain = drawer.graph.rain_rate_mm_h is not None
+            changed = settled.exposure_time_s != state.exposure_time_s
+            if drawer.motion_samples(settled) > 1 or (rain and changed):
                 with clock("render"):
                     frame = drawer.frame(self.frame, settled)  # the blur spans the settled exposure
             state = settled
