@@ -3,10 +3,14 @@
 - The pinhole render is larger than the output by the plan's margin (for distortion, CA and blur):
   the principal point moves by the left/top margin, so output pixel (u, v) is render pixel
   (u + left, v + top) and the output's own camera matrix still holds after cropping.
-- Supersampling s > 1: radiance is the mean of s² draws at 1×, each through one of the s × s sub-pixel
-  positions (`jittered_samples`; textures at the s× draw's mip level), which integrates each pixel's area
-  as a sensor pixel does (the same samples as one draw s× finer, box-averaged). depth_m and instance_id
-  stay point samples at pixel centres (exact values, no mixed ids), drawn together at 1× in one cheap
+- Supersampling s > 1: radiance integrates each pixel's area as a sensor pixel does, over s × s samples:
+  the mean of s² draws at 1×, each through one of the s × s sub-pixel positions (`jittered_samples`;
+  textures at the s× draw's mip level), wherever a frame is composited from parts (still frames, motion
+  blur), so that every part is sampled alike; one draw s× finer, box-averaged, where a frame is drawn
+  whole without motion blur through a moving head (the same samples, its fixed costs once: a 720p turning
+  sim step 2.6 s with four draws against 2.1 s with one, under load 4). The two agree to ~1e-3 of a
+  pixel's value (the sky's grid and the texture level differ slightly). depth_m and instance_id stay
+  point samples at pixel centres (exact values, no mixed ids), drawn together at 1× in one cheap
   geometry-only draw.
 - Static background: the environment is drawn once per camera and kept on the GPU; each frame starts
   from a copy of it and draws only the actors (and the props swaying in the wind,
@@ -330,13 +334,14 @@ class CameraRenderer:
         result = Passes()
         if "radiance" in passes:
             # (time offset, sub-pixel shift, draw factor, kept-background key) of each sub-frame.
-            if s > 1:  # the sub-frames carry the area samples (module docstring); sharp: all at the frame time
+            if s > 1 and samples > 1:  # the sub-frames carry the area samples too (module docstring)
                 draws = [
-                    (t if samples > 1 else 0.0, dx_px, dy_px, 1, f"radiance jitter {i % s**2}")
+                    (t, dx_px, dy_px, 1, f"radiance jitter {i % s**2}")
                     for i, (t, dx_px, dy_px) in enumerate(jittered_samples(samples, s))
                 ]
-            else:
-                draws = [(float(t), 0.0, 0.0, 1, "radiance") for t in sub_frame_offsets(samples)]
+            else:  # one draw s× finer, box-averaged: the same samples at a quarter of the draws' fixed costs
+                key = "radiance" if s == 1 else f"radiance {s}x"
+                draws = [(float(t), 0.0, 0.0, s, key) for t in sub_frame_offsets(samples)]
             fit = self.shadow_fit(view)
             rects = None
             if self.moving_regions and len(draws) > 1 and all(factor == 1 for _, _, _, factor, _ in draws):
