@@ -86,7 +86,7 @@ def _rects(case):
 def test_the_composited_frame_equals_every_sub_frame_drawn_whole(case):
     rects, view = _rects(case)
     samples = case["composited"].motion_samples(case["state"])
-    assert samples > 4  # sub-frames beyond the four whole ones are drawn in the rectangles
+    assert samples > 4  # more sub-frames than sub-pixel positions, drawn in the rectangles only
     assert rects, "the mover is in view, so there is a moving region"
     area = sum((x1 - x0) * (y1 - y0) for x0, y0, x1, y1 in rects)
     assert area < 0.5 * view.width_px * view.height_px  # most of the frame is not redrawn

@@ -16,24 +16,21 @@
   from a copy of it and draws only the actors (and the props swaying in the wind,
   `SceneGraph.moving_nodes`), depth-tested against it.
 - Motion blur (when planned): radiance integrates the exposure as the mean of sub-frames at evenly
-  spread times, so each sub-frame only redraws the actors over the kept background. With
-  supersampling s > 1, the sub-frames carry the spatial samples too (`jittered_samples`): each is
-  drawn at 1× through one of the s×s sub-pixel positions, in turn, and their number is rounded up to
-  a multiple of s², so a static pixel gets exactly the s×s box average at 1/s² of the cost per
-  sub-frame (time and area sampled together, as a distribution ray tracer does).
-- Moving regions (`CameraRenderer.moving_rects_px`): when the camera and the lights hold still during
-  the exposure, a pixel that no moving actor and no shadow of one reaches is the same in every sub-frame
-  of one sub-pixel position. So the first s² sub-frames (one per position) are drawn whole, and the
-  others only inside a few rectangles that bound what moves (`Renderer.draw`'s `crop_px`: the whole
-  view's draw scissored to them, so the same pixels bit for bit); outside them the mean is the whole
-  draws' mean, which is what every sub-frame gives there. All of a frame's draws fit their shadow maps
-  alike (`ShadowFit`), so that a shadow map's texels move with neither the actors nor the crop. Equal to
-  drawing every sub-frame whole within float rounding (tests/render/test_moving_regions.py). Measured on
-  the 2-core llvmpipe machine under other work (load 3–5, so ±30 %): the intersection's 4K box camera
-  (32 sub-frames, s = 2) 146 → 78 s at frame 0 (rectangles 27 % of the frame) and 236 → 141–168 s at
-  frame 125 (66 %: the 4° dusk sun's shadows are 14 times as long as the casters are high); the parking
-  lot's PTZ at its preset (16 sub-frames) 16.9 → 8.3 s (6 %) and 16.5 → 9.6 s (17 %); largest
-  difference 3e-7 of the frame's maximum. The s² whole draws and the depth and id pass remain.
+  spread times. With supersampling s > 1, the sub-frames carry the spatial samples too
+  (`jittered_samples`): each is drawn at 1× through one of the s×s sub-pixel positions, in turn, and
+  their number is rounded up to a multiple of s², so a static pixel gets exactly the s×s box average at
+  1/s² of the cost per sub-frame (time and area sampled together, as a distribution ray tracer does).
+  Through a moving head every sub-frame is drawn whole, their number from the plan's bound on the image
+  motion; through a still one, only where something moves fast enough to blur (still frames, below).
+- Moving regions (`CameraRenderer.moving_rects_px`): when the camera and the lights hold still, a pixel
+  that no moving node (actor, swaying prop) and no shadow of one reaches is the same at every time. The
+  rectangles bound each moving node's box over the times asked and its shadow volume down to the lowest
+  surface; what lies outside them is drawn once, and the rest in crops of them (`Renderer.draw`'s
+  `crop_px`: the whole view's draw scissored to them, so the same pixels bit for bit). All of a frame's
+  draws fit their shadow maps alike (`ShadowFit`), so that a shadow map's texels move with neither the
+  actors nor the crop. (First measured when the s² whole sub-frames were composited with the others in
+  rectangles, load 3–5: the intersection's 4K box camera, 32 sub-frames, 146 → 78 s at frame 0; the
+  parking lot's PTZ at its preset 16.9 → 8.3 s.)
 - Still frames (`CameraRenderer._still_radiance`): through a head that holds still during the exposure,
   each moving node (actor, swaying prop) is blurred by what it needs: the longest path, px, of one of
   its vertices over the exposure (start, middle, end) sets its sub-frames (`sub_frame_count` with the
@@ -213,7 +210,8 @@ class CameraRenderer:
         self.renderer, self.graph, self.camera = renderer, graph, camera
         self.spec = camera.render
         self.moving_regions = moving_regions
-        """Draw motion sub-frames only where something moves (module docstring); False draws each whole."""
+        """Draw still frames from the last one and motion sub-frames only where something moves (module
+        docstring: still frames); False draws every frame, and each of its sub-frames, whole."""
         self._kept_views: dict[str, View] = {}
         self._reach_points_m, self._reach_radius_m = _reach(graph)
         reach = self._reach_radius_m[:, None]
@@ -342,14 +340,7 @@ class CameraRenderer:
             else:  # one draw s× finer, box-averaged: the same samples at a quarter of the draws' fixed costs
                 key = "radiance" if s == 1 else f"radiance {s}x"
                 draws = [(float(t), 0.0, 0.0, s, key) for t in sub_frame_offsets(samples)]
-            fit = self.shadow_fit(view)
-            rects = None
-            if self.moving_regions and len(draws) > 1 and all(factor == 1 for _, _, _, factor, _ in draws):
-                rects = self.moving_rects_px(state, view, [offset for offset, *_ in draws], fit)
-            if rects is None:
-                result.radiance = self._sub_frame_mean(state, view, draws, fit)
-            else:
-                result.radiance = self._composited_mean(state, view, draws, fit, rects, s**2)
+            result.radiance = self._sub_frame_mean(state, view, draws, self.shadow_fit(view))
         return self._finished(state, view, result.radiance)
 
     def _finished(self, state: CameraState, view: View, radiance: np.ndarray | None) -> Frame:
@@ -508,37 +499,6 @@ class CameraRenderer:
             radiance = box_downsample(drawn.radiance, factor)
             total = radiance if total is None else total + radiance
         return total / len(draws) if len(draws) > 1 else total
-
-    def _composited_mean(
-        self, state: CameraState, view: View, draws: list, fit: ShadowFit, rects: list, positions: int
-    ) -> np.ndarray:
-        """The mean radiance of `draws` (all at 1×, through a still camera) when only `rects` change
-        between sub-frames: the first `positions` sub-frames (one per sub-pixel position) whole, the rest
-        inside `rects` only (module docstring)."""
-        whole = self._sub_frame_mean(state, view, draws[:positions], fit) * np.float32(positions)
-        if len(draws) == positions:
-            return whole / np.float32(positions)
-        inside = [whole[y0:y1, x0:x1].copy() for x0, y0, x1, y1 in rects]
-        clip = self.clip_range_m(view)
-        for offset, dx_px, dy_px, _, _ in draws[positions:]:
-            self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
-            sub_view = shifted(view, dx_px, dy_px)
-            for k, (total, rect) in enumerate(zip(inside, rects, strict=True)):
-                part = self.renderer.draw(
-                    self.graph,
-                    sub_view,
-                    ("radiance",),
-                    clip_range_m=clip,
-                    shadow_fit=fit,
-                    crop_px=rect,
-                    shadow_maps_kept=k > 0,  # the same sub-frame's: same placement, same fit
-                    texture_lod_bias=-math.log2(self.spec.supersampling),  # as `_sub_frame_mean`'s 1× draws
-                )
-                total += part.radiance
-        result = whole / np.float32(positions)
-        for total, (x0, y0, x1, y1) in zip(inside, rects, strict=True):
-            result[y0:y1, x0:x1] = total / np.float32(len(draws))
-        return result
 
     def moving_rects_px(
         self, state: CameraState, view: View, offsets: list[float], fit: ShadowFit, only: set[int] | None = None
