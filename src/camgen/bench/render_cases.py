@@ -98,30 +98,29 @@ def supersampling_cases(repo: Path, camera, graph) -> list[Case]:
 
 
 def static_background_cases(repo: Path) -> list[Case]:
-    """Full draw vs the kept environment plus actors, 1080p, radiance + ids, shadows off."""
+    """Full draw vs the kept environment plus actors, and vs still frames (the last frame kept, what moved
+    drawn again), 1080p, radiance + ids, shadows off; consecutive frames."""
     from camgen.render.sequence import CameraRenderer
 
     job, camera, graph = _parking_lot(repo, shadows=False)
+    full = f"render frame, full draw, parking lot {camera.render.width_px}×{camera.render.height_px} no shadows"
     cases = []
-    for static in (False, True):
+    for label, static, moving_regions in (
+        ("full draw", False, False),
+        ("static background (environment kept, actors drawn)", True, True),
+        ("still frames (last frame kept, what moved drawn again)", False, True),
+    ):
         spec = camera.render.model_copy(update={"static_background": static})
-        renderer = CameraRenderer(_renderer(), graph, camera.model_copy(update={"render": spec}))
+        renderer = CameraRenderer(
+            _renderer(), graph, camera.model_copy(update={"render": spec}), moving_regions=moving_regions
+        )
         frames = iter(range(10**9))
 
         def run(r=renderer, f=frames) -> None:
             r.frame(next(f) % job.frame_count)
 
-        label = "static background (environment kept, actors drawn)" if static else "full draw"
-        cases.append(
-            Case(
-                name=f"render frame, {label}, parking lot {spec.width_px}×{spec.height_px} no shadows",
-                run=run,
-                baseline=None
-                if not static
-                else f"render frame, full draw, parking lot {spec.width_px}×{spec.height_px} no shadows",
-                repeats=3,
-            )
-        )
+        name = f"render frame, {label}, parking lot {spec.width_px}×{spec.height_px} no shadows"
+        cases.append(Case(name=name, run=run, baseline=None if name == full else full, repeats=3))
     return cases
 
 

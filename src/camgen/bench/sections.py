@@ -835,8 +835,9 @@ def _other(repo: Path) -> Section:
         batch = [r for n, r in results.items() if n.startswith("batch ")]
         text = [
             "Loading and compiling each example scene; the undistortion of a 1080p grid; a frame drawn as "
-            "planned; the static background (environment kept on the GPU, only actors drawn) against a "
-            "full draw; each lens stage on a 1080p frame; the depth of field on a 1080p frame through two "
+            "planned; the static background (environment kept on the GPU, only actors drawn) and still frames "
+            "(the last frame kept, what moved drawn again) against a full draw, on consecutive frames; each "
+            "lens stage on a 1080p frame; the depth of field on a 1080p frame through two "
             "lenses; a 20-job batch on 1 and 2 worker processes; the video encoder with the settings that make "
             "its bytes reproducible against FFmpeg's own threading."
         ]

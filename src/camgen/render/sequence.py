@@ -41,8 +41,8 @@
   is kept for the next frame: under the same view and daylight (`_daylight_state`: lights, ambient,
   sky, sun), only the rectangles that bound each node that changed between the two frame times (at both,
   with its shadows) are drawn again, cropped from the whole draws, so a frame is bit for bit the frame
-  drawn alone, whatever came before it (tests/render/test_still_frames.py). With a kept static
-  background (no shadows), the base is drawn whole over it. Measured on the parking lot's camera at
+  drawn alone, whatever came before it (tests/render/test_still_frames.py). Where the plan keeps a
+  static background (no shadows), a whole base is drawn over it. Measured on the parking lot's camera at
   1080p (2 cores, load 3-4): 22 s a frame before, 6-9 s after; rectangles 20-35 % of the frame, most
   of it the six swaying trees and their shadows.
 """
@@ -427,8 +427,6 @@ class CameraRenderer:
         graph, s = self.graph, self.spec.supersampling
         daylight = _daylight_state(graph)
         kept, rects = self._kept_base, None
-        if self.spec.static_background:  # the kept environment makes a whole draw cheap
-            kept = None
         if kept is not None and _same_view(kept.view, view) and _same_arrays(kept.daylight, daylight):
             rects = self._moving_rects_at(view, [kept.time_s, state.time_s], fit, None)
         positions = [(0.0, dx_px, dy_px) for _, dx_px, dy_px in jittered_samples(s * s, s)]
