@@ -12,24 +12,12 @@ from camgen.plan import PlanSettings, compile_scene
 from camgen.render.scene_graph import build_scene_graph
 from camgen.render.sequence import CameraRenderer, render_view
 from tests.conftest import write
+from tests.render.test_moving_regions import SCENE as MOVING_REGIONS_SCENE
 from tests.render.test_moving_regions import SMALL_PROFILE
 
 pytestmark = pytest.mark.opengl
 
-SCENE = """\
-duration_s: 3
-fps: 10
-environment:
-  sky: clear
-  meshes:
-    - {type: plane, name: ground, size_m: [60, 60],
-       material: {color_rgb: [0.3, 0.3, 0.3], texture: {type: asphalt, seed: 1}}}
-    - {type: box, name: wall, size_m: [24, 0.5, 3], position_m: [0, 16, 1.5],
-       material: {color_rgb: [0.5, 0.45, 0.4], texture: {type: brick, seed: 2}}}
-lights:
-  - {type: sun, illuminance_lux: 50000, azimuth_deg: 235, elevation_deg: 25}
-  - {type: ambient, illuminance_lux: 3000}
-  - {type: spot, intensity_cd: 40000, position_m: [2, 9, 7], target_m: [2, 9, 0], cone_half_angle_deg: 35}
+ACTORS = """\
 actors:
   - name: racer
     class: car
@@ -39,10 +27,15 @@ actors:
   - name: stroller
     class: person
     path: {waypoints_m: [[-3, 12], [3, 12]], speed_m_s: 0.3, motion: linear}
-outputs: {annotations: []}
-cameras:
-  - {name: cam, profile: fixed, mount: {position_m: [0, -4, 4], yaw_deg: 90, pitch_deg: -15}}
 """
+# The moving-regions scene (textured ground and wall, a CIE sky, a sun and a spot light) with a racing car
+# and a slow walker, for 3 s, under a higher sun.
+_head, _rest = MOVING_REGIONS_SCENE.split("actors:\n")
+SCENE = (
+    _head.replace("duration_s: 2", "duration_s: 3").replace("elevation_deg: 12", "elevation_deg: 25")
+    + ACTORS
+    + _rest[_rest.index("outputs:") :]
+)
 FRAME = 20  # t = 2 s: the racer at x = 0, in front of the camera; at t = 0 it is 60 m to the left, out of view
 
 
