@@ -693,8 +693,10 @@ def _sim(repo: Path) -> Section:
             text.append(
                 f"`render` draws the view with the lens's margin at {w}×{h}, supersampled {ss}× "
                 f"({w * ss}×{h * ss} = {w * h * ss * ss / 1e6:.1f} Mpx shaded on the CPU by llvmpipe, with the "
-                "sun's shadow map and the CIE sky; `glReadPixels` waits for it), the camera model after it (lens, "
-                "sensor, ISP) and the head take the rest."
+                "sun's shadow map and the CIE sky; `glReadPixels` waits for it) while the head turns; a held "
+                "head's step draws only what moved since the last one (still frames: here the walkers, the "
+                "passing car and the cyclist, with their shadows). The camera model after it (lens, sensor, ISP) "
+                "and the head take the rest."
             )
         held = [frames for name, frames in sim_stage_frames.items() if "held" in name and frames]
         if held:
