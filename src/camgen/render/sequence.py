@@ -495,8 +495,43 @@ class CameraRenderer:
             lod_bias = math.log2(factor / spec.supersampling)
             drawn = self._draw(sub_view, ("radiance",), key, fit, lod_bias, maps_kept)
             radiance = box_downsample(drawn.radiance, factor)
+            if factor == 1 and len(draws) > 1:  # its share of the exposure, smeared by the head's turn
+                radiance = self._smeared(state, radiance, offset, 1.0 / len(draws), dx_px, dy_px)
             total = radiance if total is None else total + radiance
         return total / len(draws) if len(draws) > 1 else total
+
+    def _smeared(
+        self, state: CameraState, radiance: np.ndarray, offset: float, share: float, dx_px: float, dy_px: float
+    ) -> np.ndarray:
+        """A sub-frame drawn at `offset` (a fraction of the exposure) spread over its `share` of the exposure
+        by the head's own motion, where the head turns or zooms by more than the plan's sample step in it.
+
+        A head turns about its centre of projection (`view_at` keeps the camera's position), so the still
+        world seen at another time of the exposure is this sub-frame warped by the homography
+        K_b·R_bᵀ·R_a·K_a⁻¹ (no parallax; the sky, shadows and fog alike): the mean of ⌈shift / step⌉ warps,
+        evenly spread over the share, is the blur a sub-frame count capped at the plan's `samples_max`
+        leaves out, and a fast pan shows a smear instead of that many ghost copies of every edge. Moving
+        actors are smeared as the still world is within one share (their own motion there is the plan's
+        step or less of what the sub-frames already sample). A warp samples the draw bilinearly, and the
+        edge pixels stand in for what lies beyond the render (a band as wide as one share's shift)."""
+        spec, exposure_s = self.spec, state.exposure_time_s
+        here = shifted(view_at(state, spec, offset * exposure_s), dx_px, dy_px)
+        start = shifted(view_at(state, spec, (offset - share / 2) * exposure_s), dx_px, dy_px)
+        end = shifted(view_at(state, spec, (offset + share / 2) * exposure_s), dx_px, dy_px)
+        p = self._motion
+        step_px = p["sample_step_px"] if p is not None else 1.0
+        count = math.ceil(_head_shift_px(start, end) / step_px)
+        if count <= 1:
+            return radiance
+        h, w = radiance.shape[:2]
+        total = np.zeros_like(radiance)
+        for k in range(count):
+            at = shifted(view_at(state, spec, (offset + share * ((k + 0.5) / count - 0.5)) * exposure_s), dx_px, dy_px)
+            H = _homography(at, here)  # a pixel of the view at `at` → where this draw saw the same direction
+            total += cv2.warpPerspective(
+                radiance, H, (w, h), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE
+            )
+        return total / np.float32(count)
 
     def moving_rects_px(
         self, state: CameraState, view: View, offsets: list[float], fit: ShadowFit, only: set[int] | None = None
@@ -692,6 +727,21 @@ def _near_view(uv: np.ndarray, view: View) -> np.ndarray:
     can still belong to a triangle that crosses it)."""
     w, h = view.width_px, view.height_px
     return (uv[0] > -w) & (uv[0] < 2 * w) & (uv[1] > -h) & (uv[1] < 2 * h)
+
+
+def _homography(a: View, b: View) -> np.ndarray:
+    """3×3 H taking a pixel of view `a` to the pixel of view `b` that sees the same direction (the two share
+    their centre of projection): K_b·R_bᵀ·R_a·K_a⁻¹, R = R_world_from_cam."""
+    R_a, R_b = a.T_world_from_cam[:3, :3], b.T_world_from_cam[:3, :3]
+    return b.K_px @ R_b.T @ R_a @ np.linalg.inv(a.K_px)
+
+
+def _head_shift_px(a: View, b: View) -> float:
+    """The largest distance, px, that a pixel of view `a` (its corners and centre) moves to in view `b`."""
+    w, h = a.width_px, a.height_px
+    points = np.array([[0, 0, 1], [w - 1, 0, 1], [0, h - 1, 1], [w - 1, h - 1, 1], [(w - 1) / 2, (h - 1) / 2, 1]])
+    moved = points @ _homography(a, b).T
+    return float(np.max(np.hypot(*(moved[:, :2] / moved[:, 2:] - points[:, :2]).T)))
 
 
 def _light_state(scene) -> list[np.ndarray]:
