@@ -161,7 +161,7 @@ def _actors(workspace: Path, n: int, growth: Growth) -> None:
 
 
 def _cameras(workspace: Path, c: int, growth: Growth) -> None:
-    from camgen.bench.e2e_cases import execute_in_scratch, spread_frames, timed_per_frame
+    from camgen.bench.e2e_cases import execute_in_scratch, run_frames, timed_per_frame
     from camgen.config import load_scene
     from camgen.plan import compile_scene
 
@@ -170,7 +170,7 @@ def _cameras(workspace: Path, c: int, growth: Growth) -> None:
     start = time.perf_counter()
     job = compile_scene(load_scene(path))
     growth.cameras_compile_ms[c] = 1e3 * (time.perf_counter() - start)
-    results = execute_in_scratch(job, spread_frames(job.frame_count, STREET_FRAMES))
+    results = execute_in_scratch(job, run_frames(job.frame_count, STREET_FRAMES))
     growth.cameras_frame_ms[c] = sum(timed_per_frame(result)[0] for result in results)
 
 

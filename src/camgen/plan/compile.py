@@ -657,7 +657,7 @@ def _compile_camera(
             "only what moved (camgen.render.sequence, still frames)"
         )
     elif not scene.actors:
-        static_reason = "no actors: the environment alone is drawn each frame"
+        static_reason = "no actors: the environment alone is drawn, once while the camera holds still (still frames)"
     elif not needs_image:
         static_reason = "no image output (the geometric passes alone are cheap)"
     else:

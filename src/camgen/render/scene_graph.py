@@ -248,6 +248,8 @@ class SceneGraph:
     source: tuple[Scene, Callable[[str], Path] | None] | None = None
     """The scene it was built from and its path resolver (a night-mode camera builds its NIR graph
     from them: `camgen.render.nir`)."""
+    placed_time_s: float | None = None
+    """The time the actors were last placed at (`place_actors` places them again only for another)."""
 
     @property
     def moving_nodes(self) -> list[pyrender.Node]:
@@ -289,7 +291,11 @@ class SceneGraph:
 
     def place_actors(self, time_s: float) -> None:
         """Move every actor to where its route puts it at `time_s` (and pose every person), and bend every
-        swaying prop to its shape in the wind then."""
+        swaying prop to its shape in the wind then; nothing when they stand there already (a still frame
+        asks for its frame time four or five times: rectangles, blur groups, draws, the geometric pass)."""
+        if time_s == self.placed_time_s:
+            return
+        self.placed_time_s = time_s
         vehicles = self.vehicles or [None] * len(self.actor_nodes)
         for route, node, local, rig, vehicle in zip(
             self.actor_routes, self.actor_nodes, self.actor_local_poses, self.people, vehicles, strict=True

@@ -228,9 +228,9 @@ class CameraRenderer:
         motion = [stage.params for stage in camera.stages if stage.name == "optics.motion_blur"]
         self._motion = motion[0] if motion else None
         self._nir: SceneGraph | None = None
+        """The NIR graph of a night-mode camera (`camgen.render.nir`), built at its first night frame."""
         self._kept_base: _KeptBase | None = None
         """The last still frame's radiance (`_base_radiance`)."""
-        """The NIR graph of a night-mode camera (`camgen.render.nir`), built at its first night frame."""
         spec = self.spec
         s = spec.supersampling if "radiance" in spec.passes else 1
         largest = max(spec.width_px, spec.height_px)
@@ -319,7 +319,7 @@ class CameraRenderer:
         if groups is not None and self.moving_regions:
             radiance = self._still_radiance(state, view, groups)
             if radiance is not None:
-                return self._finished(state, view, radiance)
+                return self._finished(index, state, view, radiance)
         samples = 1 if sharp else self._plan_samples(state) if groups is None else max(groups, default=1)
         if s == 1 and samples == 1:
             self.graph.place_actors(state.time_s)
@@ -341,9 +341,9 @@ class CameraRenderer:
                 key = "radiance" if s == 1 else f"radiance {s}x"
                 draws = [(float(t), 0.0, 0.0, s, key) for t in sub_frame_offsets(samples)]
             result.radiance = self._sub_frame_mean(state, view, draws, self.shadow_fit(view))
-        return self._finished(state, view, result.radiance)
+        return self._finished(index, state, view, result.radiance)
 
-    def _finished(self, state: CameraState, view: View, radiance: np.ndarray | None) -> Frame:
+    def _finished(self, index: int, state: CameraState, view: View, radiance: np.ndarray | None) -> Frame:
         """The frame from its drawn daylight radiance (None without a radiance pass): the IR illuminator's
         light added in night mode, the geometric passes drawn at the frame time, and the rain."""
         passes, result = self.spec.passes, Passes()
@@ -357,7 +357,7 @@ class CameraRenderer:
             result.depth_m, result.instance_id = coarse.depth_m, coarse.instance_id
         if "radiance" in passes and self.graph.rain_rate_mm_h is not None:
             result.radiance = self._rain(view, state, result.radiance, result.depth_m)
-        return Frame(state.frame, state.time_s, result)
+        return Frame(index, state.time_s, result)
 
     def _still_radiance(self, state: CameraState, view: View, groups: dict[int, set[int]]) -> np.ndarray | None:
         """The frame's radiance through a camera that holds still during the exposure under lights that do
@@ -388,8 +388,10 @@ class CameraRenderer:
     def _blurred_groups(self, state: CameraState, view: View, blur: bool = True) -> dict[int, set[int]] | None:
         """The moving nodes (indices into `SceneGraph.moving_nodes`) whose image moves by more than the
         plan's threshold during the exposure, grouped by the sub-frames each needs (`sub_frame_count` of
-        its longest vertex path, px, over the exposure's start, middle and end); {} when the plan has no
-        motion blur or `blur` is False; None when the head moves or a light changes during the exposure."""
+        the longest image path, px, over the exposure's start, middle and end, of one of its vertices or of
+        where that vertex's shadow falls on the lowest surface in the light of a sun or spot light: a shadow
+        can sweep the view faster than its caster, or while the caster is out of view); {} when the plan has
+        no motion blur or `blur` is False; None when the head moves or a light changes during the exposure."""
         p, graph, spec = self._motion, self.graph, self.spec
         exposure_s = state.exposure_time_s
         ends = (-0.5, 0.0, 0.5)
@@ -398,11 +400,12 @@ class CameraRenderer:
         if p is None or not blur:
             return {}
         moving, lights = graph.moving_nodes, []
+        casting = _shadow_lights(graph.scene) if graph.shadows else []
         pixels = []
         for offset in ends:
             graph.place_actors(state.time_s + offset * exposure_s)
             lights.append(_light_state(graph.scene))
-            pixels.append([_node_pixels(graph.scene, node, view) for node in moving])
+            pixels.append([_node_pixels(graph.scene, node, view, casting, self._lowest_z_m) for node in moving])
         if not all(np.array_equal(a, b) for a, b in zip(lights[0], lights[-1], strict=True)):
             return None
         groups: dict[int, set[int]] = {}
@@ -433,7 +436,7 @@ class CameraRenderer:
         if rects is None:
             (radiance,) = self._mean_of_draws(state, view, fit, positions, None)
         else:
-            radiance = kept.radiance
+            radiance, self._kept_base = kept.radiance, None  # written in place: no half-written base is kept
             for (x0, y0, x1, y1), part in zip(
                 rects, self._mean_of_draws(state, view, fit, positions, rects), strict=True
             ):
@@ -706,16 +709,33 @@ def _same_arrays(a: list[np.ndarray], b: list[np.ndarray]) -> bool:
     return len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
 
 
-def _node_pixels(scene, node, view: View) -> tuple[np.ndarray, np.ndarray]:
-    """Pixels (2, N) of `view` where the vertices of `node`'s mesh, as placed now, project, and whether each
-    lies in front of the near plane (N,)."""
+def _node_pixels(scene, node, view: View, casting: list, lowest_z_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """Pixels (2, N) of `view` where the vertices of `node`'s mesh, as placed now, project, then where each
+    vertex's shadow falls on the plane z = `lowest_z_m` in the light of each node of `casting` (a sun's along
+    its direction, a spot light's along its rays), and whether each lies in front of the near plane and is
+    a point at all (a shadow of a vertex the light does not shine down past is not) (N,)."""
     positions = [np.asarray(primitive.positions, np.float64) for primitive in node.mesh.primitives]
     pose = scene.get_pose(node)
-    world = np.concatenate(positions) @ pose[:3, :3].T + pose[:3, 3]
+    vertices = np.concatenate(positions) @ pose[:3, :3].T + pose[:3, 3]
+    points, valid = [vertices], [np.ones(len(vertices), bool)]
+    height_m = vertices[:, 2] - lowest_z_m
+    for light in casting:
+        light_pose = scene.get_pose(light)
+        if type(light.light).__name__ == "DirectionalLight":
+            d = -light_pose[:3, 2]  # a light shines along its node's −Z
+            reach = height_m / -d[2] if d[2] < -1e-6 else np.full(len(vertices), np.nan)
+            points.append(vertices + reach[:, None] * d)
+        else:
+            L = light_pose[:3, 3]
+            above = L[2] - vertices[:, 2]
+            reach = np.divide(L[2] - lowest_z_m, above, out=np.full(len(vertices), np.nan), where=above > 1e-6)
+            points.append(L + reach[:, None] * (vertices - L))
+        valid.append(np.isfinite(reach) & (height_m >= 0.0))
+    world = np.nan_to_num(np.concatenate(points))
     T = view.T_world_from_cam
     camera = (world - T[:3, 3]) @ T[:3, :3]
     z = camera[:, 2]
-    front = z >= NEAR_CLIP_M
+    front = (z >= NEAR_CLIP_M) & np.concatenate(valid)
     z = np.where(front, z, 1.0)
     K = view.K_px
     x, y = camera[:, 0] / z, camera[:, 1] / z
