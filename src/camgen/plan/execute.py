@@ -299,10 +299,7 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                 converge = False
                 pipeline.converge_exposure(state, frame.passes)
                 settled = pipeline.state_for(index)
-                # Drawn again where the settled exposure blurs, or where rain's streaks span another exposure.
-                rain = camera_renderer.graph.rain_rate_mm_h is not None
-                changed = settled.exposure_time_s != state.exposure_time_s
-                if camera_renderer.motion_samples(settled) > 1 or (rain and changed):
+                if camera_renderer.redraws_settled(state, settled):
                     with clock("render"):
                         frame = camera_renderer.frame(index, settled)  # the blur spans the settled exposure
                 state = settled

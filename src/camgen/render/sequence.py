@@ -294,6 +294,13 @@ class CameraRenderer:
         groups = self._blurred_groups(state, render_view(state, self.spec))
         return self._plan_samples(state) if groups is None else max(groups, default=1)
 
+    def redraws_settled(self, metered: CameraState, settled: CameraState) -> bool:
+        """Whether a frame drawn sharp to meter the view (`frame(sharp=True)` at `metered`, the profile's
+        guessed exposure) is drawn again at the exposure auto-exposure settled on: where that blurs, or where
+        rain's streaks span another exposure."""
+        changed = settled.exposure_time_s != metered.exposure_time_s
+        return self.motion_samples(settled) > 1 or (self.graph.rain_rate_mm_h is not None and changed)
+
     def _plan_samples(self, state: CameraState) -> int:
         """Sub-frames for this frame's exposure by the plan's bound on the image motion (`motion_samples`)."""
         p = self._motion
@@ -328,11 +335,7 @@ class CameraRenderer:
         if s == 1 and samples == 1:
             self.graph.place_actors(state.time_s)
             drawn = self._draw(view, passes, "shared")
-            if "radiance" in passes and state.night_mode:
-                drawn.radiance = drawn.radiance + self._nir_radiance(view, state)
-            if "radiance" in passes and self.graph.rain_rate_mm_h is not None:
-                drawn.radiance = self._rain(view, state, drawn.radiance, drawn.depth_m)
-            return Frame(index, state.time_s, drawn)
+            return self._finished(index, state, view, drawn.radiance, geometry=drawn)
         result = Passes()
         if "radiance" in passes:
             # (time offset, sub-pixel shift, draw factor, kept-background key) of each sub-frame.
@@ -347,15 +350,20 @@ class CameraRenderer:
             result.radiance = self._sub_frame_mean(state, view, draws, self.shadow_fit(view))
         return self._finished(index, state, view, result.radiance)
 
-    def _finished(self, index: int, state: CameraState, view: View, radiance: np.ndarray | None) -> Frame:
+    def _finished(
+        self, index: int, state: CameraState, view: View, radiance: np.ndarray | None, geometry: Passes | None = None
+    ) -> Frame:
         """The frame from its drawn daylight radiance (None without a radiance pass): the IR illuminator's
-        light added in night mode, the geometric passes drawn at the frame time, and the rain."""
+        light added in night mode, the geometric passes drawn at the frame time (or taken from `geometry`,
+        drawn with the radiance), and the rain."""
         passes, result = self.spec.passes, Passes()
         result.radiance = radiance
         if "radiance" in passes and state.night_mode:
             result.radiance = result.radiance + self._nir_radiance(view, state)
         geometric = tuple(p for p in passes if p != "radiance")
-        if geometric:
+        if geometry is not None:
+            result.depth_m, result.instance_id = geometry.depth_m, geometry.instance_id
+        elif geometric:
             self.graph.place_actors(state.time_s)
             coarse = self._draw(view, geometric, "geometric")
             result.depth_m, result.instance_id = coarse.depth_m, coarse.instance_id
@@ -410,7 +418,7 @@ class CameraRenderer:
             graph.place_actors(state.time_s + offset * exposure_s)
             lights.append(_light_state(graph.scene))
             pixels.append([_node_pixels(graph.scene, node, view, casting, self._lowest_z_m) for node in moving])
-        if not all(np.array_equal(a, b) for a, b in zip(lights[0], lights[-1], strict=True)):
+        if not _same_arrays(lights[0], lights[-1]):
             return None
         groups: dict[int, set[int]] = {}
         for k in range(len(moving)):
@@ -437,8 +445,9 @@ class CameraRenderer:
         if kept is not None and _same_view(kept.view, view) and _same_arrays(kept.daylight, daylight):
             rects = self._moving_rects_at(view, [kept.time_s, state.time_s], fit, None)
         positions = [(0.0, dx_px, dy_px) for _, dx_px, dy_px in jittered_samples(s * s, s)]
-        if rects is None:
-            (radiance,) = self._mean_of_draws(state, view, fit, positions, None)
+        if rects is None:  # over the kept background of each sub-pixel position, where the plan keeps one
+            draws = [(0.0, dx_px, dy_px, 1, f"radiance jitter {i}") for i, (_, dx_px, dy_px) in enumerate(positions)]
+            radiance = self._sub_frame_mean(state, view, draws, fit)
         else:
             radiance, self._kept_base = kept.radiance, None  # written in place: no half-written base is kept
             for (x0, y0, x1, y1), part in zip(
@@ -449,29 +458,23 @@ class CameraRenderer:
         return radiance
 
     def _mean_of_draws(
-        self, state: CameraState, view: View, fit: ShadowFit, draws: list[tuple[float, float, float]], rects
+        self, state: CameraState, view: View, fit: ShadowFit, draws: list[tuple[float, float, float]], rects: list
     ) -> list[np.ndarray]:
         """The mean radiance of `draws` (time offset as a fraction of the exposure, sub-pixel shift dx, dy px),
         each drawn at 1× (standing for s × s samples: textures at the s× draw's mip level), cropped to each
-        of `rects` (x0, y0, x1, y1), one mean per rectangle; `rects` None: the whole view, one mean. The
-        sums run in the order of `draws` whatever the crop, so a crop's mean is the whole view's, bit for
-        bit. Shadow maps are drawn once per placement."""
-        s = self.spec.supersampling
-        crops = [None] if rects is None else rects
-        totals: list[np.ndarray | None] = [None] * len(crops)
-        clip, lod_bias = self.clip_range_m(view), -math.log2(s)
+        of `rects` (x0, y0, x1, y1), one mean per rectangle. The sums run in the order of `draws`, as
+        `_sub_frame_mean`'s over the whole view do, so a crop's mean is the whole view's, bit for bit.
+        Shadow maps are drawn once per placement."""
+        totals: list[np.ndarray | None] = [None] * len(rects)
+        clip, lod_bias = self.clip_range_m(view), -math.log2(self.spec.supersampling)
         placed = None
-        for i, (offset, dx_px, dy_px) in enumerate(draws):
+        for offset, dx_px, dy_px in draws:
             maps_kept = offset == placed
             if not maps_kept:
                 self.graph.place_actors(state.time_s + offset * state.exposure_time_s)
                 placed = offset
             sub_view = shifted(view, dx_px, dy_px)
-            if rects is None:  # over the kept background of its sub-pixel position, where the plan keeps one
-                part = self._draw(sub_view, ("radiance",), f"radiance jitter {i % s**2}", fit, lod_bias, maps_kept)
-                totals[0] = part.radiance if totals[0] is None else totals[0] + part.radiance
-                continue
-            for k, crop in enumerate(crops):
+            for k, crop in enumerate(rects):
                 part = self.renderer.draw(
                     self.graph,
                     sub_view,
@@ -580,9 +583,9 @@ class CameraRenderer:
                 if step == 0:
                     first[k] = look
                 elif not changed[k]:
-                    changed[k] = not all(np.array_equal(a, b) for a, b in zip(first[k], look, strict=True))
+                    changed[k] = not _same_arrays(first[k], look)
                 boxes[k].append(box_corners(*node.mesh.bounds, scene.get_pose(node)))
-        if not all(np.array_equal(a, b) for a, b in zip(lights_before, _light_state(scene), strict=True)):
+        if not _same_arrays(lights_before, _light_state(scene)):
             return None
         near_m, far_m = self.clip_range_m(view)
         casting = _shadow_lights(scene) if graph.shadows else []
@@ -709,7 +712,8 @@ def _daylight_state(graph: SceneGraph) -> list[np.ndarray]:
     ]
 
 
-def _same_arrays(a: list[np.ndarray], b: list[np.ndarray]) -> bool:
+def _same_arrays(a, b) -> bool:
+    """Whether two sequences of arrays are equal array by array (lights, daylight, an actor's look)."""
     return len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
 
 

@@ -549,10 +549,7 @@ class Simulation:
             settled = planned.model_copy(
                 update={"exposure_time_s": pipeline.setting.exposure_time_s, "gain_db": pipeline.setting.gain_db}
             )
-            # Drawn again where the settled exposure blurs, or where rain's streaks span another exposure.
-            rain = drawer.graph.rain_rate_mm_h is not None
-            changed = settled.exposure_time_s != state.exposure_time_s
-            if drawer.motion_samples(settled) > 1 or (rain and changed):
+            if drawer.redraws_settled(state, settled):
                 with clock("render"):
                     frame = drawer.frame(self.frame, settled)  # the blur spans the settled exposure
             state = settled
