@@ -239,15 +239,20 @@ class CocoDetector:
     """
 
     name = "YOLOv4-tiny"
+    classes: tuple[str, ...] = ()
+    """The classes a subclass detects when none are given."""
 
     def __init__(
         self,
-        classes: tuple[str, ...],
+        classes: tuple[str, ...] | None = None,
         *,
         score_threshold: float = SCORE_THRESHOLD,
         input_px: tuple[int, int] | None = None,
         aspect_width_px: int | None = None,
     ) -> None:
+        classes = self.classes if classes is None else classes
+        if not classes:
+            raise ValueError("name the COCO classes to detect")
         if input_px is not None and aspect_width_px is not None:
             raise ValueError("give input_px or aspect_width_px, not both")
         folder = model_dir()
@@ -294,28 +299,10 @@ class CocoDetector:
 class VehicleDetector(CocoDetector):
     """YOLOv4-tiny (COCO) vehicles (`VEHICLE_CLASSES` as one class) in 8-bit BGR frames (`CocoDetector`)."""
 
-    def __init__(
-        self,
-        *,
-        score_threshold: float = SCORE_THRESHOLD,
-        input_px: tuple[int, int] | None = None,
-        aspect_width_px: int | None = None,
-    ) -> None:
-        super().__init__(
-            VEHICLE_CLASSES, score_threshold=score_threshold, input_px=input_px, aspect_width_px=aspect_width_px
-        )
+    classes = VEHICLE_CLASSES
 
 
 class PersonDetector(CocoDetector):
     """YOLOv4-tiny (COCO) people in 8-bit BGR frames (`CocoDetector` of `PERSON_CLASSES`)."""
 
-    def __init__(
-        self,
-        *,
-        score_threshold: float = SCORE_THRESHOLD,
-        input_px: tuple[int, int] | None = None,
-        aspect_width_px: int | None = None,
-    ) -> None:
-        super().__init__(
-            PERSON_CLASSES, score_threshold=score_threshold, input_px=input_px, aspect_width_px=aspect_width_px
-        )
+    classes = PERSON_CLASSES
