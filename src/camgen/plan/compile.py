@@ -124,6 +124,12 @@ def _corner_illumination(K, distortion, width_px, height_px, vignetting, weight)
     return float(np.min(gain))
 
 
+_BOX_EDGES = np.array([(k, k | bit) for bit in (1, 2, 4) for k in range(8) if not k & bit])
+"""The 12 edges of a box whose corner k takes x from bit 0 of k, y from bit 1 and z from bit 2."""
+MOTION_TIMES_PER_BLOCK = 2048
+"""Times `_actor_motion_px` measures at once (its arrays of points × times stay small)."""
+
+
 def _actor_motion_px(
     actors: list[Actor],
     routes: Mapping[str, Route],
@@ -135,31 +141,159 @@ def _actor_motion_px(
     height_px: int,
     file_bounds: Mapping[str, Bounds] | None,
 ) -> float:
-    """Largest image displacement of an actor point (ground and top) within one exposure, px."""
+    """Largest image displacement within one exposure of a point of an actor's box that is in the image, px.
+
+    The box is the actor's shape's in its own frame (`actor_shape`, `local_bounds`: x along its heading, the
+    route's point at its origin) from the ground to its top, placed at the route's point and heading at the
+    exposure's start and at its end (`_path_positions`; a person's at the start's heading for both, for its
+    body turns round a waypoint over a stride, `camgen.actors.gait`, not at once as its route does). Its
+    points: the route's point and the box's 8 corners at ground and top height, and where each of its 12
+    edges crosses, at the start, the plane through the camera of the image's middle column (x = 0 in the
+    camera's frame) or of its middle row (y = 0): so a long vehicle near the camera whose corners and
+    centre lie outside the image while its front or side crosses it counts too. A point counts where
+    either end of its path lies in the image. (A box face that covers the whole image while every edge
+    of it lies outside is not sampled.)
+
+    Speed (a one-hour plan has 90 000 times for each actor): each time first gets a cheap upper bound on
+    any such point's displacement, from the box's bounding sphere and the way its points can travel
+    (`_motion_bound_px`: 0 where the sphere lies outside the view's frustum); the points are then measured
+    only at the times whose bound exceeds the largest displacement measured so far, likeliest first.
+    """
     T_cam_from_world = np.linalg.inv(T_world_from_cam_)
-    worst = 0.0
+    corner = np.arange(8)
+    boxes = []
     for actor in actors:
-        if not routes[actor.name].moves:
+        route = routes[actor.name]
+        if not route.moves:
             continue
         shape = actor_shape(actor)
-        top = float(box_corners(*local_bounds(shape, file_bounds), placement(shape))[:, 2].max())
-        ends = [_path_positions(routes[actor.name], t)[0] for t in (times_s, times_s + exposure_s)]
-        for height in (0.0, top):
-            # Column arithmetic, not (N, 3) @ (3, 3) products: BLAS is slow at an inner size of 3, and a
-            # long sequence has hundreds of thousands of points here.
-            cams = [_cam_from_world_points(T_cam_from_world, xy[:, 0], xy[:, 1], height) for xy in ends]
-            visible = np.minimum(cams[0][2], cams[1][2]) > 0.1
-            if not visible.any():
-                continue
-            uv = [_pixel_of(K, x[visible], y[visible], z[visible]) for x, y, z in cams]
-            inside = (uv[0][0] > -0.5) & (uv[0][0] < width_px - 0.5) & (uv[0][1] > -0.5) & (uv[0][1] < height_px - 0.5)
-            if inside.any():
-                # A walking person's swinging foot and hand move up to about 2.5 times as fast as
-                # the body (the foot's speed peaks at ~2.4 × walking speed in mid-swing: Winter 1991).
-                limbs = LIMB_SPEED_FACTOR if is_procedural_person(actor) or is_character(actor) else 1.0
-                shift_px = np.hypot(uv[1][0] - uv[0][0], uv[1][1] - uv[0][1])
-                worst = max(worst, limbs * float(np.max(shift_px[inside])))
+        placed = box_corners(*local_bounds(shape, file_bounds), placement(shape))
+        low, high = placed.min(axis=0), placed.max(axis=0)
+        low[2] = 0.0
+        points = np.concatenate(
+            [
+                np.stack(
+                    [
+                        np.where(corner & 1, high[0], low[0]),
+                        np.where(corner >> 1 & 1, high[1], low[1]),
+                        np.where(corner >> 2 & 1, high[2], low[2]),
+                    ],
+                    axis=1,
+                ),
+                [[0.0, 0.0, 0.0], [0.0, 0.0, high[2]]],
+            ]
+        )
+        ends = [_path_positions(route, times) for times in (times_s, times_s + exposure_s)]
+        person = is_procedural_person(actor) or is_character(actor)
+        if person:
+            ends[1] = (ends[1][0], ends[0][1])
+        # A walking person's swinging foot and hand move up to about 2.5 times as fast as
+        # the body (the foot's speed peaks at ~2.4 × walking speed in mid-swing: Winter 1991).
+        limbs = LIMB_SPEED_FACTOR if person else 1.0
+        bound = limbs * _motion_bound_px(T_cam_from_world, K, width_px, height_px, points, ends)
+        boxes.append((bound, limbs, points, ends))
+    boxes.sort(key=lambda box: -float(box[0].max(initial=0.0)))
+    worst = 0.0
+    for bound, limbs, points, ends in boxes:
+        # Each actor's likeliest time first, so that the bound rules out most of its other times.
+        for times in (np.argmax(bound)[None], np.flatnonzero(bound > worst)):
+            times = times[np.argsort(-bound[times], kind="stable")]
+            for first in range(0, len(times), MOTION_TIMES_PER_BLOCK):
+                block = times[first : first + MOTION_TIMES_PER_BLOCK]
+                block = block[bound[block] > worst]
+                if not len(block):
+                    break
+                paths = [_box_points_cam(T_cam_from_world, xy[block], heading[block], points) for xy, heading in ends]
+                worst = max(worst, limbs * _box_shift_px(paths, K, width_px, height_px))
     return worst
+
+
+def _motion_bound_px(
+    T_cam_from_world: np.ndarray, K: np.ndarray, width_px: int, height_px: int, points_m: np.ndarray, ends
+) -> np.ndarray:
+    """(N,) upper bound, px, on the image displacement of any point of the box through `points_m` (P, 3),
+    placed at `ends` ([start, end] (ground points (N, 2), headings (N,))), that lies in the image at either
+    end; 0 where the box's bounding sphere, grown by the way its points travel, lies outside the frustum.
+
+    A point at camera-frame p₀ that moves by d to p₁ = p₀ + d moves in the image by
+    x₁/z₁ − x₀/z₀ = (d_x − (x₀/z₀)·d_z)/z₁ = (d_x − (x₁/z₁)·d_z)/z₀ (in normalised units); in the image at
+    either end |x/z| ≤ tₓ there, so |Δ(x/z)| ≤ D·(1 + tₓ)/z_lo for |d| ≤ D and z₀, z₁ ≥ z_lo (and
+    likewise y). D is the route point's way plus the turn's arc at the points' largest radius; z_lo the
+    sphere's nearest depth less D (no bound, inf, nearer than 0.1 m)."""
+    fx, skew, cx, fy, cy = K[0, 0], K[0, 1], K[0, 2], K[1, 1], K[1, 2]
+    ty = max(cy + 0.5, height_px - 0.5 - cy) / fy
+    tx = (max(cx + 0.5, width_px - 0.5 - cx) + abs(skew) * ty) / fx
+    gain = math.hypot(fx * (1 + tx) + abs(skew) * (1 + ty), fy * (1 + ty))
+    # The frustum's side planes through the camera (inward normals, camera frame): u > −0.5, u < W − 0.5,
+    # v > −0.5 and v < H − 0.5 for u = (fx·x + s·y)/z + cx, v = fy·y/z + cy, z > 0.
+    planes = np.array(
+        [[fx, skew, cx + 0.5], [-fx, -skew, width_px - 0.5 - cx], [0.0, fy, cy + 0.5], [0.0, -fy, height_px - 0.5 - cy]]
+    )
+    planes /= np.linalg.norm(planes, axis=1, keepdims=True)
+    middle = (points_m.min(axis=0) + points_m.max(axis=0)) / 2
+    radius_m = float(np.linalg.norm(points_m.max(axis=0) - points_m.min(axis=0))) / 2
+    (xy0, heading0), (xy1, heading1) = ends
+    turn_rad = np.abs(np.remainder(heading1 - heading0 + math.pi, 2 * math.pi) - math.pi)
+    way_m = (
+        np.hypot(xy1[:, 0] - xy0[:, 0], xy1[:, 1] - xy0[:, 1])
+        + float(np.max(np.hypot(points_m[:, 0], points_m[:, 1]))) * turn_rad
+    )
+    c, s = np.cos(heading0), np.sin(heading0)
+    centre = _cam_from_world_points(
+        T_cam_from_world,
+        xy0[:, 0] + c * middle[0] - s * middle[1],
+        xy0[:, 1] + s * middle[0] + c * middle[1],
+        float(middle[2]),
+    )
+    reach_m = radius_m + way_m
+    seen = centre[2] > 0.1 - reach_m
+    for n in planes:
+        seen &= n[0] * centre[0] + n[1] * centre[1] + n[2] * centre[2] > -reach_m
+    near_m = centre[2] - reach_m
+    with np.errstate(divide="ignore"):
+        bound = np.where(near_m > 0.1, gain * way_m / near_m, np.inf)
+    return np.where(seen, bound, 0.0)
+
+
+def _box_points_cam(T_cam_from_world: np.ndarray, xy_m: np.ndarray, heading_rad: np.ndarray, points_m: np.ndarray):
+    """Camera-frame (x, y, z), each (P, N) m, of an actor's local points (P, 3) placed at N ground points
+    (N, 2) and headings (N,): R·p_world + t with p_world = (x + cos h·pₓ − sin h·p_y, y + sin h·pₓ +
+    cos h·p_y, p_z), linear in the local point."""
+    R, t = T_cam_from_world[:3, :3], T_cam_from_world[:3, 3]
+    c, s = np.cos(heading_rad), np.sin(heading_rad)
+    px, py, pz = points_m[:, :1], points_m[:, 1:2], points_m[:, 2:]
+    cam = []
+    for i in range(3):
+        base = R[i, 0] * xy_m[:, 0] + R[i, 1] * xy_m[:, 1] + t[i]
+        along, across = R[i, 0] * c + R[i, 1] * s, R[i, 1] * c - R[i, 0] * s
+        cam.append(base + px * along + py * across + R[i, 2] * pz)
+    return cam
+
+
+def _box_shift_px(paths, K: np.ndarray, width_px: int, height_px: int) -> float:
+    """Largest image displacement between the two ends of `paths` ([start, end] camera-frame (x, y, z), each
+    (10, N), of a box's 8 corners and 2 more points) over the points in the image at either end: those and
+    the points where the box's edges cross the middle column's and the middle row's plane at the start
+    (see `_actor_motion_px`); 0 where none is."""
+    a, b = _BOX_EDGES[:, 0], _BOX_EDGES[:, 1]
+    ends = [list(cam) for cam in paths]
+    for axis in (0, 1):
+        from_a, from_b = paths[0][axis][a], paths[0][axis][b]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            share = from_a / (from_a - from_b)
+        share[~((share >= 0.0) & (share <= 1.0))] = np.nan  # no crossing: its NaN depth drops it below
+        for cam, path in zip(ends, paths, strict=True):
+            for i in range(3):
+                cam[i] = np.concatenate([cam[i], path[i][a] + share * (path[i][b] - path[i][a])])
+    visible = np.minimum(ends[0][2], ends[1][2]) > 0.1  # NaN compares False
+    if not visible.any():
+        return 0.0
+    uv = [_pixel_of(K, x[visible], y[visible], z[visible]) for x, y, z in ends]
+    inside = np.zeros(len(uv[0][0]), bool)
+    for u, v in uv:
+        inside |= (u > -0.5) & (u < width_px - 0.5) & (v > -0.5) & (v < height_px - 0.5)
+    shift_px = np.hypot(uv[1][0] - uv[0][0], uv[1][1] - uv[0][1])
+    return float(np.max(shift_px[inside], initial=0.0))
 
 
 def _cam_from_world_points(
