@@ -571,6 +571,7 @@ VEHICLE_SURFACES = {
     "cycle_tail": ((0.25, 0.01, 0.01, 1.0), 0.0, 0.2),
     "destination": ((0.45, 0.2, 0.02, 1.0), 0.0, 0.2),
     "shade": ((1.0, 1.0, 1.0, 1.0), 0.0, 1.0),
+    "lens": ((1.0, 1.0, 1.0, 1.0), 0.0, 0.1),
 }
 """Base colour (linear, alpha), metallic and roughness of a vehicle's surfaces other than its paint:
 the running gear (tyres, rims, plate backings) takes its colours per vertex and one compromise between

@@ -2,25 +2,28 @@
 
 The vehicle's frame: x forward, y left, z up, origin on the ground at the middle of its footprint.
 
-The shell is a loft: a side profile per body type (the roof line from the rear, u = 0, to the front,
-u = 1, as heights over the vehicle's height; `PROFILES`) sampled at stations along the length, each
-station a closed cross-section — a superellipse (exponent `SECTION_EXPONENT`: a rounded box, so
-shoulders and sills are rounded), narrowed above the beltline (the greenhouse's tumblehome) and, in
-plan, rounded at the four corners. The underside follows the ground clearance and rises in an arch
-over each wheel. Both ends are closed by ladder-triangulated caps, so the shell is one closed,
-consistently wound surface (watertight). Its faces are split by position and normal into paint and
-glass (side windows between the pillars, windscreen, rear window; a bus's and a van's glazed ends),
-one primitive each, sharing the shell's vertices: together they stay watertight. Each window of the
-tube is then redrawn as whole rows of section points over its stations (`_window_rows`), so that its
-outline runs along the mesh's rows and stations, as the beltline does, instead of stepping between rows
-from one station to the next.
+The shell is a loft: a side profile per body type (the roof line from the rear, u = 0, to the front, u = 1, as
+heights over the vehicle's height; `PROFILES`) sampled at stations along the length, each station a closed
+cross-section — a superellipse (exponent `SECTION_EXPONENT`: a rounded box, so shoulders and sills are
+rounded) under the beltline and, over it, the greenhouse: a squarer arc (`GREENHOUSE_EXPONENT`) whose sides
+rise from the belt and lean in (the tumblehome) and round into the roof, its rows of points split between the
+sides and the roof alike at every station (`GREENHOUSE_SIDE_QUADS`, `ROOF_EDGE_ROW_M`), so that the side glass
+reaches up to the roof's rails and a windscreen spans the roof's width between thin pillars. In plan the ends
+are rounded at the four corners. The underside follows the ground clearance and rises in an arch over each
+wheel. Both ends are closed by ladder-triangulated caps, so the shell is one closed, consistently wound
+surface (watertight). Its faces are split by position and normal into paint and glass (side windows between
+the pillars, windscreen, rear window; a bus's and a van's glazed ends), one primitive each, sharing the
+shell's vertices: together they stay watertight. Each window of the tube is then redrawn as whole rows of
+section points over its stations (`_window_rows`), so that its outline runs along the mesh's rows and
+stations, as the beltline does, instead of stepping between rows from one station to the next.
 
 Wheels are a tyre (a closed cylinder, `WHEEL_SECTIONS` sides) and a rim (hub, five spokes and the rim's
 outer ring at the rim's diameter, `RIM_SHARE`, standing proud of the tyre's sidewall, so that a turning
 wheel shows it) in the wheel's own frame (axle along y); a bus rolls on steel disc wheels instead (a disc
 with hand holes and a hub of ten nuts, `steel_disc_wheel_meshes`) and shows its route on an LED
 destination display over the windscreen (`destination_sign`, `camgen.vehicles.sign`). Lamps are thin
-boxes half sunk into the shell's ends; plates are quads 5 mm in front of them.
+boxes half sunk into the shell's ends, in lamp units at the corners (`_lamp_housings`: a clear headlamp
+unit, a red rear cluster with a clear reversing lamp); plates are quads 5 mm in front of them.
 
 Underneath: the shell's faces that face the ground are the underbody (`UNDERBODY_RGB`: underseal and
 plastic undertrays, not the paint), and the ground under the whole footprint, which sees the sky only
@@ -97,8 +100,11 @@ class Profile:
     """Height of the sill above the ground, m (cars 0.13–0.2 m)."""
     end_lift: float = 0.18
     """Height of the bumpers' lower edge at both ends, as a share of the vehicle's height."""
-    tumblehome: float = 0.10
-    """How much narrower the roof is than the body at the beltline, as a share of the width."""
+    tumblehome: float = 0.22
+    """How much narrower the roof is than the body at the beltline, as a share of the width: a car's roof
+    over its rails is about 0.7 of its width (a Golf 8's about 1.25 m of 1.79 m; side glass leaning in about
+    20–25° from the vertical), so 0.22 with the roof's rounded edges (`GREENHOUSE_EXPONENT`); a van's sides
+    are near upright, a bus's and a box truck's upright."""
     corner_share: float = 0.06
     """Length of the rounded corners in plan, as a share of the length."""
     end_width: float = 0.78
@@ -246,6 +252,16 @@ def _bottom_m(look: VehicleLook, x: np.ndarray, axles_x, arch_radius_m: float) -
 
 SECTION_DENSE = 128
 """Points of each arc of the dense superellipse that a section's points are spaced evenly along."""
+GREENHOUSE_EXPONENT = 10.0
+"""Superellipse exponent of the greenhouse over the belt (side glass, pillars and roof): its sides rise
+straight from the belt (then lean in by `Profile.tumblehome`) and round into the roof over about a tenth of
+its half-width, as a car's roof rails do (cf. `SECTION_EXPONENT`'s body, rounded over about a fifth)."""
+GREENHOUSE_SIDE_QUADS = 4
+"""Rows of the section's upper arc up each side of a greenhouse, from the belt to the roof's edge; the
+others span the roof (`_sections`)."""
+ROOF_EDGE_ROW_M = 0.09
+"""Width of the section's first row over each roof edge, m: a windscreen's A-pillars (current cars' are
+about 0.08–0.15 m thick, `_screen_pillars`)."""
 BELT_REACH = (-0.95, 0.85)
 """Where a section's belt points may lie, as heights over its half height about its centre: a station
 whose roof is below the beltline (a bonnet) keeps an upper arc at its top."""
@@ -262,19 +278,45 @@ def _sections(half_width_m: np.ndarray, half_height_m: np.ndarray, belt_rel: np.
     e = 2 / SECTION_EXPONENT
     b = np.clip(belt_rel, *BELT_REACH)
     phi_belt = np.arcsin(np.sign(b) * np.abs(b) ** (1 / e))
+    # Over the belt, a greenhouse (where the roof stands clear of the belt) is its own squarer arc: from the
+    # belt's point straight up, round the roof's edges, over the roof; elsewhere the body's arc goes on.
+    belt_y = half_width_m * np.abs(np.cos(phi_belt)) ** e
+    belt_z = half_height_m * b
+    greenhouse = half_height_m * (1 - b) > 1e-6
+    room_m = np.where(greenhouse, half_height_m - belt_z, 0.0)
+    g = 2 / GREENHOUSE_EXPONENT
     ys, zs = [], []
     arcs = ((phi_belt, np.pi - phi_belt, UPPER_POINTS), (np.pi - phi_belt, 2 * np.pi + phi_belt, LOWER_POINTS))
-    for lo, hi, count in arcs:
+    for upper, (lo, hi, count) in zip((True, False), arcs, strict=True):
         phi = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, SECTION_DENSE + 1)[None, :]
         c, s = np.cos(phi), np.sin(phi)
         y = half_width_m[:, None] * np.sign(c) * np.abs(c) ** e
         z = half_height_m[:, None] * np.sign(s) * np.abs(s) ** e
+        if upper:
+            psi = np.linspace(0.0, np.pi, SECTION_DENSE + 1)[None, :]
+            cg, sg = np.cos(psi), np.sin(psi)
+            y = np.where(greenhouse[:, None], belt_y[:, None] * np.sign(cg) * np.abs(cg) ** g, y)
+            z = np.where(greenhouse[:, None], belt_z[:, None] + room_m[:, None] * np.abs(sg) ** g, z)
         along = np.concatenate([np.zeros((len(y), 1)), np.cumsum(np.hypot(np.diff(y), np.diff(z)), axis=1)], axis=1)
-        wanted = np.arange(count) / count
+        k = np.arange(count)
         arc_y, arc_z = np.empty((len(y), count)), np.empty((len(y), count))
         for i in range(len(y)):
-            arc_y[i] = np.interp(wanted * along[i, -1], along[i], y[i])
-            arc_z[i] = np.interp(wanted * along[i, -1], along[i], z[i])
+            if upper and greenhouse[i]:
+                # `GREENHOUSE_SIDE_QUADS` rows up each side to the roof's edge (ψ = π/4), the rest across the
+                # roof: every station's rows then mean the same, the side glass's and the screens' alike.
+                # The first row over each edge is `ROOF_EDGE_ROW_M` wide: where a screen meets the side glass it
+                # is the A- or C-pillar (`_screen_pillars`).
+                corner = SECTION_DENSE // 4
+                side, roof_edge = along[i, corner], along[i, SECTION_DENSE - corner]
+                edge = min(ROOF_EDGE_ROW_M, (roof_edge - side) / (count - 2 * GREENHOUSE_SIDE_QUADS))
+                knots_k = [0, GREENHOUSE_SIDE_QUADS, GREENHOUSE_SIDE_QUADS + 1]
+                knots_k += [count - GREENHOUSE_SIDE_QUADS - 1, count - GREENHOUSE_SIDE_QUADS, count]
+                knots_m = [0.0, side, side + edge, roof_edge - edge, roof_edge, along[i, -1]]
+                at = np.interp(k, knots_k, knots_m)
+            else:
+                at = k / count * along[i, -1]
+            arc_y[i] = np.interp(at, along[i], y[i])
+            arc_z[i] = np.interp(at, along[i], z[i])
         ys.append(arc_y)
         zs.append(arc_z)
     upper, lower = np.arange(UPPER_POINTS), np.arange(LOWER_POINTS)
@@ -715,7 +757,58 @@ def lamps_and_plates(look: VehicleLook) -> tuple[list[Part], dict[str, np.ndarra
     front.texcoords = front.texcoords * [1.0, 0.5] + [0.0, 0.5]
     rear.texcoords = rear.texcoords * [1.0, 0.5]
     backings += [(box, -1) for box in _black_trim(look, head_z)]
+    housings = _lamp_housings(look, head_z, tail_z)
+    if housings is not None:
+        lamps.append(housings)
     return lamps, corners, [_merge("plates", "plates", [front, rear])], _part("plate_backings", "trim", backings)
+
+
+HOUSING_BODIES = ("hatchback", "sedan", "estate", "suv", "pickup", "van")
+"""Body types whose lamps sit in lamp units: a clear-covered headlamp unit at each front corner and a red rear
+cluster at each rear corner (a bus's and a box truck's lamps are separate units on the panel or the chassis)."""
+HEADLAMP_UNIT_M = (0.48, 0.15)
+"""Width and height of a headlamp unit's face, m: current cars' units are 0.45–0.6 m wide and 0.12–0.2 m tall
+(makers' front views: a Golf 8's about 0.55 × 0.15 m, a Corolla's 0.5 × 0.16 m), most of it a clear
+polycarbonate cover over chrome reflectors and black bezels; the lit lens (`lamps_and_plates`) is a part of it."""
+REAR_CLUSTER_M = (0.42, 0.18)
+"""Width and height of a rear lamp cluster's face, m (a Golf 8's about 0.45 × 0.17 m, a Focus's 0.4 × 0.2 m):
+red lenses round the lit tail, stop and indicator lamps, and a clear reversing lamp."""
+HEADLAMP_UNIT_RGB = (0.10, 0.10, 0.105)
+"""Linear albedo of an unlit headlamp unit: chrome reflectors and black bezels seen through a clear cover (an
+estimate; its gloss, roughness 0.1, carries the sky's reflection)."""
+REAR_LENS_RGB = (0.22, 0.008, 0.01)
+"""Linear albedo of an unlit red rear lens (ECE R48 red over a metallised reflector: sRGB about (130, 20, 25);
+an estimate, as `camgen.render.scene_graph.VEHICLE_SURFACES`' tail lamp)."""
+REVERSING_LENS_RGB = (0.30, 0.30, 0.31)
+"""Linear albedo of an unlit reversing lamp: a clear lens over a chrome reflector (an estimate)."""
+HOUSING_DEPTH_M = 0.05
+"""Lamp units are boxes this deep, half sunk into the end face: the lit lenses (`LAMP_DEPTH_M`) stand 5 mm
+proud of them."""
+
+
+def _lamp_housings(look: VehicleLook, head_z_m: float, tail_z_m: float) -> Part | None:
+    """The lamp units round the lit lamps (`HOUSING_BODIES`): a headlamp unit at each front corner and a rear
+    cluster with a reversing lamp at each rear corner, flush with the end faces' corners, one primitive of
+    per-vertex colours (surface "lens"). Seen by day, a car's ends are told by these units, not by the small
+    lit lenses."""
+    if look.body_type not in HOUSING_BODIES:
+        return None
+    L, W = look.length_m, look.width_m
+    (_, rear_high), (_, front_high) = _end_heights(look)
+    half = W / 2 * PROFILES[look.body_type].end_width
+    pieces = []
+    head_w, head_h = HEADLAMP_UNIT_M
+    head_top = min(head_z_m + head_h / 2, front_high - 0.02)
+    rear_w, rear_h = REAR_CLUSTER_M
+    rear_top = min(tail_z_m + 0.07, rear_high - 0.02)
+    for s in (1, -1):
+        head = _box((HOUSING_DEPTH_M, head_w, head_h), (L / 2, s * (half - head_w / 2), head_top - head_h / 2))
+        rear = _box((HOUSING_DEPTH_M, rear_w, rear_h), (-L / 2, s * (half - rear_w / 2), rear_top - rear_h / 2))
+        reversing = _box((HOUSING_DEPTH_M + 0.008, 0.12, 0.05), (-L / 2, s * (half - 0.33), tail_z_m - 0.09))
+        pieces += [(head, HEADLAMP_UNIT_RGB), (rear, REAR_LENS_RGB), (reversing, REVERSING_LENS_RGB)]
+    part = _part("lamp_units", "lens", [(mesh, -1) for mesh, _ in pieces])
+    part.colours = np.concatenate([np.tile(rgb, (len(_flat(mesh)[0]), 1)) for mesh, rgb in pieces])
+    return part
 
 
 GRILLE_BODIES = ("hatchback", "sedan", "estate", "suv", "pickup", "van", "box_truck")
