@@ -618,6 +618,7 @@ def _vehicles(repo: Path) -> Section:
         WIDE_INPUT_WIDTH_PX,
         vehicle_cases,
         vehicle_table,
+        weather_scenes,
     )
 
     scores: list = []
@@ -645,6 +646,17 @@ def _vehicles(repo: Path) -> Section:
             text.append(f"YOLOv4-tiny was not run: {missing}")
         if scores:
             text.append("Over every scene: " + overall_scores(scores) + ".")
+            weather = weather_scenes(repo)
+            clear = [score for score in scores if score.scene not in weather]
+            wet = [score for score in scores if score.scene in weather]
+            if clear and wet:
+                text.append(
+                    "By day in clear air (the scenes without fog or rain: issue 20's goal): "
+                    + overall_scores(clear)
+                    + f". In fog or rain ({', '.join(sorted({score.scene for score in wet}))}): "
+                    + overall_scores(wet)
+                    + "."
+                )
             text.append(vehicle_table(scores))
         if samples:
             write_contact_sheet(plots.path("vehicle_detections.jpg"), samples)
