@@ -773,9 +773,9 @@ polycarbonate cover over chrome reflectors and black bezels; the lit lens (`lamp
 REAR_CLUSTER_M = (0.42, 0.18)
 """Width and height of a rear lamp cluster's face, m (a Golf 8's about 0.45 × 0.17 m, a Focus's 0.4 × 0.2 m):
 red lenses round the lit tail, stop and indicator lamps, and a clear reversing lamp."""
-HEADLAMP_UNIT_RGB = (0.10, 0.10, 0.105)
-"""Linear albedo of an unlit headlamp unit: chrome reflectors and black bezels seen through a clear cover (an
-estimate; its gloss, roughness 0.1, carries the sky's reflection)."""
+HEADLAMP_UNIT_RGB = (0.32, 0.32, 0.33)
+"""Linear albedo of an unlit headlamp unit: chrome reflectors and black bezels seen through a clear cover, which
+by day look light grey (sRGB about 150; an estimate; its gloss, roughness 0.1, adds the sun's highlight)."""
 REAR_LENS_RGB = (0.22, 0.008, 0.01)
 """Linear albedo of an unlit red rear lens (ECE R48 red over a metallised reflector: sRGB about (130, 20, 25);
 an estimate, as `camgen.render.scene_graph.VEHICLE_SURFACES`' tail lamp)."""
