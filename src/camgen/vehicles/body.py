@@ -155,10 +155,10 @@ PROFILES: dict[str, Profile] = {
         tumblehome=0.0, corner_share=0.01, end_width=0.92,
     ),
     "bus": Profile(
-        top=((0, 0.93), (0.01, 0.98), (0.02, 1.0), (0.98, 1.0), (0.99, 0.98), (1, 0.93)),
+        top=((0, 0.885), (0.01, 0.92), (0.02, 0.935), (0.98, 0.935), (0.99, 0.92), (1, 0.895)),
         belt=0.43, side_glass=(0.025, 0.975), pillars=tuple((0.025 + 0.105 * k, 0.037 + 0.105 * k) for k in range(10)),
         doors=((0.47, 0.58), (0.87, 0.985)), door_glass_bottom=0.2,
-        front_cap_glass=(0.33, 0.77), rear_cap_glass=(0.55, 0.88), clearance_m=0.30, end_lift=0.10,
+        front_cap_glass=(0.33, 0.77), rear_cap_glass=(0.55, 0.85), clearance_m=0.30, end_lift=0.10,
         tumblehome=0.02, corner_share=0.012, end_width=0.90,
     ),
 }  # fmt: skip
@@ -167,7 +167,8 @@ PROFILES: dict[str, Profile] = {
 the road and the waistline (the side windows' lower edge) 950 mm above the floor, so the beltline is
 1,320 mm up, 0.43 of the height; front overhang 2,705 mm with door 1 (1,250 mm clear) in it ahead of
 the front wheel, door 2 between the axles (here centred on the wheelbase, an estimate), both glazed
-leaves on the nearside. The windscreen's glass ends at 0.77 of the height, under the destination display
+leaves on the nearside. The roof is 0.2 m under the height, which the air-conditioning unit on it reaches
+(`roof_unit`). The windscreen's glass ends at 0.77 of the height, under the destination display
 (`destination_sign`) that fills the top of a city bus's front."""
 
 
@@ -889,7 +890,7 @@ def destination_sign(look: VehicleLook) -> tuple[Part, Part]:
     return _part("destination_panel", "trim", [(panel, -1)]), dots
 
 
-SIGN_TOP_SHARE = 0.90
+SIGN_TOP_SHARE = 0.88
 """The destination display's top edge as a share of a bus's height: under the front end's rounded top
 (`PROFILES["bus"]`: 0.93), where the section is still wide enough for the display."""
 DOT_FILL_SHARE = 0.8
@@ -959,6 +960,33 @@ def underbody_faces(vertices_m: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return n[:, 2] < UNDERBODY_NORMAL_Z * np.maximum(np.linalg.norm(n, axis=1), 1e-12)
 
 
+ROOF_UNIT_BODIES = ("bus",)
+"""Body types with an air-conditioning unit on the roof: every current city bus (Mercedes-Benz's Citaro: 3,076 mm
+high with it, its roof about 0.2 m lower)."""
+ROOF_UNIT_SPAN = (0.55, 0.80)
+"""Where the unit lies along the roof, as shares of the length (rear 0, front 1): a Citaro's sits over the front
+half, behind the front axle, about 3 m long (an estimate from makers' side views)."""
+ROOF_UNIT_WIDTH_SHARE = 0.72
+"""The unit's width over the vehicle's (about 1.8 m of a 2.55 m bus)."""
+
+
+def roof_unit(look: VehicleLook) -> Part | None:
+    """A bus's air-conditioning unit (`ROOF_UNIT_BODIES`): a box in the body's paint on the roof, from just under
+    the roof (sunk 2 cm) up to the vehicle's height. Seen from above, a bus's roof shows it, not one flat colour."""
+    if look.body_type not in ROOF_UNIT_BODIES:
+        return None
+    L, H = look.length_m, look.height_m
+    roof_m = float(_interp_top(PROFILES[look.body_type], np.array([0.5]))[0]) * H
+    (lo, hi), low_m = ROOF_UNIT_SPAN, roof_m - 0.02
+    box = _box(
+        ((hi - lo) * L, ROOF_UNIT_WIDTH_SHARE * look.width_m, H - low_m),
+        (((lo + hi) / 2 - 0.5) * L, 0.0, (H + low_m) / 2),
+    )
+    box.update_faces(box.face_normals[:, 2] > -0.5)  # its bottom lies inside the roof: no paint faces the ground
+    box.remove_unreferenced_vertices()
+    return _part("roof_unit", "paint", [(box, -1)])
+
+
 def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
     """The vehicle of `look`, at rest in its own frame; `driver`: with its driver seated at the wheel
     (`camgen.vehicles.cabin`). The glass lets the cabin (its dark lining, and the driver) show through."""
@@ -972,6 +1000,9 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
         Part("body_paint", "paint", vertices[used], normals[used], remapped.reshape(-1, 3),
              np.full(len(used), -1, np.int8))
     ]  # fmt: skip
+    unit = roof_unit(look)
+    if unit is not None:
+        parts.append(unit)
     # The underbody and the black pillars: black plastic alike (`UNDERBODY_RGB`), one piece of the running gear.
     used, remapped = np.unique(np.concatenate([paint[below], faces[kind == 2]]), return_inverse=True)
     underbody = Part("underbody", "gear", vertices[used], normals[used], remapped.reshape(-1, 3),
