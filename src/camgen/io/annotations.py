@@ -131,12 +131,63 @@ class LineSpool:
         for i, line in enumerate(self):
             out.write(line if i == 0 else separator + line)
 
-    def close(self) -> None:
-        """Close and delete the spool file (after the outputs were written from it)."""
+    def mark(self) -> tuple[int, int]:
+        """(lines, bytes) of the spool file now, its lines flushed to it: what `resume` cuts it back to
+        after an interrupted render (`camgen.plan.execute`'s checkpoints). Only for a spool with a file."""
+        if self.path is None:
+            raise ValueError("a spool kept in memory has no file to mark; give LineSpool a path")
+        if self._handle is None:
+            return self._count, 0
+        self._handle.flush()
+        return self._count, self._handle.tell()
+
+    def resume(self, lines: int, size_bytes: int) -> None:
+        """Continue the spool file left by an interrupted render from a `mark`: cut it back to its first
+        `size_bytes` bytes, which must hold exactly `lines` lines, and append after them.
+
+        Raises
+        ------
+        ValueError
+            When the file is shorter than the mark, or its first `size_bytes` bytes do not hold `lines`
+            whole lines: it is not the file the mark was taken of.
+        """
+        if self.path is None:
+            raise ValueError("a spool kept in memory has no file to resume; give LineSpool a path")
+        if self._handle is not None or self._count:
+            raise ValueError(f"{self.path}: resume a spool before appending to it")
+        if size_bytes == 0:
+            if lines:
+                raise ValueError(f"{self.path}: a mark of {lines} lines in 0 bytes")
+            self.path.unlink(missing_ok=True)
+            return
+        size = self.path.stat().st_size if self.path.is_file() else None
+        if size is None or size < size_bytes:
+            held = "missing" if size is None else f"{size} bytes"
+            raise ValueError(f"{self.path}: {held}, shorter than the {size_bytes} bytes of its checkpoint")
+        newlines, last = 0, b""
+        with open(self.path, "rb") as handle:
+            remaining = size_bytes
+            while remaining:
+                chunk = handle.read(min(remaining, 1 << 20))
+                newlines += chunk.count(b"\n")
+                remaining -= len(chunk)
+                last = chunk[-1:]
+        if newlines != lines or last != b"\n":
+            raise ValueError(
+                f"{self.path}: its first {size_bytes} bytes hold {newlines} lines, its checkpoint says {lines}"
+            )
+        with open(self.path, "r+b") as handle:
+            handle.truncate(size_bytes)
+        self._handle = open(self.path, "a", encoding="utf-8")  # open until `close`
+        self._count = lines
+
+    def close(self, *, keep: bool = False) -> None:
+        """Close and delete the spool file (after the outputs were written from it); keep=True leaves the
+        file for a render that resumes (`mark`, `resume`)."""
         if self._handle is not None:
             self._handle.close()
             self._handle = None
-        if self.path is not None:
+        if self.path is not None and not keep:
             self.path.unlink(missing_ok=True)
 
 
@@ -374,11 +425,23 @@ class SequenceAnnotations:
             out.write("]," + _compact(tail)[1:])
         return path
 
-    def close(self) -> None:
-        """Delete the spool files (`spool_dir`), once the outputs are written or abandoned."""
-        for lines in (self.mot, self.detections, self.images, self.annotations, self.keypoint_lines):
-            if lines is not None:
-                lines.close()
+    def spools(self) -> dict[str, LineSpool]:
+        """The sequence's line spools by name (``mot``, ``det``, ``images``, ``annotations``,
+        ``keypoints``): what a checkpoint marks and a resumed render cuts back (`LineSpool.mark`)."""
+        named = {
+            "mot": self.mot,
+            "det": self.detections,
+            "images": self.images,
+            "annotations": self.annotations,
+            "keypoints": self.keypoint_lines,
+        }
+        return {name: lines for name, lines in named.items() if lines is not None}
+
+    def close(self, *, keep: bool = False) -> None:
+        """Delete the spool files (`spool_dir`), once the outputs are written or abandoned; keep=True
+        closes them and leaves them for a render that resumes."""
+        for lines in self.spools().values():
+            lines.close(keep=keep)
 
 
 def _compact(value) -> str:
