@@ -4,8 +4,9 @@ The encoder follows the camera's `Codec` profile: rate control (target bitrate o
 fixed key-frame interval, and the chroma subsampling of the stream. Encoding goes through PyAV (FFmpeg's
 libx264, libx265 and mjpeg encoders). The file appears under its final name only once it is complete.
 
-`read_video_rgb8` reads a video back as RGB frames; `webm_vp9_writer` writes a VP9 WebM for looking at
-in a browser (`camgen preview`), not as a camera streams.
+`join_videos` joins videos written in segments (a render's, one per checkpoint, so that a stopped render
+can resume) into one without re-encoding. `read_video_rgb8` reads a video back as RGB frames;
+`webm_vp9_writer` writes a VP9 WebM for looking at in a browser (`camgen preview`), not as a camera streams.
 
 Conventions
 -----------
@@ -27,7 +28,7 @@ import math
 import numbers
 import os
 import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from fractions import Fraction
 from pathlib import Path
@@ -263,6 +264,117 @@ class VideoWriter:
             pass  # the file is deleted next; a failed trailer on it does not matter
         finally:
             self._tmp_path.unlink(missing_ok=True)
+
+
+def join_videos(
+    segments: Sequence[str | Path],
+    path: str | Path,
+    *,
+    width_px: int,
+    height_px: int,
+    fps: float,
+    codec: Codec = Codec(),  # noqa: B008 - frozen pydantic model, safe to share
+    preset: str = "medium",
+) -> int:
+    """Join videos that `VideoWriter` wrote with these settings, one after another, into one video at
+    `path` (written atomically), copying their packets: nothing is decoded or encoded again. Returns the
+    number of frames.
+
+    Each segment's first frame must be a key frame (every segment a writer wrote starts with one, and its
+    GOPs are closed), so the joined stream decodes as its segments do, one after the other, frame for
+    frame. Frame ``i`` of the whole gets presentation time ``i / fps``. A segment of n · `Codec.gop_frames`
+    frames keeps the key frames every gop_frames frames across the joins.
+
+    The container is set up as `VideoWriter` sets it up, from an opened encoder of the same settings, so
+    that the header (``avcC``/``hvcC``, the ``btrt`` buffer size from the encoder's rate control, colour
+    tags) is what a writer writes: joining the one segment of a video gives the bytes of that video. The
+    packets, which the MP4 segments hold length-prefixed, are handed to the muxer in Annex B form, as an
+    encoder hands them over (the muxer converts back; handed over length-prefixed they would be misread).
+
+    Raises
+    ------
+    ValueError
+        For no segments, a segment that holds no video, another codec or frame size, a first frame that
+        is not a key frame, a frame out of order, or NAL lengths of other than 4 bytes.
+    """
+    if not segments:
+        raise ValueError(f"{path}: no segments to join")
+    _check_size(width_px, height_px, codec.pixel_format)
+    rate = _frame_rate(fps)
+    encoder = _encoder(codec.name)
+    if codec.name != "mjpeg" and preset not in X26X_PRESETS:
+        raise ConfigError(f"preset must be one of {', '.join(X26X_PRESETS)}, got {preset!r}")
+    frame_time_base = Fraction(1) / rate
+    done = 0
+    with atomic_path(path) as tmp, av.open(str(tmp), mode="w") as container:
+        stream = container.add_stream(encoder, rate=rate)
+        _configure(stream.codec_context, codec, rate, width_px, height_px, preset, _colour(codec.name), True)
+        stream.codec_context.open()
+        container.start_encoding()  # the header from the opened encoder, before any packet
+        for segment in segments:
+            with av.open(str(segment)) as source:
+                if not source.streams.video:
+                    raise ValueError(f"{segment}: holds no video stream")
+                video = source.streams.video[0]
+                context = video.codec_context
+                if context.name != JOINED_DECODERS[codec.name] or (context.width, context.height) != (
+                    width_px,
+                    height_px,
+                ):
+                    raise ValueError(
+                        f"{segment}: {context.name} {context.width}×{context.height}, not the "
+                        f"{codec.name} {width_px}×{height_px} being joined"
+                    )
+                length_size = _nal_length_size(codec.name, context.extradata)
+                ticks = frame_time_base / video.time_base
+                first = done
+                for packet in source.demux(video):
+                    if packet.size == 0:
+                        continue  # the demuxer's end-of-stream marker
+                    if done == first and not packet.is_keyframe:
+                        raise ValueError(f"{segment}: does not start with a key frame, so it cannot be joined")
+                    if packet.pts != (done - first) * ticks:
+                        raise ValueError(f"{segment}: frame {done - first} has pts {packet.pts}, not in order")
+                    data = bytes(packet)
+                    copy = av.Packet(data if length_size is None else _annex_b(data, length_size))
+                    copy.pts = copy.dts = done
+                    copy.time_base = frame_time_base
+                    copy.is_keyframe = packet.is_keyframe
+                    copy.stream = stream
+                    container.mux(copy)
+                    done += 1
+                if done == first:
+                    raise ValueError(f"{segment}: holds no frames")
+    return done
+
+
+JOINED_DECODERS = MappingProxyType({"h264": "h264", "h265": "hevc", "mjpeg": "mjpeg"})
+"""The FFmpeg decoder that reads each `Codec.name`'s stream."""
+
+
+def _nal_length_size(codec_name: str, extradata: bytes | None) -> int | None:
+    """Bytes of each NAL unit's length prefix in an MP4's H.264/H.265 packets (from the ``avcC`` or
+    ``hvcC`` record, ISO/IEC 14496-15 §5.3.3 and §8.3.3); None for packets already in Annex B or MJPEG."""
+    if codec_name == "mjpeg" or not extradata or extradata[0] != 1:
+        return None
+    size = (extradata[4 if codec_name == "h264" else 21] & 3) + 1
+    if size != 4:
+        raise ValueError(f"NAL units with {size}-byte lengths; only the 4 bytes FFmpeg writes are joined")
+    return size
+
+
+def _annex_b(data: bytes, length_size: int) -> bytes:
+    """Length-prefixed NAL units (MP4) → the same units each after a 4-byte start code (Annex B)."""
+    out = bytearray()
+    position = 0
+    while position < len(data):
+        length = int.from_bytes(data[position : position + length_size], "big")
+        start = position + length_size
+        if length == 0 or start + length > len(data):
+            raise ValueError(f"a NAL unit of {length} bytes at byte {position} of a {len(data)}-byte packet")
+        out += b"\0\0\0\1" + data[start : start + length]
+        position = start + length
+    return bytes(out)
 
 
 def decoded_rgb8(frame: av.VideoFrame) -> np.ndarray:
