@@ -81,6 +81,24 @@ class CameraIsp:
         self._site_gains = None
         self._site_gains_for = None
 
+    def carried_state(self) -> dict:
+        """What one frame leaves for the next, as JSON-ready numbers that round-trip exactly (floats
+        keep their repr): the contrast-stretch limits and the smoothed log white-balance gains. Every
+        other attribute is settings or a cache rebuilt from them. `restore_state` takes it back."""
+        return {
+            "limits": None if self.limits is None else [float(value) for value in self.limits],
+            "white_balance_log": None
+            if self._white_balance_log is None
+            else [float(value) for value in self._white_balance_log],
+        }
+
+    def restore_state(self, state: dict) -> None:
+        """Continue from a `carried_state`: the next `process` gives what it would have given after the
+        frames that state followed."""
+        limits, white_balance_log = state["limits"], state["white_balance_log"]
+        self.limits = None if limits is None else (float(limits[0]), float(limits[1]))
+        self._white_balance_log = None if white_balance_log is None else np.array(white_balance_log, np.float64)
+
     def saturation_dn(self, gain_db: float) -> float:
         """Raw DN of a saturated site at this gain: the full well or the ADC, whichever clips first."""
         sensor = self.sensor

@@ -129,6 +129,26 @@ class CameraPipeline:
         self._site_factor = None
         self._stacked = None
 
+    def carried_state(self) -> dict:
+        """What the frames so far leave for the next, JSON-ready and exact (floats as their repr): the
+        exposure auto-exposure set for the next frame and the ISP's adapting state
+        (`CameraIsp.carried_state`). The rest of the pipeline is settings and caches, and each frame's
+        noise comes from its own generator (`frame_rng`), so a pipeline given this state by
+        `restore_state` renders the following frames as the one that rendered those frames would."""
+        return {
+            "exposure_time_s": float(self.setting.exposure_time_s),
+            "gain_db": float(self.setting.gain_db),
+            "isp": None if self.isp is None else self.isp.carried_state(),
+        }
+
+    def restore_state(self, state: dict) -> None:
+        """Continue from a `carried_state` (see there)."""
+        self.setting = ExposureSetting(float(state["exposure_time_s"]), float(state["gain_db"]))
+        if (state["isp"] is None) != (self.isp is None):
+            raise ValueError("the carried state is of a pipeline with a different ISP")
+        if self.isp is not None:
+            self.isp.restore_state(state["isp"])
+
     def state_for(self, index: int) -> CameraState:
         """The state of frame `index` with the exposure the camera will use for it."""
         return self.camera.states[index].model_copy(
