@@ -35,12 +35,29 @@ def add_parser(subparsers) -> None:
     parser.add_argument(
         "--save-passes", action="store_true", help="also write each frame's passes as passes/<frame>.npz"
     )
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help=(
+            "continue a stopped render of the same scene, frames and options from each camera's last "
+            "checkpoint (written every few hundred frames), and keep what this render wrote if it "
+            "is stopped too; the files are the bytes of an unstopped render. With nothing to resume it renders "
+            "from the start"
+        ),
+    )
     add_profile_dirs_option(parser)
     parser.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from camgen.plan.execute import execute, job_directory_name, unimplemented_stages
+    from camgen.plan.execute import (
+        NOTHING_TO_RESUME,
+        execute,
+        finished_render,
+        job_directory_name,
+        other_unfinished_renders,
+        unimplemented_stages,
+    )
     from camgen.render.renderer import Renderer
 
     if args.frames is not None and args.frames < 1:
@@ -75,10 +92,23 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
                 f"skipped: {', '.join(skipped)}",
                 soft_wrap=True,
             )
+
+    def note(message: str) -> None:
+        err.print(f"[yellow]note[/yellow] {escape(message)}", soft_wrap=True)
+
+    if args.resume:
+        if finished_render(job, args.out) is not None:
+            note(f"{Path(args.out) / job_directory_name(job)}: {NOTHING_TO_RESUME}")
+            return 0
+        for other in other_unfinished_renders(job, args.out):
+            note(
+                f"{other} holds a stopped render of another version of scene {job.scene_name} (the scene, a "
+                "profile or the settings changed since): not resumed, and left as it is"
+            )
     resolve = loaded.path.parent.joinpath
     with (
         Renderer() as renderer,
-        _frame_progress(err, f"render {job.scene_name}", [c.name for c in chosen], count) as on_frame,
+        _frame_progress(err, f"render {job.scene_name}", [c.name for c in chosen], count) as (on_frame, on_resume),
     ):
         results = execute(
             job,
@@ -89,12 +119,17 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             resolve_path=resolve,
             save_passes=args.save_passes,
             on_frame=on_frame,
+            resume=args.resume,
+            on_resume=on_resume,
+            on_note=note,
         )
     out.print(f"{escape(job.scene_name)}: job {job.job_id[:16]} on {escape(renderer.gl_renderer)}", highlight=False)
     for result in results:
-        per_frame_ms = 1e3 * result.render_s / max(result.frames, 1)
+        rendered = result.frames - result.resumed_frames
+        per_frame_ms = 1e3 * result.render_s / max(rendered, 1)
+        resumed = f" ({result.resumed_frames} of them before the stop)" if result.resumed_frames else ""
         out.print(
-            f"  {escape(result.name)}: {result.frames} frames, render {per_frame_ms:.0f} ms/frame, "
+            f"  {escape(result.name)}: {result.frames} frames{resumed}, render {per_frame_ms:.0f} ms/frame, "
             f"total {result.total_s:.1f} s → {escape(str(result.directory))}",
             highlight=False,
         )
@@ -110,14 +145,34 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
 
 
 @contextmanager
-def _frame_progress(err: Console, label: str, cameras: list[str], count: int) -> Iterator[Callable[[str, int], None]]:
-    """`execute`'s on_frame for `count` frames of each of `cameras`: a bar per camera on a terminal, periodic
-    lines (`ProgressLines`) in a log."""
+def _frame_progress(
+    err: Console, label: str, cameras: list[str], count: int
+) -> Iterator[tuple[Callable[[str, int], None], Callable[[str, int, int], None]]]:
+    """`execute`'s on_frame and on_resume for `count` frames of each of `cameras`: a bar per camera on a
+    terminal, periodic lines (`ProgressLines`) in a log. A camera resumed from a checkpoint says so in a
+    line and counts its frames done as done, out of the rate and the ETA."""
+
+    def resuming(name: str, done: int, total: int) -> None:
+        if done < total:
+            err.print(f"resuming {escape(name)} at frame {done} of {total}", highlight=False)
+        else:
+            err.print(f"{escape(name)}: all {total} frames were done before the stop", highlight=False)
+
     if not err.is_terminal:
         with ProgressLines(err, label, count * len(cameras), "frames") as lines:
-            yield lambda name, index: lines.advance()
+
+            def resumed(name: str, done: int, total: int) -> None:
+                resuming(name, done, total)
+                lines.advance(done, frames=0, timed=False)
+
+            yield (lambda name, index: lines.advance()), resumed
         return
     columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
     with Progress(*columns, console=err) as progress:
         tasks = {name: progress.add_task(escape(name), total=count) for name in cameras}
-        yield lambda name, index: progress.advance(tasks[name])
+
+        def resumed_bar(name: str, done: int, total: int) -> None:
+            resuming(name, done, total)
+            progress.reset(tasks[name], total=count, completed=done)  # the rate from the frames rendered now
+
+        yield (lambda name, index: progress.advance(tasks[name])), resumed_bar

@@ -13,21 +13,39 @@ on any exception), so a render stopped part-way leaves no per-frame files; job.j
 are written last, so a job directory holding them holds a finished render. `IMPLEMENTED_STAGES` are the
 stages run here; `unimplemented_stages` names any other stage a job plans (a job compiled by another
 camgen version), so that callers can say it is skipped.
+
+Resuming (issue 23): every `checkpoint_interval` frames a camera writes ``CAMERA.partial/.checkpoint.json``
+(`Checkpoint`): the frames done, the state one frame leaves for the next (auto-exposure's setting, the
+ISP's adapting limits and white balance: `CameraPipeline.carried_state`; the radiance files' scale), the
+length of every line spool (camera.jsonl, the annotations, the list of files written) and the video's
+segments. The video is encoded in segments, a fresh encoder from each checkpoint on (x264's and x265's
+rate control cannot be saved), kept as ``.spool/video-NNNNNNNN.mp4`` and joined without re-encoding at
+the end (`camgen.io.video.join_videos`); a render that is never stopped segments at the same frames, so
+its files are the same bytes. ``execute(..., resume=True)`` keeps the folders of a render that stops,
+and continues each camera from its checkpoint: spools cut back to their checkpointed length, files of
+later frames deleted, the pipeline's state restored. The renderer draws each frame alone, so it holds no
+state to save.
 """
 
 from __future__ import annotations
 
 import contextlib
+import glob
+import hashlib
 import json
+import math
+import re
 import shutil
 import time
-from collections.abc import Callable, Collection, Iterable
+from collections.abc import Callable, Collection, Iterable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
+import camgen
 from camgen.annotate.detection import detect_people, hog_detector
 from camgen.io.annotations import IMAGE_SUFFIXES, LineSpool, SequenceAnnotations, write_reid_crops
 from camgen.io.dng import SRGB_FROM_XYZ, write_dng
@@ -54,6 +72,19 @@ PARTIAL_SUFFIX = ".partial"
 """A camera's folder is written under its name with this suffix and renamed when complete."""
 NOISE_THREADS = 2
 """Threads for the sensor's row bands and the tone lookup (the machines here have 2 cores)."""
+CHECKPOINT_FRAMES = 250
+"""A camera writes a checkpoint every this many frames (10 s of a 25 frames/s stream), rounded up to whole
+GOPs of its codec (`checkpoint_interval`): a stopped render resumed redoes at most this many frames. Measured
+on 2 cores: a checkpoint takes 1.3 ms (median of 11, 320×240) and 3 ms at frame 89 750 of an hour at
+25 frames/s (a 9 kB file; 86 ms and 1.4 MB with 16-bit radiance files, whose per-frame clip counts it
+carries). The video's segments (one per checkpoint) cost little: 100 frames of 1080p (a panned photo with
+σ = 2 DN noise) as 4 segments of 25 against 1: x264 at 4096 kbit/s 2.03 against 2.07 MB, PSNR 38.36 against
+38.42 dB, encode 4.0 against 4.2 s; x265 1.51 against 1.97 MB, 38.64 against 38.78 dB (its rate control
+restarts below the target); joining them 10–50 ms."""
+CHECKPOINT_NAME = ".checkpoint.json"
+"""A camera's checkpoint, in its ``.partial`` folder (and in a finished camera's folder until the job ends)."""
+CHECKPOINT_VERSION = 1
+"""Version of the checkpoint's layout; a checkpoint of another version is not resumed."""
 
 IMPLEMENTED_STAGES = frozenset(
     {
@@ -103,6 +134,9 @@ class CameraResult:
     """Wall time of each frame, s (the first from the camera's setup on)."""
     finish_s: dict[str, float] = field(default_factory=dict)
     """Wall time per stage after the last frame: flushing the video encoder, writing annotations."""
+    resumed_frames: int = 0
+    """Frames taken over from a checkpoint (`execute`'s resume) instead of rendered in this run; `frames`
+    counts them, the timings do not."""
 
     @property
     def render_s(self) -> float:
@@ -134,6 +168,10 @@ def execute(
     resolve_path: Callable[[str], Path] | None = None,
     save_passes: bool = False,
     on_frame: Callable[[str, int], None] | None = None,
+    resume: bool = False,
+    checkpoint_frames: int | None = None,
+    on_resume: Callable[[str, int, int], None] | None = None,
+    on_note: Callable[[str], None] | None = None,
 ) -> list[CameraResult]:
     """Render `job` into ``out_dir/<scene>-<hash>/<camera>/`` and return what was written.
 
@@ -142,35 +180,79 @@ def execute(
     also write each frame's passes, through the lens into the output frame, as
     ``passes/<frame>.npz`` (radiance_cd_m2, depth_m, instance_id) and its raw DN.
     on_frame(camera, index) is called after each frame (for progress).
+
+    resume: continue a render of the same job, frames and options that stopped, from each camera's last
+    checkpoint (see the module docstring), and keep the unfinished folders if this render stops too
+    (without it, a render starts clean and a stopped one deletes what it wrote). A checkpoint of another
+    render (job, frames, save_passes, camgen version) or one that cannot be read is discarded with a note
+    and the camera starts from its first frame; a job directory with a manifest (a finished render) is a
+    ValueError. checkpoint_frames: frames between checkpoints (default `CHECKPOINT_FRAMES`) before
+    `checkpoint_interval` rounds them to whole GOPs (it sets where the video is segmented, so renders
+    compared byte for byte use the same).
+    on_resume(camera, frames_done, frames) is called for each camera taken up from a checkpoint (a
+    finished camera: frames_done = frames); on_note(message) gets the one-line notes.
     """
+    checkpoint_frames = CHECKPOINT_FRAMES if checkpoint_frames is None else checkpoint_frames
+    if isinstance(checkpoint_frames, bool) or not isinstance(checkpoint_frames, int) or checkpoint_frames < 1:
+        raise ValueError(f"checkpoint_frames must be an integer ≥ 1, got {checkpoint_frames!r}")
     job_dir = Path(out_dir) / job_directory_name(job)
     indices = list(range(job.frame_count) if frames is None else frames)
     wanted = None if cameras is None else set(cameras)
+    chosen = [(i, camera) for i, camera in enumerate(job.cameras) if wanted is None or camera.name in wanted]
+    note = on_note or (lambda message: None)
+    if resume and (job_dir / "manifest.json").exists():
+        raise ValueError(f"{job_dir}: {NOTHING_TO_RESUME}")
     # A render starts clean: no job.json or manifest.json until it completes, and no files left in a
-    # camera's directory by an earlier render of it (fewer frames, other outputs, a killed run).
+    # camera's directory by an earlier render of it (fewer frames, other outputs, a killed run), unless it
+    # resumes a checkpoint of this very render.
     for stale in ("manifest.json", "job.json"):
         (job_dir / stale).unlink(missing_ok=True)
-    for camera in job.cameras:
+    identities = {
+        camera.name: _identity(job, camera, indices, save_passes, checkpoint_interval(camera, checkpoint_frames))
+        for _, camera in chosen
+    }
+    taken_up = {
+        camera.name: _checkpoint_to_resume(job_dir, camera.name, identities[camera.name], note) if resume else None
+        for _, camera in chosen
+    }
+    for _, camera in chosen:
         for directory in (job_dir / camera.name, job_dir / f"{camera.name}{PARTIAL_SUFFIX}"):
-            if (wanted is None or camera.name in wanted) and directory.is_dir():
+            checkpoint = taken_up[camera.name]
+            kept = checkpoint is not None and directory.name == checkpoint.directory_name(camera.name)
+            if not kept and directory.is_dir():
                 shutil.rmtree(directory)
     results = []
     maps = LensMapCache()  # cameras with the same lens and zoom share their maps
     try:
         with ThreadPoolExecutor(NOISE_THREADS) as executor:
-            for camera_index, camera in enumerate(job.cameras):
-                if wanted is not None and camera.name not in wanted:
+            for camera_index, camera in chosen:
+                checkpoint = taken_up[camera.name]
+                final = job_dir / camera.name
+                if checkpoint is not None and checkpoint.complete:
+                    results.append(_finished_camera(final, checkpoint))
+                    if on_resume is not None:
+                        on_resume(camera.name, checkpoint.frames_done, len(indices))
                     continue
                 # A camera's files (per-frame images included) are written under a temporary name and the
                 # folder is renamed when the camera is complete; a render stopped part-way leaves none.
                 partial = job_dir / f"{camera.name}{PARTIAL_SUFFIX}"
-                context = _Context(job, camera_index, partial, renderer, maps, executor)
-                result = _execute_camera(context, indices, resolve_path, save_passes, on_frame)
-                final = job_dir / camera.name
+                context = _Context(job, camera_index, partial, renderer, maps, executor, identities[camera.name])
+                try:
+                    result = _execute_camera(
+                        context, indices, resolve_path, save_passes, on_frame, checkpoint, on_resume
+                    )
+                except CheckpointError as error:
+                    note(f"{camera.name}: cannot resume: {error}; rendering {camera.name} from its first frame")
+                    shutil.rmtree(partial)
+                    result = _execute_camera(context, indices, resolve_path, save_passes, on_frame, None, None)
                 partial.replace(final)
                 result.directory = final
                 result.files = [final / path.relative_to(partial) for path in result.files]
                 results.append(result)
+        # The finished cameras kept their checkpoints (a stop before the manifest resumes without redoing
+        # them); they go now, so that the manifest lists only the outputs.
+        for result in results:
+            (result.directory / CHECKPOINT_NAME).unlink(missing_ok=True)
         # Written last: a job directory with job.json in it holds a finished render, of the cameras and
         # frames the manifest's `rendered` names (all of them unless --camera/--frames chose fewer).
         write_text_atomic(job_dir / "job.json", job.to_json())
@@ -179,10 +261,37 @@ def execute(
     except BaseException:
         # Stopped anywhere before the manifest (an error, Ctrl-C, a batch worker's SIGTERM, even between
         # job.json and the manifest): nothing this render wrote stays, finished cameras included, so a job
-        # directory without a manifest holds no file of it.
-        discard_unfinished(job, job_dir, wanted)
+        # directory without a manifest holds no file of it; unless it is to be resumed.
+        if not resume:
+            discard_unfinished(job, job_dir, wanted)
         raise
     return results
+
+
+NOTHING_TO_RESUME = (
+    "holds a finished render of this job (manifest.json): nothing to resume; render without --resume to render it again"
+)
+
+
+def finished_render(job: Job, out_dir: str | Path) -> Path | None:
+    """The manifest of a finished render of `job` in `out_dir` (its job directory), or None."""
+    manifest = Path(out_dir) / job_directory_name(job) / "manifest.json"
+    return manifest if manifest.is_file() else None
+
+
+def other_unfinished_renders(job: Job, out_dir: str | Path) -> list[Path]:
+    """Job directories in `out_dir` of the same scene name but another job (the scene, its profiles or the
+    settings changed) that hold a stopped render (a camera's ``.partial`` folder): `execute` resumes only
+    its own job's, so a caller can say these were left as they are."""
+    ours = job_directory_name(job)
+    found = []
+    for directory in sorted(Path(out_dir).glob(f"{glob.escape(job.scene_name)}-*")):
+        name = directory.name
+        if name == ours or not directory.is_dir() or not _HASH8.fullmatch(name[len(job.scene_name) + 1 :]):
+            continue
+        if any(child.name.endswith(PARTIAL_SUFFIX) and child.is_dir() for child in directory.iterdir()):
+            found.append(directory)
+    return found
 
 
 def discard_unfinished(job: Job, job_dir: Path, cameras: Collection[str] | None = None) -> bool:
@@ -211,6 +320,301 @@ def discard_unfinished(job: Job, job_dir: Path, cameras: Collection[str] | None 
     return deleted
 
 
+class CheckpointError(ValueError):
+    """A checkpoint that cannot be resumed: unreadable, or not matching the files beside it."""
+
+
+class RadianceState(BaseModel):
+    """What a camera's `RadianceWriter` carries from frame to frame."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    scale_cd_m2_per_dn: float | None
+    clipped: dict[str, int]
+
+
+class Checkpoint(BaseModel):
+    """``CAMERA.partial/.checkpoint.json``: where a camera's render stands after `frames_done` frames, and
+    which render it is of (the first seven fields, `_identity`). Floats are written as Python's repr, so
+    they read back exactly."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    checkpoint_version: int
+    camgen_version: str
+    job_id: str
+    camera: str
+    frames: str
+    """The frame indices rendered (`_frames_text`)."""
+    save_passes: bool
+    interval_frames: int = Field(ge=1)
+    """Frames between checkpoints (`checkpoint_interval`), which sets the video's segments."""
+    frames_done: int = Field(ge=0)
+    next_frame: int | None
+    """The frame index the render continues with; None when `complete`."""
+    complete: bool
+    """The camera is finished and its folder renamed; the checkpoint stays there until the job's manifest."""
+    pipeline: dict | None = None
+    """`CameraPipeline.carried_state`, or None for a camera without one."""
+    radiance: RadianceState | None = None
+    spools: dict[str, tuple[int, int]] = Field(default_factory=dict)
+    """Line spool name → (lines, bytes) of its file (`LineSpool.mark`)."""
+    video_segments: list[str] = Field(default_factory=list)
+    """Video segments written so far, in order, under ``.spool/``."""
+    files: list[str] | None = None
+    """A complete camera's files, relative POSIX paths (an unfinished one lists them in its files spool)."""
+
+    def directory_name(self, camera: str) -> str:
+        """The folder this checkpoint belongs in: the camera's, or its ``.partial`` one."""
+        return camera if self.complete else f"{camera}{PARTIAL_SUFFIX}"
+
+
+def checkpoint_interval(camera: CameraJob, checkpoint_frames: int = CHECKPOINT_FRAMES) -> int:
+    """Frames between a camera's checkpoints: `checkpoint_frames`, rounded up to a whole number of its
+    codec's GOPs when it writes H.264/H.265 video, so each video segment (which starts with a key frame)
+    starts where the stream has one anyway and the key frames stay exactly `Codec.gop_frames` apart."""
+    codec = camera.profile.codec
+    if any(stage.name == "io.video" for stage in camera.stages) and codec.name != "mjpeg":
+        return math.ceil(checkpoint_frames / codec.gop_frames) * codec.gop_frames
+    return checkpoint_frames
+
+
+def _frames_text(indices: Sequence[int]) -> str:
+    """The frame indices of a render, short: ``0–249`` for a run of them, else their count and hash."""
+    if not indices:
+        return "none"
+    if list(indices) == list(range(indices[0], indices[-1] + 1)):
+        return f"{indices[0]}–{indices[-1]}"
+    digest = hashlib.sha256(json.dumps(list(indices)).encode()).hexdigest()
+    return f"{len(indices)} frames, sha256 {digest[:16]}"
+
+
+def _identity(job: Job, camera: CameraJob, indices: Sequence[int], save_passes: bool, interval: int) -> dict:
+    """The fields of a `Checkpoint` that say which render it is of; a checkpoint resumes only its own."""
+    return {
+        "checkpoint_version": CHECKPOINT_VERSION,
+        "camgen_version": camgen.__version__,
+        "job_id": job.job_id,
+        "camera": camera.name,
+        "frames": _frames_text(indices),
+        "save_passes": save_passes,
+        "interval_frames": interval,
+    }
+
+
+def _mismatch(checkpoint: Checkpoint, identity: dict) -> str | None:
+    """Why `checkpoint` is not of the render `identity` describes, or None when it is."""
+    if checkpoint.checkpoint_version != identity["checkpoint_version"]:
+        return f"its layout is version {checkpoint.checkpoint_version}, this camgen's {CHECKPOINT_VERSION}"
+    if checkpoint.camgen_version != identity["camgen_version"]:
+        return f"it was written by camgen {checkpoint.camgen_version}, this is {identity['camgen_version']}"
+    if checkpoint.job_id != identity["job_id"]:
+        return (
+            f"it is of another job ({checkpoint.job_id[:16]}…, this one is {identity['job_id'][:16]}…): "
+            "the scene, a profile or the plan settings changed"
+        )
+    if checkpoint.camera != identity["camera"]:
+        return f"it is of camera {checkpoint.camera}"
+    if checkpoint.frames != identity["frames"]:
+        return f"it is of a render of frames {checkpoint.frames}, this one renders frames {identity['frames']}"
+    if checkpoint.save_passes != identity["save_passes"]:
+        saved = "saved" if checkpoint.save_passes else "did not save"
+        return f"its render {saved} the passes, this one does{'' if identity['save_passes'] else ' not'}"
+    if checkpoint.interval_frames != identity["interval_frames"]:
+        return (
+            f"it checkpointed every {checkpoint.interval_frames} frames, this render every "
+            f"{identity['interval_frames']} (the video's segments would differ)"
+        )
+    return None
+
+
+_SEGMENT_NAME = "video-{:08d}.mp4"
+_HASH8 = re.compile(r"[0-9a-f]{8}")
+_SPOOL_NAMES = frozenset({"camera", "files", "mot", "det", "images", "annotations", "keypoints"})
+
+
+def read_checkpoint(path: str | Path) -> Checkpoint:
+    """The checkpoint at `path`; CheckpointError saying what is wrong with it when it cannot be used."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError as error:
+        raise CheckpointError(f"{path.name} is not UTF-8 text ({error.reason} at byte {error.start})") from None
+    except json.JSONDecodeError as error:
+        raise CheckpointError(
+            f"{path.name} is not valid JSON (line {error.lineno}, column {error.colno}: {error.msg})"
+        ) from None
+    except OSError as error:
+        raise CheckpointError(f"{path.name} cannot be read ({error.strerror or error})") from None
+    try:
+        checkpoint = Checkpoint.model_validate(data)
+    except ValidationError as error:
+        first = error.errors()[0]
+        where = ".".join(str(part) for part in first["loc"]) or "its top level"
+        raise CheckpointError(f"{path.name}: {where}: {first['msg']}") from None
+    names = [*checkpoint.video_segments, *(checkpoint.files or ())]
+    unsafe = [name for name in names if not _inside(name)]
+    unknown = sorted(set(checkpoint.spools) - _SPOOL_NAMES)
+    if unsafe or unknown:
+        raise CheckpointError(f"{path.name}: names {(unsafe or unknown)[0]!r}, which no render writes")
+    return checkpoint
+
+
+def _inside(name: str) -> bool:
+    """Whether `name` is a relative POSIX path that stays inside the folder it is relative to."""
+    posix = PurePosixPath(name)
+    return bool(name) and not posix.is_absolute() and ".." not in posix.parts and "\\" not in name
+
+
+def _checkpoint_to_resume(job_dir: Path, camera: str, identity: dict, note: Callable[[str], None]) -> Checkpoint | None:
+    """The checkpoint of `camera` in `job_dir` that this render (`identity`) resumes: its finished folder's
+    or its ``.partial`` folder's. Any other is passed over with a note (the caller deletes the folders)."""
+    fresh = f"rendering {camera} from its first frame"
+    for directory, complete in ((job_dir / camera, True), (job_dir / f"{camera}{PARTIAL_SUFFIX}", False)):
+        if not directory.is_dir():
+            continue
+        path = directory / CHECKPOINT_NAME
+        shown = f"{directory.name}/{CHECKPOINT_NAME}"
+        if not path.is_file():
+            if not complete:
+                note(f"{camera}: {directory.name} holds no checkpoint (it stopped before its first); {fresh}")
+            continue
+        try:
+            checkpoint = read_checkpoint(path)
+        except CheckpointError as error:
+            note(f"{camera}: cannot resume from {shown}: {error}; {fresh}")
+            continue
+        reason = _mismatch(checkpoint, identity)
+        if reason is None and checkpoint.complete != complete:
+            reason = "it " + ("is not" if complete else "is") + " the checkpoint of a finished camera"
+        if reason is None and complete:
+            missing = next((name for name in checkpoint.files or () if not (directory / name).is_file()), None)
+            reason = None if missing is None else f"it lists {missing}, which is missing"
+        if reason is not None:
+            note(f"{camera}: discarding {shown}: {reason}; {fresh}")
+            continue
+        return checkpoint
+    return None
+
+
+def _finished_camera(directory: Path, checkpoint: Checkpoint) -> CameraResult:
+    """The result of a camera a stopped render had finished (its complete checkpoint)."""
+    files = [directory / name for name in checkpoint.files or ()]
+    return CameraResult(
+        checkpoint.camera, directory, checkpoint.frames_done, files, resumed_frames=checkpoint.frames_done
+    )
+
+
+def _restore(
+    checkpoint: Checkpoint,
+    directory: Path,
+    indices: Sequence[int],
+    spools: dict[str, LineSpool],
+    pipeline: CameraPipeline | None,
+    radiance_files: RadianceWriter | None,
+    result: CameraResult,
+) -> list[str]:
+    """Take a camera's render up from `checkpoint`: spools cut back to their checkpointed lines, every file
+    written after it deleted, the pipeline's and the radiance files' state restored, `result` holding the
+    files and frames done. Returns the video segments so far. CheckpointError when the folder does not
+    hold what the checkpoint says."""
+    done = checkpoint.frames_done
+    if not (0 < done < len(indices)) or checkpoint.next_frame != indices[done] or done % checkpoint.interval_frames:
+        raise CheckpointError(
+            f"{CHECKPOINT_NAME} says {done} frames are done and frame {checkpoint.next_frame} is next, which is no "
+            f"checkpoint of these {len(indices)} frames every {checkpoint.interval_frames}"
+        )
+    if set(checkpoint.spools) != set(spools):
+        raise CheckpointError(
+            f"{CHECKPOINT_NAME} marks the spools {', '.join(sorted(checkpoint.spools)) or 'none'}, this render "
+            f"writes {', '.join(sorted(spools))}"
+        )
+    if (checkpoint.pipeline is None) != (pipeline is None) or (checkpoint.radiance is None) != (
+        radiance_files is None or radiance_files.format == "exr"
+    ):
+        raise CheckpointError(f"{CHECKPOINT_NAME} is of a camera with other stages")
+    spool_dir = directory / ".spool"
+    segments = list(checkpoint.video_segments)
+    missing = next((name for name in segments if not (spool_dir / name).is_file()), None)
+    if missing is not None:
+        raise CheckpointError(f".spool/{missing} is missing")
+    try:
+        for name, (lines, size_bytes) in checkpoint.spools.items():
+            spools[name].resume(lines, size_bytes)
+        if pipeline is not None:
+            pipeline.restore_state(checkpoint.pipeline)
+    except (OSError, KeyError, TypeError, ValueError) as error:
+        raise CheckpointError(str(error)) from None
+    result.files = [directory / line for line in spools["files"]]
+    if any(not _inside(path.relative_to(directory).as_posix()) for path in result.files):
+        raise CheckpointError(".spool/files.lines names a file outside the camera's folder")
+    absent = next((path for path in result.files if not path.is_file()), None)
+    if absent is not None:
+        raise CheckpointError(f"{absent.relative_to(directory)}, written before the checkpoint, is missing")
+    if checkpoint.radiance is not None:
+        radiance_files.scale_cd_m2_per_dn = checkpoint.radiance.scale_cd_m2_per_dn
+        radiance_files.clipped = dict(checkpoint.radiance.clipped)
+    keep = {
+        *result.files,
+        directory / CHECKPOINT_NAME,
+        *(spool.path for spool in spools.values()),
+        *(spool_dir / name for name in segments),
+    }
+    _delete_all_but(directory, keep)
+    result.frames = result.resumed_frames = done
+    return segments
+
+
+def _delete_all_but(directory: Path, keep: set[Path]) -> None:
+    """Delete every file under `directory` not in `keep` (what frames after a checkpoint wrote, a temporary
+    file a stop left), and the folders that leaves empty."""
+    emptied = set()
+    for path in sorted(directory.rglob("*")):
+        if path not in keep and (path.is_file() or path.is_symlink()):
+            path.unlink()
+            emptied.add(path.parent)
+    for folder in sorted(emptied, key=lambda folder: len(folder.parts), reverse=True):
+        while folder != directory and folder.name != ".spool" and not any(folder.iterdir()):
+            folder.rmdir()
+            folder = folder.parent
+
+
+def _write_checkpoint(
+    directory: Path,
+    identity: dict,
+    indices: Sequence[int],
+    result: CameraResult,
+    *,
+    spools: dict[str, LineSpool] | None = None,
+    pipeline: CameraPipeline | None = None,
+    radiance_files: RadianceWriter | None = None,
+    segments: Sequence[str] = (),
+) -> None:
+    """Write the camera's checkpoint after `result.frames` frames (atomically): with `spools`, an unfinished
+    camera's (the new files appended to the files spool first, every spool flushed and marked); without,
+    a finished camera's, listing its files."""
+    complete = spools is None
+    if not complete:
+        files = spools["files"]
+        for path in result.files[len(files) :]:
+            files.append(path.relative_to(directory).as_posix())
+    radiance = (
+        None
+        if radiance_files is None or radiance_files.format == "exr"
+        else RadianceState(scale_cd_m2_per_dn=radiance_files.scale_cd_m2_per_dn, clipped=radiance_files.clipped)
+    )
+    checkpoint = Checkpoint(
+        **identity,
+        frames_done=result.frames,
+        next_frame=None if complete else indices[result.frames],
+        complete=complete,
+        pipeline=None if pipeline is None else pipeline.carried_state(),
+        radiance=None if complete else radiance,
+        spools={} if complete else {name: spool.mark() for name, spool in spools.items()},
+        video_segments=list(segments),
+        files=[path.relative_to(directory).as_posix() for path in result.files] if complete else None,
+    )
+    write_text_atomic(directory / CHECKPOINT_NAME, json.dumps(checkpoint.model_dump(mode="json"), indent=1) + "\n")
+
+
 @dataclass
 class _Context:
     job: Job
@@ -219,9 +623,13 @@ class _Context:
     renderer: Renderer
     maps: LensMapCache
     executor: ThreadPoolExecutor
+    identity: dict
+    """The render's `_identity` for this camera's checkpoints."""
 
 
-def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_frame) -> CameraResult:
+def _execute_camera(
+    context: _Context, indices, resolve_path, save_passes, on_frame, checkpoint: Checkpoint | None, on_resume
+) -> CameraResult:
     job, directory = context.job, context.directory
     camera = job.cameras[context.camera_index]
     result = CameraResult(camera.name, directory)
@@ -235,16 +643,27 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
     )
     lens = pipeline.lens if pipeline is not None else LensStages(camera, context.maps)
     video = None
+    width_px, height_px = camera.output_size_px or (camera.width_px, camera.height_px)
+    video_settings = {
+        "width_px": width_px,
+        "height_px": height_px,
+        "fps": job.fps,
+        "codec": camera.profile.codec,
+        "preset": camera.profile.codec.preset,
+    }
+    segments: list[str] = []
+    interval = context.identity["interval_frames"]
     # Per-frame lines (camera.jsonl, the annotations) go to files under the camera's folder as they come,
     # not into memory: a long sequence renders in flat memory (issue 23). Deleted when the camera ends.
     spool_dir = directory / ".spool"
     metadata = LineSpool(spool_dir / "camera.lines")
+    spools = {"camera": metadata, "files": LineSpool(spool_dir / "files.lines")}
+    """Every line spool of the camera by name: what a checkpoint marks (`_write_checkpoint`)."""
     camera_renderer = CameraRenderer(context.renderer, build_scene_graph(job.scene, resolve_path), camera)
     annotator = sequence = detector = None
     formats = ()
     if "annotate" in stages:
         annotator = Annotator(camera_renderer, lens)
-        width_px, height_px = camera.output_size_px or (camera.width_px, camera.height_px)
         frames_format = stages["io.frames"].params["format"] if "io.frames" in stages else None
         params = stages["annotate"].params
         formats = params["formats"]
@@ -266,6 +685,7 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
             detections=detector is not None,
             spool_dir=spool_dir,
         )
+        spools.update(sequence.spools())
         graph = camera_renderer.graph
         actor_nodes = zip(graph.actors, graph.actor_nodes, strict=True)
         track_ids = {actor.name: graph.instance_ids[node] for actor, node in actor_nodes}
@@ -289,7 +709,12 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
         pipeline is not None and camera.exposure_mode == "auto" and job.settings.auto_exposure_start == "converged"
     )
     try:
-        for index in indices:
+        if checkpoint is not None:
+            segments = _restore(checkpoint, directory, indices, spools, pipeline, radiance_files, result)
+            converge = False  # the restored exposure is where the frames before left it
+            if on_resume is not None:
+                on_resume(camera.name, result.frames, len(indices))
+        for index in indices[result.frames :]:
             state = camera.states[index] if pipeline is None else pipeline.state_for(index)
             with clock("render"):
                 # A frame drawn to meter the view is drawn sharp: its exposure is the profile's guess.
@@ -313,18 +738,11 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                     rgb8 = crop_and_scale(rgb8, state.window_px, camera.output_size_px)
             if rgb8 is not None and "io.video" in stages:
                 with clock("io.video"):
-                    if video is None:
+                    if video is None:  # a segment from each checkpoint on (see the module docstring)
                         from camgen.io.video import VideoWriter  # PyAV only where a video is written
 
-                        width_px, height_px = camera.output_size_px or (camera.width_px, camera.height_px)
-                        video = VideoWriter(
-                            directory / "video.mp4",
-                            width_px=width_px,
-                            height_px=height_px,
-                            fps=job.fps,
-                            codec=camera.profile.codec,
-                            preset=camera.profile.codec.preset,
-                        )
+                        segment = _SEGMENT_NAME.format(result.frames)
+                        video = VideoWriter(spool_dir / segment, **video_settings)
                     video.write(rgb8)
             with clock("optics.passes"):
                 stream = _stream_passes(camera, stages, state, frame.passes, lens, save_passes)
@@ -383,17 +801,42 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
             if save_passes:
                 if result.frames == 0:
                     table = [vars(instance) for instance in instance_table(job.scene)]
-                    write_text_atomic(directory / "passes" / "instances.json", json.dumps(table, indent=1))
+                    result.files.append(directory / "passes" / "instances.json")
+                    write_text_atomic(result.files[-1], json.dumps(table, indent=1))
                 raw = None if captured is None else captured.raw_dn
                 with clock("io.passes"):
                     _save_passes(directory / "passes" / f"{frame.index:06d}.npz", stream, raw, result)
             result.frames += 1
+            if result.frames % interval == 0 and result.frames < len(indices):
+                if video is not None:
+                    with clock("io.video"):
+                        video.close()  # the segment ends here: the next starts with a fresh encoder
+                    segments.append(segment)
+                    video = None
+                with clock("io.checkpoint"):
+                    _write_checkpoint(
+                        directory,
+                        context.identity,
+                        indices,
+                        result,
+                        spools=spools,
+                        pipeline=pipeline,
+                        radiance_files=radiance_files,
+                        segments=segments,
+                    )
             clock.end_frame()
             if on_frame is not None:
                 on_frame(camera.name, frame.index)
         if video is not None:
             with clock("io.video"):
                 video.close()
+            segments.append(segment)
+            video = None
+        if segments:
+            from camgen.io.video import join_videos
+
+            with clock("io.video"):
+                join_videos([spool_dir / name for name in segments], directory / "video.mp4", **video_settings)
             result.files.append(directory / "video.mp4")
         if radiance_files is not None and result.frames:
             result.files.append(radiance_files.close())
@@ -407,20 +850,27 @@ def _execute_camera(context: _Context, indices, resolve_path, save_passes, on_fr
                     result.files.append(sequence.write_coco(directory / "coco.json"))
                 if "yolo" in formats:
                     result.files.append(sequence.write_yolo_data(directory))
+        for spool in spools.values():
+            spool.close()
+        for name in segments:
+            (spool_dir / name).unlink()
+        if spool_dir.is_dir():
+            spool_dir.rmdir()
+        # Kept in the finished folder until the job's manifest: a stop before it resumes without this camera.
+        _write_checkpoint(directory, context.identity, indices, result, pipeline=pipeline)
         clock.end_frame()
         result.stage_frames, result.finish_s = clock.frames[:-1], clock.frames[-1]
         result.frame_wall_s = clock.frame_wall_s[:-1]
     except BaseException:
+        # The folder is deleted (`discard_unfinished`) or, for a render that resumes, kept with its spools
+        # and the segments up to its last checkpoint; the segment being written is never finished.
         if video is not None:
             video.abort()
+        for spool in spools.values():
+            spool.close(keep=True)
         raise
     finally:
         camera_renderer.close()
-        metadata.close()
-        if sequence is not None:
-            sequence.close()
-        if spool_dir.is_dir():
-            spool_dir.rmdir()
     result.total_s = time.perf_counter() - started
     return result
 
