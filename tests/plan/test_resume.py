@@ -180,6 +180,28 @@ def test_a_checkpoint_it_cannot_use_is_discarded(job, renderer, reference, stopp
     assert_same_files(out / job_directory_name(job), reference)
 
 
+def test_a_camera_finished_before_the_stop_is_kept(workspace, renderer, tmp_path):
+    """Two cameras, stopped in the second: the first, finished and renamed, keeps its checkpoint until the
+    job's manifest, and the resume takes it over without rendering it again."""
+    second = "\n  - name: side\n    profile: fixed\n    mount: {position_m: [2, -4, 3], yaw_deg: 100, pitch_deg: -25}\n"
+    scene = write(workspace, "scenes/two.yaml", WALK_SCENE.rstrip("\n") + second)
+    job = compile_scene(load_scene(scene), PlanSettings(auto_exposure_start="profile"))
+    render(job, tmp_path / "reference", renderer)
+    out = tmp_path / "out"
+    stopped = {"cam": None, "side": STOP_AFTER_INDEX}
+    with pytest.raises(StopError):
+        render(
+            job, out, renderer, resume=True, on_frame=lambda camera, index: stop_after(stopped[camera])(camera, index)
+        )
+    job_dir = out / job_directory_name(job)
+    assert read_checkpoint(job_dir / "cam" / CHECKPOINT_NAME).complete
+    resumed = []
+    results = render(job, out, renderer, resume=True, on_resume=lambda *a: resumed.append(a))
+    assert resumed == [("cam", FRAMES, FRAMES), ("side", 3, FRAMES)]
+    assert [(r.name, r.resumed_frames, len(r.stage_frames)) for r in results] == [("cam", 8, 0), ("side", 3, 5)]
+    assert_same_files(job_dir, tmp_path / "reference" / job_directory_name(job))
+
+
 def test_without_resume_a_stopped_render_leaves_nothing(job, renderer, tmp_path):
     with pytest.raises(StopError):
         render(job, tmp_path, renderer, on_frame=stop_after(STOP_AFTER_INDEX))
@@ -234,6 +256,8 @@ def test_a_line_spool_resumes_from_its_mark(tmp_path):
     (tmp_path / "short").write_text("a\n")
     with pytest.raises(ValueError, match="shorter than the 4 bytes of its checkpoint"):
         LineSpool(tmp_path / "short").resume(2, 4)
+    with pytest.raises(ValueError, match="a mark of -1 lines"):
+        LineSpool(tmp_path / "short").resume(-1, 2)
     (tmp_path / "other").write_text("a b\n")
     with pytest.raises(ValueError, match="hold 1 lines, its checkpoint says 2"):
         LineSpool(tmp_path / "other").resume(2, 4)

@@ -155,6 +155,8 @@ class LineSpool:
             raise ValueError("a spool kept in memory has no file to resume; give LineSpool a path")
         if self._handle is not None or self._count:
             raise ValueError(f"{self.path}: resume a spool before appending to it")
+        if lines < 0 or size_bytes < 0:
+            raise ValueError(f"{self.path}: a mark of {lines} lines in {size_bytes} bytes")
         if size_bytes == 0:
             if lines:
                 raise ValueError(f"{self.path}: a mark of {lines} lines in 0 bytes")
@@ -169,6 +171,8 @@ class LineSpool:
             remaining = size_bytes
             while remaining:
                 chunk = handle.read(min(remaining, 1 << 20))
+                if not chunk:
+                    break  # the file shrank while read: the count below tells
                 newlines += chunk.count(b"\n")
                 remaining -= len(chunk)
                 last = chunk[-1:]

@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, NonNegativeInt, ValidationError
 
 import camgen
 from camgen.annotate.detection import detect_people, hog_detector
@@ -355,7 +355,7 @@ class Checkpoint(BaseModel):
     pipeline: dict | None = None
     """`CameraPipeline.carried_state`, or None for a camera without one."""
     radiance: RadianceState | None = None
-    spools: dict[str, tuple[int, int]] = Field(default_factory=dict)
+    spools: dict[str, tuple[NonNegativeInt, NonNegativeInt]] = Field(default_factory=dict)
     """Line spool name → (lines, bytes) of its file (`LineSpool.mark`)."""
     video_segments: list[str] = Field(default_factory=list)
     """Video segments written so far, in order, under ``.spool/``."""
