@@ -6,7 +6,7 @@ five-spoke alloys, and an LED destination display over the windscreen.
   `STUD_COUNT` nuts on ISO 4107's 335 mm circle.
 - The display: its lit dots read back as the matrix of the bus's route and destination (dot by dot), lie
   on the front end above the windscreen's glass within the display's size, and in a scene without
-  light (0.001 lux) it is the only thing the bus shows, amber at the display's luminance (OpenGL).
+  light (0.001 lux) it is the only thing the bus shows, amber at the display's night luminance (OpenGL).
 """
 
 from __future__ import annotations
@@ -32,7 +32,14 @@ from camgen.vehicles.body import (
     wheel_meshes,
 )
 from camgen.vehicles.look import draw_look
-from camgen.vehicles.sign import MATRIX_COLUMNS, MATRIX_ROWS, SIGN_SIZE_M, destination_text, matrix
+from camgen.vehicles.sign import (
+    MATRIX_COLUMNS,
+    MATRIX_ROWS,
+    SIGN_SIZE_M,
+    destination_text,
+    display_luminance_cd_m2,
+    matrix,
+)
 
 GRID_PX = 400
 
@@ -102,7 +109,7 @@ def test_the_display_shows_the_route_and_destination_over_the_windscreen():
 def test_the_display_shines_amber_in_the_dark(renderer):
     from camgen.render.renderer import View
     from camgen.render.scene_graph import build_scene_graph
-    from camgen.vehicles import LAMP_COLOUR_RGB, LAMP_LUMINANCE_CD_M2
+    from camgen.vehicles import LAMP_COLOUR_RGB
     from tests.render.conftest import camera_matrix, look_at, scene_from
 
     scene = scene_from(
@@ -117,7 +124,8 @@ def test_the_display_shines_amber_in_the_dark(renderer):
     T = look_at(sign + 8.0 * T_vehicle[:3, 0], sign)  # 8 m ahead of the bus, facing its front
     passes = renderer.draw(graph, View(camera_matrix(300.0, 300.0, 79.5, 59.5), T, 160, 120), ("radiance",))
     lit = passes.radiance.max(axis=2) > 1.0
-    expected = LAMP_LUMINANCE_CD_M2["destination"] * np.asarray(LAMP_COLOUR_RGB["destination"])
+    # In the dark the display dims to its night level (`camgen.vehicles.sign.display_luminance_cd_m2`).
+    expected = display_luminance_cd_m2(0.001) * np.asarray(LAMP_COLOUR_RGB["destination"])
     # The brightest pixels are whole dots: the display's emission, amber (red over green, no blue).
     brightest = passes.radiance[passes.radiance[..., 0] >= 0.99 * passes.radiance[..., 0].max()]
     np.testing.assert_allclose(np.median(brightest, axis=0), expected, rtol=0.02, atol=0.01)

@@ -64,8 +64,9 @@ from camgen.props.sway import SWAYING_TYPES, PropSway, bendable, prop_sway, wind
 from camgen.render.gl import pyrender
 from camgen.render.mipmaps import MipmappedTexture
 from camgen.vehicles import LAMP_COLOUR_RGB, LAMP_LUMINANCE_CD_M2, VehicleRig, plate_texture, vehicle_rigs
+from camgen.vehicles.sign import display_luminance_cd_m2
 from camgen.world.ies import flux_lm as ies_flux_lm
-from camgen.world.ies import intensity_grid_cd
+from camgen.world.ies import grid_intensity_cd, intensity_grid_cd
 from camgen.world.night import SPOT_FULL_INTENSITY_FRACTION, peak_intensity_cd
 from camgen.world.rain import WET_ALBEDO_FACTOR, WET_ROUGHNESS_FACTOR
 from camgen.world.site import SiteDaylight, daylight_change, site_daylight
@@ -303,7 +304,7 @@ class SceneGraph:
             if rig is None and vehicle is None:
                 self.scene.set_pose(node, actor_pose(route, time_s) @ local)
             elif vehicle is not None and vehicle.place(time_s):
-                _pose_vehicle_mesh(node, vehicle, self.deformed)
+                _pose_vehicle_mesh(node, vehicle, self.deformed, sign_luminance_cd_m2(self.scene, vehicle))
                 self.scene.set_pose(node, np.eye(4))
         self.crowd.place(time_s)
         for node, rig in zip(self.actor_nodes, self.people, strict=True):
@@ -576,26 +577,74 @@ VEHICLE_SURFACES = {
 """Base colour (linear, alpha), metallic and roughness of a vehicle's surfaces other than its paint:
 the running gear (tyres, rims, plate backings) takes its colours per vertex and one compromise between
 rubber (dielectric, roughness ≈ 0.9) and alloy (metallic, ≈ 0.35), so that it is one draw; unlit lamps
-show their lens colour (clear, red, amber) and emit `camgen.vehicles.LAMP_LUMINANCE_CD_M2` when lit."""
+show their lens colour (clear, red, amber) and emit `camgen.vehicles.LAMP_LUMINANCE_CD_M2` when lit (a bus's
+destination display its `sign_luminance_cd_m2`)."""
 
 
 def _lamp(surface: str) -> str | None:
     """The lamp a surface is (head, tail, brake, indicator_left, indicator_right, a bicycle's cycle_head and
-    cycle_tail), or None."""
-    return surface if surface in LAMP_LUMINANCE_CD_M2 or surface.startswith("indicator") else None
+    cycle_tail, a bus's destination display), or None."""
+    return surface if surface in LAMP_COLOUR_RGB or surface.startswith("indicator") else None
 
 
-def _lamp_emission(surface: str, lit: bool) -> tuple[float, float, float]:
+def _lamp_emission(surface: str, lit: bool, sign_cd_m2: float) -> tuple[float, float, float]:
     if not lit:
         return (0.0, 0.0, 0.0)
     kind = "indicator" if surface.startswith("indicator") else surface
-    luminance = LAMP_LUMINANCE_CD_M2[kind]
+    luminance = sign_cd_m2 if kind == "destination" else LAMP_LUMINANCE_CD_M2[kind]
     return tuple(luminance * c for c in LAMP_COLOUR_RGB[kind])
 
 
-def vehicle_mesh(rig: VehicleRig) -> pyrender.Mesh:
+def horizontal_illuminance_lux(scene: pyrender.Scene, point_m: np.ndarray) -> float:
+    """Illuminance of an upward-facing surface at `point_m` from `scene`'s lights as they are set now, lux, in
+    photometric units (each light's colour weighted Y = 0.2126 R + 0.7152 G + 0.0722 B), nothing shadowed: the
+    ambient light's π·ambient_light (its E), each directional light's E·sin(elevation), and each point and
+    spot light's I(θ)·cos(incidence)/d² (a spot's I(θ) the renderer's cone, `camgen.world.night`, or an IES
+    lamp's table, `camgen.world.ies`)."""
+    weights = np.array([0.2126, 0.7152, 0.0722])
+    total = math.pi * float(weights @ np.asarray(scene.ambient_light, dtype=np.float64))
+    point = np.asarray(point_m, dtype=np.float64)
+    for node in scene.light_nodes:
+        light, pose = node.light, scene.get_pose(node)
+        power = light.intensity * float(weights @ np.asarray(light.color, dtype=np.float64))
+        if isinstance(light, pyrender.DirectionalLight):
+            total += power * max(0.0, float(pose[2, 2]))  # the light travels along the node's −z
+            continue
+        towards = pose[:3, 3] - point
+        distance_m = float(np.linalg.norm(towards))
+        if distance_m < 1e-6 or towards[2] <= 0.0:
+            continue
+        towards /= distance_m
+        if isinstance(light, pyrender.SpotLight):
+            profile = getattr(light, "intensity_profile", None)
+            if profile is not None:
+                c0, c90, axis = profile.axes(pose) @ -towards
+                power *= float(
+                    grid_intensity_cd(
+                        profile.relative,
+                        math.degrees(math.acos(np.clip(axis, -1.0, 1.0))),
+                        math.degrees(math.atan2(c90, c0)),
+                    )
+                )
+            else:
+                cos_i, cos_o = math.cos(light.innerConeAngle), math.cos(light.outerConeAngle)
+                share = min(1.0, max(0.0, (float(-towards @ -pose[:3, 2]) - cos_o) / max(cos_i - cos_o, 1e-9)))
+                power *= share * share
+        total += power * towards[2] / distance_m**2
+    return total
+
+
+def sign_luminance_cd_m2(scene: pyrender.Scene, rig: VehicleRig) -> float:
+    """Luminance of `rig`'s destination display under `scene`'s lights now (`camgen.vehicles.sign`:
+    `display_luminance_cd_m2` of the horizontal illuminance at its middle), cd/m²; 0 without a display."""
+    centre = rig.sign_centre_m
+    return 0.0 if centre is None else float(display_luminance_cd_m2(horizontal_illuminance_lux(scene, centre)))
+
+
+def vehicle_mesh(rig: VehicleRig, sign_cd_m2: float) -> pyrender.Mesh:
     """A procedural vehicle as one primitive per part (paint, glass, running gear, each lamp, plates),
-    posed in world coordinates; `SceneGraph.place_actors` moves it and lights its lamps."""
+    posed in world coordinates, its destination display (if any) at `sign_cd_m2`; `SceneGraph.place_actors`
+    moves it and lights its lamps."""
     paint = rig.look.paint
     primitives = []
     for part, piece in zip(rig.model.parts, rig.parts, strict=True):
@@ -623,7 +672,7 @@ def vehicle_mesh(rig: VehicleRig) -> pyrender.Mesh:
             )
         lamp = _lamp(part.surface)
         if lamp is not None:
-            material.emissiveFactor = _lamp_emission(lamp, rig.lit.get(lamp, False))
+            material.emissiveFactor = _lamp_emission(lamp, rig.lit.get(lamp, False), sign_cd_m2)
         primitives.append(
             pyrender.Primitive(
                 positions=rig.vertices_m[piece],
@@ -637,15 +686,16 @@ def vehicle_mesh(rig: VehicleRig) -> pyrender.Mesh:
     return pyrender.Mesh(primitives=primitives)
 
 
-def _pose_vehicle_mesh(node: pyrender.Node, rig: VehicleRig, deformed: set) -> None:
-    """Copy a placed vehicle's vertices into its primitives and light its lamps."""
+def _pose_vehicle_mesh(node: pyrender.Node, rig: VehicleRig, deformed: set, sign_cd_m2: float) -> None:
+    """Copy a placed vehicle's vertices into its primitives and light its lamps (its destination display at
+    `sign_cd_m2`)."""
     for primitive, part, piece in zip(node.mesh.primitives, rig.model.parts, rig.parts, strict=True):
         primitive.positions = rig.vertices_m[piece]
         primitive.normals = rig.normals[piece]
         deformed.add(primitive)
         lamp = _lamp(part.surface)
         if lamp is not None:
-            primitive.material.emissiveFactor = _lamp_emission(lamp, rig.lit.get(lamp, False))
+            primitive.material.emissiveFactor = _lamp_emission(lamp, rig.lit.get(lamp, False), sign_cd_m2)
     node.mesh._bounds = None  # pyrender caches a mesh's bounds
 
 
@@ -911,7 +961,8 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
             continue
         if is_procedural_vehicle(actor):
             vehicle = vehicle_by_name[actor.name]
-            actor_nodes.append(graph.add(vehicle_mesh(vehicle), name=f"actor:{actor.name}"))
+            mesh = vehicle_mesh(vehicle, sign_luminance_cd_m2(graph, vehicle))
+            actor_nodes.append(graph.add(mesh, name=f"actor:{actor.name}"))
             local_poses.append(np.eye(4))
             people.append(None)
             vehicles.append(vehicle)

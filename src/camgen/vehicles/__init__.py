@@ -54,7 +54,6 @@ LAMP_LUMINANCE_CD_M2 = {
     "indicator": 4_000.0,
     "cycle_head": 7_500.0,
     "cycle_tail": 2_500.0,
-    "destination": 2_000.0,
 }
 """Luminance of a lit lamp's lens as a camera off its axis sees it, cd/m²: a low beam's 10–20 kcd
 peak (UN ECE R112) falls to a few hundred cd away from the beam over its ~0.02 m² lens; a rear
@@ -63,9 +62,8 @@ R6) over 0.02–0.04 m². A bicycle's lamps (the Road Vehicles Lighting Regulati
 2005: a white front and a red rear lamp when ridden between sunset and sunrise, a flashing one of at
 least 4 cd): about 10 cd over the front lamp's 13.5 cm² lens and 4 cd over the rear lamp's 17.5 cm²
 (estimates at the regulations' minimum; LED cycle lamps are often brighter on their axis). A bus's LED
-destination display (`camgen.vehicles.sign`): its lit dots about 2,000 cd/m² (an estimate: such signs dim
-with the ambient light, and must be read by day behind the windscreen's glass; EN 12966's classes for
-roadside variable-message signs ask 3,100–12,400 cd/m² in direct sun)."""
+destination display has no fixed luminance: it dims with the illuminance at the bus
+(`camgen.vehicles.sign.display_luminance_cd_m2`)."""
 LAMP_COLOUR_RGB = {
     "head": (1.0, 1.0, 1.0),
     "tail": (4.7, 0.0, 0.0),
@@ -169,7 +167,8 @@ class VehicleRig:
         self._rest_normals = np.concatenate([part.normals for part in model.parts])
         self._wheel = np.concatenate([part.wheel for part in model.parts]).astype(np.int64)
         self._state: tuple | None = None
-        self._has_sign = any(part.surface == "destination" for part in model.parts)
+        signs = [piece for part, piece in zip(model.parts, self.parts, strict=True) if part.surface == "destination"]
+        self._sign = signs[0] if signs else None
         self._boxed = np.concatenate([np.full(len(part.vertices_m), part.surface != "shade") for part in model.parts])
         self.lit: dict[str, bool] = {}
         self.place(0.0)
@@ -239,8 +238,17 @@ class VehicleRig:
             "brake": standing is not None and math.isfinite(standing[1]),
             "indicator_left": bool(steer > INDICATOR_STEER_RAD and flash),
             "indicator_right": bool(steer < -INDICATOR_STEER_RAD and flash),
-            "destination": self._has_sign,  # a bus in service shows its route (`camgen.vehicles.sign`)
+            "destination": self._sign is not None,  # a bus in service shows its route (`camgen.vehicles.sign`)
         }
+
+    @property
+    def sign_centre_m(self) -> np.ndarray | None:
+        """(3,) world point in the middle of the posed destination display's lit dots, m (where its light
+        sensor reads the ambient light, `camgen.vehicles.sign.display_luminance_cd_m2`); None without one."""
+        if self._sign is None:
+            return None
+        dots = self.vertices_m[self._sign]
+        return (dots.min(axis=0) + dots.max(axis=0)) / 2
 
     @property
     def box_vertices_m(self) -> np.ndarray:

@@ -13,6 +13,25 @@ seed (not from its look's generator, whose draws stay as they were).
 
 The lit dots are the `lit_runs` of `matrix`: each row's runs of lit dots, so that a vehicle part draws one
 quad per run.
+
+Luminance (`display_luminance_cd_m2`): an LED display is driven from an ambient light sensor, bright enough
+to be read in sunshine and dimmed at night so as not to glare. EN 12966 (road variable-message signs; EN
+12966-1:2005+A1:2009, EN 12966:2014+A1:2018 §4.4.3) classes the luminance a sign must reach under external
+illumination, L1–L3 asking 3,100–12,400 cd/m² of a white sign under the 40,000 lx of direct sun, but
+leaves "the control of the luminance of luminous signs with respect to the ambient light" out of its scope
+(the standard's abstract); that curve is the maker's. Hanover Displays' DG3 bus-sign controller sets its
+exterior displays' brightness as a share of their maximum (Installation and Operation Manual 540846-3,
+2015: configuration code BL), Microgate's LED boards set 1–100 % from their light sensor (MicroGraph LED
+user manual §1.9), and a municipal LED sign dims from 95 % on a sunny day to 5 % at night (appenzell24.ch,
+Lutzenberg's entry sign, a 1:19 range); Mobitec's and Luminator's public pages found here give no figures.
+At night, Luginbuhl et al. (2010, "Digital LED billboard luminance recommendations", US Naval Observatory
+Flagstaff) ask no more than 100 cd/m² of a sign seen by drivers adapted to about 1 cd/m² of lit road.
+So, estimates on those figures: `DISPLAY_DAY_CD_M2` (EN 12966's L1 under direct sun) from
+`DISPLAY_DAY_LUX` up, `DISPLAY_NIGHT_CD_M2` (half of Luginbuhl's ceiling) at night, and between them
+L = L_day·√(E / E_day), the square root spanning the 1:62 range over the 10.4–40,000 lx from a lit street
+to direct sun (a sensor's curve is a maker's setting; the square root is an estimate, not a published
+law). E is the horizontal illuminance at the display (the renderer's sun, sky and lamps there,
+`camgen.render.scene_graph.horizontal_illuminance_lux`).
 """
 
 from __future__ import annotations
@@ -34,6 +53,13 @@ DESTINATIONS = (
     "HARBOUR",
     "PARK & RIDE",
 )
+DISPLAY_DAY_CD_M2 = 3_100.0
+"""Luminance of the lit dots in sunshine, cd/m²: EN 12966's class L1 under 40,000 lx (an estimate for a bus's
+display; see the module's docstring)."""
+DISPLAY_DAY_LUX = 40_000.0
+"""Horizontal illuminance from which the display shines at `DISPLAY_DAY_CD_M2`, lux (EN 12966's direct sun)."""
+DISPLAY_NIGHT_CD_M2 = 50.0
+"""Luminance of the lit dots at night, cd/m² (an estimate: half of Luginbuhl et al. 2010's 100 cd/m² ceiling)."""
 SIGN_SPAWN_KEY = 0x7369_676E
 """Spawn key of the display's text from the vehicle's identity seed (ASCII "sign")."""
 
@@ -75,3 +101,14 @@ def lit_runs(dots: np.ndarray) -> np.ndarray:
     rows, starts = np.nonzero(edges == 1)
     _, stops = np.nonzero(edges == -1)
     return np.stack([rows, starts, stops], axis=1)
+
+
+def display_luminance_cd_m2(illuminance_lux: np.ndarray | float) -> np.ndarray:
+    """Luminance of the display's lit dots under a horizontal illuminance `illuminance_lux` (any shape), cd/m²:
+
+        L = clip(L_day·√(E / E_day), L_night, L_day)
+
+    with L_day = `DISPLAY_DAY_CD_M2`, E_day = `DISPLAY_DAY_LUX`, L_night = `DISPLAY_NIGHT_CD_M2` (the floor
+    holds below E_day·(L_night / L_day)² ≈ 10.4 lx). See the module's docstring for the figures; NaN stays NaN."""
+    illuminance = np.maximum(np.asarray(illuminance_lux, dtype=np.float64), 0.0)
+    return np.clip(DISPLAY_DAY_CD_M2 * np.sqrt(illuminance / DISPLAY_DAY_LUX), DISPLAY_NIGHT_CD_M2, DISPLAY_DAY_CD_M2)
