@@ -202,6 +202,24 @@ def test_a_camera_finished_before_the_stop_is_kept(workspace, renderer, tmp_path
     assert_same_files(job_dir, tmp_path / "reference" / job_directory_name(job))
 
 
+def test_a_camera_stopped_before_its_folder_was_renamed_is_taken_over(job, renderer, reference, monkeypatch, tmp_path):
+    """Stopped after the camera's last checkpoint (a finished camera's), before ``cam.partial`` became
+    ``cam``: the resume renames it and renders nothing."""
+    execute_camera = camgen.plan.execute._execute_camera
+
+    def stopped_after(*args):
+        execute_camera(*args)
+        raise StopError
+
+    with monkeypatch.context() as patch, pytest.raises(StopError):
+        patch.setattr(camgen.plan.execute, "_execute_camera", stopped_after)
+        render(job, tmp_path, renderer, resume=True)
+    resumed = []
+    (result,) = render(job, tmp_path, renderer, resume=True, on_resume=lambda *a: resumed.append(a))
+    assert resumed == [("cam", FRAMES, FRAMES)] and result.stage_frames == []
+    assert_same_files(tmp_path / job_directory_name(job), reference)
+
+
 def test_without_resume_a_stopped_render_leaves_nothing(job, renderer, tmp_path):
     with pytest.raises(StopError):
         render(job, tmp_path, renderer, on_frame=stop_after(STOP_AFTER_INDEX))

@@ -483,14 +483,20 @@ def _checkpoint_to_resume(job_dir: Path, camera: str, identity: dict, note: Call
             note(f"{camera}: cannot resume from {shown}: {error}; {fresh}")
             continue
         reason = _mismatch(checkpoint, identity)
-        if reason is None and checkpoint.complete != complete:
-            reason = "it " + ("is not" if complete else "is") + " the checkpoint of a finished camera"
-        if reason is None and complete:
+        if reason is None and complete and not checkpoint.complete:
+            reason = "it is not the checkpoint of a finished camera"
+        if reason is None and checkpoint.complete:
             missing = next((name for name in checkpoint.files or () if not (directory / name).is_file()), None)
             reason = None if missing is None else f"it lists {missing}, which is missing"
         if reason is not None:
             note(f"{camera}: discarding {shown}: {reason}; {fresh}")
             continue
+        if checkpoint.complete and not complete:
+            # Stopped after the camera's last checkpoint, before its folder was renamed: rename it now.
+            final = job_dir / camera
+            if final.is_dir():
+                shutil.rmtree(final)
+            directory.replace(final)
         return checkpoint
     return None
 
