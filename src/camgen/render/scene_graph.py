@@ -551,12 +551,12 @@ class ShadeMaterial(pyrender.MetallicRoughnessMaterial):
     unlabelled = True
 
 
-GLASS_RGB = (0.012, 0.014, 0.016)
-"""Glass's reflection of the diffuse sky at normal incidence as an albedo (its Fresnel reflectance of
-about 4 % over a sky that fills about a third of a window's view): a near-black base, glossy (roughness
-0.05), so the sun's and the sky's specular reflections carry its look; the renderer raises the sky's
-reflection with the Fresnel factor towards grazing views and lets the transmitted cabin through
-(`camgen.vehicles.cabin`, the shader's `transmissive` path)."""
+GLASS_RGB = (0.005, 0.0055, 0.006)
+"""Glass's own diffuse share as an albedo (a faint tint and road film; clean float glass scatters well under 1 %):
+a near-black base, glossy (roughness 0.05). Its look is its mirror reflection, added by the shader (the
+`transmissive` path): Schlick's Fresnel factor of the view angle (4 % at normal incidence) times the sky or the
+lit ground along the reflected ray, as the paint's clear coat mirrors them, and the sun's specular highlight;
+the transmitted cabin shows through (`camgen.vehicles.cabin`)."""
 CABIN_ROUGHNESS = 0.8
 """The cabin's lining and its driver: rough dielectrics (fabric, plastics, skin)."""
 VEHICLE_SURFACES = {

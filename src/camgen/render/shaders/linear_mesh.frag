@@ -431,18 +431,25 @@ const float CLEARCOAT_F0 = 0.04;
 // 2002); 0.15 for a mix of road and pavement.
 const float CLEARCOAT_GROUND_ALBEDO = 0.15;
 
-vec3 clearcoat_ambient(vec3 n, vec3 diffuse_ambient)
+// The environment a smooth dielectric mirrors along the reflected ray `r`: the sky's radiance above the
+// horizon, the lit ground's below (see clearcoat_ambient).
+vec3 mirrored_environment(vec3 r)
 {
-    vec3 v = normalize(cam_pos - frag_position);
-    float f_coat = CLEARCOAT_F0 + (1.0 - CLEARCOAT_F0) * pow(1.0 - clamp(dot(n, v), 0.0, 1.0), 5.0);
-    float sky_share = clamp(0.5 + 2.5 * reflect(-v, n).z, 0.0, 1.0);
+    float sky_share = clamp(0.5 + 2.5 * r.z, 0.0, 1.0);
     vec3 ground_irradiance = PI * ambient_light;
     for (int i = 0; i < n_directional_lights; i++) {
         ground_irradiance += directional_lights[i].intensity * directional_lights[i].color
             * max(-directional_lights[i].direction.z, 0.0);
     }
     vec3 ground = CLEARCOAT_GROUND_ALBEDO * ground_irradiance / PI;
-    return (1.0 - f_coat) * diffuse_ambient + f_coat * mix(ground, ambient_light, sky_share);
+    return mix(ground, ambient_light, sky_share);
+}
+
+vec3 clearcoat_ambient(vec3 n, vec3 diffuse_ambient)
+{
+    vec3 v = normalize(cam_pos - frag_position);
+    float f_coat = CLEARCOAT_F0 + (1.0 - CLEARCOAT_F0) * pow(1.0 - clamp(dot(n, v), 0.0, 1.0), 5.0);
+    return (1.0 - f_coat) * diffuse_ambient + f_coat * mirrored_environment(reflect(-v, n));
 }
 
 ///////////////////////////////////////////////////////////////////////////////
@@ -589,7 +596,7 @@ void main()
     }
     if (clearcoat != 0) {
         color.xyz += clearcoat_ambient(n, base_color.xyz * ambient_light);
-    } else {
+    } else if (transmissive == 0) {
         color.xyz += base_color.xyz * ambient_light;
     }
 
@@ -618,13 +625,15 @@ void main()
     float out_alpha = 1.0;
     if (transmissive != 0) {
         // camgen glass, blended as a * colour + (1 - a) * behind: the reflection R plus the transmitted
-        // T (1 - F) of what lies behind, F Schlick's Fresnel reflectance at the view angle. The sky's
-        // reflection (the ambient term, the base colour's share at normal incidence) grows with F where
-        // the reflected ray goes up to the sky; a window seen from above reflects the darker ground.
+        // T (1 - F) of what lies behind, F Schlick's Fresnel reflectance at the view angle. Its ambient
+        // reflection is F times the environment along the reflected ray (mirrored_environment, as the
+        // paint's clear coat): the sky where the ray goes up (a windscreen or rear window seen from above
+        // mirrors the sky, as real ones do), the lit ground where it goes down. The base colour is the
+        // glass's own diffuse share (its tint and dirt), lit by the ambient light like any surface.
         vec3 v_glass = normalize(cam_pos - frag_position);
-        float f_view = min_roughness + (1.0 - min_roughness) * pow(1.0 - clamp(abs(dot(n, v_glass)), 0.0, 1.0), 5.0);
-        float sky_share = clamp(0.5 + 2.5 * reflect(-v_glass, n).z, 0.0, 1.0);
-        color.xyz += base_color.xyz * ambient_light * (f_view / min_roughness - 1.0) * sky_share;
+        vec3 n_glass = dot(n, v_glass) < 0.0 ? -n : n;  // the inner panes face into the cabin
+        float f_view = min_roughness + (1.0 - min_roughness) * pow(1.0 - clamp(dot(n_glass, v_glass), 0.0, 1.0), 5.0);
+        color.xyz += base_color.xyz * ambient_light + f_view * mirrored_environment(reflect(-v_glass, n_glass));
         out_alpha = 1.0 - (1.0 - base_color.a) * (1.0 - f_view);
         color.xyz /= out_alpha;
     }
