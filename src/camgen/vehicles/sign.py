@@ -17,11 +17,12 @@ quad per run.
 Luminance (`display_luminance_cd_m2`): an LED display is driven from an ambient light sensor, bright enough
 to be read in sunshine and dimmed at night so as not to glare. EN 12966 (road variable-message signs; EN
 12966-1:2005+A1:2009, EN 12966:2014+A1:2018 §4.4.3) classes the luminance a sign must reach under external
-illumination, L1–L3 asking 3,100–12,400 cd/m² of a white sign under the 40,000 lx of direct sun, but
-leaves "the control of the luminance of luminous signs with respect to the ambient light" out of its scope
-(the standard's abstract); that curve is the maker's. Hanover Displays' DG3 bus-sign controller sets its
-exterior displays' brightness as a share of their maximum (Installation and Operation Manual 540846-3,
-2015: configuration code BL), Microgate's LED boards set 1–100 % from their light sensor (MicroGraph LED
+illumination, L1–L3 asking 3,100–12,400 cd/m² of a white sign under the 40,000 lx of direct sun (the
+table's figures as camgen cited them before; the table itself was not at hand for this model), but leaves
+"the control of the luminance of luminous signs with respect to the ambient light" out of its scope (the
+standard's abstract); that curve is the maker's. Hanover Displays' DG3 bus-sign controller states its
+exterior displays' brightness limit as a share of their maximum (Installation and Operation Manual
+540846-3, 2015: configuration code BL), Microgate's LED boards set 1–100 % from their light sensor (MicroGraph LED
 user manual §1.9), and a municipal LED sign dims from 95 % on a sunny day to 5 % at night (appenzell24.ch,
 Lutzenberg's entry sign, a 1:19 range); Mobitec's and Luminator's public pages found here give no figures.
 At night, Luginbuhl et al. (2010, "Digital LED billboard luminance recommendations", US Naval Observatory
