@@ -27,7 +27,14 @@ from camgen.io.annotations import LineSpool
 from camgen.io.manifest import verify
 from camgen.job import Job
 from camgen.plan import PlanSettings, compile_scene
-from camgen.plan.execute import CHECKPOINT_NAME, PARTIAL_SUFFIX, execute, job_directory_name, read_checkpoint
+from camgen.plan.execute import (
+    CHECKPOINT_NAME,
+    PARTIAL_SUFFIX,
+    checkpoint_interval,
+    execute,
+    job_directory_name,
+    read_checkpoint,
+)
 from tests.conftest import FIXED_PROFILE, SCENE, write
 
 pytestmark = pytest.mark.opengl
@@ -256,6 +263,15 @@ def test_the_cli_resumes_and_then_has_nothing_to_resume(workspace, monkeypatch, 
     assert main(arguments) == 0
     assert "nothing to resume" in capsys.readouterr().err
     assert files_of(job_dir) == finished
+
+
+def test_the_checkpoint_interval_is_whole_gops(job):
+    """Rounded up to a multiple of the codec's GOP (3 here) where an H.264/H.265 video is written, so a
+    segment starts where the stream has a key frame anyway; as asked where none is (MJPEG: every frame is one)."""
+    (camera,) = job.cameras
+    assert [checkpoint_interval(camera, frames) for frames in (1, 3, 4, 250)] == [3, 3, 6, 252]
+    mjpeg = camera.profile.model_copy(update={"codec": camera.profile.codec.model_copy(update={"name": "mjpeg"})})
+    assert checkpoint_interval(camera.model_copy(update={"profile": mjpeg}), 4) == 4
 
 
 def test_a_line_spool_resumes_from_its_mark(tmp_path):
