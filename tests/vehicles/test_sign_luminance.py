@@ -6,7 +6,7 @@
   E·sin(elevation) plus the sky's E; at night the skyglow plus a street lamp's I(θ)·cos θ / d², I from the
   lamp's flux and beam (`camgen.world.night`), both computed here from the scene's numbers; and it follows a
   bus driving out from under the lamp; under an IES lamp, its table (read with the file's own interpolation)
-  at the display's γ and C.
+  at the display's γ and C; and a bus standing through a dusk follows the site's daylight.
 - Rendered (OpenGL, 160×120), a bus's front over grey ground under a uniform sky of 2 lx (night) and 20,000 lx
   (day): the display's dots are its emission plus their amber base colour's E/π, and the ground ρ·E/π. Against
   the ground, the dots' contrast is 126 times higher at night than by day (630 against 5.0): with a fixed
@@ -18,6 +18,7 @@
 from __future__ import annotations
 
 import math
+from datetime import timedelta
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +31,7 @@ from camgen.vehicles.sign import DISPLAY_DAY_CD_M2, DISPLAY_DAY_LUX, DISPLAY_NIG
 from camgen.world.ies import flux_lm as ies_flux_lm
 from camgen.world.ies import intensity_grid_cd
 from camgen.world.night import beam_intensity_cd, peak_intensity_cd
+from camgen.world.site import site_daylight
 from tests.render.conftest import camera_matrix, look_at, scene_from
 
 AMBER = np.asarray(LAMP_COLOUR_RGB["destination"])
@@ -108,6 +110,35 @@ def test_the_scene_graph_lights_the_display_by_the_illuminance_at_it():
         seen.append(float(expected))
     # Under the lamp the display is above its night floor; driven on past the lamp's beam, back on it.
     assert seen[0] > 1.5 * DISPLAY_NIGHT_CD_M2 and seen[-1] == pytest.approx(DISPLAY_NIGHT_CD_M2)
+
+
+def test_a_standing_bus_dims_its_display_with_the_dusk():
+    site = {"latitude_deg": 53.55, "longitude_deg": 9.99, "time": "2026-10-15T17:45:00+02:00"}
+    graph = build_scene_graph(
+        scene_from(
+            duration_s=300.0,
+            environment={"site": site},
+            lights=[{"type": "sun"}, {"type": "ambient"}],  # the site's clear sky gives both
+            actors=[{**BUS, "path": {"waypoints_m": [[0, 0]]}}],
+        )
+    )
+    scene_site = graph.daylight.site
+    seen = []
+    for time_s in (0.0, 300.0):
+        graph.set_daylight(time_s)
+        graph.place_actors(time_s)
+        now = site_daylight(
+            scene_site.latitude_deg,
+            scene_site.longitude_deg,
+            scene_site.time + timedelta(seconds=time_s),
+            scene_site.north_deg,
+            graph.daylight.sky,
+        )
+        lux = now.sun_illuminance_lux * math.sin(math.radians(now.elevation_deg)) + now.sky_illuminance_lux
+        _, emission = _display(graph)
+        np.testing.assert_allclose(emission, display_luminance_cd_m2(lux) * AMBER, rtol=1e-4)
+        seen.append(emission[0])
+    assert seen[1] < 0.97 * seen[0]  # five minutes before sunset: 6,200 lx to 5,500
 
 
 def test_an_ies_lamp_lights_the_display_by_its_table():

@@ -306,6 +306,8 @@ class SceneGraph:
             elif vehicle is not None and vehicle.place(time_s):
                 _pose_vehicle_mesh(node, vehicle, self.deformed, sign_luminance_cd_m2(self.scene, vehicle))
                 self.scene.set_pose(node, np.eye(4))
+            elif vehicle is not None and self.daylight is not None and vehicle.sign_centre_m is not None:
+                _light_display(node, vehicle, sign_luminance_cd_m2(self.scene, vehicle))  # a standing bus at dusk
         self.crowd.place(time_s)
         for node, rig in zip(self.actor_nodes, self.people, strict=True):
             if rig is None:
@@ -697,6 +699,15 @@ def _pose_vehicle_mesh(node: pyrender.Node, rig: VehicleRig, deformed: set, sign
         if lamp is not None:
             primitive.material.emissiveFactor = _lamp_emission(lamp, rig.lit.get(lamp, False), sign_cd_m2)
     node.mesh._bounds = None  # pyrender caches a mesh's bounds
+
+
+def _light_display(node: pyrender.Node, rig: VehicleRig, sign_cd_m2: float) -> None:
+    """Light a vehicle's destination display at `sign_cd_m2` (the daylight moved, the vehicle did not)."""
+    for primitive, part in zip(node.mesh.primitives, rig.model.parts, strict=True):
+        if part.surface == "destination":
+            primitive.material.emissiveFactor = _lamp_emission(
+                part.surface, rig.lit.get(part.surface, False), sign_cd_m2
+            )
 
 
 def character_mesh(rig: CharacterRig, override: Material | None) -> pyrender.Mesh:
