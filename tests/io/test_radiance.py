@@ -15,7 +15,8 @@ from camgen.config import load_scene
 from camgen.io.radiance import HEADROOM, RadianceWriter, radiance_scale_cd_m2_per_dn, radiance_u16
 from camgen.plan import PlanSettings, compile_scene
 from camgen.plan.execute import execute
-from camgen.render.sequence import crop_to_output, render_camera
+from camgen.render.scene_graph import build_scene_graph
+from camgen.render.sequence import CameraRenderer, crop_to_output
 from tests.conftest import FIXED_PROFILE, SCENE, write
 
 
@@ -55,7 +56,21 @@ def test_rendered_radiance_files_hold_the_renderers_radiance(workspace, renderer
     stages = {s.name for s in camera.stages}
     assert "optics.remap" not in stages and "optics.vignetting" in stages  # no distortion: a crop
     (result,) = execute(job, workspace / "out", renderer=renderer)
-    expected = [crop_to_output(frame.passes.radiance, camera.render) for frame in render_camera(renderer, job, camera)]
+    # The frames as drawn at the exposures auto-exposure set (camera.jsonl): the walker's motion blur spans them.
+    used = [json.loads(line) for line in (result.directory / "camera.jsonl").read_text().splitlines()]
+    drawer = CameraRenderer(renderer, build_scene_graph(job.scene), camera)
+    try:
+        expected = [
+            crop_to_output(
+                drawer.frame(
+                    index, state.model_copy(update={"exposure_time_s": record["exposure_time_s"]})
+                ).passes.radiance,
+                camera.render,
+            )
+            for index, (state, record) in enumerate(zip(camera.states, used, strict=True))
+        ]
+    finally:
+        drawer.close()
     meta = json.loads((result.directory / "radiance" / "radiance.json").read_text(encoding="utf-8"))
     assert meta["unit"].startswith("cd/m²") and len(expected) == 2
     for index, radiance in enumerate(expected):
