@@ -227,6 +227,43 @@ def test_a_camera_stopped_before_its_folder_was_renamed_is_taken_over(job, rende
     assert_same_files(tmp_path / job_directory_name(job), reference)
 
 
+def test_a_render_stopped_while_its_manifest_is_written_keeps_its_cameras(
+    job, renderer, reference, monkeypatch, tmp_path
+):
+    """Stopped while the manifest hashes every file (a long render's last step): the finished cameras kept their
+    checkpoints, so the resume takes them over and renders nothing."""
+
+    def stopped(*args, **kwargs):
+        raise StopError
+
+    with monkeypatch.context() as patch, pytest.raises(StopError):
+        patch.setattr(camgen.plan.execute, "write_manifest", stopped)
+        render(job, tmp_path, renderer, resume=True)
+    resumed = []
+    (result,) = render(job, tmp_path, renderer, resume=True, on_resume=lambda *a: resumed.append(a))
+    assert resumed == [("cam", FRAMES, FRAMES)] and result.stage_frames == []
+    assert_same_files(tmp_path / job_directory_name(job), reference)
+
+
+def test_a_camera_stopped_as_it_clears_its_spools_is_taken_over(job, renderer, reference, monkeypatch, tmp_path):
+    """Stopped just after a camera's finished checkpoint, while its spools and video segments are deleted: the
+    resume takes the camera over (what is left of the spools goes) and renders nothing."""
+    close = camgen.plan.execute.LineSpool.close
+
+    def stopped(self, *args, **kwargs):
+        if not kwargs.get("keep") and not args:
+            raise StopError
+        return close(self, *args, **kwargs)
+
+    with monkeypatch.context() as patch, pytest.raises(StopError):
+        patch.setattr(camgen.plan.execute.LineSpool, "close", stopped)
+        render(job, tmp_path, renderer, resume=True)
+    resumed = []
+    (result,) = render(job, tmp_path, renderer, resume=True, on_resume=lambda *a: resumed.append(a))
+    assert resumed == [("cam", FRAMES, FRAMES)] and result.stage_frames == []
+    assert_same_files(tmp_path / job_directory_name(job), reference)
+
+
 def test_without_resume_a_stopped_render_leaves_nothing(job, renderer, tmp_path):
     with pytest.raises(StopError):
         render(job, tmp_path, renderer, on_frame=stop_after(STOP_AFTER_INDEX))

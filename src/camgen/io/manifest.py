@@ -32,7 +32,7 @@ from __future__ import annotations
 import hashlib
 import json
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING, Any, Literal
@@ -79,12 +79,19 @@ class FileProblem:
 
 
 def build_manifest(
-    job: Job, job_dir: str | Path, *, rendered: dict | None = None, on_progress: ProgressCallback | None = None
+    job: Job,
+    job_dir: str | Path,
+    *,
+    rendered: dict | None = None,
+    on_progress: ProgressCallback | None = None,
+    exclude: Collection[str] = (),
 ) -> dict[str, Any]:
     """The manifest of `job` rendered into `job_dir`: resolved configuration and every file's hash.
 
-    Every regular file under `job_dir` is listed, except ``manifest.json`` at its top. Deterministic:
-    the same job and the same file contents give an equal dict, and `manifest_text` of it the same bytes.
+    Every regular file under `job_dir` is listed, except ``manifest.json`` at its top and the relative POSIX
+    paths in `exclude` (files the writer deletes once the manifest is written: a render's checkpoints).
+    Deterministic: the same job and the same file contents give an equal dict, and `manifest_text` of it the
+    same bytes.
     """
     job_dir = Path(job_dir)
     config = job.model_dump(
@@ -101,7 +108,7 @@ def build_manifest(
             "cameras": {"__all__": {"name", "profile_name", "profile", "serial"}},
         },
     )
-    paths = _files_on_disk(job_dir)
+    paths = [name for name in _files_on_disk(job_dir) if name not in exclude]
     sizes = {name: (job_dir / name).stat().st_size for name in paths}
     progress = _Progress(sum(sizes.values()), on_progress)
     files = {}
@@ -122,15 +129,21 @@ def manifest_text(manifest: dict[str, Any]) -> str:
 
 
 def write_manifest(
-    job: Job, job_dir: str | Path, *, rendered: dict | None = None, on_progress: ProgressCallback | None = None
+    job: Job,
+    job_dir: str | Path,
+    *,
+    rendered: dict | None = None,
+    on_progress: ProgressCallback | None = None,
+    exclude: Collection[str] = (),
 ) -> Path:
     """Write ``job_dir/manifest.json`` atomically and return its path.
 
-    Call it last, after job.json: it hashes what is in `job_dir` now, and any file written after it
-    will read as modified or extra to `verify`.
+    Call it last, after job.json: it hashes what is in `job_dir` now (less `exclude`: `build_manifest`), and
+    any file written after it will read as modified or extra to `verify`.
     """
     path = Path(job_dir) / MANIFEST_NAME
-    write_text_atomic(path, manifest_text(build_manifest(job, job_dir, rendered=rendered, on_progress=on_progress)))
+    manifest = build_manifest(job, job_dir, rendered=rendered, on_progress=on_progress, exclude=exclude)
+    write_text_atomic(path, manifest_text(manifest))
     return path
 
 

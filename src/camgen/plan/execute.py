@@ -249,15 +249,17 @@ def execute(
                 result.directory = final
                 result.files = [final / path.relative_to(partial) for path in result.files]
                 results.append(result)
-        # The finished cameras kept their checkpoints (a stop before the manifest resumes without redoing
-        # them); they go now, so that the manifest lists only the outputs.
-        for result in results:
-            (result.directory / CHECKPOINT_NAME).unlink(missing_ok=True)
         # Written last: a job directory with job.json in it holds a finished render, of the cameras and
         # frames the manifest's `rendered` names (all of them unless --camera/--frames chose fewer).
         write_text_atomic(job_dir / "job.json", job.to_json())
         rendered = rendered_record([r.name for r in results], indices if frames is not None else None)
-        write_manifest(job, job_dir, rendered=rendered)  # after everything, job.json included
+        # The finished cameras keep their checkpoints until the manifest is written (a stop before it, while
+        # it hashes every file, resumes without redoing them); the manifest does not list them.
+        checkpoints = [result.directory / CHECKPOINT_NAME for result in results]
+        excluded = {path.relative_to(job_dir).as_posix() for path in checkpoints}
+        write_manifest(job, job_dir, rendered=rendered, exclude=excluded)  # after everything, job.json included
+        for path in checkpoints:
+            path.unlink(missing_ok=True)
     except BaseException:
         # Stopped anywhere before the manifest (an error, Ctrl-C, a batch worker's SIGTERM, even between
         # job.json and the manifest): nothing this render wrote stays, finished cameras included, so a job
@@ -502,7 +504,9 @@ def _checkpoint_to_resume(job_dir: Path, camera: str, identity: dict, note: Call
 
 
 def _finished_camera(directory: Path, checkpoint: Checkpoint) -> CameraResult:
-    """The result of a camera a stopped render had finished (its complete checkpoint)."""
+    """The result of a camera a stopped render had finished (its complete checkpoint); what is left of its spools
+    and video segments (a stop just after that checkpoint) is deleted."""
+    shutil.rmtree(directory / ".spool", ignore_errors=True)
     files = [directory / name for name in checkpoint.files or ()]
     return CameraResult(
         checkpoint.camera, directory, checkpoint.frames_done, files, resumed_frames=checkpoint.frames_done
@@ -856,14 +860,16 @@ def _execute_camera(
                     result.files.append(sequence.write_coco(directory / "coco.json"))
                 if "yolo" in formats:
                     result.files.append(sequence.write_yolo_data(directory))
+        # Kept in the finished folder until the job's manifest: a stop before it resumes without this camera.
+        # Written before the spools and segments go, so that a stop between the two leaves a checkpoint that
+        # holds (`_finished_camera` clears what is left of the spools).
+        _write_checkpoint(directory, context.identity, indices, result, pipeline=pipeline)
         for spool in spools.values():
             spool.close()
         for name in segments:
             (spool_dir / name).unlink()
         if spool_dir.is_dir():
             spool_dir.rmdir()
-        # Kept in the finished folder until the job's manifest: a stop before it resumes without this camera.
-        _write_checkpoint(directory, context.identity, indices, result, pipeline=pipeline)
         clock.end_frame()
         result.stage_frames, result.finish_s = clock.frames[:-1], clock.frames[-1]
         result.frame_wall_s = clock.frame_wall_s[:-1]
