@@ -148,8 +148,8 @@ def _actor_motion_px(
     exposure's start and at its end (`_path_positions`; a person's at the start's heading for both, for its
     body turns round a waypoint over a stride, `camgen.actors.gait`, not at once as its route does). Its
     points: the route's point and the box's 8 corners at ground and top height, and where each of its 12
-    edges crosses, at the start, the plane through the camera of the image's middle column (x = 0 in the
-    camera's frame) or of its middle row (y = 0): so a long vehicle near the camera whose corners and
+    edges crosses, at the start, the plane through the camera of the principal point's column (x = 0 in
+    the camera's frame) or of its row (y = 0): so a long vehicle near the camera whose corners and
     centre lie outside the image while its front or side crosses it counts too. A point counts where
     either end of its path lies in the image. (A box face that covers the whole image while every edge
     of it lies outside is not sampled.)
@@ -273,7 +273,7 @@ def _box_points_cam(T_cam_from_world: np.ndarray, xy_m: np.ndarray, heading_rad:
 def _box_shift_px(paths, K: np.ndarray, width_px: int, height_px: int) -> float:
     """Largest image displacement between the two ends of `paths` ([start, end] camera-frame (x, y, z), each
     (10, N), of a box's 8 corners and 2 more points) over the points in the image at either end: those and
-    the points where the box's edges cross the middle column's and the middle row's plane at the start
+    the points where the box's edges cross the principal point's column's and row's planes at the start
     (see `_actor_motion_px`); 0 where none is."""
     a, b = _BOX_EDGES[:, 0], _BOX_EDGES[:, 1]
     ends = [list(cam) for cam in paths]

@@ -9,7 +9,8 @@ annotations (`camgen.plan.annotations`: MOTChallenge with its img1 images and op
 detections, COCO, YOLO, Market-1501 re-ID crops) and the per-frame camera states (``camera.jsonl``).
 
 Each camera's folder is written as ``CAMERA.partial`` and renamed when the camera is complete (removed
-on any exception), so a render stopped part-way leaves no per-frame files; job.json and manifest.json
+on any exception unless the render resumes: below), so a render stopped part-way leaves no per-frame files;
+job.json and manifest.json
 are written last, so a job directory holding them holds a finished render. `IMPLEMENTED_STAGES` are the
 stages run here; `unimplemented_stages` names any other stage a job plans (a job compiled by another
 camgen version), so that callers can say it is skipped.
@@ -24,7 +25,8 @@ the end (`camgen.io.video.join_videos`); a render that is never stopped segments
 its files are the same bytes. ``execute(..., resume=True)`` keeps the folders of a render that stops,
 and continues each camera from its checkpoint: spools cut back to their checkpointed length, files of
 later frames deleted, the pipeline's state restored. The renderer draws each frame alone, so it holds no
-state to save.
+state to save. A camera's finished checkpoint is written before its spools go, and the finished cameras keep
+theirs until the manifest (which leaves them out) is written: a stop at any point redoes no finished camera.
 """
 
 from __future__ import annotations

@@ -21,9 +21,10 @@ Wheels are a tyre (a closed cylinder, `WHEEL_SECTIONS` sides) and a rim (hub, fi
 outer ring at the rim's diameter, `RIM_SHARE`, standing proud of the tyre's sidewall, so that a turning
 wheel shows it) in the wheel's own frame (axle along y); a bus rolls on steel disc wheels instead (a disc
 with hand holes and a hub of ten nuts, `steel_disc_wheel_meshes`) and shows its route on an LED
-destination display over the windscreen (`destination_sign`, `camgen.vehicles.sign`). Lamps are thin
-boxes half sunk into the shell's ends, in lamp units at the corners (`_lamp_housings`: a clear headlamp
-unit, a red rear cluster with a clear reversing lamp); plates are quads 5 mm in front of them.
+destination display over the windscreen (`destination_sign`, `camgen.vehicles.sign`) and carries its
+air-conditioning unit on the roof (`roof_unit`). Lamps are thin boxes half sunk into the shell's ends, in lamp
+units at the corners (`_lamp_housings`: a clear headlamp unit, a red rear cluster with a clear reversing lamp);
+plates are quads 5 mm in front of them.
 
 Underneath: the shell's faces that face the ground are the underbody (`UNDERBODY_RGB`: underseal and
 plastic undertrays, not the paint), and the ground under the whole footprint, which sees the sky only
@@ -272,37 +273,40 @@ def _sections(half_width_m: np.ndarray, half_height_m: np.ndarray, belt_rel: np.
     """(y, z − centre) of each station's section points (S, N) and each point's mirror image (N,).
 
     The points run counter-clockwise about +x: `UPPER_POINTS` from the belt on the +y side over the roof
-    (the first exactly at the belt), then `LOWER_POINTS` from the belt on the −y side under the floor,
-    each arc's points evenly spaced along it. So every station has a row of points on its beltline
-    (`belt_rel`: the belt's height over the half height, about the centre), where the windows end. Both
+    (the first exactly at the belt), then `LOWER_POINTS` from the belt on the −y side under the floor. The
+    lower arc is the body's superellipse, its points evenly spaced along it; the upper arc is the greenhouse's
+    squarer one (`GREENHOUSE_EXPONENT`), `GREENHOUSE_SIDE_QUADS` rows up each side, a `ROOF_EDGE_ROW_M` row
+    over each roof edge and the rest evenly across the roof, at every station alike (a bonnet's and a boot's
+    too, where the "belt" is clamped under their top: `BELT_REACH`). So every station has a row of points on
+    its beltline (`belt_rel`: the belt's height over the half height, about the centre), where the windows end. Both
     counts are odd, so no point lies on the vertical; point k's mirror image (y → −y) is `mirror[k]`."""
     e = 2 / SECTION_EXPONENT
     b = np.clip(belt_rel, *BELT_REACH)
     phi_belt = np.arcsin(np.sign(b) * np.abs(b) ** (1 / e))
-    # Over the belt, a greenhouse (where the roof stands clear of the belt) is its own squarer arc: from the
-    # belt's point straight up, round the roof's edges, over the roof; elsewhere the body's arc goes on.
+    # Over the belt the greenhouse is its own squarer arc: from the belt's point straight up, round the roof's
+    # edges, over the roof (`BELT_REACH` keeps some room over a bonnet's or boot's clamped belt).
     belt_y = half_width_m * np.abs(np.cos(phi_belt)) ** e
     belt_z = half_height_m * b
-    greenhouse = half_height_m * (1 - b) > 1e-6
-    room_m = np.where(greenhouse, half_height_m - belt_z, 0.0)
+    room_m = half_height_m - belt_z
     g = 2 / GREENHOUSE_EXPONENT
     ys, zs = [], []
     arcs = ((phi_belt, np.pi - phi_belt, UPPER_POINTS), (np.pi - phi_belt, 2 * np.pi + phi_belt, LOWER_POINTS))
     for upper, (lo, hi, count) in zip((True, False), arcs, strict=True):
-        phi = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, SECTION_DENSE + 1)[None, :]
-        c, s = np.cos(phi), np.sin(phi)
-        y = half_width_m[:, None] * np.sign(c) * np.abs(c) ** e
-        z = half_height_m[:, None] * np.sign(s) * np.abs(s) ** e
-        if upper:
+        if upper:  # the greenhouse, from the belt's point on the +y side to its mirror image
             psi = np.linspace(0.0, np.pi, SECTION_DENSE + 1)[None, :]
             cg, sg = np.cos(psi), np.sin(psi)
-            y = np.where(greenhouse[:, None], belt_y[:, None] * np.sign(cg) * np.abs(cg) ** g, y)
-            z = np.where(greenhouse[:, None], belt_z[:, None] + room_m[:, None] * np.abs(sg) ** g, z)
+            y = belt_y[:, None] * np.sign(cg) * np.abs(cg) ** g
+            z = belt_z[:, None] + room_m[:, None] * np.abs(sg) ** g
+        else:  # the body, from the belt's point on the −y side under the floor and back
+            phi = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, SECTION_DENSE + 1)[None, :]
+            c, s = np.cos(phi), np.sin(phi)
+            y = half_width_m[:, None] * np.sign(c) * np.abs(c) ** e
+            z = half_height_m[:, None] * np.sign(s) * np.abs(s) ** e
         along = np.concatenate([np.zeros((len(y), 1)), np.cumsum(np.hypot(np.diff(y), np.diff(z)), axis=1)], axis=1)
         k = np.arange(count)
         arc_y, arc_z = np.empty((len(y), count)), np.empty((len(y), count))
         for i in range(len(y)):
-            if upper and greenhouse[i]:
+            if upper:
                 # `GREENHOUSE_SIDE_QUADS` rows up each side to the roof's edge (ψ = π/4), the rest across the
                 # roof: every station's rows then mean the same, the side glass's and the screens' alike.
                 # The first row over each edge is `ROOF_EDGE_ROW_M` wide: where a screen meets the side glass it
@@ -805,7 +809,7 @@ def _lamp_housings(look: VehicleLook, head_z_m: float, tail_z_m: float) -> Part 
     for s in (1, -1):
         head = _box((HOUSING_DEPTH_M, head_w, head_h), (L / 2, s * (half - head_w / 2), head_top - head_h / 2))
         rear = _box((HOUSING_DEPTH_M, rear_w, rear_h), (-L / 2, s * (half - rear_w / 2), rear_top - rear_h / 2))
-        reversing = _box((HOUSING_DEPTH_M + 0.008, 0.12, 0.05), (-L / 2, s * (half - 0.33), tail_z_m - 0.09))
+        reversing = _box((HOUSING_DEPTH_M + 0.008, 0.12, 0.04), (-L / 2, s * (half - 0.33), tail_z_m - 0.085))
         pieces += [(head, HEADLAMP_UNIT_RGB), (rear, REAR_LENS_RGB), (reversing, REVERSING_LENS_RGB)]
     part = _part("lamp_units", "lens", [(mesh, -1) for mesh, _ in pieces])
     part.colours = np.concatenate([np.tile(rgb, (len(_flat(mesh)[0]), 1)) for mesh, rgb in pieces])
@@ -892,7 +896,8 @@ def destination_sign(look: VehicleLook) -> tuple[Part, Part]:
 
 SIGN_TOP_SHARE = 0.88
 """The destination display's top edge as a share of a bus's height: under the front end's rounded top
-(`PROFILES["bus"]`: 0.93), where the section is still wide enough for the display."""
+(`PROFILES["bus"]`: 0.895 at the front, 0.92 a hundredth of the length behind it), where the section is still
+wide enough for the display."""
 DOT_FILL_SHARE = 0.8
 """Share of a dot's pitch that its LED lights (the dark gaps between a matrix's dots)."""
 
@@ -965,7 +970,7 @@ ROOF_UNIT_BODIES = ("bus",)
 high with it, its roof about 0.2 m lower)."""
 ROOF_UNIT_SPAN = (0.55, 0.80)
 """Where the unit lies along the roof, as shares of the length (rear 0, front 1): a Citaro's sits over the front
-half, behind the front axle, about 3 m long (an estimate from makers' side views)."""
+half, about 3 m long, over and behind the front axle (an estimate from makers' side views)."""
 ROOF_UNIT_WIDTH_SHARE = 0.72
 """The unit's width over the vehicle's (about 1.8 m of a 2.55 m bus)."""
 

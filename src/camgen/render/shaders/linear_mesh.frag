@@ -422,7 +422,7 @@ bool in_sun_cascade(mat4 light_matrix, sampler2D shadow_map)
 // is the sky above the horizon, radiance ambient_light (a uniform sky of illuminance E has radiance E / pi,
 // camgen.render.scene_graph), and below it the ground, a Lambertian surface of albedo
 // CLEARCOAT_GROUND_ALBEDO lit by that sky and the suns, blended over the reflected ray's elevation as the
-// glass's reflection is (sky_share: fully sky from 4.6 deg up, ground from 11.5 deg down: buildings and
+// glass's reflection is (sky_share: fully sky from 11.5 deg up, ground from 11.5 deg down: buildings and
 // trees break the horizon). At normal incidence the coat adds 4 % of the sky; at grazing views (a roof or
 // bonnet seen from a distant camera, a car's flanks towards the horizon) it mirrors most of it, which is
 // what makes a painted body read as a car's; sides facing the camera from above mirror the darker ground.
@@ -632,7 +632,7 @@ void main()
         // glass's own diffuse share (its tint and dirt), lit by the ambient light like any surface.
         vec3 v_glass = normalize(cam_pos - frag_position);
         vec3 n_glass = dot(n, v_glass) < 0.0 ? -n : n;  // the inner panes face into the cabin
-        float f_view = min_roughness + (1.0 - min_roughness) * pow(1.0 - clamp(dot(n_glass, v_glass), 0.0, 1.0), 5.0);
+        float f_view = CLEARCOAT_F0 + (1.0 - CLEARCOAT_F0) * pow(1.0 - clamp(dot(n_glass, v_glass), 0.0, 1.0), 5.0);
         color.xyz += base_color.xyz * ambient_light + f_view * mirrored_environment(reflect(-v_glass, n_glass));
         out_alpha = 1.0 - (1.0 - base_color.a) * (1.0 - f_view);
         color.xyz /= out_alpha;
