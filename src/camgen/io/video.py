@@ -145,11 +145,7 @@ class VideoWriter:
         self._height_px = height_px
         self._frames_written = 0
         self._closed = False
-        _check_size(width_px, height_px, codec.pixel_format)
-        rate = _frame_rate(fps)
-        encoder = _encoder(codec.name)
-        if codec.name != "mjpeg" and preset not in X26X_PRESETS:
-            raise ConfigError(f"preset must be one of {', '.join(X26X_PRESETS)}, got {preset!r}")
+        rate, encoder = _checked_settings(width_px, height_px, fps, codec, preset)
         self._colour = _colour(codec.name)
 
         self._path.parent.mkdir(parents=True, exist_ok=True)
@@ -166,9 +162,9 @@ class VideoWriter:
                     f"{self._path}: cannot tell the container format from the suffix {self._path.suffix!r}; "
                     "use .mp4, .mkv, .mov or .avi"
                 ) from error
-            self._stream = self._container.add_stream(encoder, rate=rate)
-            _configure(self._stream.codec_context, codec, rate, width_px, height_px, preset, self._colour, reproducible)
-            self._stream.codec_context.open()
+            self._stream = _opened_stream(
+                self._container, encoder, rate, codec, width_px, height_px, preset, self._colour, reproducible
+            )
         except BaseException:
             self._discard()
             raise
@@ -266,6 +262,26 @@ class VideoWriter:
             self._tmp_path.unlink(missing_ok=True)
 
 
+def _checked_settings(width_px: int, height_px: int, fps: float, codec: Codec, preset: str) -> tuple[Fraction, str]:
+    """(frame rate as a fraction, FFmpeg encoder name) of a writer's settings; ConfigError for a size the pixel
+    format cannot hold, a bad rate, a codec this FFmpeg lacks or an unknown preset (`VideoWriter`)."""
+    _check_size(width_px, height_px, codec.pixel_format)
+    rate = _frame_rate(fps)
+    encoder = _encoder(codec.name)
+    if codec.name != "mjpeg" and preset not in X26X_PRESETS:
+        raise ConfigError(f"preset must be one of {', '.join(X26X_PRESETS)}, got {preset!r}")
+    return rate, encoder
+
+
+def _opened_stream(container, encoder: str, rate: Fraction, codec: Codec, width_px: int, height_px: int,
+                   preset: str, colour, reproducible: bool):  # fmt: skip
+    """A video stream added to `container` and its encoder configured (`_configure`) and opened."""
+    stream = container.add_stream(encoder, rate=rate)
+    _configure(stream.codec_context, codec, rate, width_px, height_px, preset, colour, reproducible)
+    stream.codec_context.open()
+    return stream
+
+
 def join_videos(
     segments: Sequence[str | Path],
     path: str | Path,
@@ -299,17 +315,11 @@ def join_videos(
     """
     if not segments:
         raise ValueError(f"{path}: no segments to join")
-    _check_size(width_px, height_px, codec.pixel_format)
-    rate = _frame_rate(fps)
-    encoder = _encoder(codec.name)
-    if codec.name != "mjpeg" and preset not in X26X_PRESETS:
-        raise ConfigError(f"preset must be one of {', '.join(X26X_PRESETS)}, got {preset!r}")
+    rate, encoder = _checked_settings(width_px, height_px, fps, codec, preset)
     frame_time_base = Fraction(1) / rate
     done = 0
     with atomic_path(path) as tmp, av.open(str(tmp), mode="w") as container:
-        stream = container.add_stream(encoder, rate=rate)
-        _configure(stream.codec_context, codec, rate, width_px, height_px, preset, _colour(codec.name), True)
-        stream.codec_context.open()
+        stream = _opened_stream(container, encoder, rate, codec, width_px, height_px, preset, _colour(codec.name), True)
         container.start_encoding()  # the header from the opened encoder, before any packet
         for segment in segments:
             with av.open(str(segment)) as source:
