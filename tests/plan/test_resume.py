@@ -209,45 +209,28 @@ def test_a_camera_finished_before_the_stop_is_kept(workspace, renderer, tmp_path
     assert_same_files(job_dir, tmp_path / "reference" / job_directory_name(job))
 
 
-def test_a_camera_stopped_before_its_folder_was_renamed_is_taken_over(job, renderer, reference, monkeypatch, tmp_path):
-    """Stopped after the camera's last checkpoint (a finished camera's), before ``cam.partial`` became
-    ``cam``: the resume renames it and renders nothing."""
+def _stop_after_execute_camera(patch) -> None:
+    """After the camera's last checkpoint (a finished camera's), before ``cam.partial`` became ``cam``."""
     execute_camera = camgen.plan.execute._execute_camera
 
     def stopped_after(*args):
         execute_camera(*args)
         raise StopError
 
-    with monkeypatch.context() as patch, pytest.raises(StopError):
-        patch.setattr(camgen.plan.execute, "_execute_camera", stopped_after)
-        render(job, tmp_path, renderer, resume=True)
-    resumed = []
-    (result,) = render(job, tmp_path, renderer, resume=True, on_resume=lambda *a: resumed.append(a))
-    assert resumed == [("cam", FRAMES, FRAMES)] and result.stage_frames == []
-    assert_same_files(tmp_path / job_directory_name(job), reference)
+    patch.setattr(camgen.plan.execute, "_execute_camera", stopped_after)
 
 
-def test_a_render_stopped_while_its_manifest_is_written_keeps_its_cameras(
-    job, renderer, reference, monkeypatch, tmp_path
-):
-    """Stopped while the manifest hashes every file (a long render's last step): the finished cameras kept their
-    checkpoints, so the resume takes them over and renders nothing."""
+def _stop_in_manifest(patch) -> None:
+    """While the manifest hashes every file (a long render's last step)."""
 
     def stopped(*args, **kwargs):
         raise StopError
 
-    with monkeypatch.context() as patch, pytest.raises(StopError):
-        patch.setattr(camgen.plan.execute, "write_manifest", stopped)
-        render(job, tmp_path, renderer, resume=True)
-    resumed = []
-    (result,) = render(job, tmp_path, renderer, resume=True, on_resume=lambda *a: resumed.append(a))
-    assert resumed == [("cam", FRAMES, FRAMES)] and result.stage_frames == []
-    assert_same_files(tmp_path / job_directory_name(job), reference)
+    patch.setattr(camgen.plan.execute, "write_manifest", stopped)
 
 
-def test_a_camera_stopped_as_it_clears_its_spools_is_taken_over(job, renderer, reference, monkeypatch, tmp_path):
-    """Stopped just after a camera's finished checkpoint, while its spools and video segments are deleted: the
-    resume takes the camera over (what is left of the spools goes) and renders nothing."""
+def _stop_clearing_spools(patch) -> None:
+    """Just after the camera's finished checkpoint, while its spools and video segments are deleted."""
     close = camgen.plan.execute.LineSpool.close
 
     def stopped(self, *args, **kwargs):
@@ -255,8 +238,15 @@ def test_a_camera_stopped_as_it_clears_its_spools_is_taken_over(job, renderer, r
             raise StopError
         return close(self, *args, **kwargs)
 
+    patch.setattr(camgen.plan.execute.LineSpool, "close", stopped)
+
+
+@pytest.mark.parametrize("stop", [_stop_after_execute_camera, _stop_in_manifest, _stop_clearing_spools])
+def test_a_camera_stopped_after_it_finished_is_taken_over(job, renderer, reference, monkeypatch, tmp_path, stop):
+    """Stopped anywhere after the camera's finished checkpoint: the resume takes the finished camera over (its
+    folder renamed, what is left of its spools deleted) and renders nothing."""
     with monkeypatch.context() as patch, pytest.raises(StopError):
-        patch.setattr(camgen.plan.execute.LineSpool, "close", stopped)
+        stop(patch)
         render(job, tmp_path, renderer, resume=True)
     resumed = []
     (result,) = render(job, tmp_path, renderer, resume=True, on_resume=lambda *a: resumed.append(a))
