@@ -254,6 +254,17 @@ def test_a_camera_stopped_after_it_finished_is_taken_over(job, renderer, referen
     assert_same_files(tmp_path / job_directory_name(job), reference)
 
 
+def test_a_finished_render_of_fewer_frames_is_not_what_resume_was_asked(job, renderer, reference, tmp_path):
+    """A finished render of the first frames only: resuming the whole sequence renders it (it is not "nothing to
+    resume"), and resuming the same frames again is."""
+    execute(job, tmp_path, renderer=renderer, frames=range(FRAMES // 2), checkpoint_frames=CHECKPOINT_FRAMES)
+    (result,) = render(job, tmp_path, renderer, resume=True)
+    assert (result.frames, result.resumed_frames) == (FRAMES, 0)
+    assert_same_files(tmp_path / job_directory_name(job), reference)
+    with pytest.raises(ValueError, match="nothing to resume"):
+        render(job, tmp_path, renderer, resume=True)
+
+
 def test_without_resume_a_stopped_render_leaves_nothing(job, renderer, tmp_path):
     with pytest.raises(StopError):
         render(job, tmp_path, renderer, on_frame=stop_after(STOP_AFTER_INDEX))

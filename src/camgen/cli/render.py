@@ -97,7 +97,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         err.print(f"[yellow]note[/yellow] {escape(message)}", soft_wrap=True)
 
     if args.resume:
-        if finished_render(job, args.out) is not None:
+        if finished_render(job, args.out, args.camera, range(count)) is not None:
             note(f"{Path(args.out) / job_directory_name(job)}: {NOTHING_TO_RESUME}")
             return 0
         for other in other_unfinished_renders(job, args.out):

@@ -202,7 +202,7 @@ def execute(
     wanted = None if cameras is None else set(cameras)
     chosen = [(i, camera) for i, camera in enumerate(job.cameras) if wanted is None or camera.name in wanted]
     note = on_note or (lambda message: None)
-    if resume and (job_dir / "manifest.json").exists():
+    if resume and finished_render(job, out_dir, cameras, None if frames is None else indices) is not None:
         raise ValueError(f"{job_dir}: {NOTHING_TO_RESUME}")
     # A render starts clean: no job.json or manifest.json until it completes, and no files left in a
     # camera's directory by an earlier render of it (fewer frames, other outputs, a killed run), unless it
@@ -277,10 +277,22 @@ NOTHING_TO_RESUME = (
 )
 
 
-def finished_render(job: Job, out_dir: str | Path) -> Path | None:
-    """The manifest of a finished render of `job` in `out_dir` (its job directory), or None."""
+def finished_render(
+    job: Job, out_dir: str | Path, cameras: Iterable[str] | None = None, frames: Iterable[int] | None = None
+) -> Path | None:
+    """The manifest of a finished render of `job` in `out_dir` (its job directory) that rendered what `execute`
+    with these `cameras` and `frames` would (its `rendered` record: None means every camera, every frame), or
+    None: a finished render of fewer frames or other cameras is not the one asked for."""
     manifest = Path(out_dir) / job_directory_name(job) / "manifest.json"
-    return manifest if manifest.is_file() else None
+    if not manifest.is_file():
+        return None
+    try:
+        rendered = json.loads(manifest.read_text(encoding="utf-8")).get("rendered")
+    except (OSError, ValueError, AttributeError):
+        return None
+    wanted = None if cameras is None else set(cameras)
+    names = [camera.name for camera in job.cameras if wanted is None or camera.name in wanted]
+    return manifest if rendered == rendered_record(names, None if frames is None else list(frames)) else None
 
 
 def other_unfinished_renders(job: Job, out_dir: str | Path) -> list[Path]:
