@@ -77,6 +77,24 @@ def test_a_frame_after_others_is_bit_for_bit_the_frame_drawn_alone(job, renderer
     np.testing.assert_array_equal(kept, alone)
 
 
+def test_a_frame_with_nothing_blurred_is_drawn_finely_and_bit_for_bit_alike(job, renderer, monkeypatch):
+    """Early frames (the racer far out of view, the stroller too slow to blur): the base is one draw s× finer,
+    and a frame after others, drawn in crops of that draw, is bit for bit the frame drawn alone."""
+    camera = job.cameras[0]
+    frame = 3
+    state = camera.states[frame]
+    alone_drawer = _renderer_of(job, renderer)
+    assert alone_drawer._blurred_groups(state, render_view(state, camera.render)) == {}
+    alone = alone_drawer.frame(frame).passes.radiance
+    assert alone_drawer._kept_base.fine
+    after = _renderer_of(job, renderer)
+    after.frame(frame - 2)
+    crops = _counting(renderer, monkeypatch)
+    kept = after.frame(frame).passes.radiance
+    assert crops and None not in crops, "the frame was drawn from the kept one, in rectangles only"
+    np.testing.assert_array_equal(kept, alone)
+
+
 def test_a_changed_light_draws_the_frame_whole(job, renderer, monkeypatch):
     first = _renderer_of(job, renderer)
     first.frame(FRAME - 1)
