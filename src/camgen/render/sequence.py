@@ -355,8 +355,7 @@ class CameraRenderer:
                     for i, (t, dx_px, dy_px) in enumerate(jittered_samples(samples, s))
                 ]
             else:  # one draw s× finer, box-averaged: the same samples at a quarter of the draws' fixed costs
-                key = "radiance" if s == 1 else f"radiance {s}x"
-                draws = [(float(t), 0.0, 0.0, s, key) for t in sub_frame_offsets(samples)]
+                draws = [(float(t), 0.0, 0.0, s, _fine_key(s)) for t in sub_frame_offsets(samples)]
             result.radiance = self._sub_frame_mean(state, view, draws, self.shadow_fit(view))
         return self._finished(index, state, view, result.radiance)
 
@@ -462,10 +461,10 @@ class CameraRenderer:
             and _same_arrays(kept.daylight, daylight)
         ):
             rects = self._moving_rects_at(view, [kept.time_s, state.time_s], fit, None)
-        positions = [(0.0, dx_px, dy_px) for _, dx_px, dy_px in jittered_samples(s * s, s)]
+        positions = [] if fine else [(0.0, dx_px, dy_px) for _, dx_px, dy_px in jittered_samples(s * s, s)]
         if rects is None:  # over the kept background of each draw, where the plan keeps one
             if fine:
-                draws = [(0.0, 0.0, 0.0, s, "radiance" if s == 1 else f"radiance {s}x")]
+                draws = [(0.0, 0.0, 0.0, s, _fine_key(s))]
             else:
                 draws = [(0.0, dx, dy, 1, f"radiance jitter {i}") for i, (_, dx, dy) in enumerate(positions)]
             radiance = self._sub_frame_mean(state, view, draws, fit)
@@ -733,6 +732,12 @@ def _reach(graph: SceneGraph) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate(points), np.concatenate(radii)
 
 
+def _fine_key(supersampling: int) -> str:
+    """The kept-background key of a radiance draw s× finer (`CameraRenderer._draw`): whole frames and still
+    frames' bases share it."""
+    return "radiance" if supersampling == 1 else f"radiance {supersampling}x"
+
+
 @dataclass
 class _KeptBase:
     """The last frame's radiance at its frame time, before any motion blur (`CameraRenderer._base_radiance`)."""
@@ -784,15 +789,22 @@ def _node_pixels(scene, node, view: View, casting: list, lowest_z_m: float) -> t
             reach = np.divide(L[2] - lowest_z_m, above, out=np.full(len(vertices), np.nan), where=above > 1e-6)
             points.append(L + reach[:, None] * (vertices - L))
         valid.append(np.isfinite(reach) & (height_m >= 0.0))
-    world = np.nan_to_num(np.concatenate(points))
+    camera = _camera_frame(np.nan_to_num(np.concatenate(points)), view)
+    front = (camera[:, 2] >= NEAR_CLIP_M) & np.concatenate(valid)
+    camera[~front, 2] = 1.0
+    return np.stack(_pinhole_px(camera, view.K_px)), front
+
+
+def _camera_frame(points_m: np.ndarray, view: View) -> np.ndarray:
+    """(N, 3) camera-frame coordinates of world points (N, 3) seen through `view`."""
     T = view.T_world_from_cam
-    camera = (world - T[:3, 3]) @ T[:3, :3]
-    z = camera[:, 2]
-    front = (z >= NEAR_CLIP_M) & np.concatenate(valid)
-    z = np.where(front, z, 1.0)
-    K = view.K_px
-    x, y = camera[:, 0] / z, camera[:, 1] / z
-    return np.stack([K[0, 0] * x + K[0, 1] * y + K[0, 2], K[1, 1] * y + K[1, 2]]), front
+    return (points_m - T[:3, 3]) @ T[:3, :3]
+
+
+def _pinhole_px(camera_m: np.ndarray, K: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel coordinates (u, v) of camera-frame points (N, 3) in front of the camera, through `K` (no lens)."""
+    x, y = camera_m[:, 0] / camera_m[:, 2], camera_m[:, 1] / camera_m[:, 2]
+    return K[0, 0] * x + K[0, 1] * y + K[0, 2], K[1, 1] * y + K[1, 2]
 
 
 def _near_view(uv: np.ndarray, view: View) -> np.ndarray:
@@ -916,8 +928,7 @@ def _projected_rect_px(points_m: np.ndarray, view: View, near_m: float) -> tuple
     """The pixels (x0, y0, x1, y1; x1, y1 exclusive) of `view` that the convex hull of `points_m` (N, 3,
     world) can cover, padded by `RECT_PAD_PX`; the hull is clipped at the near plane first (every segment
     between two points crossing it adds its crossing); None when it misses the view."""
-    T = view.T_world_from_cam
-    camera = (points_m - T[:3, 3]) @ T[:3, :3]
+    camera = _camera_frame(points_m, view)
     z = camera[:, 2]
     front = camera[z >= near_m]
     i, j = np.nonzero((z[:, None] >= near_m) != (z[None, :] >= near_m))
@@ -928,10 +939,7 @@ def _projected_rect_px(points_m: np.ndarray, view: View, near_m: float) -> tuple
     hull = np.concatenate([front, crossings])
     if len(hull) == 0:
         return None
-    K = view.K_px
-    x, y = hull[:, 0] / hull[:, 2], hull[:, 1] / hull[:, 2]
-    u = K[0, 0] * x + K[0, 1] * y + K[0, 2]
-    v = K[1, 1] * y + K[1, 2]
+    u, v = _pinhole_px(hull, view.K_px)
     x0 = max(0, math.floor(u.min()) - RECT_PAD_PX)
     y0 = max(0, math.floor(v.min()) - RECT_PAD_PX)
     x1 = min(view.width_px, math.ceil(u.max()) + RECT_PAD_PX + 1)
