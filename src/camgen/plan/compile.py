@@ -125,7 +125,7 @@ def _corner_illumination(K, distortion, width_px, height_px, vignetting, weight)
 
 
 _BOX_EDGES = np.array([(k, k | bit) for bit in (1, 2, 4) for k in range(8) if not k & bit])
-"""The 12 edges of a box whose corner k takes x from bit 0 of k, y from bit 1 and z from bit 2."""
+"""The 12 edges of a box whose corner k takes x from bit 0 of k, y from bit 1 and z from bit 2 (`box_corners`)."""
 MOTION_TIMES_PER_BLOCK = 2048
 """Times `_actor_motion_px` measures at once (its arrays of points × times stay small)."""
 
@@ -160,7 +160,6 @@ def _actor_motion_px(
     only at the times whose bound exceeds the largest displacement measured so far, likeliest first.
     """
     T_cam_from_world = np.linalg.inv(T_world_from_cam_)
-    corner = np.arange(8)
     boxes = []
     for actor in actors:
         route = routes[actor.name]
@@ -170,19 +169,7 @@ def _actor_motion_px(
         placed = box_corners(*local_bounds(shape, file_bounds), placement(shape))
         low, high = placed.min(axis=0), placed.max(axis=0)
         low[2] = 0.0
-        points = np.concatenate(
-            [
-                np.stack(
-                    [
-                        np.where(corner & 1, high[0], low[0]),
-                        np.where(corner >> 1 & 1, high[1], low[1]),
-                        np.where(corner >> 2 & 1, high[2], low[2]),
-                    ],
-                    axis=1,
-                ),
-                [[0.0, 0.0, 0.0], [0.0, 0.0, high[2]]],
-            ]
-        )
+        points = np.concatenate([box_corners(low, high, np.eye(4)), [[0.0, 0.0, 0.0], [0.0, 0.0, high[2]]]])
         ends = [_path_positions(route, times) for times in (times_s, times_s + exposure_s)]
         person = is_procedural_person(actor) or is_character(actor)
         if person:
