@@ -70,6 +70,7 @@ from camgen.world.ies import grid_intensity_cd, intensity_grid_cd
 from camgen.world.night import SPOT_FULL_INTENSITY_FRACTION, peak_intensity_cd
 from camgen.world.rain import WET_ALBEDO_FACTOR, WET_ROUGHNESS_FACTOR
 from camgen.world.site import SiteDaylight, daylight_change, site_daylight
+from camgen.world.sky import LUMINANCE_WEIGHTS
 from camgen.world.textures import TYPICAL_ALBEDO_RGB, encode_srgb8, surface_maps
 
 from OpenGL.GL import GL_REPEAT  # isort: skip — after camgen.render.gl, which selects the EGL platform
@@ -603,12 +604,11 @@ def horizontal_illuminance_lux(scene: pyrender.Scene, point_m: np.ndarray) -> fl
     ambient light's π·ambient_light (its E), each directional light's E·sin(elevation), and each point and
     spot light's I(θ)·cos(incidence)/d² (a spot's I(θ) the renderer's cone, `camgen.world.night`, or an IES
     lamp's table, `camgen.world.ies`)."""
-    weights = np.array([0.2126, 0.7152, 0.0722])
-    total = math.pi * float(weights @ np.asarray(scene.ambient_light, dtype=np.float64))
+    total = math.pi * float(LUMINANCE_WEIGHTS @ np.asarray(scene.ambient_light, dtype=np.float64))
     point = np.asarray(point_m, dtype=np.float64)
     for node in scene.light_nodes:
         light, pose = node.light, scene.get_pose(node)
-        power = light.intensity * float(weights @ np.asarray(light.color, dtype=np.float64))
+        power = light.intensity * float(LUMINANCE_WEIGHTS @ np.asarray(light.color, dtype=np.float64))
         if isinstance(light, pyrender.DirectionalLight):
             total += power * max(0.0, float(pose[2, 2]))  # the light travels along the node's −z
             continue
