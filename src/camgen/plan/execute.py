@@ -54,7 +54,7 @@ from camgen.io.dng import SRGB_FROM_XYZ, write_dng
 from camgen.io.files import atomic_path, write_text_atomic
 from camgen.io.flow import write_flo, write_scene_flow
 from camgen.io.frames import write_depth, write_frame
-from camgen.io.manifest import write_manifest
+from camgen.io.manifest import MANIFEST_NAME, read_manifest, write_manifest
 from camgen.io.radiance import RadianceWriter
 from camgen.isp.eptz import crop_and_scale
 from camgen.job import CameraJob, Job
@@ -286,16 +286,14 @@ def finished_render(
     """The manifest of a finished render of `job` in `out_dir` (its job directory) that rendered what `execute`
     with these `cameras` and `frames` would (its `rendered` record: None means every camera, every frame), or
     None: a finished render of fewer frames or other cameras is not the one asked for."""
-    manifest = Path(out_dir) / job_directory_name(job) / "manifest.json"
-    if not manifest.is_file():
-        return None
-    try:
-        rendered = json.loads(manifest.read_text(encoding="utf-8")).get("rendered")
-    except (OSError, ValueError, AttributeError):
+    job_dir = Path(out_dir) / job_directory_name(job)
+    manifest, _ = read_manifest(job_dir)
+    if manifest is None:
         return None
     wanted = None if cameras is None else set(cameras)
     names = [camera.name for camera in job.cameras if wanted is None or camera.name in wanted]
-    return manifest if rendered == rendered_record(names, None if frames is None else list(frames)) else None
+    asked = rendered_record(names, None if frames is None else list(frames))
+    return job_dir / MANIFEST_NAME if manifest.get("rendered") == asked else None
 
 
 def other_unfinished_renders(job: Job, out_dir: str | Path) -> list[Path]:
@@ -447,7 +445,6 @@ def _mismatch(checkpoint: Checkpoint, identity: dict) -> str | None:
 
 _SEGMENT_NAME = "video-{:08d}.mp4"
 _HASH8 = re.compile(r"[0-9a-f]{8}")
-_SPOOL_NAMES = frozenset({"camera", "files", "mot", "det", "images", "annotations", "keypoints"})
 
 
 def read_checkpoint(path: str | Path) -> Checkpoint:
@@ -469,11 +466,11 @@ def read_checkpoint(path: str | Path) -> Checkpoint:
         first = error.errors()[0]
         where = ".".join(str(part) for part in first["loc"]) or "its top level"
         raise CheckpointError(f"{path.name}: {where}: {first['msg']}") from None
+    # The spools' names are checked against the render's own when it is resumed (`_restore`).
     names = [*checkpoint.video_segments, *(checkpoint.files or ())]
     unsafe = [name for name in names if not _inside(name)]
-    unknown = sorted(set(checkpoint.spools) - _SPOOL_NAMES)
-    if unsafe or unknown:
-        raise CheckpointError(f"{path.name}: names {(unsafe or unknown)[0]!r}, which no render writes")
+    if unsafe:
+        raise CheckpointError(f"{path.name}: names {unsafe[0]!r}, which no render writes")
     return checkpoint
 
 
@@ -835,10 +832,8 @@ def _execute_camera(
                     _save_passes(directory / "passes" / f"{frame.index:06d}.npz", stream, raw, result)
             result.frames += 1
             if result.frames % interval == 0 and result.frames < len(indices):
-                if video is not None:
-                    with clock("io.video"):
-                        video.close()  # the segment ends here: the next starts with a fresh encoder
-                    segments.append(segment)
+                if video is not None:  # the segment ends here: the next starts with a fresh encoder
+                    _close_segment(video, segment, segments, clock)
                     video = None
                 with clock("io.checkpoint"):
                     _write_checkpoint(
@@ -855,9 +850,7 @@ def _execute_camera(
             if on_frame is not None:
                 on_frame(camera.name, frame.index)
         if video is not None:
-            with clock("io.video"):
-                video.close()
-            segments.append(segment)
+            _close_segment(video, segment, segments, clock)
             video = None
         if segments:
             from camgen.io.video import join_videos
@@ -902,6 +895,13 @@ def _execute_camera(
         camera_renderer.close()
     result.total_s = time.perf_counter() - started
     return result
+
+
+def _close_segment(video, name: str, segments: list[str], clock: StageClock) -> None:
+    """Finish the video segment `name` being written (its file complete under ``.spool/``) and list it."""
+    with clock("io.video"):
+        video.close()
+    segments.append(name)
 
 
 FRAME_SUFFIX = {"png": ".png", "tiff": ".tiff", "exr": ".exr"}
