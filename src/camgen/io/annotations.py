@@ -441,11 +441,11 @@ class SequenceAnnotations:
         }
         return {name: lines for name, lines in named.items() if lines is not None}
 
-    def close(self, *, keep: bool = False) -> None:
-        """Delete the spool files (`spool_dir`), once the outputs are written or abandoned; keep=True
-        closes them and leaves them for a render that resumes."""
+    def close(self) -> None:
+        """Delete the spool files (`spool_dir`), once the outputs are written or abandoned (a render that
+        resumes closes `spools` itself and keeps them)."""
         for lines in self.spools().values():
-            lines.close(keep=keep)
+            lines.close()
 
 
 def _compact(value) -> str:

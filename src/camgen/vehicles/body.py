@@ -812,7 +812,8 @@ def _lamp_housings(look: VehicleLook, head_z_m: float, tail_z_m: float) -> Part 
         reversing = _box((HOUSING_DEPTH_M + 0.008, 0.12, 0.04), (-L / 2, s * (half - 0.33), tail_z_m - 0.085))
         pieces += [(head, HEADLAMP_UNIT_RGB), (rear, REAR_LENS_RGB), (reversing, REVERSING_LENS_RGB)]
     part = _part("lamp_units", "lens", [(mesh, -1) for mesh, _ in pieces])
-    part.colours = np.concatenate([np.tile(rgb, (len(_flat(mesh)[0]), 1)) for mesh, rgb in pieces])
+    # `_part` gives each face its own three vertices, in the pieces' order.
+    part.colours = np.repeat([rgb for _, rgb in pieces], [3 * len(mesh.faces) for mesh, _ in pieces], axis=0)
     return part
 
 
