@@ -303,6 +303,13 @@ def test_the_cli_resumes_and_then_has_nothing_to_resume(workspace, monkeypatch, 
     assert files_of(job_dir) == finished
 
 
+@pytest.mark.parametrize("value", [0, -3, 2.5, True, "250"])
+def test_a_bad_checkpoint_interval_is_refused_before_anything_is_written(job, renderer, tmp_path, value):
+    with pytest.raises(ValueError, match=r"checkpoint_frames must be an integer ≥ 1, got"):
+        execute(job, tmp_path, renderer=renderer, frames=range(FRAMES), checkpoint_frames=value)
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_the_checkpoint_interval_is_whole_gops(job):
     """Rounded up to a multiple of the codec's GOP (3 here) where an H.264/H.265 video is written, so a
     segment starts where the stream has a key frame anyway; as asked where none is (MJPEG: every frame is one)."""
