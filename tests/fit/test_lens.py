@@ -136,12 +136,14 @@ def board_spec(job) -> str:
     scope="module",
     params=[name if name == "barrel" else pytest.param(name, marks=pytest.mark.slow) for name in RENDERED_PROFILES],
 )
-def rendered(request, board_views):
+def rendered(request, board_views, board_detections):
     """(profile name, its YAML, planned job, folder of the 8-bit views, what was found in it, first fit),
-    rendered once a session (`board_views`, shared with tests/render/test_lens_calibration.py)."""
+    rendered and detected once a session (`board_views`, `board_detections`: `detect_in_folder` of the folder,
+    shared with tests/render/test_lens_calibration.py), fitted as `fit_folder` does."""
     name = request.param
     directory, job, _ = board_views(name)
-    found, fit = fit_folder(directory / "images", board_spec(job), pixel_pitch_um=PIXEL_PITCH_UM)
+    found = board_detections(name, parse_board(board_spec(job)))
+    fit = fit_lens(found.detections, found.size_px, unusable=found.unusable, pixel_pitch_um=PIXEL_PITCH_UM)
     return name, lens_profile(distortion=DISTORTIONS[name]), job, directory, found, fit
 
 

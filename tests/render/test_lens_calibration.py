@@ -49,7 +49,7 @@ import math
 import numpy as np
 import pytest
 
-from camgen.fit.checkerboard import calibrate, find_corners, gray8_from_radiance, inner_corners
+from camgen.fit.checkerboard import board_spec, calibrate, find_corners, gray8_from_radiance, inner_corners
 from camgen.optics.projection import project_points
 from tests.fit.boards import (
     DISTORTIONS,
@@ -81,12 +81,15 @@ CA_CORNERS_AVERAGED = 12
         pytest.param(name, marks=pytest.mark.slow) if name == "pincushion" else name for name in reversed(DISTORTIONS)
     ],
 )
-def lens_calibration(request, board_views):
-    """(job, corners found per view, calibration) of one distortion profile, rendered once a session
-    (`board_views`, shared with tests/fit/test_lens.py, across test processes)."""
-    _, job, views = board_views(request.param)
+def lens_calibration(request, board_views, board_detections):
+    """(job, corners found per view, calibration) of one distortion profile, rendered and its corners found
+    once a session (`board_views`, `board_detections`: shared with tests/fit/test_lens.py, across test processes;
+    `detect_in_folder` finds them as `find_corners` does, on the same 8-bit views)."""
+    _, job, _ = board_views(request.param)
     board = the_board(job)
-    found = [find_corners(gray8, inner_corners(board)) for gray8 in views]
+    found_by_name = board_detections(request.param, board_spec(board)).detections
+    corners = {detection.name: detection.corners_px for detection in found_by_name}
+    found = [corners.get(f"{camera.name}.png") for camera in job.cameras]
     camera = job.cameras[0]
     result = calibrate(board, [c for c in found if c is not None], (camera.width_px, camera.height_px))
     return job, found, result
