@@ -993,10 +993,114 @@ def roof_unit(look: VehicleLook) -> Part | None:
     return _part("roof_unit", "paint", [(box, -1)])
 
 
+@dataclass(frozen=True)
+class MirrorSpec:
+    """A body type's exterior rear-view mirrors: how far each head reaches past the body's width, m, the
+    head's height (z) and depth (x, fore and aft), m, and whether its housing is in the body's paint."""
+
+    reach_m: float
+    height_m: float
+    depth_m: float
+    painted: bool
+
+
+MIRRORS: dict[str, MirrorSpec] = {
+    **dict.fromkeys(("hatchback", "sedan", "estate", "suv", "pickup"), MirrorSpec(0.142, 0.15, 0.10, True)),
+    "van": MirrorSpec(0.207, 0.32, 0.11, False),
+    "box_truck": MirrorSpec(0.22, 0.36, 0.11, False),
+    "bus": MirrorSpec(0.20, 0.38, 0.07, False),
+}
+"""Door mirrors by body type. A car's reach is a Volkswagen Golf 8's (width 1,789 mm, 2,073 mm with its
+mirrors: 142 mm a side; makers' technical data), its head about 0.15 m tall and 0.1 m deep, in the body's paint
+(most cars'); a large van's is a Ford Transit's (2,059 mm, 2,474 mm with mirrors: 207 mm a side), its head the
+taller two-glass head of a commercial vehicle, black; a box truck's the same with a little more reach (an
+estimate). A city bus carries its mirrors on arms ahead of the front corners, the heads hanging beside the
+windscreen's upper half ("rabbit-ear" mirrors, as a Citaro's; reach and size are estimates from makers'
+pictures). Widths without mirrors are `camgen.vehicles.look.BODY_TYPES`'."""
+MIRROR_GLASS_RGB = (0.22, 0.23, 0.25)
+"""Linear albedo the mirror glass is drawn with: a silvered glass reflects about half of what lies behind the
+vehicle and to its side (ground and sky by day); drawn as a mid grey of the running gear (an estimate)."""
+MIRROR_EXPONENT = 4.0
+"""Superellipsoid exponent of a mirror's head: a box with rounded edges and corners."""
+MIRROR_STALK_M = (0.05, 0.06)
+"""Height and reach out of the door of the black stalk that carries a car's or van's mirror head, m (an estimate)."""
+BUS_MIRROR_AHEAD_M = 0.30
+"""How far ahead of a bus's front face its mirror heads hang, m (an estimate from makers' pictures)."""
+
+
+def _rounded_box(size_m, centre_m, exponent: float = MIRROR_EXPONENT) -> trimesh.Trimesh:
+    """A superellipsoid |x/a|ⁿ + |y/b|ⁿ + |z/c|ⁿ = 1 of the box `size_m` (2a, 2b, 2c) at `centre_m`: an icosphere's
+    points pushed out along their directions onto it."""
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    d = np.asarray(sphere.vertices)
+    r = np.sum(np.abs(d) ** exponent, axis=1) ** (-1.0 / exponent)
+    vertices = d * r[:, None] * (np.asarray(size_m) / 2) + np.asarray(centre_m)
+    return trimesh.Trimesh(vertices, np.asarray(sphere.faces), process=False)
+
+
+def _side_skin_m(vertices_m: np.ndarray, x_m: float, z_m: float) -> float:
+    """The shell's half-width at height `z_m` at the station nearest `x_m`, m: its section's points on the +y side,
+    by height, interpolated (the section is convex, so its +y half is one width per height)."""
+    stations = vertices_m[:, 0]
+    nearest = stations[np.argmin(np.abs(stations - x_m))]
+    side = vertices_m[(stations == nearest) & (vertices_m[:, 1] > 0)]
+    order = np.argsort(side[:, 2])
+    return float(np.interp(z_m, side[order, 2], side[order, 1]))
+
+
+def door_mirrors(look: VehicleLook, vertices_m: np.ndarray) -> tuple[Part | None, Part | None]:
+    """The exterior mirrors (`MIRRORS`): (the heads' housings in the body's paint, or None where they are black;
+    the black housings, stalks and bus mirrors' arms and every mirror's glass as one part coloured per vertex, for
+    the running gear); (None, None) for a body type without them. A car's or van's head sits at the front side
+    window's lower front corner, its lower inner edge on the door's top (`vertices_m`, the shell's), out to
+    `reach_m` past the body's width, carried by a black stalk from inside the door, its glass facing back; a bus's
+    hangs on an arm ahead of each front corner. Seen from above, ahead or behind, the heads stand out of a
+    vehicle's outline at the shoulders."""
+    spec = MIRRORS.get(look.body_type)
+    if spec is None:
+        return None, None
+    profile = PROFILES[look.body_type]
+    L, W, H = look.length_m, look.width_m, look.height_m
+    arms = []
+    if look.body_type == "bus":
+        x_m = L / 2 + BUS_MIRROR_AHEAD_M
+        z_m = profile.front_cap_glass[1] * H - spec.height_m / 2 - 0.1
+        inner_m = W / 2 + spec.reach_m - 0.22
+    else:
+        x_m = (profile.side_glass[1] - 0.5) * L - spec.depth_m
+        z_m = profile.belt * H + 0.03 + spec.height_m / 2
+        # The head's lower inner edge on the door's top at the belt; a stalk of black plastic from inside the door
+        # carries it (over the belt the side glass and the A-pillar lean in, away from the head, as on real cars).
+        bottom_m = z_m - spec.height_m / 2
+        door_m = _side_skin_m(vertices_m, x_m, bottom_m)
+        inner_m = door_m - 0.02
+        for s in (1, -1):
+            stalk = (0.06, MIRROR_STALK_M[1] + 0.06, MIRROR_STALK_M[0])
+            arms.append(_box(stalk, (x_m, s * (door_m - 0.06 + stalk[1] / 2), bottom_m + 0.01)))
+    outer_m = W / 2 + spec.reach_m
+    housings, glass = [], []
+    for s in (1, -1):
+        centre = (x_m, s * (inner_m + outer_m) / 2, z_m)
+        housings.append(_rounded_box((spec.depth_m, outer_m - inner_m, spec.height_m), centre))
+        pane = (0.004, 0.82 * (outer_m - inner_m), 0.78 * spec.height_m)
+        glass.append(_box(pane, (x_m - spec.depth_m / 2 - 0.001, centre[1], z_m)))
+        if look.body_type == "bus":  # from the front face near its top, forward and out to the head's top
+            start = (L / 2 - 0.05, s * (W / 2 - 0.25), SIGN_TOP_SHARE * H - 0.05)
+            end = (x_m, centre[1], z_m + spec.height_m / 2 - 0.02)
+            arms.append(trimesh.creation.cylinder(radius=0.025, segment=(start, end), sections=8))
+    dark = [(mesh, MIRROR_GLASS_RGB) for mesh in glass] + [(mesh, TRIM_RGB) for mesh in arms]
+    if not spec.painted:
+        dark += [(mesh, TRIM_RGB) for mesh in housings]
+    gear = _part("mirror_gear", "gear", [(mesh, -1) for mesh, _ in dark])
+    gear.colours = np.repeat([rgb for _, rgb in dark], [3 * len(mesh.faces) for mesh, _ in dark], axis=0)
+    painted = _part("mirrors", "paint", [(mesh, -1) for mesh in housings], smooth=True) if spec.painted else None
+    return painted, gear
+
+
 def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
     """The vehicle of `look`, at rest in its own frame; `driver`: with its driver seated at the wheel
     (`camgen.vehicles.cabin`). The glass lets the cabin (its dark lining, and the driver) show through."""
-    from camgen.vehicles.cabin import driver_part, glass_part, inner_glass_part, lining_part
+    from camgen.vehicles.cabin import bus_interior_part, driver_part, glass_part, inner_glass_part, lining_part
 
     vertices, faces, normals, kind = shell(look)
     paint = faces[kind == 0]
@@ -1009,6 +1113,9 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
     unit = roof_unit(look)
     if unit is not None:
         parts.append(unit)
+    painted_mirrors, mirror_gear = door_mirrors(look, vertices)
+    if painted_mirrors is not None:
+        parts.append(painted_mirrors)
     # The underbody and the black pillars: black plastic alike (`UNDERBODY_RGB`), one piece of the running gear.
     used, remapped = np.unique(np.concatenate([paint[below], faces[kind == 2]]), return_inverse=True)
     underbody = Part("underbody", "gear", vertices[used], normals[used], remapped.reshape(-1, 3),
@@ -1016,7 +1123,8 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
     if (kind == 1).any():
         glass = glass_part(look, vertices, normals, faces[kind == 1])
         parts += [inner_glass_part(glass), glass]  # the far panes first (the renderer keeps the order)
-    cabin = [lining_part(vertices, normals, faces[kind != 1])] + ([driver_part(look)] if driver else [])
+    cabin = [lining_part(vertices, normals, faces[kind != 1])]
+    cabin += ([bus_interior_part(look)] if look.body_type == "bus" else []) + ([driver_part(look)] if driver else [])
     parts.append(_merge("cabin", "cabin", cabin))
     width_m = TYRE_WIDTH_SHARE * look.width_m
     tyre, rim = wheel_meshes(look.wheel_radius_m, width_m, RIM_SHARE[look.body_type])
@@ -1036,6 +1144,7 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
         piece.colours = np.tile(rgb, (len(piece.vertices_m), 1))
     # Each primitive costs a draw call per pass (the renderer's per-draw overhead dominates a vehicle's):
     # tyres, rims, plate backings and the underbody share one.
-    parts.append(_merge("running_gear", "gear", [tyres, rims, backings, underbody]))
+    gear = [tyres, rims, backings, underbody] + ([mirror_gear] if mirror_gear is not None else [])
+    parts.append(_merge("running_gear", "gear", gear))
     parts += lamps + plates + [ground_shade(look)]
     return VehicleModel(look=look, parts=parts, wheel_centres_m=wheel_centres(look), plate_corners_m=plate_corners)

@@ -253,3 +253,68 @@ def inner_glass_part(glass: Part) -> Part:
     return Part(
         "body_glass_inside", "glass", glass.vertices_m, -glass.normals, faces, glass.wheel, colours=glass.colours
     )
+
+
+BUS_FLOOR_M = 0.37
+"""A low-floor city bus's floor over the road, m (Mercedes-Benz Citaro: 370 mm at the doors)."""
+BUS_SEAT_PITCH_M = 0.78
+"""Distance between rows of a city bus's forward-facing seats, m: 0.75–0.8 m in makers' seating plans (UN
+Regulation 107 asks at least 0.65 m between a seat back and the one in front in class I)."""
+BUS_SEAT = (0.45, 0.44, 0.50, 0.50)
+"""A bus seat's cushion height over the floor, the cushion's depth, its back's height over the cushion and each
+seat's width, m (UN Regulation 107 Annex 3: a seat at least 0.40 m wide, its cushion 0.40–0.50 m over the
+floor; the back's height, an estimate of current city-bus seats' about 0.5 m)."""
+BUS_SEAT_RGB = (0.02, 0.03, 0.07)
+"""Linear albedo of the seats: dark blue moquette, the commonest city-bus trim (an estimate)."""
+HANDRAIL_RGB = (0.60, 0.33, 0.01)
+"""Linear albedo of the vertical handrails: signal yellow (RAL 1003), the colour UN R107 and the UK's PSVAR 2000
+have handrails contrast in (sRGB about (249, 168, 0); as a paint's albedo an estimate)."""
+HANDRAIL_RADIUS_M = 0.0175
+"""A handrail's radius, m: 35 mm tubes (UN R107 asks handholds 20–45 mm across)."""
+BUS_AISLE_STANDING = (0.44, 0.62)
+"""The stretch along a bus (shares of the length, rear 0 → front 1) opposite door 2 kept free of seats: the
+wheelchair and pushchair space UN R107 Annex 8 asks for (an estimate of its extent)."""
+
+
+def bus_interior_part(look: VehicleLook) -> Part:
+    """A city bus's passenger saloon, seen through its windows: forward-facing pairs of seats along both sides
+    from behind the front door to the rear (`BUS_SEAT_PITCH_M`), none in the standing space opposite door 2
+    (`BUS_AISLE_STANDING`), and a yellow vertical handrail from the floor to the roof at the aisle end of every
+    other row, each on the floor or on a podium over a wheel arch; one part of per-vertex colours (surface "cabin"),
+    inside the closed shell."""
+    profile = PROFILES["bus"]
+    L, W = look.length_m, look.width_m
+    cushion_m, depth_m, back_m, seat_w_m = BUS_SEAT
+    wall_m = W / 2 - 0.12  # the side walls' inside, behind the lining and the window frames
+    front_door_u = min(u0 for u0, _ in profile.doors if u0 > 0.7)
+    first_m = (front_door_u - 0.5) * L - 0.9  # the first row behind the front door's stairwell
+    rows = np.arange(first_m, -L / 2 + 0.6, -BUS_SEAT_PITCH_M)
+    standing = [(u - 0.5) * L for u in BUS_AISLE_STANDING]
+    roof_m = _roof_z_m(look, 0.0) - LINING_INSET_M - 0.02
+    axles, arch_m = (look.front_axle_x_m, look.rear_axle_x_m), look.wheel_radius_m + ARCH_GAP_M
+    pieces = []
+    for k, x_m in enumerate(rows):
+        if standing[0] < x_m < standing[1]:
+            continue
+        # Over a wheel arch the row stands on a podium over the arch (the shell's underside rises there).
+        under = _bottom_m(look, np.linspace(x_m - depth_m / 2 - 0.25, x_m + depth_m / 2, 9), axles, arch_m)
+        floor_m = max(BUS_FLOOR_M, float(under.max()) + CLEARANCE_M)
+        for s in (1, -1):
+            y_m = s * (wall_m - seat_w_m)  # the pair's middle
+            cushion = trimesh.creation.box((depth_m, 2 * seat_w_m, 0.12))
+            cushion.apply_translation((x_m, y_m, floor_m + cushion_m - 0.06))
+            back = trimesh.creation.box((0.08, 2 * seat_w_m, back_m))
+            back.apply_translation((x_m - depth_m / 2, y_m, floor_m + cushion_m + back_m / 2))
+            pieces += [(cushion, BUS_SEAT_RGB), (back, BUS_SEAT_RGB)]
+            if k % 2 == 0:
+                pole = trimesh.creation.cylinder(HANDRAIL_RADIUS_M, roof_m - floor_m, sections=8)
+                pole.apply_translation(
+                    (x_m - depth_m / 2 - 0.1, s * (wall_m - 2 * seat_w_m - 0.05), (roof_m + floor_m) / 2)
+                )
+                pieces.append((pole, HANDRAIL_RGB))
+    vertices = np.concatenate([np.asarray(mesh.vertices)[np.asarray(mesh.faces)].reshape(-1, 3) for mesh, _ in pieces])
+    normals = np.concatenate([np.repeat(np.asarray(mesh.face_normals), 3, axis=0) for mesh, _ in pieces])
+    colours = np.repeat([rgb for _, rgb in pieces], [3 * len(mesh.faces) for mesh, _ in pieces], axis=0)
+    faces = np.arange(len(vertices)).reshape(-1, 3)
+    return Part("bus_saloon", "cabin", vertices, normals, faces, np.full(len(vertices), -1, np.int8),
+                colours=np.asarray(colours, dtype=np.float64))  # fmt: skip
