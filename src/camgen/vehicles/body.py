@@ -50,6 +50,9 @@ LOWER_POINTS = 15
 SECTION_EXPONENT = 5.0
 """Superellipse exponent of the cross-section: 2 an ellipse, large a sharp box; 5 gives shoulders
 rounded over about a fifth of the half-width."""
+ARCH_EXPONENT_GAIN = 8.0
+"""The most a section's exponent grows over a wheel arch (`shell`): the squashed section over a wheel is about a
+quarter of the height of one between the axles."""
 STATION_SPACING_M = 0.08
 WHEEL_SECTIONS = 32
 """Sides of a tyre's cylinder: at 32 a 0.63 m tyre's outline departs from a circle by 1.5 mm."""
@@ -261,6 +264,9 @@ its half-width, as a car's roof rails do (cf. `SECTION_EXPONENT`'s body, rounded
 GREENHOUSE_SIDE_QUADS = 4
 """Rows of the section's upper arc up each side of a greenhouse, from the belt to the roof's edge; the
 others span the roof (`_sections`)."""
+SILL_SIDE_QUADS = 5
+"""Rows of the section's lower arc down each side, from the belt to the bottom's corner; the others span the floor
+(`_sections`)."""
 ROOF_EDGE_ROW_M = 0.09
 """Width of the section's first row over each roof edge, m: a windscreen's A-pillars (current cars' are
 about 0.08–0.15 m thick, `_screen_pillars`)."""
@@ -269,18 +275,19 @@ BELT_REACH = (-0.95, 0.85)
 whose roof is below the beltline (a bonnet) keeps an upper arc at its top."""
 
 
-def _sections(half_width_m: np.ndarray, half_height_m: np.ndarray, belt_rel: np.ndarray):
+def _sections(half_width_m: np.ndarray, half_height_m: np.ndarray, belt_rel: np.ndarray, exponent: np.ndarray):
     """(y, z − centre) of each station's section points (S, N) and each point's mirror image (N,).
 
     The points run counter-clockwise about +x: `UPPER_POINTS` from the belt on the +y side over the roof
     (the first exactly at the belt), then `LOWER_POINTS` from the belt on the −y side under the floor. The
-    lower arc is the body's superellipse, its points evenly spaced along it; the upper arc is the greenhouse's
+    lower arc is the body's superellipse (its exponent per station), `SILL_SIDE_QUADS` rows down each side to the
+    bottom's corners and the rest across the floor, evenly spaced along it between; the upper arc is the greenhouse's
     squarer one (`GREENHOUSE_EXPONENT`), `GREENHOUSE_SIDE_QUADS` rows up each side, a `ROOF_EDGE_ROW_M` row
     over each roof edge and the rest evenly across the roof, at every station alike (a bonnet's and a boot's
     too, where the "belt" is clamped under their top: `BELT_REACH`). So every station has a row of points on
     its beltline (`belt_rel`: the belt's height over the half height, about the centre), where the windows end. Both
     counts are odd, so no point lies on the vertical; point k's mirror image (y → −y) is `mirror[k]`."""
-    e = 2 / SECTION_EXPONENT
+    e = 2 / np.asarray(exponent, dtype=np.float64)
     b = np.clip(belt_rel, *BELT_REACH)
     phi_belt = np.arcsin(np.sign(b) * np.abs(b) ** (1 / e))
     # Over the belt the greenhouse is its own squarer arc: from the belt's point straight up, round the roof's
@@ -300,8 +307,8 @@ def _sections(half_width_m: np.ndarray, half_height_m: np.ndarray, belt_rel: np.
         else:  # the body, from the belt's point on the −y side under the floor and back
             phi = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, SECTION_DENSE + 1)[None, :]
             c, s = np.cos(phi), np.sin(phi)
-            y = half_width_m[:, None] * np.sign(c) * np.abs(c) ** e
-            z = half_height_m[:, None] * np.sign(s) * np.abs(s) ** e
+            y = half_width_m[:, None] * np.sign(c) * np.abs(c) ** e[:, None]
+            z = half_height_m[:, None] * np.sign(s) * np.abs(s) ** e[:, None]
         along = np.concatenate([np.zeros((len(y), 1)), np.cumsum(np.hypot(np.diff(y), np.diff(z)), axis=1)], axis=1)
         k = np.arange(count)
         arc_y, arc_z = np.empty((len(y), count)), np.empty((len(y), count))
@@ -319,7 +326,13 @@ def _sections(half_width_m: np.ndarray, half_height_m: np.ndarray, belt_rel: np.
                 knots_m = [0.0, side, side + edge, roof_edge - edge, roof_edge, along[i, -1]]
                 at = np.interp(k, knots_k, knots_m)
             else:
-                at = k / count * along[i, -1]
+                # `SILL_SIDE_QUADS` rows down each side to the bottom's corner (the superellipse's point on its box's
+                # diagonal), the rest across the floor: a row of points on each corner, so that no facet chamfers it
+                # (the paint's edge to the underbody follows the sill and a wheel arch's lip).
+                corners_m = np.interp((5 * np.pi / 4, 7 * np.pi / 4), phi[i], along[i])
+                knots_k = [0, SILL_SIDE_QUADS, count - SILL_SIDE_QUADS, count]
+                knots_m = [0.0, max(corners_m[0], 1e-6), min(corners_m[1], along[i, -1] - 1e-6), along[i, -1]]
+                at = np.interp(k, knots_k, knots_m)
             arc_y[i] = np.interp(at, along[i], y[i])
             arc_z[i] = np.interp(at, along[i], z[i])
         ys.append(arc_y)
@@ -348,7 +361,12 @@ def shell(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nda
     half_width = W / 2 * (profile.end_width + (1 - profile.end_width) * np.sqrt(1 - (1 - t) ** 2))
     zc, hz = (top + bottom) / 2, (top - bottom) / 2
     belt = profile.belt * H
-    Y, Z, mirror = _sections(half_width, hz, (belt - zc) / hz)
+    # Over a wheel the section is squashed to the arch's top: its exponent grows as its height shrinks, so that
+    # its sides stay upright down to the arch and round under it as tightly as elsewhere (the arch's edge a clean
+    # arc in a side view, the underbody only its roof).
+    plain_hz = (top - np.minimum(_bottom_m(look, x, (), arch_radius), top - 0.05)) / 2
+    exponent = SECTION_EXPONENT * np.clip(plain_hz / hz, 1.0, ARCH_EXPONENT_GAIN)
+    Y, Z, mirror = _sections(half_width, hz, (belt - zc) / hz, exponent)
     Z = Z + zc[:, None]
     above = np.clip((Z - belt) / np.maximum(top[:, None] - belt, 1e-6), 0.0, 1.0)
     Y = Y * (1 - profile.tumblehome * above)
