@@ -90,3 +90,30 @@ def test_cars_have_lamp_units_at_their_corners():
     assert (red[:, 0] > 5 * red[:, 1]).any() and (red[:, 0] < 2 * red[:, 1]).any()  # red lenses, a clear one
     bus = draw_look(7, "bus")
     assert not any(part.surface == "lens" for part in build_vehicle(bus).parts)
+
+
+@pytest.mark.parametrize("body", CARS)
+def test_headlamp_units_reach_back_over_the_nose(body):
+    """Seen from above, a car's front corners are its headlamps: each unit's top lies on the nose's surface (just
+    outside the closed shell, the shell just under it), from the front face back about 0.18 m (makers' top views:
+    0.15–0.25 m) and 0.3–0.45 m across from the shoulder in at each station, facing up; the grille's width stays between them."""
+    from tests.vehicles.test_mirrors_saloon import _winding_number
+
+    look = draw_look(7, "car", pinned={"body_type": body})
+    unit = next(part for part in build_vehicle(look).parts if part.name == "lamp_units")
+    corners = unit.vertices_m[unit.faces]
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    front_m = look.length_m / 2
+    # Faces facing up over the nose (the boxes of the face's units stand proud of the front face, to front_m + 2.5 cm).
+    top = (normal[:, 2] > 0.5 * np.linalg.norm(normal, axis=1)) & np.all(corners[:, :, 0] <= front_m + 1e-9, axis=1)
+    points = corners[top & np.all(corners[:, :, 0] > 0, axis=1)].reshape(-1, 3)
+    vertices, faces, _, _ = shell(look)
+    for side in (1, -1):
+        mine = points[np.sign(points[:, 1]) == side]
+        assert front_m - 0.2 < mine[:, 0].min() < front_m - 0.15 and mine[:, 0].max() == pytest.approx(front_m)
+        widths = [np.ptp(mine[mine[:, 0] == x, 1]) for x in np.unique(mine[:, 0])]
+        assert 0.3 < np.median(widths) and max(widths) < 0.45, widths
+        for point in mine[::5]:
+            assert _winding_number(vertices, faces, point) == pytest.approx(0.0, abs=1e-6)
+            assert _winding_number(vertices, faces, point - [0.0, 0.0, 0.01]) == pytest.approx(1.0, abs=1e-6)
+    assert np.abs(points[:, 1]).min() > 0.15  # the grille between them, 0.3 m or more

@@ -23,7 +23,8 @@ wheel shows it) in the wheel's own frame (axle along y); a bus rolls on steel di
 with hand holes and a hub of ten nuts, `steel_disc_wheel_meshes`) and shows its route on an LED
 destination display over the windscreen (`destination_sign`, `camgen.vehicles.sign`) and carries its
 air-conditioning unit on the roof (`roof_unit`). Lamps are thin boxes half sunk into the shell's ends, in lamp
-units at the corners (`_lamp_housings`: a clear headlamp unit, a red rear cluster with a clear reversing lamp);
+units at the corners (`_lamp_housings`: a clear headlamp unit reaching back over the nose, a red rear cluster with
+a clear reversing lamp); exterior mirrors (`door_mirrors`);
 plates are quads 5 mm in front of them.
 
 Underneath: the shell's faces that face the ground are the underbody (`UNDERBODY_RGB`: underseal and
@@ -734,9 +735,12 @@ def _end_heights(look: VehicleLook) -> tuple[tuple[float, float], tuple[float, f
     return (float(bottom[0]), float(top[0])), (float(bottom[1]), float(top[1]))
 
 
-def lamps_and_plates(look: VehicleLook) -> tuple[list[Part], dict[str, np.ndarray], list[Part], Part]:
+def lamps_and_plates(
+    look: VehicleLook, shell_vertices_m: np.ndarray | None = None
+) -> tuple[list[Part], dict[str, np.ndarray], list[Part], Part]:
     """Lamp parts (head, tail, brake, indicators), the plates' corners, the plates' part and the plates'
-    backings."""
+    backings. With the shell's vertices (`shell`), the headlamp units reach back over the nose
+    (`_headlamp_tops`)."""
     L, W = look.length_m, look.width_m
     (rear_low, rear_high), (front_low, front_high) = _end_heights(look)
     half = W / 2 * PROFILES[look.body_type].end_width
@@ -780,7 +784,7 @@ def lamps_and_plates(look: VehicleLook) -> tuple[list[Part], dict[str, np.ndarra
     front.texcoords = front.texcoords * [1.0, 0.5] + [0.0, 0.5]
     rear.texcoords = rear.texcoords * [1.0, 0.5]
     backings += [(box, -1) for box in _black_trim(look, head_z)]
-    housings = _lamp_housings(look, head_z, tail_z)
+    housings = _lamp_housings(look, head_z, tail_z, shell_vertices_m)
     if housings is not None:
         lamps.append(housings)
     return lamps, corners, [_merge("plates", "plates", [front, rear])], _part("plate_backings", "trim", backings)
@@ -809,9 +813,12 @@ HOUSING_DEPTH_M = 0.05
 proud of them."""
 
 
-def _lamp_housings(look: VehicleLook, head_z_m: float, tail_z_m: float) -> Part | None:
+def _lamp_housings(
+    look: VehicleLook, head_z_m: float, tail_z_m: float, shell_vertices_m: np.ndarray | None = None
+) -> Part | None:
     """The lamp units round the lit lamps (`HOUSING_BODIES`): a headlamp unit at each front corner and a rear
-    cluster with a reversing lamp at each rear corner, flush with the end faces' corners, one primitive of
+    cluster with a reversing lamp at each rear corner, flush with the end faces' corners (each headlamp unit
+    reaching back over the nose, `_headlamp_tops`, with the shell's vertices), one primitive of
     per-vertex colours (surface "lens"). Seen by day, a car's ends are told by these units, not by the small
     lit lenses."""
     if look.body_type not in HOUSING_BODIES:
@@ -829,10 +836,67 @@ def _lamp_housings(look: VehicleLook, head_z_m: float, tail_z_m: float) -> Part 
         rear = _box((HOUSING_DEPTH_M, rear_w, rear_h), (-L / 2, s * (half - rear_w / 2), rear_top - rear_h / 2))
         reversing = _box((HOUSING_DEPTH_M + 0.008, 0.12, 0.04), (-L / 2, s * (half - 0.33), tail_z_m - 0.085))
         pieces += [(head, HEADLAMP_UNIT_RGB), (rear, REAR_LENS_RGB), (reversing, REVERSING_LENS_RGB)]
+    if shell_vertices_m is not None:
+        pieces += [(top, HEADLAMP_UNIT_RGB) for top in _headlamp_tops(look, shell_vertices_m, half - head_w)]
     part = _part("lamp_units", "lens", [(mesh, -1) for mesh, _ in pieces])
     # `_part` gives each face its own three vertices, in the pieces' order.
     part.colours = np.repeat([rgb for _, rgb in pieces], [3 * len(mesh.faces) for mesh, _ in pieces], axis=0)
     return part
+
+
+HEADLAMP_TOP_DEPTH_M = 0.18
+"""How far a headlamp unit reaches back over the nose from the front face, m: a current car's headlamps sit at the
+bonnet's front corners and wrap up and back over the nose and onto the wing, 0.15–0.25 m in plan (makers' top
+views: a Golf 8's about 0.2 m); seen from above, they are a car's front corners."""
+HEADLAMP_TOP_WIDTH_M = 0.42
+"""The most a headlamp unit's top spans across, from the shoulder inwards, m (makers' top views: 0.35–0.5 m, the
+grille's width between them)."""
+HEADLAMP_TOP_OFFSET_M = 0.004
+"""How far over the shell's surface a headlamp unit's top lies, m."""
+HEADLAMP_TOP_STEEPEST = 1.5
+"""The unit's top stops at the shoulder, where the surface falls more steeply than this (dz/dy, about 56°)."""
+
+
+def _surface_top_m(station_m: np.ndarray, y_m: np.ndarray) -> np.ndarray:
+    """Height of a station's section top at `y_m` (≥ 0), m: its points on the +y side from the top down to the
+    widest, by y (the section is convex: one height per y on that quadrant), interpolated as the mesh's facets
+    are."""
+    side = station_m[station_m[:, 1] >= 0]
+    widest = side[np.argmax(side[:, 1]), 2]
+    quadrant = side[side[:, 2] >= widest]
+    order = np.argsort(quadrant[:, 1])
+    return np.interp(y_m, quadrant[order, 1], quadrant[order, 2])
+
+
+def _headlamp_tops(look: VehicleLook, shell_vertices_m: np.ndarray, inner_m: float) -> list[trimesh.Trimesh]:
+    """Each headlamp unit's top: the shell's surface over the nose at each front corner, from the front face back
+    `HEADLAMP_TOP_DEPTH_M` and from the shoulder (`HEADLAMP_TOP_STEEPEST`) in by `HEADLAMP_TOP_WIDTH_M`, not past
+    `inner_m` (the face's unit's inner edge), lifted
+    `HEADLAMP_TOP_OFFSET_M` off it; a grid on the shell's own stations, so it follows the mesh's facets."""
+    L = look.length_m
+    xs = np.unique(shell_vertices_m[:, 0])
+    xs = xs[xs >= L / 2 - HEADLAMP_TOP_DEPTH_M]
+    columns = 9
+    tops = []
+    for s in (1, -1):
+        rows = []
+        for x in xs:
+            station = shell_vertices_m[shell_vertices_m[:, 0] == x]
+            fine = np.linspace(inner_m, np.abs(station[:, 1]).max(), 64)
+            z = _surface_top_m(station, fine)
+            steep = np.flatnonzero(np.diff(z) / np.diff(fine) < -HEADLAMP_TOP_STEEPEST)
+            outer = fine[steep[0]] if len(steep) else fine[-1]
+            inner = max(inner_m, outer - HEADLAMP_TOP_WIDTH_M)
+            y = np.linspace(inner, max(outer, inner + 1e-3), columns)
+            rows.append(np.stack([np.full(columns, x), s * y, _surface_top_m(station, y) + HEADLAMP_TOP_OFFSET_M], 1))
+        grid = np.concatenate(rows)
+        index = np.arange(len(grid)).reshape(len(xs), columns)
+        a, b, c, d = index[:-1, :-1], index[:-1, 1:], index[1:, 1:], index[1:, :-1]
+        # (a, c, b) turns counter-clockwise seen from above on the +y side (rows run along +x, columns along +y);
+        # the −y side's columns run along −y, so its faces turn the other way round.
+        faces = np.concatenate([np.stack([a, c, b], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)])
+        tops.append(trimesh.Trimesh(grid, faces if s > 0 else faces[:, ::-1], process=False))
+    return tops
 
 
 GRILLE_BODIES = ("hatchback", "sedan", "estate", "suv", "pickup", "van", "box_truck")
@@ -1153,7 +1217,7 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
     tyres = _merge("tyres", "gear", [_part("tyres", "gear", dark[:4], smooth=True)]
                    + ([_part("holes", "gear", dark[4:])] if len(dark) > 4 else []))  # fmt: skip
     rims = _part("rims", "gear", [(piece, w) for w in range(4) for piece in rim])
-    lamps, plate_corners, plates, backings = lamps_and_plates(look)
+    lamps, plate_corners, plates, backings = lamps_and_plates(look, vertices)
     if look.body_type in DESTINATION_SIGN_BODIES:
         panel, dots = destination_sign(look)
         backings = _merge("plate_backings", "trim", [backings, panel])
