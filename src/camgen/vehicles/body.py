@@ -24,8 +24,8 @@ with hand holes and a hub of ten nuts, `steel_disc_wheel_meshes`) and shows its 
 destination display over the windscreen (`destination_sign`, `camgen.vehicles.sign`) and carries its
 air-conditioning unit on the roof (`roof_unit`). Lamps are thin boxes half sunk into the shell's ends, in lamp
 units at the corners (`_lamp_housings`: a clear headlamp unit reaching back over the nose, a red rear cluster with
-a clear reversing lamp); exterior mirrors (`door_mirrors`);
-plates are quads 5 mm in front of them.
+a clear reversing lamp); plates are quads 5 mm in front of them. Exterior mirrors (`door_mirrors`) stand out of
+the outline at the front side windows' lower corners (a bus's on arms ahead of its front).
 
 Underneath: the shell's faces that face the ground are the underbody (`UNDERBODY_RGB`: underseal and
 plastic undertrays, not the paint), and the ground under the whole footprint, which sees the sky only
