@@ -194,16 +194,17 @@ class SwayingProp:
     placed_at_s: float | None = None
     """The time its vertices were last bent to."""
 
-    def place(self, time_s: float, scene: pyrender.Scene, deformed: set) -> None:
-        """Bend the prop's vertices to `time_s` (nothing when they already are)."""
+    def place(self, time_s: float, scene: pyrender.Scene, deformed: set) -> bool:
+        """Bend the prop's vertices to `time_s` (nothing when they already are); whether they were bent."""
         if self.placed_at_s == time_s:
-            return
+            return False
         primitive = self.node.mesh.primitives[0]
         primitive.positions, primitive.normals = self.sway.deformed(self.rest_vertices_m, self.rest_normals, time_s)
         deformed.add(primitive)
         self.node.mesh._bounds = None  # pyrender caches a mesh's bounds, and the scene's until a node moves
         scene.set_pose(self.node, self.node.matrix)
         self.placed_at_s = time_s
+        return True
 
 
 @dataclass
@@ -252,6 +253,14 @@ class SceneGraph:
     from them: `camgen.render.nir`)."""
     placed_time_s: float | None = None
     """The time the actors were last placed at (`place_actors` places them again only for another)."""
+    look_versions: list[int] = field(default_factory=list)
+    """Per moving node (in the order of `moving_nodes`), a count that `place_actors` raises whenever it may have
+    changed what the node draws (its pose, vertices, normals or lamps), and only then: equal counts at two times
+    mean the same look, so a caller may keep what it derived from it (`camgen.render.sequence`: the blur test's
+    vertices, the kept frame's looks). Nothing else moves a node of the graph."""
+
+    def __post_init__(self):
+        self.look_versions = [0] * (len(self.actor_nodes) + len(self.swaying))
 
     @property
     def moving_nodes(self) -> list[pyrender.Node]:
@@ -299,20 +308,25 @@ class SceneGraph:
             return
         self.placed_time_s = time_s
         vehicles = self.vehicles or [None] * len(self.actor_nodes)
-        for route, node, local, rig, vehicle in zip(
-            self.actor_routes, self.actor_nodes, self.actor_local_poses, self.people, vehicles, strict=True
+        versions = self.look_versions
+        for k, (route, node, local, rig, vehicle) in enumerate(
+            zip(self.actor_routes, self.actor_nodes, self.actor_local_poses, self.people, vehicles, strict=True)
         ):
             if rig is None and vehicle is None:
                 self.scene.set_pose(node, actor_pose(route, time_s) @ local)
+                versions[k] += 1
             elif vehicle is not None and vehicle.place(time_s):
                 _pose_vehicle_mesh(node, vehicle, self.deformed, sign_luminance_cd_m2(self.scene, vehicle))
                 self.scene.set_pose(node, np.eye(4))
+                versions[k] += 1
             elif vehicle is not None and self.daylight is not None and vehicle.sign_centre_m is not None:
                 _light_display(node, vehicle, sign_luminance_cd_m2(self.scene, vehicle))  # a standing bus at dusk
+                versions[k] += 1
         self.crowd.place(time_s)
-        for node, rig in zip(self.actor_nodes, self.people, strict=True):
+        for k, (node, rig) in enumerate(zip(self.actor_nodes, self.people, strict=True)):
             if rig is None:
                 continue
+            versions[k] += 1
             if isinstance(rig, CharacterRig):
                 rig.place(time_s)
             for primitive, part in zip(node.mesh.primitives, getattr(rig, "parts", [slice(None)]), strict=True):
@@ -321,8 +335,9 @@ class SceneGraph:
                 self.deformed.add(primitive)
             node.mesh._bounds = None  # pyrender caches a mesh's bounds, and the scene's bounds until
             self.scene.set_pose(node, np.eye(4))  # a node moves: the identity pose stands for "moved"
-        for prop in self.swaying:
-            prop.place(time_s, self.scene, self.deformed)
+        for k, prop in enumerate(self.swaying, start=len(self.actor_nodes)):
+            if prop.place(time_s, self.scene, self.deformed):
+                versions[k] += 1
 
 
 def instance_table(scene: Scene) -> tuple[Instance, ...]:

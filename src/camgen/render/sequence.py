@@ -53,6 +53,15 @@
   path, auto-exposure, every output) on the parking lot's PTZ at 1080p, four consecutive frames, the
   2-core machine quiet: 3.47 s a frame before, 2.59 s after (the first frame 16.1 s, 6.3 s); the kept
   rectangles are 35 % of the frame, nearly all the six swaying trees and their shadows.
+  What a still frame does besides drawing is kept small, deciding exactly as before: the actors are placed
+  three times (the blur test's start and end, then the frame time that the rectangles and draws share); what
+  changed since the kept frame is told from the looks kept with it (`_Looks`, shared while a node's
+  `SceneGraph.look_versions` holds), not by placing the actors at its time again; the blur test skips a node
+  whose look holds over the exposure (a parked car), and one whose image path `_path_bound_px` bounds under
+  the threshold, and projects the others vertex by vertex; and the rectangles merge by their draws' pixels
+  (`RECT_MERGE_SLACK_PX`). A held 720p sim step of ptz_follow, stepped in turn with the code before (24 steps
+  each, load 8): 1.75 → 1.39 s (×0.82 step by step); the blur test 174 → 83 ms, the rectangles 80 → 2 ms,
+  placing the actors 118 → 71 ms, the draws 1375 → 1183 ms; the same frames bit for bit.
 """
 
 from __future__ import annotations
@@ -183,9 +192,14 @@ def merged_rects_px(rects: list[tuple[int, int, int, int]], slack_px: int) -> li
 MOVING_AREA_MAX_FRACTION = 0.85
 """Above this share of the frame inside the moving regions, every sub-frame is drawn whole: the crops
 would save less than their fixed costs (a shadow-map pass each, the sky and far ground per draw)."""
-RECT_MERGE_SLACK_PX = 256 * 256
-"""Two moving regions are drawn as one when that adds no more than this many pixels: a stand-in for each
-draw's fixed cost (its shadow-map passes, Python, the sky and far-ground set-up), chosen, not tuned."""
+RECT_MERGE_SLACK_PX = 80 * 80
+"""Two moving regions are drawn as one when that adds no more than this many pixels of the draw (a crop of a
+draw s× finer counts s² per pixel of the frame): a stand-in for a cropped draw's fixed cost (Python, the sky
+and far-ground set-up, the vertices of what reaches the crop; its shadow maps are drawn once per frame).
+Measured on llvmpipe (2 cores, load 8), 16², 128² and 256² crops of the 720p sim step's 2× draw (shadow maps
+kept) on a car, a walker, bare ground and a facade: 5–11 ms, and 0.8–2.3 µs per pixel more, a fixed cost of
+5–8 thousand pixels. 256² pixels of the frame (the figure chosen before) merged a walker and a passing car with
+its cyclist, 300 pixels apart, into one rectangle 40 % larger than the two."""
 RECT_PAD_PX = 2
 """Pixels added around a projected bound: half a pixel of sub-pixel jitter, half a pixel of rasterisation
 to the nearest centre, and one spare."""
@@ -245,6 +259,10 @@ class CameraRenderer:
         """The NIR graph of a night-mode camera (`camgen.render.nir`), built at its first night frame."""
         self._kept_base: _KeptBase | None = None
         """The last still frame's radiance (`_base_radiance`)."""
+        self._sun_texels_m: dict[int, tuple[tuple, float]] = {}
+        """Per sun light node (by id), what its last `_sun_texel_m` depended on, and its value."""
+        self._vertices_m: dict[int, tuple[int, np.ndarray]] = {}
+        """Per moving node, its look version and its vertices then (`_world_vertices_m`)."""
         spec = self.spec
         s = spec.supersampling if "radiance" in spec.passes else 1
         largest = max(spec.width_px, spec.height_px)
@@ -414,7 +432,12 @@ class CameraRenderer:
         the longest image path, px, over the exposure's start, middle and end, of one of its vertices or of
         where that vertex's shadow falls on the lowest surface in the light of a sun or spot light: a shadow
         can sweep the view faster than its caster, or while the caster is out of view); {} when the plan has
-        no motion blur or `blur` is False; None when the head moves or a light changes during the exposure."""
+        no motion blur or `blur` is False; None when the head moves or a light changes during the exposure.
+
+        The same decision at a fraction of the cost: the actors are placed at the start and the end first and
+        at the frame time last (where the frame's draws want them); a node whose look holds over the three
+        (`SceneGraph.look_versions`: a parked car) moves by 0 px; a node whose paths `_path_bound_px` bounds
+        under the threshold is not projected; the others are, vertex by vertex."""
         p, graph, spec = self._motion, self.graph, self.spec
         exposure_s = state.exposure_time_s
         ends = (-0.5, 0.0, 0.5)
@@ -422,27 +445,58 @@ class CameraRenderer:
             return None
         if p is None or not blur:
             return {}
-        moving, lights = graph.moving_nodes, []
-        casting = _shadow_lights(graph.scene) if graph.shadows else []
-        pixels = []
-        for offset in ends:
+        scene, moving = graph.scene, graph.moving_nodes
+        casting = _shadow_lights(scene) if graph.shadows else []
+        placed = {}
+        for offset in (-0.5, 0.5, 0.0):
             graph.place_actors(state.time_s + offset * exposure_s)
-            lights.append(_light_state(graph.scene))
-            pixels.append([_node_pixels(graph.scene, node, view, casting, self._lowest_z_m) for node in moving])
+            placed[offset] = (
+                _light_state(scene),
+                [scene.get_pose(light).copy() for light in casting],
+                list(graph.look_versions),
+                [self._world_vertices_m(k, node) for k, node in enumerate(moving)],
+            )
+        lights, light_poses, versions, vertices = zip(*(placed[offset] for offset in ends), strict=True)
         if not _same_arrays(lights[0], lights[-1]):
             return None
+        lights_held = _same_arrays(lights[0], lights[1])
+        step_px, most, threshold = p["sample_step_px"], p["samples_max"], p["threshold_px"]
+
+        def samples_of(path_px: float) -> int:
+            return sub_frame_count(path_px, step_px=step_px, samples_max=most, threshold_px=threshold)
+
         groups: dict[int, set[int]] = {}
         for k in range(len(moving)):
-            (uv0, front0), (uv1, front1), (uv2, front2) = (pixels[i][k] for i in range(3))
+            node_vertices = [vertices[i][k] for i in range(3)]
+            if lights_held and threshold >= 0.0:  # a path at or under the threshold needs 1 sub-frame
+                if versions[0][k] == versions[1][k] == versions[2][k]:
+                    continue  # the same points at the three times: every path is 0 px
+                if _path_bound_px(node_vertices, view, casting, light_poses[0], self._lowest_z_m) <= threshold:
+                    continue
+            (uv0, front0), (uv1, front1), (uv2, front2) = (
+                _node_pixels(node_vertices[i], view, casting, light_poses[i], self._lowest_z_m) for i in range(3)
+            )
             seen = front0 & front1 & front2 & _near_view(uv1, view)
             if not seen.any():
                 continue
             path_px = np.hypot(*(uv1 - uv0)[:, seen]) + np.hypot(*(uv2 - uv1)[:, seen])
-            step_px, most, threshold = p["sample_step_px"], p["samples_max"], p["threshold_px"]
-            samples = sub_frame_count(float(path_px.max()), step_px=step_px, samples_max=most, threshold_px=threshold)
+            samples = samples_of(float(path_px.max()))
             if samples > 1:
                 groups.setdefault(samples, set()).add(k)
         return groups
+
+    def _world_vertices_m(self, k: int, node) -> np.ndarray:
+        """(N, 3) world positions of the vertices of moving node `k` (`node`) as placed now, every primitive's in
+        turn; kept while its look holds (`SceneGraph.look_versions`)."""
+        version = self.graph.look_versions[k]
+        kept = self._vertices_m.get(k)
+        if kept is not None and kept[0] == version:
+            return kept[1]
+        positions = [np.asarray(primitive.positions, np.float64) for primitive in node.mesh.primitives]
+        pose = self.graph.scene.get_pose(node)
+        vertices = np.concatenate(positions) @ pose[:3, :3].T + pose[:3, 3]
+        self._vertices_m[k] = (version, vertices)
+        return vertices
 
     def _base_radiance(self, state: CameraState, view: View, fit: ShadowFit, *, fine: bool) -> np.ndarray:
         """The radiance at the frame time with s × s area samples per pixel, kept for the next frame: `fine`, one
@@ -450,17 +504,23 @@ class CameraRenderer:
         sub-frames sample them. When the view, the daylight and the sampling are the kept one's, only the
         rectangles that bound what moved between the two (`moving_rects_px` at the two times) are drawn again,
         each cropped from the whole view's draws (`_fine_crops`, `_mean_of_draws`: the same pixels, bit for
-        bit)."""
+        bit). What moved is told from the looks kept with the last frame (`_Looks`), so the actors are placed at the
+        frame time only."""
         graph, s = self.graph, self.spec.supersampling
         daylight = _daylight_state(graph)
         kept, rects = self._kept_base, None
+        graph.place_actors(state.time_s)
+        looks = _Looks.now(graph, None if kept is None else kept.looks)
         if (
             kept is not None
             and kept.fine == fine
             and _same_view(kept.view, view)
             and _same_arrays(kept.daylight, daylight)
         ):
-            rects = self._moving_rects_at(view, [kept.time_s, state.time_s], fit, None)
+            changed = [looks.differ(kept.looks, k) for k in range(len(looks.versions))]
+            boxes = [[kept.looks.boxes[k], looks.boxes[k]] if moved else [] for k, moved in enumerate(changed)]
+            slack_px = RECT_MERGE_SLACK_PX / s**2 if fine else RECT_MERGE_SLACK_PX  # in the draws' pixels
+            rects = self._rects_of(view, fit, boxes, changed, slack_px)
         positions = [] if fine else [(0.0, dx_px, dy_px) for _, dx_px, dy_px in jittered_samples(s * s, s)]
         if rects is None:  # over the kept background of each draw, where the plan keeps one
             if fine:
@@ -477,7 +537,7 @@ class CameraRenderer:
             )
             for (x0, y0, x1, y1), part in zip(rects, parts, strict=True):
                 radiance[y0:y1, x0:x1] = part
-        self._kept_base = _KeptBase(view, daylight, state.time_s, radiance, fine)
+        self._kept_base = _KeptBase(view, daylight, radiance, fine, looks)
         return radiance
 
     def _fine_crops(self, state: CameraState, view: View, fit: ShadowFit, rects: list) -> list[np.ndarray]:
@@ -629,22 +689,35 @@ class CameraRenderer:
                 boxes[k].append(box_corners(*node.mesh.bounds, scene.get_pose(node)))
         if not _same_arrays(lights_before, _light_state(scene)):
             return None
+        return self._rects_of(view, fit, boxes, changed, RECT_MERGE_SLACK_PX)
+
+    def _rects_of(
+        self, view: View, fit: ShadowFit, boxes: list[list[np.ndarray]], changed: list[bool], slack_px: float
+    ) -> list[tuple[int, int, int, int]] | None:
+        """The rectangles of `moving_rects_px` for the moving nodes whose look `changed`, each bounded by its box
+        corners `boxes` (8, 3 each) at the times it was placed at, merged while a rectangle around two costs no
+        more than the two apart plus `slack_px` (`merged_rects_px`, in the pixels of `view`)."""
+        from pyrender.light import DirectionalLight
+
+        scene = self.graph.scene
         near_m, far_m = self.clip_range_m(view)
-        casting = _shadow_lights(scene) if graph.shadows else []
+        casting = _shadow_lights(scene) if self.graph.shadows else []
+        sun_texels_m = {}
         rects = []
-        for k in range(len(moving)):
-            if not changed[k]:
+        for k, moved in enumerate(changed):
+            if not moved:
                 continue
             corners = np.concatenate(boxes[k])
             low, high = corners.min(axis=0), corners.max(axis=0)
-            grow_m = max(
-                (
-                    SHADOW_TEXEL_MARGIN
-                    * _shadow_texel_m(scene, node, fit, (near_m, far_m), self._caster_box_m, corners)
-                    for node in casting
-                ),
-                default=0.0,
-            )
+            texels_m = []
+            for node in casting:
+                if isinstance(node.light, DirectionalLight):  # the same for every caster
+                    if id(node) not in sun_texels_m:
+                        sun_texels_m[id(node)] = self._sun_texel_m(node, fit, (near_m, far_m))
+                    texels_m.append(sun_texels_m[id(node)])
+                else:
+                    texels_m.append(_shadow_texel_m(scene, node, fit, (near_m, far_m), self._caster_box_m, corners))
+            grow_m = SHADOW_TEXEL_MARGIN * max(texels_m, default=0.0)
             swept = box_corners(low - grow_m, high + grow_m, np.eye(4))
             hulls = [swept]
             for node in casting:
@@ -656,11 +729,31 @@ class CameraRenderer:
                 rect = _projected_rect_px(hull, view, NEAR_CLIP_M)
                 if rect is not None:
                     rects.append(aligned_rect_px(rect, view.width_px, view.height_px))
-        rects = merged_rects_px(rects, RECT_MERGE_SLACK_PX)
+        rects = merged_rects_px(rects, slack_px)
         area = sum((x1 - x0) * (y1 - y0) for x0, y0, x1, y1 in rects)
         if area > MOVING_AREA_MAX_FRACTION * view.width_px * view.height_px:
             return None
         return rects
+
+    def _sun_texel_m(self, node, fit: ShadowFit, clip_m: tuple[float, float]) -> float:
+        """`_shadow_texel_m` of a sun light, which does not depend on the caster: kept while the sun, the fit
+        and the clip range hold (a held view's frames ask for the same)."""
+        pose = self.graph.scene.get_pose(node)
+        key = (
+            pose.tobytes(),
+            fit.view.K_px.tobytes(),
+            fit.view.T_world_from_cam.tobytes(),
+            fit.view.width_px,
+            fit.view.height_px,
+            np.asarray(fit.low_m, np.float64).tobytes(),
+            np.asarray(fit.high_m, np.float64).tobytes(),
+            clip_m,
+        )
+        kept = self._sun_texels_m.get(id(node))
+        if kept is None or kept[0] != key:
+            texel_m = _shadow_texel_m(self.graph.scene, node, fit, clip_m, self._caster_box_m, np.zeros((1, 3)))
+            kept = self._sun_texels_m[id(node)] = (key, texel_m)
+        return kept[1]
 
     def _rain(self, view: View, state: CameraState, radiance: np.ndarray, depth_m: np.ndarray | None) -> np.ndarray:
         """The frame's radiance in the scene's rain (`camgen.render.rain`): streaks over the exposure the
@@ -744,10 +837,40 @@ class _KeptBase:
 
     view: View
     daylight: list[np.ndarray]
-    time_s: float
     radiance: np.ndarray
     fine: bool
     """Drawn s× finer and box-averaged, or as s² jittered 1× draws (`CameraRenderer._base_radiance`)."""
+    looks: _Looks
+    """What each moving node drew then."""
+
+
+@dataclass
+class _Looks:
+    """Each moving node's look (`_actor_look`), its version (`SceneGraph.look_versions`) and its box corners (8, 3),
+    at one placement of the actors."""
+
+    versions: list[int]
+    looks: list[tuple]
+    boxes: list[np.ndarray]
+
+    @staticmethod
+    def now(graph: SceneGraph, before: _Looks | None) -> _Looks:
+        """The looks as the actors are placed now, sharing `before`'s where a node's version is the same (its look
+        and box are then the same: only the others are copied)."""
+        scene, versions = graph.scene, list(graph.look_versions)
+        looks, boxes = [], []
+        for k, node in enumerate(graph.moving_nodes):
+            if before is not None and before.versions[k] == versions[k]:
+                looks.append(before.looks[k])
+                boxes.append(before.boxes[k])
+            else:
+                looks.append(_actor_look(scene, node))
+                boxes.append(box_corners(*node.mesh.bounds, scene.get_pose(node)))
+        return _Looks(versions, looks, boxes)
+
+    def differ(self, other: _Looks, k: int) -> bool:
+        """Whether node `k` looks different here and in `other`."""
+        return self.looks[k] is not other.looks[k] and not _same_arrays(self.looks[k], other.looks[k])
 
 
 def _daylight_state(graph: SceneGraph) -> list[np.ndarray]:
@@ -767,18 +890,18 @@ def _same_arrays(a, b) -> bool:
     return len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
 
 
-def _node_pixels(scene, node, view: View, casting: list, lowest_z_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """Pixels (2, N) of `view` where the vertices of `node`'s mesh, as placed now, project, then where each
-    vertex's shadow falls on the plane z = `lowest_z_m` in the light of each node of `casting` (a sun's along
-    its direction, a spot light's along its rays), and whether each lies in front of the near plane and is
-    a point at all (a shadow of a vertex the light does not shine down past is not) (N,)."""
-    positions = [np.asarray(primitive.positions, np.float64) for primitive in node.mesh.primitives]
-    pose = scene.get_pose(node)
-    vertices = np.concatenate(positions) @ pose[:3, :3].T + pose[:3, 3]
+def _node_pixels(
+    vertices_m: np.ndarray, view: View, casting: list, light_poses: list[np.ndarray], lowest_z_m: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Pixels (2, N) of `view` where the world points `vertices_m` (N, 3: a node's vertices) project, then
+    where each one's shadow falls on the plane z = `lowest_z_m` in the light of each node of `casting` (posed at
+    `light_poses`; a sun's along its direction, a spot light's along its rays), and whether each lies in front
+    of the near plane and is a point at all (a shadow of a vertex the light does not shine down past is not)
+    (N,)."""
+    vertices = vertices_m
     points, valid = [vertices], [np.ones(len(vertices), bool)]
     height_m = vertices[:, 2] - lowest_z_m
-    for light in casting:
-        light_pose = scene.get_pose(light)
+    for light, light_pose in zip(casting, light_poses, strict=True):
         if type(light.light).__name__ == "DirectionalLight":
             d = -light_pose[:3, 2]  # a light shines along its node's −Z
             reach = height_m / -d[2] if d[2] < -1e-6 else np.full(len(vertices), np.nan)
@@ -793,6 +916,60 @@ def _node_pixels(scene, node, view: View, casting: list, lowest_z_m: float) -> t
     front = (camera[:, 2] >= NEAR_CLIP_M) & np.concatenate(valid)
     camera[~front, 2] = 1.0
     return np.stack(_pinhole_px(camera, view.K_px)), front
+
+
+PATH_BOUND_MARGIN = 1e-6
+"""Relative and absolute (px) margin `_path_bound_px` adds to its bound, far above the rounding of both it and
+the vertex-by-vertex paths it stands for (~1e-12 px), so that a bound under the threshold stays a proof."""
+
+
+def _path_bound_px(
+    vertices_m: list[np.ndarray], view: View, casting: list, light_poses: list[np.ndarray], lowest_z_m: float
+) -> float:
+    """An upper bound, px, on the longest image path that `CameraRenderer._blurred_groups` measures for one node:
+    over the points of `_node_pixels` (the vertices `vertices_m` at the exposure's start, middle and end, (N, 3)
+    each, and their shadows in the light of `casting`, held at `light_poses`) that lie in front of the near plane
+    at all three times and within a view's size of the view at the middle, |uv(middle) − uv(start)| +
+    |uv(end) − uv(middle)|; inf where no bound is known (a spot light casts).
+
+    For camera-frame points X_a, X_b (z_a > 0) with q = (x/z, y/z) and pixels uv = A·q + c (A the upper 2×2 of K),
+    q_a − q_b = ((X_a − X_b)_xy − (z_a − z_b)·q_b) / z_a, so by Cauchy–Schwarz
+    |uv_a − uv_b| ≤ ‖A‖₂·√(1 + |q_b|²)·|X_a − X_b| / z_a. At the middle, b, a counted point's pixel lies in the
+    box (−W, 2W) × (−H, 2H), so |q_b| is at most its largest at the box's corners (|q| is convex); at an end, a,
+    its depth is at least the near plane and at least the least depth of all the node's points then; and
+    |X_a − X_b| is the world distance the point moved (the camera frame turns and shifts the world). A vertex's
+    shadow in a sun shining along d is P + ((P_z − z_low)/(−d_z))·d, so it moves by ΔP + (ΔP_z/(−d_z))·d and
+    lies at that depth. The bound takes, per end, the largest distance over the least depth, of the vertices and
+    of each sun's shadows: the longest path is at most the sum over the two ends."""
+    if any(type(light.light).__name__ != "DirectionalLight" for light in casting):
+        return math.inf
+    start, middle, end = vertices_m
+    if len(middle) == 0:
+        return 0.0
+    K, T = view.K_px, view.T_world_from_cam
+    A = np.array([[K[0, 0], K[0, 1]], [0.0, K[1, 1]]])
+    w, h = view.width_px, view.height_px
+    corners = np.array([[-w, -h], [2 * w, -h], [-w, 2 * h], [2 * w, 2 * h]], np.float64) - K[:2, 2]
+    q = np.linalg.solve(A, corners.T)
+    gain = float(np.linalg.norm(A, 2)) * math.sqrt(1.0 + float(np.max(np.sum(q * q, axis=0))))
+    axis_m, origin_m = T[:3, 2], T[:3, 3]  # the camera's depth axis and centre, world
+    suns = [-pose[:3, 2] for pose in light_poses if -pose[2, 2] < -1e-6]  # else no shadow (`_node_pixels`)
+    kinds = [0.0] * (1 + len(suns))  # the bound of the vertices' paths, then of each sun's shadows'
+    for vertices in (start, end):
+        moved = vertices - middle
+        depth_m = (vertices - origin_m) @ axis_m
+        kinds[0] += _longest(moved) / max(NEAR_CLIP_M, float(depth_m.min()))
+        for j, d in enumerate(suns, start=1):
+            shadow_moved = moved + (moved[:, 2] / -d[2])[:, None] * d
+            shadow_depth_m = depth_m + (vertices[:, 2] - lowest_z_m) / -d[2] * float(d @ axis_m)
+            kinds[j] += _longest(shadow_moved) / max(NEAR_CLIP_M, float(shadow_depth_m.min()))
+    bound = gain * max(kinds)
+    return bound * (1.0 + PATH_BOUND_MARGIN) + PATH_BOUND_MARGIN if math.isfinite(bound) else math.inf
+
+
+def _longest(vectors: np.ndarray) -> float:
+    """The largest length of the rows of `vectors` (N, 3), N ≥ 1."""
+    return float(np.sqrt(np.max(np.einsum("ij,ij->i", vectors, vectors))))
 
 
 def _camera_frame(points_m: np.ndarray, view: View) -> np.ndarray:
