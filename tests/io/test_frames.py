@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import struct
+import zlib
 from pathlib import Path
 
 import cv2
@@ -10,7 +12,7 @@ import OpenImageIO as oiio  # noqa: N813 - the alias its documentation uses
 import pytest
 
 from camgen.errors import ConfigError
-from camgen.io.frames import depth_mm_u16, write_depth, write_frame
+from camgen.io.frames import PNG_COMPRESSION_LEVEL, PNG_ROW_FILTER, depth_mm_u16, write_depth, write_frame
 
 HEIGHT_PX, WIDTH_PX = 24, 32
 SUFFIX = {"png": ".png", "tiff": ".tiff", "exr": ".exr"}
@@ -105,6 +107,64 @@ def test_exr_half_rejects_values_it_would_turn_to_inf(tmp_path: Path) -> None:
         write_frame(tmp_path / "half.exr", image, format="exr", exr_pixel_type="half")
     image[:] = np.inf  # inf is inf in both
     write_frame(tmp_path / "half.exr", image, format="exr", exr_pixel_type="half")
+
+
+PNG_FILTER_TYPES = {"none": 0, "sub": 1, "up": 2, "average": 3, "paeth": 4}
+"""The filter-type byte that starts each row of PNG image data (ISO/IEC 15948, 9.2)."""
+
+
+def png_rows(path: Path) -> tuple[int, list[int]]:
+    """The zlib stream's FLEVEL (RFC 1950: 0 for level 1, 1 for 2–5, 2 for 6, 3 for 7–9) and the filter type
+    of each row, read from the file's chunks by hand (8-bit or 16-bit, not interlaced)."""
+    data = path.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    offset, idat, header = 8, b"", None
+    while offset < len(data):
+        length, kind = struct.unpack(">I4s", data[offset : offset + 8])
+        body = data[offset + 8 : offset + 8 + length]
+        if kind == b"IHDR":
+            header = struct.unpack(">IIBBBBB", body)
+        elif kind == b"IDAT":
+            idat += body
+        offset += 12 + length
+    width_px, height_px, bit_depth, colour_type, _, _, interlace = header
+    assert interlace == 0
+    channels = {0: 1, 2: 3}[colour_type]
+    row_bytes = 1 + width_px * channels * bit_depth // 8
+    raw = zlib.decompress(idat)
+    assert len(raw) == height_px * row_bytes
+    return idat[1] >> 6, [raw[row * row_bytes] for row in range(height_px)]
+
+
+@pytest.mark.parametrize(("dtype", "channels"), [(np.uint8, 3), (np.uint16, 3), (np.uint8, None), (np.uint16, 1)])
+def test_png_rows_all_get_the_documented_filter(tmp_path: Path, dtype: type, channels: int | None) -> None:
+    """Every row is filtered with PNG_ROW_FILTER's choice for its channel count, at PNG_COMPRESSION_LEVEL,
+    and decodes to the array written (test_integer_round_trip_is_exact has the small random cases)."""
+    rng = np.random.default_rng(5)
+    shape = (96, 128) + (() if channels is None else (channels,))
+    ramp = np.linspace(0, 0.8 * np.iinfo(dtype).max, shape[1])[np.newaxis, :]
+    image = ramp + rng.normal(0, 0.02 * np.iinfo(dtype).max, (shape[0], shape[1]))
+    image = np.clip(image, 0, np.iinfo(dtype).max).astype(dtype)
+    image = image if channels is None else np.repeat(image[..., np.newaxis], channels, axis=2)
+    write_frame(tmp_path / "frame.png", image, format="png")
+    level, filters = png_rows(tmp_path / "frame.png")
+    assert set(filters) == {PNG_FILTER_TYPES[PNG_ROW_FILTER[channels or 1]]}
+    assert level == {1: 0, 2: 1, 3: 1, 4: 1, 5: 1, 6: 2}.get(PNG_COMPRESSION_LEVEL, 3)
+    np.testing.assert_array_equal(read_cv2_rgb(tmp_path / "frame.png").reshape(image.shape), image)
+    np.testing.assert_array_equal(read_oiio(tmp_path / "frame.png")[0].reshape(image.shape), image)
+
+
+def test_depth_png_rows_use_the_up_filter(tmp_path: Path) -> None:
+    """A depth map is one channel: "up" on every row, and the millimetres read back as depth_mm_u16 gives."""
+    rows_m = np.linspace(3.0, 60.0, 90)[:, np.newaxis]
+    depth_m = np.repeat(rows_m, 120, axis=1) + np.random.default_rng(6).uniform(0, 0.01, (90, 120))
+    depth_m[:10] = np.inf
+    write_depth(tmp_path / "depth.png", depth_m, format="png16")
+    _, filters = png_rows(tmp_path / "depth.png")
+    assert PNG_ROW_FILTER[1] == "up" and set(filters) == {PNG_FILTER_TYPES["up"]}
+    np.testing.assert_array_equal(
+        cv2.imread(str(tmp_path / "depth.png"), cv2.IMREAD_UNCHANGED), depth_mm_u16(depth_m)[0]
+    )
 
 
 def test_same_input_same_bytes(tmp_path: Path) -> None:
