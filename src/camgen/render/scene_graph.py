@@ -253,7 +253,7 @@ class SceneGraph:
     from them: `camgen.render.nir`)."""
     placed_time_s: float | None = None
     """The time the actors were last placed at (`place_actors` places them again only for another)."""
-    look_versions: list[int] = field(default_factory=list)
+    look_versions: list[int] = field(init=False, default_factory=list)
     """Per moving node (in the order of `moving_nodes`), a count that `place_actors` raises whenever it may have
     changed what the node draws (its pose, vertices, normals or lamps), and only then: equal counts at two times
     mean the same look, so a caller may keep what it derived from it (`camgen.render.sequence`: the blur test's
