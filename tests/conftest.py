@@ -2,10 +2,18 @@
 
 from __future__ import annotations
 
+import os
 import textwrap
 from pathlib import Path
 
 import pytest
+
+# One OpenBLAS thread per test process. Its threads busy-wait for work, and beside the other test process
+# (`make test`: -n 2), OpenCV's thread pool and llvmpipe's on 2 cores they mostly wait: a (4 M × 3) @ (3 × 3)
+# product after OpenCV had run took 0.65 s instead of 0.06 s (the 12 ChArUco views of tests/fit/boards.py:
+# 35 s → 13 s wall, 13 s → 4.6 s CPU, the same images bit for bit). Read when numpy loads OpenBLAS: nothing
+# imports numpy before this file; the processes the tests start inherit it.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 REPO = Path(__file__).resolve().parents[1]
 
