@@ -23,7 +23,7 @@ class KilledWorkers:
     def __init__(self, workers: int) -> None:
         self.submitted: list[Future] = []
 
-    def submit(self, job_json, out_dir, frames, scene_path):
+    def submit(self, job_json, out_dir, frames, scene_path, resume, checkpoint_frames):
         from camgen.job import Job
 
         job = Job.from_json(job_json)
@@ -78,7 +78,7 @@ class CrashedWorkers(KilledWorkers):
     """Each job's worker dies hard mid-frame (the kernel's OOM killer, a crash in the driver): its ``.partial``
     folder stays, and the pool reports the job failed, as `camgen.batch.run._result` does for a broken pool."""
 
-    def submit(self, job_json, out_dir, frames, scene_path):
+    def submit(self, job_json, out_dir, frames, scene_path, resume, checkpoint_frames):
         from camgen.job import Job
 
         job = Job.from_json(job_json)
@@ -87,7 +87,7 @@ class CrashedWorkers(KilledWorkers):
             frames_dir.mkdir(parents=True, exist_ok=True)
             (frames_dir / "000001.jpg").write_bytes(b"\xff\xd8")
         handle = Future()
-        handle.set_result((0, 0.0, "BrokenProcessPool: A process in the process pool was terminated abruptly"))
+        handle.set_result((0, 0.0, "BrokenProcessPool: A process in the process pool was terminated abruptly", 0))
         return handle
 
     def wait(self, handles):

@@ -8,7 +8,8 @@ nothing of `run`; `run` imports the Ray executor only when a batch asks for it.
 
 A worker process opens one OpenGL `Renderer` on its first job and keeps it for the rest (a context per
 process). A pool worker's signals (`init_pool_worker`): SIGINT is ignored (the parent decides), SIGTERM
-unwinds the running job, deleting its temporary files, and ends the worker.
+unwinds the running job, deleting its temporary files (or, in a batch that resumes, keeping its checkpoints
+for the next run), and ends the worker.
 """
 
 from __future__ import annotations
@@ -28,8 +29,9 @@ from camgen.job import Job
 STOP_GRACE_S = 5.0
 """After a stop, how long a worker has to unwind its job (deleting its temporary files) before it is killed."""
 
-JobResult = tuple[int, float, str | None]
-"""What `render_job` returns: (frames written, seconds, error text or None)."""
+JobResult = tuple[int, float, str | None, int]
+"""What `render_job` returns: (frames written, seconds, error text or None, frames of those taken over from a
+stopped render's checkpoints instead of rendered)."""
 
 
 def first_frames(job: Job, frame_count: int | None) -> range | None:
@@ -46,7 +48,15 @@ class JobExecutor(Protocol):
     name: str
     """Recorded in dataset.json: "local" or "ray"."""
 
-    def submit(self, job_json: str, out_dir: str, frames: int | None, scene_path: str) -> Hashable:
+    def submit(
+        self,
+        job_json: str,
+        out_dir: str,
+        frames: int | None,
+        scene_path: str,
+        resume: bool,
+        checkpoint_frames: int | None,
+    ) -> Hashable:
         """Start `render_job` with these arguments; return its handle."""
         ...
 
@@ -55,8 +65,8 @@ class JobExecutor(Protocol):
         ...
 
     def result(self, handle: Hashable) -> JobResult | None:
-        """(frames, seconds, error) of a finished job, or None if it was cancelled or interrupted. A worker
-        that died counts as the job's error."""
+        """(frames, seconds, error, resumed frames) of a finished job, or None if it was cancelled or interrupted.
+        A worker that died counts as the job's error."""
         ...
 
     def cancel(self, handles: Collection[Hashable]) -> None:
@@ -128,23 +138,38 @@ def _stop_worker(signum: int, frame) -> None:
     os._exit(128 + signum)
 
 
-def render_job(job_json: str, out_dir: str, frames: int | None, scene_path: str) -> JobResult:
-    """Runs in a worker: render one job; returns (frames, seconds, error text or None). A pool worker stopped
-    by SIGTERM exits from here, once the job has unwound (the pool's loop would go on to the next job)."""
+def render_job(
+    job_json: str,
+    out_dir: str,
+    frames: int | None,
+    scene_path: str,
+    resume: bool = False,
+    checkpoint_frames: int | None = None,
+) -> JobResult:
+    """Runs in a worker: render one job; returns (frames, seconds, error text or None, resumed frames). A pool
+    worker stopped by SIGTERM exits from here, once the job has unwound (the pool's loop would go on to the next
+    job).
+
+    resume: continue the job from the checkpoints a stopped or failed try left (`execute`'s resume), and keep
+    this try's if it stops or fails too; a job directory whose manifest is of this job but whose files no longer
+    pass `verify` (`run_batch` did not skip it) is rendered again from the start instead. checkpoint_frames:
+    `execute`'s (None: its default); a resumed try must use the interval of the try it continues."""
     global _in_job
     try:
         _in_job = True
         try:
-            return _render(job_json, out_dir, frames, scene_path)
+            return _render(job_json, out_dir, frames, scene_path, resume, checkpoint_frames)
         finally:
             _in_job = False
     except _WorkerStop:  # also when SIGTERM lands in the inner finally, before _in_job is False
         os._exit(128 + signal.SIGTERM)
 
 
-def _render(job_json: str, out_dir: str, frames: int | None, scene_path: str) -> JobResult:
+def _render(
+    job_json: str, out_dir: str, frames: int | None, scene_path: str, resume: bool, checkpoint_frames: int | None
+) -> JobResult:
     global _worker_renderer
-    from camgen.plan.execute import execute
+    from camgen.plan.execute import execute, finished_render
     from camgen.render.renderer import Renderer
 
     started = time.perf_counter()
@@ -152,15 +177,21 @@ def _render(job_json: str, out_dir: str, frames: int | None, scene_path: str) ->
         if _worker_renderer is None:
             _worker_renderer = Renderer()
         job = Job.from_json(job_json)
+        chosen = first_frames(job, frames)
         results = execute(
             job,
             out_dir,
             renderer=_worker_renderer,
-            frames=first_frames(job, frames),
+            frames=chosen,
             resolve_path=Path(scene_path).resolve().parent.joinpath,
+            # execute refuses to resume over a finished render's manifest; one that is here although the job was
+            # not skipped no longer verifies, and is rendered again.
+            resume=resume and finished_render(job, out_dir, frames=chosen) is None,
+            checkpoint_frames=checkpoint_frames,
         )
     except Exception as exc:  # reported to the parent as this job's error, with the traceback's last frame
         stack = traceback.extract_tb(exc.__traceback__)
         where = f" (at {Path(stack[-1].filename).name}:{stack[-1].lineno})" if stack else ""
-        return 0, time.perf_counter() - started, error_text(exc) + where
-    return sum(result.frames for result in results), time.perf_counter() - started, None
+        return 0, time.perf_counter() - started, error_text(exc) + where, 0
+    frames_done = sum(result.frames for result in results)
+    return frames_done, time.perf_counter() - started, None, sum(result.resumed_frames for result in results)

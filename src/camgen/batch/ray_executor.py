@@ -62,8 +62,16 @@ class RayExecutor:
                     if handler is not None:
                         signal.signal(signum, handler)
 
-    def submit(self, job_json: str, out_dir: str, frames: int | None, scene_path: str) -> ray.ObjectRef:
-        return _render_task.remote(job_json, out_dir, frames, scene_path)
+    def submit(
+        self,
+        job_json: str,
+        out_dir: str,
+        frames: int | None,
+        scene_path: str,
+        resume: bool,
+        checkpoint_frames: int | None,
+    ) -> ray.ObjectRef:
+        return _render_task.remote(job_json, out_dir, frames, scene_path, resume, checkpoint_frames)
 
     def wait(self, handles: Collection[ray.ObjectRef]) -> list[ray.ObjectRef]:
         refs = list(handles)
@@ -79,13 +87,14 @@ class RayExecutor:
         except RayTaskError as exc:
             if isinstance(exc.cause, KeyboardInterrupt):
                 return None
-            return 0, 0.0, error_text(exc)
+            return 0, 0.0, error_text(exc), 0
         except RayError as exc:  # the worker died, or (after a cancel) the task never settled
-            return 0, 0.0, error_text(exc)
+            return 0, 0.0, error_text(exc), 0
 
     def cancel(self, handles: Collection[ray.ObjectRef]) -> None:
         # As the pool does: each task is interrupted (KeyboardInterrupt: its job unwinds, deleting its temporary
-        # files); one still running after STOP_GRACE_S has its worker killed.
+        # files, or keeping its checkpoints in a batch that resumes); one still running after STOP_GRACE_S has its
+        # worker killed.
         refs = list(handles)
         for ref in refs:
             ray.cancel(ref)

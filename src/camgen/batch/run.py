@@ -6,13 +6,18 @@ process opens one OpenGL `Renderer` on its first job and keeps it for the rest (
 pool uses a "spawn" start, so no worker inherits the parent's OpenGL or thread state). A job whose
 directory already holds a manifest that `verify` passes, for the same job hash and the same frames, is
 skipped. Anything else is rendered again: `execute` clears stale files and writes the manifest last,
-so a job that was killed half-way never looks complete.
+so a job that was killed half-way never looks complete. With ``resume`` (``camgen batch --resume``) a job
+that a stopped batch, a failed try or a killed worker left unfinished is continued from its cameras'
+checkpoints instead (`execute`'s resume: the same bytes as a render never stopped), and a try that stops or
+fails keeps its checkpoints for the next.
 
 Stopping: SIGINT (Ctrl-C, to this process or its whole process group) or SIGTERM (a service manager's
 stop) stops the batch within seconds, not after the running renders. The parent alone decides: pool
 workers ignore SIGINT, and the parent sends each worker SIGTERM, on which the worker unwinds its job
 (its temporary ``.partial`` files are deleted, no manifest is written) and exits; one still alive after
-`STOP_GRACE_S` is killed. The interrupted jobs are recorded as such and a rerun renders them again.
+`STOP_GRACE_S` is killed. The interrupted jobs are recorded as such and a rerun renders them again. In a batch
+that resumes, the stopped workers keep their jobs' ``.partial`` folders (checkpoints, spools, video segments)
+and so does the parent for a killed one; a rerun with ``resume`` continues each from its last checkpoint.
 """
 
 from __future__ import annotations
@@ -67,6 +72,8 @@ class JobOutcome:
     seconds: float = 0.0
     attempts: int = 0
     error: str | None = None
+    resumed_frames: int = 0
+    """Of `frames`, those taken over from the checkpoints of a stopped or failed try instead of rendered."""
 
 
 @dataclass(frozen=True)
@@ -89,6 +96,11 @@ class BatchSummary:
     @property
     def frames(self) -> int:
         return sum(outcome.frames for outcome in self.outcomes if outcome.status == "done")
+
+    @property
+    def rendered_frames(self) -> int:
+        """The done jobs' frames rendered in this run (`frames` less those resumed from checkpoints)."""
+        return sum(outcome.frames - outcome.resumed_frames for outcome in self.outcomes if outcome.status == "done")
 
     @property
     def ok(self) -> bool:
@@ -123,13 +135,21 @@ class PoolExecutor:
             max_workers=workers, mp_context=multiprocessing.get_context("spawn"), initializer=init_pool_worker
         )
 
-    def submit(self, job_json: str, out_dir: str, frames: int | None, scene_path: str) -> Future:
+    def submit(
+        self,
+        job_json: str,
+        out_dir: str,
+        frames: int | None,
+        scene_path: str,
+        resume: bool,
+        checkpoint_frames: int | None,
+    ) -> Future:
         # The pool starts its workers in submit. A signal mask outlives exec, so with SIGINT blocked here a
         # worker starts with it blocked, until `init_pool_worker` ignores it: a Ctrl-C while the worker starts up
         # does not kill it with a traceback. (Here, the signal waits for the mask to be restored.)
         unblocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
         try:
-            return self._pool.submit(render_job, job_json, out_dir, frames, scene_path)
+            return self._pool.submit(render_job, job_json, out_dir, frames, scene_path, resume, checkpoint_frames)
         except BrokenProcessPool as exc:  # a worker died hard (out of memory, a crash in the driver)
             failed: Future = Future()
             failed.set_exception(exc)
@@ -189,6 +209,8 @@ def run_batch(
     on_event: Callable[[JobOutcome], None] | None = None,
     executor: Literal["local", "ray"] = "local",
     address: str | None = None,
+    resume: bool = False,
+    checkpoint_frames: int | None = None,
 ) -> BatchSummary:
     """Render each (batch job, compiled job) into ``out_dir/<scene>-<hash8>/`` with `workers` processes.
 
@@ -205,6 +227,14 @@ def run_batch(
     stops the batch within about `STOP_GRACE_S`: the running jobs are stopped, their partial files deleted,
     and what completed is returned (`stop_signal` set). The dataset record and DATASET.md are written at the
     end, atomically, in every case.
+
+    resume: a job that is not complete is continued from the checkpoints an earlier stopped batch, failed try
+    or killed worker left (`camgen.plan.execute.execute`'s resume), and nothing unfinished is deleted: a stop
+    keeps the running jobs' ``.partial`` folders, a failed try keeps its checkpoints and the retry (or a later
+    batch with resume) continues from them. Jobs without checkpoints render from their first frame; the bytes
+    are those of a batch never stopped. checkpoint_frames: frames between a camera's checkpoints (None:
+    `execute`'s default); it sets where the video is segmented, so a resumed batch must use the interval of
+    the batch it resumes (a checkpoint of another interval is discarded and its camera rendered again).
     """
     check_options(workers=workers, retries=retries, executor=executor, address=address)
     out_dir = Path(out_dir)
@@ -215,16 +245,21 @@ def run_batch(
     running: dict[Hashable, int] = {}
     stop_signal: int | None = None
 
-    def record(index: int, frames_done: int, seconds: float, error: str | None) -> None:
+    def record(index: int, frames_done: int, seconds: float, error: str | None, resumed_frames: int) -> None:
         batch, job = jobs[index]
         status: Status = "failed" if error is not None else "done"
         directory = out_dir / job_directory_name(job)
-        outcomes[index] = JobOutcome(batch, job.job_id, directory, status, frames_done, seconds, attempts[index], error)
+        outcomes[index] = JobOutcome(
+            batch, job.job_id, directory, status, frames_done, seconds, attempts[index], error, resumed_frames
+        )
         if on_event is not None:
             on_event(outcomes[index])
 
     def discard(index: int) -> None:
-        """Delete what an unfinished try of job `index` left (`discard_unfinished`)."""
+        """Delete what an unfinished try of job `index` left (`discard_unfinished`), unless the batch resumes:
+        then it is where the next try continues from."""
+        if resume:
+            return
         job = jobs[index][1]
         discard_unfinished(job, out_dir / job_directory_name(job))
 
@@ -232,7 +267,9 @@ def run_batch(
         batch, job = jobs[index]
         attempts[index] += 1
         # Absolute paths: a Ray worker's working directory is not ours.
-        handle = runner.submit(job.to_json(), str(out_dir.resolve()), frames, str(batch.scene_path.resolve()))
+        handle = runner.submit(
+            job.to_json(), str(out_dir.resolve()), frames, str(batch.scene_path.resolve()), resume, checkpoint_frames
+        )
         running[handle] = index
 
     with _StopSignals() as signals:
@@ -267,8 +304,9 @@ def run_batch(
                         if result is None:  # a Ray task stopped by a Ctrl-C that reached its worker
                             raise KeyboardInterrupt
                         if result[2] is not None:
-                            # A job that raised deleted its files as it unwound; a worker that died hard (out of
-                            # memory, a crash in the driver; the pool then fails its other jobs too) did not.
+                            # A job that raised deleted its files as it unwound (kept them, if it resumes); a worker
+                            # that died hard (out of memory, a crash in the driver; the pool then fails its other jobs
+                            # too) did not.
                             discard(index)
                         if result[2] is not None and attempts[index] <= retries:
                             submit(index)
@@ -286,7 +324,8 @@ def run_batch(
                         record(index, *result)
                     else:
                         # A worker that did not unwind within the grace period was killed in the middle of
-                        # its job (a long draw or encode): its temporary files are deleted here instead.
+                        # its job (a long draw or encode): its temporary files are deleted here instead (kept, for
+                        # their checkpoints, if the batch resumes).
                         discard(index)
         finally:
             if runner is not None:
@@ -349,11 +388,11 @@ class _StopSignals:
 
 
 def _result(future: Future) -> JobResult:
-    """(frames, seconds, error) of a finished task; a worker that died (the pool is then broken, after a stop
-    too) counts as the job's error. Workers ignore SIGINT, so no job ends in a KeyboardInterrupt."""
+    """(frames, seconds, error, resumed frames) of a finished task; a worker that died (the pool is then broken,
+    after a stop too) counts as the job's error. Workers ignore SIGINT, so no job ends in a KeyboardInterrupt."""
     exc = future.exception()
     if exc is not None:  # a broken pool or an unpicklable result: the job failed, the batch goes on
-        return 0, 0.0, error_text(exc)
+        return 0, 0.0, error_text(exc), 0
     return future.result()
 
 
@@ -381,6 +420,7 @@ def write_batch_record(summary: BatchSummary, out_dir: Path, frames: int | None,
                 "frames": o.frames,
                 "seconds": round(o.seconds, 3),
                 "attempts": o.attempts,
+                "resumed_frames": o.resumed_frames,
                 "error": o.error,
             }
             for o in summary.outcomes

@@ -51,6 +51,16 @@ def add_parser(subparsers) -> None:
         metavar="ADDR",
         help="the Ray cluster to run on (e.g. auto, HOST:6379, ray://HOST:10001); default: start a local Ray",
     )
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help=(
+            "continue the jobs a stopped batch (or a failed try) left unfinished from each camera's last checkpoint "
+            "(written every few hundred frames), as render --resume does, and keep what the running jobs wrote if "
+            "this batch is stopped or a job fails too; finished jobs are skipped either way, and the files are the "
+            "bytes of a batch never stopped. Without it, unfinished jobs are deleted and rendered from the start"
+        ),
+    )
     add_profile_dirs_option(parser)
     parser.set_defaults(run=run)
 
@@ -127,12 +137,13 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             on_event=on_event,
             executor=args.executor,
             address=args.address,
+            resume=args.resume,
         )
     _write_dataset_files(args, dataset, summary, out, err)
     table = Table(title=f"{escape(str(args.dataset))} → {escape(str(args.out))}")
     for column in ("done", "skipped", "failed", "frames", "wall time", "frames/s"):
         table.add_column(column, justify="right")
-    fps = summary.frames / summary.wall_s if summary.wall_s > 0 else 0.0
+    fps = summary.rendered_frames / summary.wall_s if summary.wall_s > 0 else 0.0
     table.add_row(
         str(summary.count("done")),
         str(summary.count("skipped")),
@@ -143,9 +154,13 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
     )
     out.print(table)
     if summary.stop_signal is not None:
+        again = (
+            "finished; run again with --resume to continue them from their checkpoints"
+            if args.resume
+            else "rendered; run again to resume"
+        )
         err.print(
-            f"interrupted ({signal.Signals(summary.stop_signal).name}): {summary.count('interrupted')} jobs not "
-            "rendered; run again to resume"
+            f"interrupted ({signal.Signals(summary.stop_signal).name}): {summary.count('interrupted')} jobs not {again}"
         )
         return 128 + summary.stop_signal  # the shell's code for a command a signal ended: 130, 143
     return 0 if summary.ok else 1
@@ -203,6 +218,8 @@ def command_line(args: argparse.Namespace) -> str:
         words += ["--executor", args.executor]
     if args.address is not None:
         words += ["--address", args.address]
+    if args.resume:
+        words.append("--resume")
     for directory in args.profiles:
         words += ["--profiles", str(directory)]
     return shlex.join(words)
@@ -211,12 +228,15 @@ def command_line(args: argparse.Namespace) -> str:
 @contextmanager
 def _job_progress(err: Console, total: int) -> Iterator[Callable[[JobOutcome], None]]:
     """Counts each job's outcome: rich's bar on a terminal, periodic lines (`ProgressLines`) in a log. Skipped
-    jobs and jobs that did not compile took no time, so they are left out of the ETA's rate."""
+    jobs and jobs that did not compile took no time, so they are left out of the ETA's rate, and so are the
+    frames a resumed job took over from its checkpoints."""
+
+    def rendered(outcome: JobOutcome) -> int:
+        return outcome.frames - outcome.resumed_frames if outcome.status == "done" else 0
+
     if not err.is_terminal:
         with ProgressLines(err, "batch", total, "jobs") as lines:
-            yield lambda outcome: lines.advance(
-                frames=outcome.frames if outcome.status == "done" else 0, timed=outcome.attempts > 0
-            )
+            yield lambda outcome: lines.advance(frames=rendered(outcome), timed=outcome.attempts > 0)
         return
     columns = (
         TextColumn("jobs"),
@@ -231,7 +251,7 @@ def _job_progress(err: Console, total: int) -> Iterator[Callable[[JobOutcome], N
 
         def count(outcome: JobOutcome) -> None:
             nonlocal frames_done
-            frames_done += outcome.frames if outcome.status == "done" else 0
+            frames_done += rendered(outcome)
             elapsed_s = progress.tasks[task].elapsed or 0.0
             progress.update(task, advance=1, fps=frames_done / elapsed_s if elapsed_s > 0 else 0.0)
 
