@@ -149,18 +149,27 @@ def shifted(view: View, dx_px: float, dy_px: float) -> View:
     return View(K, view.T_world_from_cam, view.width_px, view.height_px)
 
 
-def aligned_rect_px(rect_px: tuple[int, int, int, int], width_px: int, height_px: int) -> tuple[int, int, int, int]:
+def aligned_rect_px(
+    rect_px: tuple[int, int, int, int], width_px: int, height_px: int, step_px: int = SKY_STEP_PX
+) -> tuple[int, int, int, int]:
     """`rect_px` grown so that a draw cropped to it evaluates the sky on the whole view's grid
     (`camgen.render.renderer.sky_view`: nodes every `SKY_STEP_PX` pixels from the draw's corner, plus its
-    last pixel, interpolated between): its left and top on a multiple of `SKY_STEP_PX`, its last column
-    and row on one too or at the view's edge."""
-    step = SKY_STEP_PX
+    last pixel, interpolated between): its left and top on a multiple of `step_px` (`SKY_STEP_PX`; a
+    rectangle whose crops are drawn s× finer needs `SKY_STEP_PX` / gcd(`SKY_STEP_PX`, s), `_fine_step_px`),
+    its last column and row on one too or at the view's edge."""
+    step = step_px
 
     def end(last: int, size: int) -> int:
         return min(size, -(-last // step) * step + 1)
 
     x0, y0, x1, y1 = rect_px
     return (x0 // step) * step, (y0 // step) * step, end(x1 - 1, width_px), end(y1 - 1, height_px)
+
+
+def _fine_step_px(supersampling: int) -> int:
+    """The grid, px, that a rectangle's left and top lie on when it is drawn as crops of a draw `supersampling`
+    times finer (`CameraRenderer._fine_crops`): times the factor, they lie on that draw's sky grid."""
+    return SKY_STEP_PX // math.gcd(SKY_STEP_PX, supersampling)
 
 
 def merged_rects_px(rects: list[tuple[int, int, int, int]], slack_px: int) -> list[tuple[int, int, int, int]]:
@@ -520,7 +529,7 @@ class CameraRenderer:
             changed = [looks.differ(kept.looks, k) for k in range(len(looks.versions))]
             boxes = [[kept.looks.boxes[k], looks.boxes[k]] if moved else [] for k, moved in enumerate(changed)]
             slack_px = RECT_MERGE_SLACK_PX / s**2 if fine else RECT_MERGE_SLACK_PX  # in the draws' pixels
-            rects = self._rects_of(view, fit, boxes, changed, slack_px)
+            rects = self._rects_of(view, fit, boxes, changed, slack_px, _fine_step_px(s) if fine else SKY_STEP_PX)
         positions = [] if fine else [(0.0, dx_px, dy_px) for _, dx_px, dy_px in jittered_samples(s * s, s)]
         if rects is None:  # over the kept background of each draw, where the plan keeps one
             if fine:
@@ -541,16 +550,19 @@ class CameraRenderer:
         return radiance
 
     def _fine_crops(self, state: CameraState, view: View, fit: ShadowFit, rects: list) -> list[np.ndarray]:
-        """The radiance at the frame time in each of `rects` (x0, y0, x1, y1, on the sky's grid:
-        `aligned_rect_px`) as the whole view's one draw s× finer, box-averaged, gives it (`_sub_frame_mean`):
-        each rectangle's crop of that draw, grown to the fine draw's sky grid and the growth dropped, so the
-        same pixels bit for bit. Shadow maps are drawn once."""
+        """The radiance at the frame time in each of `rects` (x0, y0, x1, y1, their left and top on the grid of
+        `_fine_step_px`) as the whole view's one draw s× finer, box-averaged, gives it (`_sub_frame_mean`):
+        each rectangle's crop of that draw, grown to the fine draw's sky grid and the growth (right and bottom
+        only) dropped, so the same pixels bit for bit. Shadow maps are drawn once."""
         s = self.spec.supersampling
         fine = view.scaled(s)
         clip = self.clip_range_m(view)
         self.graph.place_actors(state.time_s)
         parts = []
+        step = _fine_step_px(s)
         for k, (x0, y0, x1, y1) in enumerate(rects):
+            if x0 % step or y0 % step:
+                raise ValueError(f"rectangle {(x0, y0, x1, y1)} does not start on the {step}-pixel grid")
             crop = aligned_rect_px((x0 * s, y0 * s, x1 * s, y1 * s), fine.width_px, fine.height_px)
             drawn = self.renderer.draw(
                 self.graph, fine, ("radiance",), clip_range_m=clip, shadow_fit=fit, crop_px=crop,
@@ -689,14 +701,21 @@ class CameraRenderer:
                 boxes[k].append(box_corners(*node.mesh.bounds, scene.get_pose(node)))
         if not _same_arrays(lights_before, _light_state(scene)):
             return None
-        return self._rects_of(view, fit, boxes, changed, RECT_MERGE_SLACK_PX)
+        return self._rects_of(view, fit, boxes, changed, RECT_MERGE_SLACK_PX, SKY_STEP_PX)
 
     def _rects_of(
-        self, view: View, fit: ShadowFit, boxes: list[list[np.ndarray]], changed: list[bool], slack_px: float
+        self,
+        view: View,
+        fit: ShadowFit,
+        boxes: list[list[np.ndarray]],
+        changed: list[bool],
+        slack_px: float,
+        step_px: int,
     ) -> list[tuple[int, int, int, int]] | None:
         """The rectangles of `moving_rects_px` for the moving nodes whose look `changed`, each bounded by its box
-        corners `boxes` (8, 3 each) at the times it was placed at, merged while a rectangle around two costs no
-        more than the two apart plus `slack_px` (`merged_rects_px`, in the pixels of `view`)."""
+        corners `boxes` (8, 3 each) at the times it was placed at, aligned to `step_px` (`aligned_rect_px`) and
+        merged while a rectangle around two costs no more than the two apart plus `slack_px` (`merged_rects_px`,
+        in the pixels of `view`)."""
         from pyrender.light import DirectionalLight
 
         scene = self.graph.scene
@@ -728,7 +747,7 @@ class CameraRenderer:
             for hull in hulls:
                 rect = _projected_rect_px(hull, view, NEAR_CLIP_M)
                 if rect is not None:
-                    rects.append(aligned_rect_px(rect, view.width_px, view.height_px))
+                    rects.append(aligned_rect_px(rect, view.width_px, view.height_px, step_px))
         rects = merged_rects_px(rects, slack_px)
         area = sum((x1 - x0) * (y1 - y0) for x0, y0, x1, y1 in rects)
         if area > MOVING_AREA_MAX_FRACTION * view.width_px * view.height_px:
