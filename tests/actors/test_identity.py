@@ -104,10 +104,11 @@ def test_each_person_matches_itself_across_cameras_better_than_anyone_else(tmp_p
     # Each person's colours agree between the two cameras, which film it from opposite corners (one its
     # sunlit side, the other its shaded side, at different exposures): within OWN_DISTANCE_MAX. Measured at
     # this frame (seeded: every run the same): 9.6 (pedestrian_1, 127 and 36 px tall) and 13.4 (pedestrian_2,
-    # 107 px) since the clothing fixes of 2026-11-26 (10.2–10.5 and 11.8–12.1 before). Ranking each against the other, as the test once
-    # did, no longer separates them: both wear achromatic clothes (a white T-shirt over grey trousers; a black
-    # coat over black trousers), which this descriptor tells apart only by lightness, half-weighted because
-    # exposure differs by camera; pedestrian_2 came out 12.07 from itself and 12.05 from pedestrian_1.
+    # 107 px) since the clothing fixes of 2026-11-26 (10.2–10.5 and 11.8–12.1 before). Ranking each against the
+    # other, as the test once did, no longer separates them: both wear achromatic clothes (a white T-shirt over
+    # grey trousers; a black coat over black trousers), which this descriptor tells apart only by lightness,
+    # half-weighted because exposure differs by camera; pedestrian_2 came out 12.07 from itself and 12.05 from
+    # pedestrian_1.
     for name in people:
         own = _distance(a[name], b[name])
         assert own < OWN_DISTANCE_MAX, (name, own)

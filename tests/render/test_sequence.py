@@ -54,7 +54,9 @@ def _without_motion_blur(camera):
 def _with_motion_step(camera, step_px):
     """The camera as planned, but with motion blur sampled every `step_px` of image motion instead of the plan's."""
     stages = tuple(
-        s.model_copy(update={"params": {**s.params, "sample_step_px": step_px}}) if s.name == "optics.motion_blur" else s
+        s.model_copy(update={"params": {**s.params, "sample_step_px": step_px}})
+        if s.name == "optics.motion_blur"
+        else s
         for s in camera.stages
     )
     return camera.model_copy(update={"stages": stages})
