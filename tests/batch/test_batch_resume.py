@@ -238,6 +238,7 @@ def test_sigterm_keeps_the_running_job_and_resume_continues_it(tmp_path, referen
 
 
 @needs_ray
+@pytest.mark.slow  # 31 s (a local Ray's start): `make test` keeps the pool's resume tests and Ray's same bytes
 def test_ray_resumes_a_job_a_failed_try_left(tmp_path, monkeypatch, renderer, fail_once, reference):
     # The checkpoint is made in this process (`InlineExecutor`); Ray's workers, in processes of their own, take
     # the job up from it with the pool's `render_job`.

@@ -12,10 +12,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from camgen.vehicles.body import LOWER_POINTS, PROFILES, UPPER_POINTS, build_vehicle, shell
+from camgen.vehicles.body import LOWER_POINTS, PROFILES, UPPER_POINTS, _end_heights, build_vehicle, shell
 from camgen.vehicles.look import draw_look
 
 CARS = ("hatchback", "sedan", "estate", "suv")
+CLASS_OF = {"van": "truck"}
 
 
 def _grid(look):
@@ -92,29 +93,40 @@ def test_cars_have_lamp_units_at_their_corners():
     assert not any(part.surface == "lens" for part in build_vehicle(bus).parts)
 
 
-@pytest.mark.parametrize("body", CARS)
-def test_headlamp_units_reach_back_over_the_nose(body):
+@pytest.mark.parametrize("body", (*CARS, "pickup", "van"))
+@pytest.mark.parametrize("seed", [1, 7])
+def test_headlamp_units_reach_back_over_the_nose(body, seed):
     """Seen from above, a car's front corners are its headlamps: each unit's top lies on the nose's surface (just
-    outside the closed shell, the shell just under it), from the front face back about 0.18 m (makers' top views:
-    0.15–0.25 m) and 0.3–0.45 m across from the shoulder in at each station, facing up; the grille's width stays
-    between them."""
+    outside the closed shell, the shell just under it, at points all over its triangles, not only its corners),
+    from the front face back about 0.18 m and 0.3–0.5 m across from the shoulder in at each station (0.42 m at the
+    middle one, where its rows are chosen; a van's steeper nose less); the grille's width stays between them."""
     from tests.vehicles.test_mirrors_saloon import _winding_number
 
-    look = draw_look(7, "car", pinned={"body_type": body})
+    look = draw_look(seed, CLASS_OF.get(body, "car"), pinned={"body_type": body})
     unit = next(part for part in build_vehicle(look).parts if part.name == "lamp_units")
     corners = unit.vertices_m[unit.faces]
     normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     front_m = look.length_m / 2
-    # Faces facing up over the nose (the boxes of the face's units stand proud of the front face, to front_m + 2.5 cm).
-    top = (normal[:, 2] > 0.5 * np.linalg.norm(normal, axis=1)) & np.all(corners[:, :, 0] <= front_m + 1e-9, axis=1)
-    points = corners[top & np.all(corners[:, :, 0] > 0, axis=1)].reshape(-1, 3)
+    _, (_, front_high_m) = _end_heights(look)
+    # The faces over the front face's top edge: the tops (the boxes on the face end 2.5 cm under the edge and stand
+    # 2.5 cm proud of the face).
+    top = np.all(corners[:, :, 0] > 0, axis=1) & np.all(corners[:, :, 0] < front_m + 0.015, axis=1)
+    top &= (corners[:, :, 2].min(axis=1) > front_high_m - 0.02) & (normal[:, 2] > 0)
     vertices, faces, _, _ = shell(look)
+    rng = np.random.default_rng(0)
     for side in (1, -1):
-        mine = points[np.sign(points[:, 1]) == side]
-        assert front_m - 0.2 < mine[:, 0].min() < front_m - 0.15 and mine[:, 0].max() == pytest.approx(front_m)
-        widths = [np.ptp(mine[mine[:, 0] == x, 1]) for x in np.unique(mine[:, 0])]
-        assert 0.3 < np.median(widths) and max(widths) < 0.45, widths
-        for point in mine[::5]:
-            assert _winding_number(vertices, faces, point) == pytest.approx(0.0, abs=1e-6)
-            assert _winding_number(vertices, faces, point - [0.0, 0.0, 0.01]) == pytest.approx(1.0, abs=1e-6)
-    assert np.abs(points[:, 1]).min() > 0.15  # the grille between them, 0.3 m or more
+        mine = corners[top & (np.sign(corners[:, :, 1]).sum(axis=1) == 3 * side)]
+        points = mine.reshape(-1, 3)
+        assert len(mine) > 10
+        assert front_m - 0.2 < points[:, 0].min() < front_m - 0.15 and abs(points[:, 0].max() - front_m) < 0.01
+        widths = [np.ptp(points[np.isclose(points[:, 0], x, atol=1e-3), 1]) for x in np.unique(points[:, 0].round(3))]
+        # A van's nose is steeper: the rows facing up over it span 0.14–0.17 m of the unit's width.
+        assert (0.1 if body == "van" else 0.3) < np.median(widths) and max(widths) < 0.5, widths
+        # Points inside its triangles (barycentric), not only its corners: outside the shell, the shell 1 cm in.
+        weights = rng.dirichlet(np.ones(3), size=len(mine))
+        inward = -normal[top & (np.sign(corners[:, :, 1]).sum(axis=1) == 3 * side)]
+        inward /= np.linalg.norm(inward, axis=1, keepdims=True)
+        for point, into in list(zip(np.einsum("fk,fkd->fd", weights, mine), inward, strict=True))[::3]:
+            assert _winding_number(vertices, faces, point) == pytest.approx(0.0, abs=1e-6), (body, point)
+            assert _winding_number(vertices, faces, point + 0.01 * into) == pytest.approx(1.0, abs=1e-6)
+    assert np.abs(corners[top][:, :, 1]).min() > 0.15  # the grille between them, 0.3 m or more

@@ -23,6 +23,7 @@ from camgen.vehicles.cabin import (
     BUS_SEAT_PITCH_M,
     BUS_SEAT_RGB,
     DRIVER_FACES,
+    HANDRAIL_RADIUS_M,
     HANDRAIL_RGB,
     bus_passengers_part,
     driver_part,
@@ -168,6 +169,10 @@ def test_a_bus_saloon_has_rows_of_seats_and_yellow_handrails_inside_its_shell():
     assert rails[:, 2].max() - rails[:, 2].min() > 2.0
     assert rails[:, 2].max() > look.height_m - 0.5
     assert np.abs(rails[:, 1]).max() < look.width_m / 2 - 0.6
+    # A gangway between the pairs of seats (UN R107 gauges a class I bus's with a cylinder about 0.45 m across), and
+    # the handrails on its edges, not in it.
+    assert 2 * np.abs(seats[:, 1]).min() >= 0.45
+    assert 2 * np.abs(rails[:, 1]).min() >= 0.45 - 2 * HANDRAIL_RADIUS_M - 1e-9
 
 
 def test_a_bus_in_service_carries_seated_passengers_inside_its_shell():

@@ -102,24 +102,28 @@ def test_faces_facing_the_ground_are_underbody_and_the_shell_stays_closed(body):
 @pytest.mark.parametrize("body", ["hatchback", "sedan", "estate", "suv", "pickup", "bus"])
 def test_the_paint_comes_down_to_each_wheel_arch_in_a_smooth_arc(body):
     """In a side view the paint's lower edge over a wheel follows the arch (radius: the wheel's and the arch's
-    gap): at every station over its middle 80 % the side's lowest paint lies within 0.11 m of the arch (a bus's,
-    whose section rows are taller, 0.2 m: the black liner's band under it) and moves less than 3 cm (a bus's 7 cm,
-    at the arch's ends) from one station to the next. Before the bottom's corners were rows of their own, the
-    cars' edge stepped by 0.10–0.12 m between stations and stood up to 0.19 m over the arch, the bus's stepped by
-    1.6 m (vans and box trucks: 0.08–0.11 m steps now, left as they are)."""
-    look = _look(body)
-    paint = next(part for part in build_vehicle(look).parts if part.name == "body_paint")
-    corners = paint.vertices_m[paint.faces]
-    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    side = corners[normal[:, 1] > 0.5 * np.linalg.norm(normal, axis=1)].reshape(-1, 3)  # the left side's paint
-    r, arch_m = look.wheel_radius_m, look.wheel_radius_m + ARCH_GAP_M
-    for axle_m in (look.front_axle_x_m, look.rear_axle_x_m):
-        stations = np.unique(side[np.abs(side[:, 0] - axle_m) < 0.8 * arch_m, 0])
-        assert len(stations) >= 8
-        lowest = np.array([side[side[:, 0] == x, 2].min() for x in stations])
-        over = lowest - (r + np.sqrt(arch_m**2 - (stations - axle_m) ** 2))
-        assert np.all(over > 0.0) and over.max() < (0.2 if body == "bus" else 0.11), (body, over.round(3))
-        assert np.abs(np.diff(over)).max() < (0.07 if body == "bus" else 0.03), (body, np.diff(over).round(3))
+    gap): at every station over its middle 80 % the side's lowest paint lies within 0.13 m of the arch (the black
+    liner's band under it) and moves less than 2 cm (a bus's 7 cm, at the arch's ends, where its taller rows
+    meet the arch's steep sides) from one station to the next, for ten looks of each body type. Measured over
+    thirty looks: cars 0.05–0.125 m over the arch, steps up to 1.3 cm; the bus 0.10–0.122 m, up to 6.8 cm. Before
+    the bottom's corners were rows of their own, the cars' edge stepped by 0.10–0.12 m between stations and stood
+    up to 0.19 m over the arch, the bus's stepped by 1.6 m (vans and box trucks: up to 0.21 m over it and 0.11 m
+    steps now, left as they are)."""
+    for seed in range(10):
+        look = _look(body, seed)
+        paint = next(part for part in build_vehicle(look).parts if part.name == "body_paint")
+        corners = paint.vertices_m[paint.faces]
+        normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        side = corners[normal[:, 1] > 0.5 * np.linalg.norm(normal, axis=1)].reshape(-1, 3)  # the left side's paint
+        r, arch_m = look.wheel_radius_m, look.wheel_radius_m + ARCH_GAP_M
+        for axle_m in (look.front_axle_x_m, look.rear_axle_x_m):
+            stations = np.unique(side[np.abs(side[:, 0] - axle_m) < 0.8 * arch_m, 0])
+            assert len(stations) >= 8
+            lowest = np.array([side[side[:, 0] == x, 2].min() for x in stations])
+            over = lowest - (r + np.sqrt(arch_m**2 - (stations - axle_m) ** 2))
+            assert np.all(over > 0.0) and over.max() < 0.13, (body, seed, over.round(3))
+            step = 0.07 if body == "bus" else 0.02
+            assert np.abs(np.diff(over)).max() < step, (body, seed, np.diff(over).round(3))
 
 
 @pytest.mark.parametrize("body", ["hatchback", "suv", "van", "bus"])

@@ -157,7 +157,7 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         again = (
             "finished; run again with --resume to continue them from their checkpoints"
             if args.resume
-            else "rendered; run again to resume"
+            else "rendered; run again to render them (complete jobs are skipped)"
         )
         err.print(
             f"interrupted ({signal.Signals(summary.stop_signal).name}): {summary.count('interrupted')} jobs not {again}"

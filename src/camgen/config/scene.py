@@ -1341,7 +1341,7 @@ def _standing_cylinder(name: str, radius_m: float, height_m: float) -> CylinderM
 VEHICLE_ENVELOPE_M: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
     "car": ((-1.4, -1.2, 0.0), (4.6, 1.2, 1.95)),
     "truck": ((-2.6, -1.6, 0.0), (6.5, 1.6, 3.75)),
-    "bus": ((-3.6, -1.6, 0.0), (9.3, 1.6, 3.2)),
+    "bus": ((-3.6, -1.6, 0.0), (9.1, 1.6, 3.2)),
     "bicycle": ((-0.5, -0.5, 0.0), (1.6, 0.5, 1.25)),
     "motorcycle": ((-0.6, -0.6, 0.0), (2.0, 0.6, 1.35)),
 }
@@ -1349,7 +1349,7 @@ VEHICLE_ENVELOPE_M: dict[str, tuple[tuple[float, float, float], tuple[float, flo
 (`camgen.vehicles`): its rear axle's middle stands on the actor's ground point (as a kinematic bicycle
 model's reference point), so the box reaches from the longest rear overhang (an estate's 1.1 m, a box
 truck's 2.4 m, a city bus's 3.5 m) to the longest wheelbase and front overhang (a pickup's 4.3 m, a box
-truck's 6.2 m, a bus's 8.7 m and 9.0 m to its mirrors' heads ahead of it), over the widest wheels steered
+truck's 6.2 m, a bus's 8.7 m and 9.02 m to its mirrors' heads ahead of it), over the widest wheels steered
 to the class's lock (about 0.6 rad) and door mirrors (`camgen.vehicles.body.MIRRORS`), and to the tallest roof
 of its body types (`camgen.vehicles.look` cites the dimensions); a bicycle's and a motorcycle's from the rear tyre to
 the front tyre steered to its lock, over the widest handlebar and mirrors."""

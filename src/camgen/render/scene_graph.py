@@ -257,7 +257,8 @@ class SceneGraph:
     """Per moving node (in the order of `moving_nodes`), a count that `place_actors` raises whenever it may have
     changed what the node draws (its pose, vertices, normals or lamps), and only then: equal counts at two times
     mean the same look, so a caller may keep what it derived from it (`camgen.render.sequence`: the blur test's
-    vertices, the kept frame's looks). Nothing else moves a node of the graph."""
+    vertices, the kept frame's looks); unequal counts need not mean another look (a person's, a rider's or a shape's
+    count rises at every new time, a parked car's never). Nothing else moves a node of the graph."""
 
     def __post_init__(self):
         self.look_versions = [0] * (len(self.actor_nodes) + len(self.swaying))

@@ -628,6 +628,14 @@ def _merge(name: str, surface: str, parts: list[Part]) -> Part:
     )
 
 
+def _coloured_part(name: str, surface: str, pieces: list[tuple[trimesh.Trimesh, tuple[float, float, float]]]) -> Part:
+    """One body part (`Part.wheel` −1) of flat-shaded meshes, each coloured with its own linear albedo per vertex."""
+    part = _part(name, surface, [(mesh, -1) for mesh, _ in pieces])
+    # `_part` gives each face its own three vertices, in the pieces' order.
+    part.colours = np.repeat([rgb for _, rgb in pieces], [3 * len(mesh.faces) for mesh, _ in pieces], axis=0)
+    return part
+
+
 TYRE_RGB = (0.025, 0.025, 0.025)
 """Linear albedo of tyre rubber (carbon-black filled: about 2–3 %)."""
 RIM_RGB = (0.45, 0.45, 0.46)
@@ -741,11 +749,11 @@ def _end_heights(look: VehicleLook) -> tuple[tuple[float, float], tuple[float, f
 
 
 def lamps_and_plates(
-    look: VehicleLook, shell_vertices_m: np.ndarray | None = None
+    look: VehicleLook, shell_m: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 ) -> tuple[list[Part], dict[str, np.ndarray], list[Part], Part]:
     """Lamp parts (head, tail, brake, indicators), the plates' corners, the plates' part and the plates'
-    backings. With the shell's vertices (`shell`), the headlamp units reach back over the nose
-    (`_headlamp_tops`)."""
+    backings. With the shell (`shell_m`: its vertices, normals and faces, `shell`), the headlamp units reach back
+    over the nose (`_headlamp_tops`)."""
     L, W = look.length_m, look.width_m
     (rear_low, rear_high), (front_low, front_high) = _end_heights(look)
     half = W / 2 * PROFILES[look.body_type].end_width
@@ -789,7 +797,7 @@ def lamps_and_plates(
     front.texcoords = front.texcoords * [1.0, 0.5] + [0.0, 0.5]
     rear.texcoords = rear.texcoords * [1.0, 0.5]
     backings += [(box, -1) for box in _black_trim(look, head_z)]
-    housings = _lamp_housings(look, head_z, tail_z, shell_vertices_m)
+    housings = _lamp_housings(look, head_z, tail_z, shell_m)
     if housings is not None:
         lamps.append(housings)
     return lamps, corners, [_merge("plates", "plates", [front, rear])], _part("plate_backings", "trim", backings)
@@ -819,11 +827,14 @@ proud of them."""
 
 
 def _lamp_housings(
-    look: VehicleLook, head_z_m: float, tail_z_m: float, shell_vertices_m: np.ndarray | None = None
+    look: VehicleLook,
+    head_z_m: float,
+    tail_z_m: float,
+    shell_m: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> Part | None:
     """The lamp units round the lit lamps (`HOUSING_BODIES`): a headlamp unit at each front corner and a rear
     cluster with a reversing lamp at each rear corner, flush with the end faces' corners (each headlamp unit
-    reaching back over the nose, `_headlamp_tops`, with the shell's vertices), one primitive of
+    reaching back over the nose, `_headlamp_tops`, given the shell), one primitive of
     per-vertex colours (surface "lens"). Seen by day, a car's ends are told by these units, not by the small
     lit lenses."""
     if look.body_type not in HOUSING_BODIES:
@@ -841,66 +852,51 @@ def _lamp_housings(
         rear = _box((HOUSING_DEPTH_M, rear_w, rear_h), (-L / 2, s * (half - rear_w / 2), rear_top - rear_h / 2))
         reversing = _box((HOUSING_DEPTH_M + 0.008, 0.12, 0.04), (-L / 2, s * (half - 0.33), tail_z_m - 0.085))
         pieces += [(head, HEADLAMP_UNIT_RGB), (rear, REAR_LENS_RGB), (reversing, REVERSING_LENS_RGB)]
-    if shell_vertices_m is not None:
-        pieces += [(top, HEADLAMP_UNIT_RGB) for top in _headlamp_tops(look, shell_vertices_m, half - head_w)]
-    part = _part("lamp_units", "lens", [(mesh, -1) for mesh, _ in pieces])
-    # `_part` gives each face its own three vertices, in the pieces' order.
-    part.colours = np.repeat([rgb for _, rgb in pieces], [3 * len(mesh.faces) for mesh, _ in pieces], axis=0)
-    return part
+    if shell_m is not None:
+        pieces += [(top, HEADLAMP_UNIT_RGB) for top in _headlamp_tops(look, shell_m, half - head_w)]
+    return _coloured_part("lamp_units", "lens", pieces)
 
 
 HEADLAMP_TOP_DEPTH_M = 0.18
 """How far a headlamp unit reaches back over the nose from the front face, m: a current car's headlamps sit at the
-bonnet's front corners and wrap up and back over the nose and onto the wing, 0.15–0.25 m in plan (makers' top
-views: a Golf 8's about 0.2 m); seen from above, they are a car's front corners."""
+bonnet's front corners and wrap up and back over the nose and onto the wing (a VW Golf 8's about 0.2 m in plan,
+measured on the maker's top-view drawing; an estimate for the fleet)."""
 HEADLAMP_TOP_WIDTH_M = 0.42
-"""The most a headlamp unit's top spans across, from the shoulder inwards, m (makers' top views: 0.35–0.5 m, the
-grille's width between them)."""
+"""The most a headlamp unit's top spans across, from the shoulder inwards, m (the same drawing: about 0.4 m each,
+the grille's width between them; an estimate for the fleet)."""
 HEADLAMP_TOP_OFFSET_M = 0.004
-"""How far over the shell's surface a headlamp unit's top lies, m."""
-HEADLAMP_TOP_STEEPEST = 1.5
-"""The unit's top stops at the shoulder, where the surface falls more steeply than this (dz/dy, about 56°)."""
+"""How far out along the shell's normals a headlamp unit's top lies, m."""
+HEADLAMP_TOP_NORMAL_Z = 0.5
+"""The unit's top covers the shell's rows whose normals point up more than this (within 60° of the vertical): it
+stops at the shoulder, where the surface turns down the side."""
 
 
-def _surface_top_m(station_m: np.ndarray, y_m: np.ndarray) -> np.ndarray:
-    """Height of a station's section top at `y_m` (≥ 0), m: its points on the +y side from the top down to the
-    widest, by y (the section is convex: one height per y on that quadrant), interpolated as the mesh's facets
-    are."""
-    side = station_m[station_m[:, 1] >= 0]
-    widest = side[np.argmax(side[:, 1]), 2]
-    quadrant = side[side[:, 2] >= widest]
-    order = np.argsort(quadrant[:, 1])
-    return np.interp(y_m, quadrant[order, 1], quadrant[order, 2])
-
-
-def _headlamp_tops(look: VehicleLook, shell_vertices_m: np.ndarray, inner_m: float) -> list[trimesh.Trimesh]:
-    """Each headlamp unit's top: the shell's surface over the nose at each front corner, from the front face back
-    `HEADLAMP_TOP_DEPTH_M` and from the shoulder (`HEADLAMP_TOP_STEEPEST`) in by `HEADLAMP_TOP_WIDTH_M`, not past
-    `inner_m` (the face's unit's inner edge), lifted
-    `HEADLAMP_TOP_OFFSET_M` off it; a grid on the shell's own stations, so it follows the mesh's facets."""
-    L = look.length_m
-    xs = np.unique(shell_vertices_m[:, 0])
-    xs = xs[xs >= L / 2 - HEADLAMP_TOP_DEPTH_M]
-    columns = 9
+def _headlamp_tops(
+    look: VehicleLook, shell_m: tuple[np.ndarray, np.ndarray, np.ndarray], inner_m: float
+) -> list[trimesh.Trimesh]:
+    """Each headlamp unit's top: the shell's own faces over the nose at each front corner (`shell_m`: its vertices,
+    normals and faces, `shell`), from the front face back `HEADLAMP_TOP_DEPTH_M`, across the rows that face up
+    (`HEADLAMP_TOP_NORMAL_Z`) from the shoulder in by `HEADLAMP_TOP_WIDTH_M` but not past `inner_m` (the face's
+    unit's inner edge), chosen at the patch's middle station so that its edges run along the mesh's rows and
+    stations; lifted `HEADLAMP_TOP_OFFSET_M` along the normals. Its faces are the shell's, so no part of it dips
+    under the paint."""
+    vertices, normals, faces = shell_m
+    count = UPPER_POINTS + LOWER_POINTS
+    station_x = vertices[::count, 0]
+    front = np.flatnonzero(station_x >= look.length_m / 2 - HEADLAMP_TOP_DEPTH_M)
+    middle = front[np.argmin(np.abs(station_x[front] - (look.length_m - HEADLAMP_TOP_DEPTH_M) / 2))]
+    at = vertices[middle * count : (middle + 1) * count]
+    up = normals[middle * count : (middle + 1) * count, 2] > HEADLAMP_TOP_NORMAL_Z
     tops = []
-    for s in (1, -1):
-        rows = []
-        for x in xs:
-            station = shell_vertices_m[shell_vertices_m[:, 0] == x]
-            fine = np.linspace(inner_m, np.abs(station[:, 1]).max(), 64)
-            z = _surface_top_m(station, fine)
-            steep = np.flatnonzero(np.diff(z) / np.diff(fine) < -HEADLAMP_TOP_STEEPEST)
-            outer = fine[steep[0]] if len(steep) else fine[-1]
-            inner = max(inner_m, outer - HEADLAMP_TOP_WIDTH_M)
-            y = np.linspace(inner, max(outer, inner + 1e-3), columns)
-            rows.append(np.stack([np.full(columns, x), s * y, _surface_top_m(station, y) + HEADLAMP_TOP_OFFSET_M], 1))
-        grid = np.concatenate(rows)
-        index = np.arange(len(grid)).reshape(len(xs), columns)
-        a, b, c, d = index[:-1, :-1], index[:-1, 1:], index[1:, 1:], index[1:, :-1]
-        # (a, c, b) turns counter-clockwise seen from above on the +y side (rows run along +x, columns along +y);
-        # the −y side's columns run along −y, so its faces turn the other way round.
-        faces = np.concatenate([np.stack([a, c, b], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)])
-        tops.append(trimesh.Trimesh(grid, faces if s > 0 else faces[:, ::-1], process=False))
+    for side in (1.0, -1.0):
+        y = side * at[:, 1]
+        outer = y[up].max()
+        rows = np.flatnonzero(up & (y >= max(inner_m, outer - HEADLAMP_TOP_WIDTH_M)))
+        inside = np.isin(faces // count, front) & np.isin(faces % count, rows)
+        patch = faces[inside.all(axis=1)]
+        used, remapped = np.unique(patch, return_inverse=True)
+        lifted = vertices[used] + HEADLAMP_TOP_OFFSET_M * normals[used]
+        tops.append(trimesh.Trimesh(lifted, remapped.reshape(-1, 3), process=False))
     return tops
 
 
@@ -1111,6 +1107,14 @@ MIRROR_EXPONENT = 4.0
 """Superellipsoid exponent of a mirror's head: a box with rounded edges and corners."""
 MIRROR_STALK_M = (0.05, 0.06)
 """Height and reach out of the door of the black stalk that carries a car's or van's mirror head, m (an estimate)."""
+MIRROR_OVER_BELT_M = 0.03
+"""A car's or van's mirror head's lower edge over the beltline, m (an estimate from makers' side views)."""
+MIRROR_GLASS_SHARE = (0.82, 0.78)
+"""The glass's share of the head's width and height seen from behind (the housing's rim round it; an estimate)."""
+BUS_MIRROR_HEAD_WIDTH_M = 0.22
+"""Width of a bus's mirror head across the bus, m (an estimate from makers' pictures)."""
+BUS_MIRROR_DROP_M = 0.10
+"""How far under the windscreen's top a bus's mirror head ends, m (an estimate from makers' pictures)."""
 BUS_MIRROR_AHEAD_M = 0.30
 """How far ahead of a bus's front face its mirror heads hang, m (an estimate from makers' pictures)."""
 
@@ -1151,11 +1155,11 @@ def door_mirrors(look: VehicleLook, vertices_m: np.ndarray) -> tuple[Part | None
     arms = []
     if look.body_type == "bus":
         x_m = L / 2 + BUS_MIRROR_AHEAD_M
-        z_m = profile.front_cap_glass[1] * H - spec.height_m / 2 - 0.1
-        inner_m = W / 2 + spec.reach_m - 0.22
+        z_m = profile.front_cap_glass[1] * H - spec.height_m / 2 - BUS_MIRROR_DROP_M
+        inner_m = W / 2 + spec.reach_m - BUS_MIRROR_HEAD_WIDTH_M
     else:
         x_m = (profile.side_glass[1] - 0.5) * L - spec.depth_m
-        z_m = profile.belt * H + 0.03 + spec.height_m / 2
+        z_m = profile.belt * H + MIRROR_OVER_BELT_M + spec.height_m / 2
         # The head's lower inner edge on the door's top at the belt; a stalk of black plastic from inside the door
         # carries it (over the belt the side glass and the A-pillar lean in, away from the head, as on real cars).
         bottom_m = z_m - spec.height_m / 2
@@ -1169,7 +1173,7 @@ def door_mirrors(look: VehicleLook, vertices_m: np.ndarray) -> tuple[Part | None
     for s in (1, -1):
         centre = (x_m, s * (inner_m + outer_m) / 2, z_m)
         housings.append(_rounded_box((spec.depth_m, outer_m - inner_m, spec.height_m), centre))
-        pane = (0.004, 0.82 * (outer_m - inner_m), 0.78 * spec.height_m)
+        pane = (0.004, MIRROR_GLASS_SHARE[0] * (outer_m - inner_m), MIRROR_GLASS_SHARE[1] * spec.height_m)
         glass.append(_box(pane, (x_m - spec.depth_m / 2 - 0.001, centre[1], z_m)))
         if look.body_type == "bus":  # from the front face near its top, forward and out to the head's top
             start = (L / 2 - 0.05, s * (W / 2 - 0.25), SIGN_TOP_SHARE * H - 0.05)
@@ -1178,8 +1182,7 @@ def door_mirrors(look: VehicleLook, vertices_m: np.ndarray) -> tuple[Part | None
     dark = [(mesh, MIRROR_GLASS_RGB) for mesh in glass] + [(mesh, TRIM_RGB) for mesh in arms]
     if not spec.painted:
         dark += [(mesh, TRIM_RGB) for mesh in housings]
-    gear = _part("mirror_gear", "gear", [(mesh, -1) for mesh, _ in dark])
-    gear.colours = np.repeat([rgb for _, rgb in dark], [3 * len(mesh.faces) for mesh, _ in dark], axis=0)
+    gear = _coloured_part("mirror_gear", "gear", dark)
     painted = _part("mirrors", "paint", [(mesh, -1) for mesh in housings], smooth=True) if spec.painted else None
     return painted, gear
 
@@ -1231,7 +1234,7 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
     tyres = _merge("tyres", "gear", [_part("tyres", "gear", dark[:4], smooth=True)]
                    + ([_part("holes", "gear", dark[4:])] if len(dark) > 4 else []))  # fmt: skip
     rims = _part("rims", "gear", [(piece, w) for w in range(4) for piece in rim])
-    lamps, plate_corners, plates, backings = lamps_and_plates(look, vertices)
+    lamps, plate_corners, plates, backings = lamps_and_plates(look, (vertices, normals, faces))
     if look.body_type in DESTINATION_SIGN_BODIES:
         panel, dots = destination_sign(look)
         backings = _merge("plate_backings", "trim", [backings, panel])

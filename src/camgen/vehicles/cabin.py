@@ -25,6 +25,13 @@ always an adult without a bag, seated by `camgen.actors.driving` at the seat of 
 is part of the vehicle's instance and is never annotated as a person of its own: MOT17 annotates only
 people who are visible and not inside vehicles, and the driver is only seen through glass. It lies inside
 the closed shell, so the vehicle's box and mask are the same with or without it.
+
+A city bus's saloon (`bus_interior_part`): forward-facing pairs of seats on both sides at a seat pitch (`bus_rows`),
+a gangway between them, a standing space opposite door 2, podiums over the wheel arches and yellow handrails,
+seen through its large windows; in service (driven), 2–8 seated passengers (`bus_passengers_part`), procedural
+people seated like the driver, hands on their laps. Like the driver they belong to the vehicle's instance and are
+never annotated as people (MOT17's convention: people inside vehicles are not annotated), and they lie inside the
+closed shell.
 """
 
 from __future__ import annotations
@@ -36,7 +43,7 @@ import numpy as np
 import trimesh
 
 from camgen.actors.riding import HIP_ABOVE_SEAT_M
-from camgen.vehicles.body import ARCH_GAP_M, PROFILES, Part, _bottom_m, _interp_top
+from camgen.vehicles.body import ARCH_GAP_M, PROFILES, Part, _bottom_m, _coloured_part, _interp_top
 from camgen.vehicles.look import VehicleLook
 from camgen.vehicles.plate import UK_PLATE_PATTERN
 
@@ -261,10 +268,17 @@ BUS_FLOOR_M = 0.37
 BUS_SEAT_PITCH_M = 0.78
 """Distance between rows of a city bus's forward-facing seats, m: 0.75–0.8 m in makers' seating plans (UN
 Regulation 107 asks at least 0.65 m between a seat back and the one in front in class I)."""
-BUS_SEAT = (0.45, 0.44, 0.50, 0.50)
+BUS_SEAT_M = (0.45, 0.44, 0.50, 0.44)
 """A bus seat's cushion height over the floor, the cushion's depth, its back's height over the cushion and each
 seat's width, m (UN Regulation 107 Annex 3: a seat at least 0.40 m wide, its cushion 0.40–0.50 m over the
-floor; the back's height, an estimate of current city-bus seats' about 0.5 m)."""
+floor; 0.44 m wide leaves a 2.45–2.55 m bus a gangway of 0.49–0.59 m between its pairs (`BUS_WALL_INSET_M`);
+R107 gauges a class I gangway with a cylinder about 0.45 m across (Annex 4, figure 6; quoted from memory, not
+checked); the back's height, an estimate of current city-bus seats' about 0.5 m)."""
+SEAT_BACK_THICKNESS_M = 0.08
+"""A bus seat back's thickness, m (a moulded shell with its padding; an estimate)."""
+BUS_WALL_INSET_M = 0.10
+"""How far inside a bus's width its saloon's side walls are, m: the body's skin, the lining and the window frames
+(an estimate: a Citaro is 2.55 m wide outside and about 2.35 m inside at seat height)."""
 BUS_SEAT_RGB = (0.02, 0.03, 0.07)
 """Linear albedo of the seats: dark blue moquette, the commonest city-bus trim (an estimate)."""
 HANDRAIL_RGB = (0.60, 0.33, 0.01)
@@ -283,7 +297,7 @@ def bus_rows(look: VehicleLook) -> list[tuple[int, float, float]]:
     space opposite door 2 (`BUS_AISLE_STANDING`); a row over a wheel arch, its legroom included, stands on a podium
     over it (the shell's underside rises there)."""
     L = look.length_m
-    depth_m = BUS_SEAT[1]
+    depth_m = BUS_SEAT_M[1]
     front_door_u = min(u0 for u0, _ in PROFILES["bus"].doors if u0 > 0.7)
     first_m = (front_door_u - 0.5) * L - 0.9
     standing = [(u - 0.5) * L for u in BUS_AISLE_STANDING]
@@ -301,7 +315,7 @@ def bus_rows(look: VehicleLook) -> list[tuple[int, float, float]]:
 
 def _bus_wall_m(look: VehicleLook) -> float:
     """The saloon's side walls' inside, off the centreline, m: behind the lining and the window frames."""
-    return look.width_m / 2 - 0.12
+    return look.width_m / 2 - BUS_WALL_INSET_M
 
 
 def bus_interior_part(look: VehicleLook) -> Part:
@@ -310,7 +324,7 @@ def bus_interior_part(look: VehicleLook) -> Part:
     (`BUS_AISLE_STANDING`), and a yellow vertical handrail from the floor to the roof at the aisle end of every
     other row, each on the floor or on a podium over a wheel arch; one part of per-vertex colours (surface "cabin"),
     inside the closed shell."""
-    cushion_m, depth_m, back_m, seat_w_m = BUS_SEAT
+    cushion_m, depth_m, back_m, seat_w_m = BUS_SEAT_M
     wall_m = _bus_wall_m(look)
     roof_m = _roof_z_m(look, 0.0) - LINING_INSET_M - 0.02
     pieces = []
@@ -319,21 +333,16 @@ def bus_interior_part(look: VehicleLook) -> Part:
             y_m = s * (wall_m - seat_w_m)  # the pair's middle
             cushion = trimesh.creation.box((depth_m, 2 * seat_w_m, 0.12))
             cushion.apply_translation((x_m, y_m, floor_m + cushion_m - 0.06))
-            back = trimesh.creation.box((0.08, 2 * seat_w_m, back_m))
+            back = trimesh.creation.box((SEAT_BACK_THICKNESS_M, 2 * seat_w_m, back_m))
             back.apply_translation((x_m - depth_m / 2, y_m, floor_m + cushion_m + back_m / 2))
             pieces += [(cushion, BUS_SEAT_RGB), (back, BUS_SEAT_RGB)]
             if k % 2 == 0:
                 pole = trimesh.creation.cylinder(HANDRAIL_RADIUS_M, roof_m - floor_m, sections=8)
                 pole.apply_translation(
-                    (x_m - depth_m / 2 - 0.1, s * (wall_m - 2 * seat_w_m - 0.05), (roof_m + floor_m) / 2)
+                    (x_m - depth_m / 2 - 0.1, s * (wall_m - 2 * seat_w_m - HANDRAIL_RADIUS_M), (roof_m + floor_m) / 2)
                 )
                 pieces.append((pole, HANDRAIL_RGB))
-    vertices = np.concatenate([np.asarray(mesh.vertices)[np.asarray(mesh.faces)].reshape(-1, 3) for mesh, _ in pieces])
-    normals = np.concatenate([np.repeat(np.asarray(mesh.face_normals), 3, axis=0) for mesh, _ in pieces])
-    colours = np.repeat([rgb for _, rgb in pieces], [3 * len(mesh.faces) for mesh, _ in pieces], axis=0)
-    faces = np.arange(len(vertices)).reshape(-1, 3)
-    return Part("bus_saloon", "cabin", vertices, normals, faces, np.full(len(vertices), -1, np.int8),
-                colours=np.asarray(colours, dtype=np.float64))  # fmt: skip
+    return _coloured_part("bus_saloon", "cabin", pieces)
 
 
 PASSENGER_SPAWN_KEY = 0x7061_7373
@@ -343,6 +352,11 @@ BUS_PASSENGERS = (2, 8)
 26–32; off-peak buses run a quarter full or less, and the standing are not drawn)."""
 PASSENGER_BACK_ANGLE_RAD = math.radians(12.0)
 """A seated passenger's back angle from the vertical (a city bus's seat backs are upright: about 10–15°)."""
+LAP_FROM_H_POINT_M = (0.25, 0.13, 0.10)
+"""Where a seated passenger's hands rest on the thighs: ahead of the H-point, to either side and up, m (an estimate
+from a seated adult's thigh length, about 0.45–0.6 m)."""
+FOOT_ROOM_M = 0.15
+"""How far the balls of a seated passenger's feet stay behind the seat back ahead, m (the toes ahead of them)."""
 H_POINT_BEFORE_BACK_M = 0.14
 """The H-point's distance ahead of the seat back's front face, m (SAE J826's manikin: about 0.13–0.14 m)."""
 
@@ -361,7 +375,8 @@ def _passenger(look: VehicleLook, seed: int, h_point_m: np.ndarray, floor_m: flo
     x, y, z = h_point_m
     feet_x = min(pedal_x_m(model, h_point_m, floor_m), toe_room_m)
     feet = np.array([[feet_x, y + hip_y, floor_m], [feet_x, y - hip_y, floor_m]])
-    laps = np.array([[x + 0.25, y + 0.13, z + 0.10], [x + 0.25, y - 0.13, z + 0.10]])
+    ahead_m, apart_m, up_m = LAP_FROM_H_POINT_M
+    laps = np.array([[x + ahead_m, y + apart_m, z + up_m], [x + ahead_m, y - apart_m, z + up_m]])
     vertices, _ = seated_vertices(model, Controls(np.asarray(h_point_m), laps, feet), PASSENGER_BACK_ANGLE_RAD)
     colours = np.asarray(model.colours[:, :3], dtype=np.float64)
     unused = np.zeros((len(vertices), 4))
@@ -381,7 +396,7 @@ def bus_passengers_part(look: VehicleLook) -> Part:
     from camgen.vehicles.body import _merge
 
     rng = np.random.default_rng(np.random.SeedSequence(look.identity_seed, spawn_key=(PASSENGER_SPAWN_KEY,)))
-    cushion_m, depth_m, _, seat_w_m = BUS_SEAT
+    cushion_m, depth_m, _, seat_w_m = BUS_SEAT_M
     wall_m = _bus_wall_m(look)
     seats = [
         (x_m, side * (wall_m - seat_w_m * (0.5 + inner)), floor_m)
@@ -395,9 +410,9 @@ def bus_passengers_part(look: VehicleLook) -> Part:
     passengers = []
     for index, seed in zip(sorted(chosen), seeds, strict=True):
         x_m, y_m, floor_m = seats[index]
-        back_face_m = x_m - depth_m / 2 + 0.04
+        back_face_m = x_m - depth_m / 2 + SEAT_BACK_THICKNESS_M / 2
         h_point = np.array([back_face_m + H_POINT_BEFORE_BACK_M, y_m, floor_m + cushion_m + HIP_ABOVE_SEAT_M])
         # The seat back of the row ahead (its rear face) bounds the feet; a hand's breadth short of it.
-        toe_room_m = x_m + BUS_SEAT_PITCH_M - depth_m / 2 - 0.04 - 0.15
+        toe_room_m = x_m + BUS_SEAT_PITCH_M - depth_m / 2 - SEAT_BACK_THICKNESS_M / 2 - FOOT_ROOM_M
         passengers.append(_passenger(look, int(seed), h_point, floor_m, toe_room_m))
     return _merge("passengers", "cabin", passengers)
