@@ -271,3 +271,14 @@ def test_with_resume_a_job_whose_worker_died_keeps_its_files(tmp_path, monkeypat
     monkeypatch.setattr(camgen.batch.run, "PoolExecutor", CrashedWorkers)
     assert main(["batch", str(dataset), "-o", str(out), "--workers", "2", "--retries", "1", "--resume"]) == 1
     assert len(partial_files(out)) == 4  # every job failed twice; the retry wrote over the first try's frame
+
+
+@pytest.mark.parametrize("bad", [0, -3, 2.5, True, "250"])
+def test_a_bad_checkpoint_interval_is_refused_before_any_worker_starts(tmp_path, bad):
+    """`run_batch` refuses a checkpoint interval that is not an integer ≥ 1 with its message, before it starts a
+    worker or writes anything (each job's `execute` would otherwise fail with it in its worker)."""
+    from camgen.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=r"checkpoint_frames must be an integer ≥ 1"):
+        run_batch([], tmp_path / "out", workers=1, retries=0, resume=True, checkpoint_frames=bad)
+    assert not (tmp_path / "out").exists()

@@ -186,7 +186,9 @@ class PoolExecutor:
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
-def check_options(*, workers: int, retries: int, executor: str, address: str | None) -> None:
+def check_options(
+    *, workers: int, retries: int, executor: str, address: str | None, checkpoint_frames: int | None = None
+) -> None:
     """ConfigError for run options `run_batch` cannot take (the CLI checks them before expanding)."""
     if workers < 1:
         raise ConfigError(f"--workers must be ≥ 1, got {workers}")
@@ -196,6 +198,10 @@ def check_options(*, workers: int, retries: int, executor: str, address: str | N
         raise ConfigError(f"--executor must be local or ray, got {executor!r}")
     if address is not None and executor != "ray":
         raise ConfigError(f"--address {address} is for --executor ray; add --executor ray or leave it out")
+    bad = isinstance(checkpoint_frames, bool) or not isinstance(checkpoint_frames, int | None)
+    if bad or (checkpoint_frames is not None and checkpoint_frames < 1):
+        # Checked here, before any worker starts, rather than by every job's `execute` in its worker.
+        raise ConfigError(f"checkpoint_frames must be an integer ≥ 1 (or None), got {checkpoint_frames!r}")
 
 
 def run_batch(
@@ -236,7 +242,9 @@ def run_batch(
     `execute`'s default); it sets where the video is segmented, so a resumed batch must use the interval of
     the batch it resumes (a checkpoint of another interval is discarded and its camera rendered again).
     """
-    check_options(workers=workers, retries=retries, executor=executor, address=address)
+    check_options(
+        workers=workers, retries=retries, executor=executor, address=address, checkpoint_frames=checkpoint_frames
+    )
     out_dir = Path(out_dir)
     started = time.perf_counter()
     outcomes: dict[int, JobOutcome] = {}

@@ -173,7 +173,7 @@ def _fine_step_px(supersampling: int) -> int:
     return SKY_STEP_PX // math.gcd(SKY_STEP_PX, supersampling)
 
 
-def merged_rects_px(rects: list[tuple[int, int, int, int]], slack_px: int) -> list[tuple[int, int, int, int]]:
+def merged_rects_px(rects: list[tuple[int, int, int, int]], slack_px: float) -> list[tuple[int, int, int, int]]:
     """Rectangles (x0, y0, x1, y1) merged pairwise while one rectangle around two costs no more than the two
     apart plus `slack_px` (a draw's fixed cost, in pixels). Rectangles left overlapping are both drawn
     (the same pixels twice: correct, at some cost)."""
