@@ -1166,8 +1166,8 @@ def door_mirrors(look: VehicleLook, vertices_m: np.ndarray) -> tuple[Part | None
         bottom_m = z_m - spec.height_m / 2
         door_m = _side_skin_m(vertices_m, x_m, bottom_m)
         inner_m = door_m - 0.02
+        stalk = (0.06, MIRROR_STALK_M[1] + 0.06, MIRROR_STALK_M[0])  # from 6 cm inside the door's skin
         for s in (1, -1):
-            stalk = (0.06, MIRROR_STALK_M[1] + 0.06, MIRROR_STALK_M[0])
             arms.append(_box(stalk, (x_m, s * (door_m - 0.06 + stalk[1] / 2), bottom_m + 0.01)))
     outer_m = W / 2 + spec.reach_m
     housings, glass = [], []

@@ -218,14 +218,21 @@ def seated_driver(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray
 def driver_part(look: VehicleLook) -> Part:
     """The seated driver (`seated_driver`) decimated to about `DRIVER_FACES` triangles, as a part of the
     body with per-vertex colours (surface "cabin")."""
+    vertices, _, faces, colours = seated_driver(look)
+    return _seated_person_part("driver", vertices, faces, colours)
+
+
+def _seated_person_part(name: str, vertices_m: np.ndarray, faces: np.ndarray, colours: np.ndarray) -> Part:
+    """A person seated in the vehicle (vertices (V, 3) in its frame, faces, colours (V, 3)) decimated to about
+    `DRIVER_FACES` triangles, as a part of the body (`Part.wheel` −1) with per-vertex colours (surface "cabin"):
+    seen small, through glass."""
     from camgen.actors.person import decimate
 
-    vertices, _, faces, colours = seated_driver(look)
-    unused = np.zeros((len(vertices), 4))
+    unused = np.zeros((len(vertices_m), 4))
     fraction = min(1.0, DRIVER_FACES / len(faces))
-    vertices, faces, colours, _, _ = decimate(vertices, faces, colours, unused.astype(np.int64), unused, fraction)
+    vertices, faces, colours, _, _ = decimate(vertices_m, faces, colours, unused.astype(np.int64), unused, fraction)
     normals = trimesh.Trimesh(vertices, faces, process=False).vertex_normals
-    return Part("driver", "cabin", vertices, np.asarray(normals), faces, np.full(len(vertices), -1, np.int8),
+    return Part(name, "cabin", vertices, np.asarray(normals), faces, np.full(len(vertices), -1, np.int8),
                 colours=colours)  # fmt: skip
 
 
@@ -367,7 +374,7 @@ def _passenger(look: VehicleLook, seed: int, h_point_m: np.ndarray, floor_m: flo
     balls of the feet no further forward than `toe_room_m`; decimated to `DRIVER_FACES`, per-vertex colours."""
     from camgen.actors.appearance import draw_appearance
     from camgen.actors.driving import Controls, pedal_x_m, seated_vertices
-    from camgen.actors.person import build_person, decimate
+    from camgen.actors.person import build_person
     from camgen.actors.skeleton import INDEX
 
     model = build_person(draw_appearance(seed, pinned={"bag": "none"}))
@@ -379,14 +386,7 @@ def _passenger(look: VehicleLook, seed: int, h_point_m: np.ndarray, floor_m: flo
     laps = np.array([[x + ahead_m, y + apart_m, z + up_m], [x + ahead_m, y - apart_m, z + up_m]])
     vertices, _ = seated_vertices(model, Controls(np.asarray(h_point_m), laps, feet), PASSENGER_BACK_ANGLE_RAD)
     colours = np.asarray(model.colours[:, :3], dtype=np.float64)
-    unused = np.zeros((len(vertices), 4))
-    fraction = min(1.0, DRIVER_FACES / len(model.faces))
-    vertices, faces, colours, _, _ = decimate(
-        vertices, np.asarray(model.faces), colours, unused.astype(np.int64), unused, fraction
-    )
-    normals = trimesh.Trimesh(vertices, faces, process=False).vertex_normals
-    return Part("passenger", "cabin", vertices, np.asarray(normals), faces, np.full(len(vertices), -1, np.int8),
-                colours=colours)  # fmt: skip
+    return _seated_person_part("passenger", vertices, np.asarray(model.faces), colours)
 
 
 def bus_passengers_part(look: VehicleLook) -> Part:
