@@ -722,7 +722,6 @@ class CameraRenderer:
         scene = self.graph.scene
         near_m, far_m = self.clip_range_m(view)
         casting = _shadow_lights(scene) if self.graph.shadows else []
-        sun_texels_m = {}
         rects = []
         for k, moved in enumerate(changed):
             if not moved:
@@ -731,10 +730,8 @@ class CameraRenderer:
             low, high = corners.min(axis=0), corners.max(axis=0)
             texels_m = []
             for node in casting:
-                if isinstance(node.light, DirectionalLight):  # the same for every caster
-                    if id(node) not in sun_texels_m:
-                        sun_texels_m[id(node)] = self._sun_texel_m(node, fit, (near_m, far_m))
-                    texels_m.append(sun_texels_m[id(node)])
+                if isinstance(node.light, DirectionalLight):  # the same for every caster, kept (`_sun_texel_m`)
+                    texels_m.append(self._sun_texel_m(node, fit, (near_m, far_m)))
                 else:
                     texels_m.append(_shadow_texel_m(scene, node, fit, (near_m, far_m), self._caster_box_m, corners))
             grow_m = SHADOW_TEXEL_MARGIN * max(texels_m, default=0.0)
