@@ -6,7 +6,10 @@
 - The shell's faces that face the ground are drawn as the black underbody, never in the paint, and
   paint, glass and underbody together are still the closed shell.
 - Over each wheel the side's paint comes down to the arch, its lower edge a smooth arc a liner's depth over it
-  (the bottom's corner a row of the section's points: no facet chamfers it into a jagged black patch).
+  (the bottom's corner a row of the section's points: no facet chamfers it into a jagged black patch); a van's
+  and a box truck's, flat sides with a rounded bottom edge, end on a round cut-out at one height over the arch
+  (the edge's radius less its first facet's sagitta), and their flat side's smooth normals over the arch are the
+  flat side's own (no shading streaks).
 - The shaded ground under a vehicle covers its whole footprint, inside its plan outline: the vehicle's
   extent in its own frame is the same with and without it (its box in an image leaves it out:
   tests/vehicles/test_vehicle_render.py).
@@ -22,14 +25,17 @@ import trimesh
 
 from camgen.vehicles.body import (
     ARCH_GAP_M,
+    LOWER_POINTS,
     PROFILES,
     RIM_RGB,
     RIM_SHARE,
     STATION_SPACING_M,
     TYRE_WIDTH_SHARE,
     UNDERBODY_RGB,
+    UPPER_POINTS,
     build_vehicle,
     nearside_sign,
+    plan_half_width_m,
     shell,
     wheel_meshes,
 )
@@ -99,16 +105,21 @@ def test_faces_facing_the_ground_are_underbody_and_the_shell_stays_closed(body):
     assert union.is_watertight and len(union.faces) == len(faces)
 
 
-@pytest.mark.parametrize("body", ["hatchback", "sedan", "estate", "suv", "pickup", "bus"])
+ARCH_STEP_M = {"bus": 0.07, "van": 0.002, "box_truck": 0.002}
+"""The most the paint's lower edge over an arch may move between stations, m (cars' 2 cm unless named here)."""
+
+
+@pytest.mark.parametrize("body", ["hatchback", "sedan", "estate", "suv", "pickup", "van", "box_truck", "bus"])
 def test_the_paint_comes_down_to_each_wheel_arch_in_a_smooth_arc(body):
     """In a side view the paint's lower edge over a wheel follows the arch (radius: the wheel's and the arch's
     gap): at every station over its middle 80 % the side's lowest paint lies within 0.13 m of the arch (the black
     liner's band under it) and moves less than 2 cm (a bus's 7 cm, at the arch's ends, where its taller rows
-    meet the arch's steep sides) from one station to the next, for ten looks of each body type. Measured over
-    thirty looks: cars 0.05–0.125 m over the arch, steps up to 1.3 cm; the bus 0.10–0.122 m, up to 6.8 cm. Before
-    the bottom's corners were rows of their own, the cars' edge stepped by 0.10–0.12 m between stations and stood
-    up to 0.19 m over the arch, the bus's stepped by 1.6 m (vans and box trucks: up to 0.21 m over it and 0.11 m
-    steps now, left as they are)."""
+    meet the arch's steep sides; a van's and a box truck's 2 mm: their bottom edge is one radius everywhere) from
+    one station to the next, for ten looks of each body type. Measured over thirty looks: cars 0.05–0.125 m over
+    the arch, steps up to 1.3 cm; the bus 0.10–0.122 m, up to 6.8 cm; vans 0.04 m and box trucks 0.025 m, steps
+    under 1 mm. Before the bottom's corners were rows of their own, the cars' edge stepped by 0.10–0.12 m between
+    stations and stood up to 0.19 m over the arch, the bus's stepped by 1.6 m; before their flat sides (thirty
+    looks), vans' stood up to 0.21 m over it and stepped by up to 0.11 m, box trucks' up to 0.15 m and 0.10 m."""
     for seed in range(10):
         look = _look(body, seed)
         paint = next(part for part in build_vehicle(look).parts if part.name == "body_paint")
@@ -122,8 +133,41 @@ def test_the_paint_comes_down_to_each_wheel_arch_in_a_smooth_arc(body):
             lowest = np.array([side[side[:, 0] == x, 2].min() for x in stations])
             over = lowest - (r + np.sqrt(arch_m**2 - (stations - axle_m) ** 2))
             assert np.all(over > 0.0) and over.max() < 0.13, (body, seed, over.round(3))
-            step = 0.07 if body == "bus" else 0.02
-            assert np.abs(np.diff(over)).max() < step, (body, seed, np.diff(over).round(3))
+            assert np.abs(np.diff(over)).max() < ARCH_STEP_M.get(body, 0.02), (body, seed, np.diff(over).round(3))
+            radius_m = PROFILES[body].sill_radius_m
+            if radius_m is not None:  # a round cut-out: the edge's first facet's lower end, 30° round the edge
+                assert over == pytest.approx(radius_m * (1 - np.sin(np.radians(30))), abs=0.002), (body, seed)
+
+
+@pytest.mark.parametrize("body", ["van", "box_truck"])
+def test_a_flat_side_is_flat_and_shaded_flat_over_its_wheel_arches(body):
+    """A van's or box truck's side under the belt is a flat panel (`Profile.sill_radius_m`): over each wheel arch
+    (and a metre either side) every shell point of the left side from the belt down to the bottom edge's radius
+    over the section's bottom lies on the body's half-width (short of the ends' corners in plan), and its smooth
+    normal is the flat side's, +y within 0.5° (at the arch's steep ends a normal averaged with the lip's facets
+    tilted up to 28° and streaked the paint over it). Before the flat sides (superellipse sections, exponent 5 or
+    10, rounded over a fifth or a tenth of the half-width) those points lay up to 0.13 m inside the half-width,
+    the lowest on the rounded bottom, their normals leaning up to 89° off +y."""
+    for seed in range(5):
+        look = _look(body, seed)
+        vertices, _, normals, _ = shell(look)
+        radius_m = PROFILES[body].sill_radius_m
+        belt_m = PROFILES[body].belt * look.height_m
+        stations = np.unique(vertices[:, 0])
+        bottom = np.array([vertices[vertices[:, 0] == x, 2].min() for x in stations])
+        under = np.interp(vertices[:, 0], stations, bottom)
+        k = np.arange(len(vertices)) % (UPPER_POINTS + LOWER_POINTS)
+        lower = (k == 0) | (k >= UPPER_POINTS)  # the lower arc's points and the +y belt point (a bonnet's top is not)
+        for axle_m in (look.front_axle_x_m, look.rear_axle_x_m):
+            near = np.abs(vertices[:, 0] - axle_m) < look.wheel_radius_m + ARCH_GAP_M + 1.0
+            for reach_m in (-0.1, 0.1):  # clear of the ends' rounded corners in plan, the neighbouring stations too
+                near &= np.isclose(plan_half_width_m(look, vertices[:, 0] + reach_m), look.width_m / 2)
+            flat = near & lower & (vertices[:, 1] > 0) & (vertices[:, 2] <= belt_m + 1e-9)
+            flat &= vertices[:, 2] >= under + radius_m - 1e-9
+            assert flat.sum() > 40
+            assert np.allclose(vertices[flat, 1], look.width_m / 2, atol=1e-6), (body, seed)
+            worst = normals[flat][normals[flat, 1].argmin()]
+            assert np.all(normals[flat, 1] > np.cos(np.radians(0.5))), (body, seed, worst)
 
 
 @pytest.mark.parametrize("body", ["hatchback", "suv", "van", "bus"])

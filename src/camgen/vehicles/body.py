@@ -5,7 +5,8 @@ The vehicle's frame: x forward, y left, z up, origin on the ground at the middle
 The shell is a loft: a side profile per body type (the roof line from the rear, u = 0, to the front, u = 1, as
 heights over the vehicle's height; `PROFILES`) sampled at stations along the length, each station a closed
 cross-section — a superellipse (exponent `SECTION_EXPONENT`: a rounded box, so shoulders and sills are
-rounded) under the beltline and, over it, the greenhouse: a squarer arc (`GREENHOUSE_EXPONENT`) whose sides
+rounded; a van's or box truck's a flat-sided box with a rounded bottom edge, `Profile.sill_radius_m`) under the
+beltline and, over it, the greenhouse: a squarer arc (`GREENHOUSE_EXPONENT`) whose sides
 rise from the belt and lean in (the tumblehome) and round into the roof, its rows of points split between the
 sides and the roof alike at every station (`GREENHOUSE_SIDE_QUADS`, `ROOF_EDGE_ROW_M`), so that the side glass
 reaches up to the roof's rails and a windscreen spans the roof's width between thin pillars. In plan the ends
@@ -118,6 +119,13 @@ class Profile:
     section_exponent: float = SECTION_EXPONENT
     """Superellipse exponent of the body under the belt: a car's rounded sides and sills, a bus's or a box body's
     flat sides coming straight down to a skirt (10: corners rounded over about a tenth of the half-width)."""
+    sill_radius_m: float | None = None
+    """With a radius, the body under the belt is a flat-sided box instead of a superellipse: upright flat sides
+    down to a rounded bottom edge of this radius, m (`_rounded_lower_arc`). Over a wheel the edge is the arch's
+    lip, the same radius at every station, so the side's paint ends on a round cut-out a fixed height over the
+    arch, as a van's or a truck's pressed steel side does round its wheel. A van's 0.08 m and a box truck's 0.05 m
+    are estimates from makers' side and rear views (a Transit's or Sprinter's side panel rolls under over a few
+    centimetres above its sill; a box body's panels and its cab's meet their skirts at a nearly sharp edge)."""
 
 
 PROFILES: dict[str, Profile] = {
@@ -155,13 +163,13 @@ PROFILES: dict[str, Profile] = {
         top=((0, 0.96), (0.015, 1.0), (0.78, 1.0), (0.84, 0.93), (0.90, 0.62), (0.94, 0.55), (0.99, 0.50),
              (1, 0.45)),
         belt=0.52, side_glass=(0.73, 0.89), windscreen=(0.80, 0.91), rear_cap_glass=(0.62, 0.90),
-        clearance_m=0.18, end_lift=0.10, tumblehome=0.05, corner_share=0.03, end_width=0.85,
+        clearance_m=0.18, end_lift=0.10, tumblehome=0.05, corner_share=0.03, end_width=0.85, sill_radius_m=0.08,
     ),
     "box_truck": Profile(
         top=((0, 0.99), (0.005, 1.0), (0.76, 1.0), (0.765, 0.80), (0.80, 0.81), (0.95, 0.80), (0.985, 0.74),
              (1, 0.40)),
         belt=0.44, side_glass=(0.86, 0.975), windscreen=(0.955, 1.0), clearance_m=0.45, end_lift=0.12,
-        tumblehome=0.0, corner_share=0.01, end_width=0.92, section_exponent=10.0,
+        tumblehome=0.0, corner_share=0.01, end_width=0.92, section_exponent=10.0, sill_radius_m=0.05,
     ),
     "bus": Profile(
         top=((0, 0.885), (0.01, 0.92), (0.02, 0.935), (0.98, 0.935), (0.99, 0.92), (1, 0.895)),
@@ -280,7 +288,44 @@ BELT_REACH = (-0.95, 0.85)
 whose roof is below the beltline (a bonnet) keeps an upper arc at its top."""
 
 
-def _sections(half_width_m: np.ndarray, half_height_m: np.ndarray, belt_rel: np.ndarray, exponent: np.ndarray):
+SILL_CORNER_QUADS = 3
+"""Of a flat-sided body's `SILL_SIDE_QUADS` rows down each side (`Profile.sill_radius_m`), those round its bottom
+edge (30° each); the others run down its flat side."""
+
+
+def _rounded_lower_arc(
+    half_width_m: np.ndarray, half_height_m: np.ndarray, belt_z_m: np.ndarray, radius_m: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(y, z − centre) of a flat-sided body's lower arc (S, `LOWER_POINTS`), in `_sections`' order: from the belt on
+    the −y side straight down the flat side, round the bottom edge (a quarter circle of `radius_m`, in
+    `SILL_CORNER_QUADS` rows), across the floor and back up the +y side, the last point's mirror image the +y belt
+    point. The radius shrinks to half the side's height under the belt or half the half-width where they are less
+    (a bumper's station low over its end), so every station keeps a flat side."""
+    hw, hz, zb = (np.asarray(a, dtype=np.float64)[:, None] for a in (half_width_m, half_height_m, belt_z_m))
+    rc = np.minimum(radius_m, 0.5 * np.minimum(zb + hz, hw))
+    flat = SILL_SIDE_QUADS - SILL_CORNER_QUADS
+    floor = LOWER_POINTS - 2 * SILL_SIDE_QUADS
+    t = np.arange(flat + 1)[None, :] / flat  # down the flat side, the corner's first point last
+    side_y, side_z = np.broadcast_to(-hw, (len(hw), flat + 1)), zb + (rc - hz - zb) * t
+    a = np.pi + np.pi / 2 * np.arange(1, SILL_CORNER_QUADS + 1)[None, :] / SILL_CORNER_QUADS
+    corner_y, corner_z = -hw + rc + rc * np.cos(a), -hz + rc + rc * np.sin(a)
+    f = np.arange(1, floor)[None, :] / floor  # the floor's inner points (its ends are the corners' last)
+    floor_y, floor_z = (-hw + rc) * (1 - 2 * f), np.broadcast_to(-hz, (len(hw), floor - 1))
+    half_y = np.concatenate([side_y, corner_y], axis=1)
+    half_z = np.concatenate([side_z, corner_z], axis=1)
+    # The +y side: the −y side's points mirrored, from the floor's far corner up to the point under the belt.
+    y = np.concatenate([half_y, floor_y, -half_y[:, :0:-1]], axis=1)
+    z = np.concatenate([half_z, floor_z, half_z[:, :0:-1]], axis=1)
+    return y, z
+
+
+def _sections(
+    half_width_m: np.ndarray,
+    half_height_m: np.ndarray,
+    belt_rel: np.ndarray,
+    exponent: np.ndarray,
+    sill_radius_m: float | None = None,
+):
     """(y, z − centre) of each station's section points (S, N) and each point's mirror image (N,).
 
     The points run counter-clockwise about +x: `UPPER_POINTS` from the belt on the +y side over the roof
@@ -291,19 +336,26 @@ def _sections(half_width_m: np.ndarray, half_height_m: np.ndarray, belt_rel: np.
     over each roof edge and the rest evenly across the roof, at every station alike (a bonnet's and a boot's
     too, where the "belt" is clamped under their top: `BELT_REACH`). So every station has a row of points on
     its beltline (`belt_rel`: the belt's height over the half height, about the centre), where the windows end. Both
-    counts are odd, so no point lies on the vertical; point k's mirror image (y → −y) is `mirror[k]`."""
+    counts are odd, so no point lies on the vertical; point k's mirror image (y → −y) is `mirror[k]`. With
+    `sill_radius_m` the lower arc is a flat-sided box's instead (`_rounded_lower_arc`), its belt point on the flat
+    side."""
     e = 2 / np.asarray(exponent, dtype=np.float64)
     b = np.clip(belt_rel, *BELT_REACH)
     phi_belt = np.arcsin(np.sign(b) * np.abs(b) ** (1 / e))
     # Over the belt the greenhouse is its own squarer arc: from the belt's point straight up, round the roof's
     # edges, over the roof (`BELT_REACH` keeps some room over a bonnet's or boot's clamped belt).
-    belt_y = half_width_m * np.abs(np.cos(phi_belt)) ** e
+    belt_y = half_width_m * np.abs(np.cos(phi_belt)) ** e if sill_radius_m is None else half_width_m
     belt_z = half_height_m * b
     room_m = half_height_m - belt_z
     g = 2 / GREENHOUSE_EXPONENT
     ys, zs = [], []
     arcs = ((phi_belt, np.pi - phi_belt, UPPER_POINTS), (np.pi - phi_belt, 2 * np.pi + phi_belt, LOWER_POINTS))
     for upper, (lo, hi, count) in zip((True, False), arcs, strict=True):
+        if not upper and sill_radius_m is not None:
+            arc_y, arc_z = _rounded_lower_arc(half_width_m, half_height_m, belt_z, sill_radius_m)
+            ys.append(arc_y)
+            zs.append(arc_z)
+            continue
         if upper:  # the greenhouse, from the belt's point on the +y side to its mirror image
             psi = np.linspace(0.0, np.pi, SECTION_DENSE + 1)[None, :]
             cg, sg = np.cos(psi), np.sin(psi)
@@ -373,7 +425,7 @@ def shell(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nda
     # arc in a side view, the underbody only its roof).
     plain_hz = (top - np.minimum(_bottom_m(look, x, (), arch_radius), top - 0.05)) / 2
     exponent = profile.section_exponent * np.clip(plain_hz / hz, 1.0, ARCH_EXPONENT_GAIN)
-    Y, Z, mirror = _sections(half_width, hz, (belt - zc) / hz, exponent)
+    Y, Z, mirror = _sections(half_width, hz, (belt - zc) / hz, exponent, profile.sill_radius_m)
     Z = Z + zc[:, None]
     above = np.clip((Z - belt) / np.maximum(top[:, None] - belt, 1e-6), 0.0, 1.0)
     Y = Y * (1 - profile.tumblehome * above)
@@ -387,15 +439,39 @@ def shell(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nda
     tube = np.concatenate([np.stack([a, c_, d_], -1).reshape(-1, 3), np.stack([a, b, c_], -1).reshape(-1, 3)])
     # Ends: a ladder between each point on the left (y > 0), bottom to top, and its mirror image.
     left = sorted((k for k in range(N) if Y[0, k] > 0), key=lambda k: Z[0, k])
+    # A flat floor (`Profile.sill_radius_m`) has several points on one line: the ladder's rungs across it would be
+    # triangles of no area, so the floor's points are fanned to the lowest point over it on the left instead.
+    floor = [k for k in left if Z[0, k] - Z[0, left[0]] < 1e-9] if profile.sill_radius_m is not None else left[:1]
+    chain = sorted(floor + [mirror[k] for k in floor], key=lambda k: Y[0, k])
     caps = []
     for station, sign in ((0, -1), (S - 1, 1)):
-        for k0, k1 in itertools.pairwise(left):
+        p = index[station]
+        faces_here = []
+        if len(floor) > 1:
+            apex = left[len(floor)]
+            faces_here += [(p[k0], p[k1], p[apex]) for k0, k1 in itertools.pairwise(chain)]
+            faces_here.append((p[mirror[apex]], p[chain[0]], p[apex]))
+        for k0, k1 in itertools.pairwise(left if len(floor) == 1 else left[len(floor) :]):
             m0, m1 = mirror[k0], mirror[k1]
-            p = index[station]
-            quad = [(p[k0], p[k1], p[m1]), (p[k0], p[m1], p[m0])]
-            caps += quad if sign > 0 else [tuple(reversed(f)) for f in quad]
+            faces_here += [(p[k0], p[k1], p[m1]), (p[k0], p[m1], p[m0])]
+        caps += faces_here if sign > 0 else [tuple(reversed(f)) for f in faces_here]
     faces = np.concatenate([tube, np.array(caps)])
     normals = _vertex_normals(vertices, faces[: len(tube)], len(vertices))
+    if profile.sill_radius_m is not None:
+        # A flat side's rows, the belt's to the bottom edge's first, take their normals from the flat side alone:
+        # the edge's first facet would tilt the lowest row's (over a wheel arch's steep ends, where the lip faces
+        # fore or aft, by up to 28°) and streak the flat paint above it up to the next row, and the greenhouse's
+        # lean would tilt the belt's by more where the side under it is shorter (over an arch). The flat side's
+        # true normal is the edge's too where the two meet.
+        flat = SILL_SIDE_QUADS - SILL_CORNER_QUADS
+        quads = UPPER_POINTS + np.concatenate([np.arange(flat), LOWER_POINTS - flat + np.arange(flat)])
+        rows = np.concatenate(
+            [UPPER_POINTS + np.arange(flat + 1), (UPPER_POINTS + LOWER_POINTS - np.arange(flat + 1)) % N]
+        )
+        on_flat = np.isin(np.tile(np.arange(N), S - 1), quads)
+        flat_normals = _vertex_normals(vertices, tube[np.concatenate([on_flat, on_flat])], len(vertices))
+        at = index[:, rows].ravel()
+        normals[at] = flat_normals[at]
     kind = _glass(profile, look, vertices, faces, len(tube) // 2)
     return vertices, faces, normals, kind
 
