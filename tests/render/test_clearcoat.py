@@ -51,7 +51,8 @@ def _scene():
             {
                 "name": "car",
                 "class": "car",
-                "vehicle": {"seed": 1, "body_type": "sedan", "colour": "black", "driver": False},
+                # Seed 3: a roof all paint (no glass roof or shark fin: `camgen.vehicles.roof.roof_kit`).
+                "vehicle": {"seed": 3, "body_type": "sedan", "colour": "black", "driver": False},
                 "path": {"waypoints_m": [[0, 0]]},
             }
         ],
@@ -63,7 +64,7 @@ def coat(renderer):
     """{view name: (radiance (H, W, 3), the target's pixel (x, y), the cosine of the view angle)}."""
     graph = build_scene_graph(_scene())
     T_vehicle = graph.vehicles[0].T_world_from_vehicle
-    look = draw_look(1, "car", pinned={"body_type": "sedan", "colour": "black"})
+    look = draw_look(3, "car", pinned={"body_type": "sedan", "colour": "black"})
     flat = [u for u, z in PROFILES["sedan"].top if z == 1.0]
     roof = np.array([(np.mean(flat) - 0.5) * look.length_m, 0.0, look.height_m, 1.0])
     # The flank at the middle of the wheelbase, half-way up the section (its widest point: normal ±y).

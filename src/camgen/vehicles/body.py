@@ -26,7 +26,9 @@ destination display over the windscreen (`destination_sign`, `camgen.vehicles.si
 air-conditioning unit on the roof (`roof_unit`). Lamps are thin boxes half sunk into the shell's ends, in lamp
 units at the corners (`_lamp_housings`: a clear headlamp unit reaching back over the nose, a red rear cluster with
 a clear reversing lamp); plates are quads 5 mm in front of them. Exterior mirrors (`door_mirrors`) stand out of
-the outline at the front side windows' lower corners (a bus's on arms ahead of its front).
+the outline at the front side windows' lower corners (a bus's on arms ahead of its front). What a car shows from
+above over the shell (`camgen.vehicles.roof`): a glass roof (the shell's own roof quads as glass, `_glass_roof`),
+roof rails, a shark-fin antenna, the cowl and wipers at the windscreen's foot and the bonnet's shut lines.
 
 Underneath: the shell's faces that face the ground are the underbody (`UNDERBODY_RGB`: underseal and
 plastic undertrays, not the paint), and the ground under the whole footprint, which sees the sky only
@@ -526,11 +528,28 @@ def _glass(profile: Profile, look: VehicleLook, vertices, faces, quads: int) -> 
     tube &= ~_screen_pillars(tube, top_row.max() if top_row.size else -1)
     doors = grid(glass) & ~np.any([grid(w) for w in windows], axis=0)  # a bus's doors reach below the belt
     tube |= doors
+    tube |= _glass_roof(look, vertices, faces, quads, tube)
     black = _black_pillars(profile, look, vertices, faces, quads, tube, top_row.max() if top_row.size else -1)
     kind = glass.astype(np.int8)
     for half in (slice(0, quads), slice(quads, 2 * quads)):
         kind[half] = np.where(black, 2, tube).reshape(-1)
     return kind
+
+
+def _glass_roof(look: VehicleLook, vertices, faces, quads: int, tube: np.ndarray) -> np.ndarray:
+    """(S − 1, N) bool: the glass roof's quads (`camgen.vehicles.roof.glass_roof_rows`), the roof's quads between its
+    edge rows over its longest run of stations that face up at the roof's height and hold no other glass, where the
+    vehicle has one."""
+    from camgen.vehicles.roof import glass_roof_rows, roof_quads, roof_rows_up
+
+    count = UPPER_POINTS + LOWER_POINTS
+    roof = roof_quads(UPPER_POINTS, GREENHOUSE_SIDE_QUADS)
+    grid = vertices[: len(vertices) // count * count].reshape(-1, count, 3)
+    up = roof_rows_up(look, grid, UPPER_POINTS, GREENHOUSE_SIDE_QUADS) & ~tube[:, roof].any(axis=1)
+    rows = glass_roof_rows(look, grid[:, 0, 0], up)
+    out = np.zeros_like(tube)
+    out[np.ix_(rows, roof)] = True
+    return out
 
 
 BLACK_PILLAR_SHARE = 0.04
@@ -1264,6 +1283,16 @@ def door_mirrors(look: VehicleLook, vertices_m: np.ndarray) -> tuple[Part | None
     return painted, gear
 
 
+def _windscreen_foot_m(vertices_m: np.ndarray, glass_faces: np.ndarray) -> float | None:
+    """Where the windscreen's glass ends at the bonnet: the largest x of the glass faces ahead of the middle that face
+    forward and up (a sloped windscreen, not an upright glazed front end), m; None without one."""
+    corners = vertices_m[glass_faces]
+    n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    screen = (n[:, 0] > 0.35) & (n[:, 2] > 0.2) & (corners.mean(axis=1)[:, 0] > 0)
+    return float(corners[screen][:, :, 0].max()) if screen.any() else None
+
+
 def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
     """The vehicle of `look`, at rest in its own frame; `driver`: with its driver seated at the wheel
     (`camgen.vehicles.cabin`). The glass lets the cabin (its dark lining, and the driver) show through."""
@@ -1275,6 +1304,7 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
         inner_glass_part,
         lining_part,
     )
+    from camgen.vehicles.roof import roof_details
 
     vertices, faces, normals, kind = shell(look)
     paint = faces[kind == 0]
@@ -1321,6 +1351,18 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
     # Each primitive costs a draw call per pass (the renderer's per-draw overhead dominates a vehicle's):
     # tyres, rims, plate backings and the underbody share one.
     gear = [tyres, rims, backings, underbody] + ([mirror_gear] if mirror_gear is not None else [])
+    # What a car shows from above over its shell (`camgen.vehicles.roof`): its dark and silver pieces join the
+    # running gear's draw; a body-coloured shark fin is a piece of paint of its own.
+    details = roof_details(
+        look, (vertices, normals, faces), _windscreen_foot_m(vertices, faces[kind == 1]),
+        UPPER_POINTS, GREENHOUSE_SIDE_QUADS, UPPER_POINTS + LOWER_POINTS,
+    )  # fmt: skip
+    painted_fin = details.pop("fin_paint")
+    dark_details = [piece for pieces in details.values() for piece in pieces]
+    if dark_details:
+        gear.append(_coloured_part("roof_gear", "gear", dark_details))
+    if painted_fin:
+        parts.append(_part("roof_fin", "paint", [(mesh, -1) for mesh, _ in painted_fin], smooth=True))
     parts.append(_merge("running_gear", "gear", gear))
     parts += lamps + plates + [ground_shade(look)]
     return VehicleModel(look=look, parts=parts, wheel_centres_m=wheel_centres(look), plate_corners_m=plate_corners)
