@@ -600,7 +600,10 @@ class CameraRenderer:
                     shadow_maps_kept=maps_kept or k > 0,
                     texture_lod_bias=lod_bias,
                 ).radiance
-                totals[k] = part if totals[k] is None else totals[k] + part
+                if totals[k] is None:
+                    totals[k] = part  # the draw's own array, free to sum into
+                else:
+                    totals[k] += part
         return [total / np.float32(len(draws)) for total in totals]
 
     def _sub_frame_mean(self, state: CameraState, view: View, draws: list, fit: ShadowFit) -> np.ndarray:
