@@ -30,7 +30,7 @@ import numpy as np
 
 from camgen.actors.gait import _aim
 from camgen.actors.person import PersonModel
-from camgen.actors.skeleton import INDEX, JOINTS, PARENT_INDEX, Pose, global_transforms, rot_axis
+from camgen.actors.skeleton import INDEX, JOINTS, PARENT_INDEX, Pose, global_transforms, joint_transforms, rot_axis
 from camgen.motion.trajectory import Route
 
 HIP_ABOVE_SEAT_M = 0.09
@@ -50,6 +50,8 @@ ELBOW_POLE = np.array([-0.3, 0.8, -0.5])
 back and down."""
 KNEE_POLE = np.array([1.0, 0.15, 0.0])
 """Which way the left knee points, in the vehicle's frame (mirrored for the right)."""
+SHOULDERS = (INDEX["upperarm_l"], INDEX["upperarm_r"])
+"""The joints whose reach `Rider.lean_rad` tries (the shoulders: the upper arms' roots)."""
 
 
 class Rider:
@@ -107,8 +109,7 @@ class Rider:
 
         def short_m(lean: float) -> float:  # how much farther the farther grip is than the arm reaches
             T_pelvis, local = self._trunk(targets.T_world_from_vehicle, targets.seat_m, lean)
-            G = global_transforms(J, Pose(T_pelvis, local))
-            shoulders = G[[INDEX["upperarm_l"], INDEX["upperarm_r"]], :3, 3]
+            shoulders = joint_transforms(J, Pose(T_pelvis, local), SHOULDERS)[:, :3, 3]
             return float(np.linalg.norm(wrists - shoulders, axis=1).max()) - ARM_REACH * self.arm_m
 
         low, high = LEAN_LIMITS_RAD

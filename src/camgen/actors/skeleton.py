@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from scipy import sparse
@@ -122,17 +123,52 @@ class Pose:
     """(J, 3, 3) each joint's rotation relative to its parent, in rest-aligned axes (pelvis: unused)."""
 
 
+def _local_transforms(rest_joints_m: np.ndarray, pose: Pose) -> np.ndarray:
+    """(J, 4, 4) each joint's transform from its parent's frame, Tr(r_j − r_parent(j)) · R_j (the pelvis's
+    row unused)."""
+    local = np.zeros((len(JOINTS), 4, 4))
+    local[:, :3, :3] = pose.local_rotations
+    local[1:, :3, 3] = rest_joints_m[1:] - rest_joints_m[PARENT_INDEX[1:]]
+    local[:, 3, 3] = 1.0
+    return local
+
+
 def global_transforms(rest_joints_m: np.ndarray, pose: Pose) -> np.ndarray:
-    """(J, 4, 4) global transform of every joint for `pose` (forward kinematics)."""
+    """(J, 4, 4) global transform of every joint for `pose` (forward kinematics).
+
+    One 4 × 4 product per joint, its parent's global transform times its local one; the local transforms
+    are built in one go (one identity built per joint cost more than the products)."""
     G = np.empty((len(JOINTS), 4, 4))
     G[0] = pose.T_world_from_pelvis
-    for j in range(1, len(JOINTS)):
-        p = PARENT_INDEX[j]
-        local = np.eye(4)
-        local[:3, :3] = pose.local_rotations[j]
-        local[:3, 3] = rest_joints_m[j] - rest_joints_m[p]
-        G[j] = G[p] @ local
+    local = _local_transforms(rest_joints_m, pose)
+    for j, p in _CHAIN:
+        G[j] = G[p] @ local[j]
     return G
+
+
+_CHAIN = tuple((j, int(PARENT_INDEX[j])) for j in range(1, len(JOINTS)))
+
+
+@lru_cache(maxsize=16)
+def _chain_to(joints: tuple[int, ...]) -> tuple[tuple[int, int], ...]:
+    """(joint, parent) of `joints` and their ancestors but the pelvis, parents first."""
+    needed = set()
+    for j in joints:
+        while j > 0:
+            needed.add(j)
+            j = int(PARENT_INDEX[j])
+    return tuple((j, p) for j, p in _CHAIN if j in needed)
+
+
+def joint_transforms(rest_joints_m: np.ndarray, pose: Pose, joints: tuple[int, ...]) -> np.ndarray:
+    """(len(joints), 4, 4) the global transforms of `joints` alone (`global_transforms`' rows, bit for bit:
+    the same products along their chains from the pelvis, the other joints' left out)."""
+    G = np.empty((len(JOINTS), 4, 4))
+    G[0] = pose.T_world_from_pelvis
+    local = _local_transforms(rest_joints_m, pose)
+    for j, p in _chain_to(tuple(joints)):
+        G[j] = G[p] @ local[j]
+    return G[list(joints)]
 
 
 def skinning_matrices(rest_joints_m: np.ndarray, G: np.ndarray) -> np.ndarray:
