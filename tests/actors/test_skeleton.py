@@ -1,5 +1,5 @@
 """Forward kinematics gives, bit for bit, what the textbook product along each joint's chain gives, for every
-joint (`global_transforms`) and for a few (`joint_transforms`)."""
+joint (`global_transforms`) and for a few (`joint_transforms`); the time memo keeps what it is given."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from camgen.actors.memo import TimeMemo
 from camgen.actors.skeleton import INDEX, JOINTS, PARENT_INDEX, Pose, global_transforms, joint_transforms
 
 
@@ -49,3 +50,15 @@ def test_joint_transforms_are_those_joints_rows_bit_for_bit(names):
     for rest, pose in _poses(50):
         np.testing.assert_array_equal(joint_transforms(rest, pose, joints), _textbook(rest, pose)[list(joints)])
 
+
+def test_a_time_memo_keeps_its_latest_times_and_forgets_the_oldest_first():
+    memo = TimeMemo(limit=3)
+    for time_s in (0.1, 0.2, 0.3):
+        memo.put(time_s, f"pose at {time_s}")
+    memo.put(0.2, "pose at 0.2 again")  # a time it holds: nothing forgotten
+    assert len(memo) == 3 and memo.get(0.2) == "pose at 0.2 again"
+    memo.put(0.4, "pose at 0.4")
+    assert memo.get(0.1) is None and [memo.get(t) for t in (0.3, 0.4)] == ["pose at 0.3", "pose at 0.4"]
+    assert memo.get(0.30000000000000004) is None  # exact times only: a time computed another way is another time
+    with pytest.raises(ValueError, match="at least one"):
+        TimeMemo(limit=0)

@@ -16,6 +16,7 @@ import numpy as np
 
 from camgen.actors.appearance import Appearance, draw_appearance
 from camgen.actors.gait import Walker
+from camgen.actors.memo import TimeMemo, frozen
 from camgen.actors.person import KEYPOINT_JOINT_ROWS, PersonModel, build_person
 from camgen.actors.riding import Rider
 from camgen.actors.skeleton import (
@@ -63,7 +64,8 @@ def _model(appearance: Appearance) -> PersonModel:
 
 @dataclass
 class PersonRig:
-    """A person's mesh and gait, and its posed state at the last `place` time."""
+    """A person's mesh and gait, and its posed state at the last `place` time (`joints_m`, `keypoints_m` and
+    `T_world_from_pelvis` are read-only: the skeleton's pose is kept for its time, `pose_skeleton`)."""
 
     model: PersonModel
     walker: Walker | Rider
@@ -77,18 +79,27 @@ class PersonRig:
 
     def __post_init__(self) -> None:
         self.weights = weight_matrix(self.model.joint_index, self.model.joint_weight, len(JOINTS))
+        self._skeletons: TimeMemo[tuple[np.ndarray, ...]] = TimeMemo()
         self.place(0.0)
 
     def pose_skeleton(self, time_s: float) -> np.ndarray:
-        """Pose the skeleton at `time_s` (joints and keypoints); its (J, 3, 4) skinning matrices."""
+        """Pose the skeleton at `time_s` (joints and keypoints); its (J, 3, 4) skinning matrices (read-only).
+        The pose is a pure function of the time: one already taken is handed out again (`TimeMemo`)."""
+        kept = self._skeletons.get(time_s)
+        if kept is None:
+            kept = self._skeletons.put(time_s, frozen(*self._skeleton_at(time_s)))
+        M, self.joints_m, self.keypoints_m, self.T_world_from_pelvis = kept
+        return M
+
+    def _skeleton_at(self, time_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(skinning matrices (J, 3, 4), joints (J, 3), keypoints (17, 3), T_world_from_pelvis (4, 4)) at `time_s`."""
         model = self.model
         G = global_transforms(model.joints_m, self.walker.pose(time_s))
-        self.joints_m = G[:, :3, 3].copy()
+        joints_m = G[:, :3, 3].copy()
         head = G[INDEX["head"]]
         markers = (model.head_markers_m - model.joints_m[INDEX["head"]]) @ head[:3, :3].T + head[:3, 3]
-        self.keypoints_m = np.concatenate([markers, self.joints_m[KEYPOINT_JOINT_ROWS]])
-        self.T_world_from_pelvis = G[INDEX["pelvis"]]
-        return skinning_matrices(model.joints_m, G)
+        keypoints_m = np.concatenate([markers, joints_m[KEYPOINT_JOINT_ROWS]])
+        return skinning_matrices(model.joints_m, G), joints_m, keypoints_m, G[INDEX["pelvis"]].copy()
 
     def heading_box(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(low (3,), high (3,), T_world_from_box (4, 4)): the box around the posed mesh in a frame that
@@ -113,8 +124,11 @@ class PersonRig:
         if not self.walker.falling(time_s):
             return
         below = -float(self.vertices_m[:, 2].min())
-        if below > 0:
+        if below > 0:  # lifted copies: the skeleton's arrays are kept for its time (`pose_skeleton`)
             self.vertices_m[:, 2] += below
+            self.joints_m = self.joints_m.copy()
+            self.keypoints_m = self.keypoints_m.copy()
+            self.T_world_from_pelvis = self.T_world_from_pelvis.copy()
             self.joints_m[:, 2] += below
             self.keypoints_m[:, 2] += below
             self.T_world_from_pelvis[2, 3] += below

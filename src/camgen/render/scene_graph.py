@@ -707,9 +707,11 @@ def vehicle_mesh(rig: VehicleRig, sign_cd_m2: float) -> pyrender.Mesh:
 def _pose_vehicle_mesh(node: pyrender.Node, rig: VehicleRig, deformed: set, sign_cd_m2: float) -> None:
     """Copy a placed vehicle's vertices into its primitives and light its lamps (its destination display at
     `sign_cd_m2`)."""
+    # One conversion to the primitives' float32 for the whole vehicle; each primitive takes its rows' view.
+    vertices, normals = rig.vertices_m.astype(np.float32), rig.normals.astype(np.float32)
     for primitive, part, piece in zip(node.mesh.primitives, rig.model.parts, rig.parts, strict=True):
-        primitive.positions = rig.vertices_m[piece]
-        primitive.normals = rig.normals[piece]
+        primitive.positions = vertices[piece]
+        primitive.normals = normals[piece]
         deformed.add(primitive)
         lamp = _lamp(part.surface)
         if lamp is not None:

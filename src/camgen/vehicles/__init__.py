@@ -21,6 +21,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from camgen.actors.memo import TimeMemo, frozen
 from camgen.config.scene import Actor, Scene, is_procedural_vehicle
 from camgen.motion.trajectory import Route
 from camgen.vehicles.body import Part, VehicleModel, build_vehicle
@@ -153,7 +154,8 @@ class VehicleRig:
     """A vehicle's model and route, and its posed state at the last `place` time.
 
     After `place`: `vertices_m` and `normals` hold every part's vertices in the world, one slice of
-    them per part (`parts`, in the model's order), and `lit` which lamps shine."""
+    them per part (`parts`, in the model's order), `T_world_from_vehicle` its frame (read-only: a pose is
+    kept for its time, `pose`), and `lit` which lamps shine."""
 
     keypoints_m = None
     """Vehicles carry no skeleton (the annotations read keypoints of people only)."""
@@ -166,11 +168,21 @@ class VehicleRig:
         self._rest = np.concatenate([part.vertices_m for part in model.parts])
         self._rest_normals = np.concatenate([part.normals for part in model.parts])
         self._wheel = np.concatenate([part.wheel for part in model.parts]).astype(np.int64)
+        self._bone = self._wheel + 1
+        """Each vertex's row of the transforms `place` builds: 0 the body's, 1 + b bone (wheel) b's."""
+        starts = np.flatnonzero(np.diff(self._bone, prepend=-1))
+        ends = [*starts[1:], len(self._bone)]
+        self._runs = [(slice(int(i), int(j)), int(self._bone[i])) for i, j in zip(starts, ends, strict=True)]
+        """The vertices in runs of one bone each (the body's, each wheel's or other bone's): a few tens."""
+        self._turned: tuple[list[bytes], np.ndarray, np.ndarray] | None = None
+        """(each bone's rotation as bytes, the rest vertices and normals turned by them), kept from the last
+        placement: the runs of a bone whose rotation holds (the body's on a straight) are not turned again."""
         self._state: tuple | None = None
         signs = [piece for part, piece in zip(model.parts, self.parts, strict=True) if part.surface == "destination"]
         self._sign = signs[0] if signs else None
         self._boxed = np.concatenate([np.full(len(part.vertices_m), part.surface != "shade") for part in model.parts])
         self.lit: dict[str, bool] = {}
+        self._poses: TimeMemo[tuple] = TimeMemo()
         self.place(0.0)
 
     @property
@@ -188,16 +200,33 @@ class VehicleRig:
         return 0.0 if steer is None else float(steer(time_s))
 
     def pose(self, time_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """(T_world_from_vehicle (4, 4), T_vehicle_from_wheel (4, 4, 4)) at `time_s`. The route's point
-        is the rear axle's middle (the kinematic bicycle model's reference point,
-        `camgen.motion.vehicle_route`); the vehicle's frame is centred on its footprint ahead of it."""
+        """(T_world_from_vehicle (4, 4), T_vehicle_from_bone (B, 4, 4)) at `time_s`, read-only: a pure function
+        of the time, kept for it (`TimeMemo`) with the lamps (`place` and the rider ask for the same times)."""
+        T, bones, _, _ = self._posed(time_s)
+        return T, bones
+
+    def _posed(self, time_s: float) -> tuple[np.ndarray, np.ndarray, dict[str, bool], tuple[bytes, bytes]]:
+        """(T_world_from_vehicle, T_vehicle_from_bone, lamps, the two as bytes) at `time_s`, kept for it."""
+        kept = self._poses.get(time_s)
+        if kept is None:
+            steering = self.steer_rad(time_s)  # the pose's and the indicators' (one look-up on the route)
+            T, bones = frozen(*self._pose_at(time_s, steering))
+            lit = self._lamps_at(time_s, steering)
+            kept = self._poses.put(time_s, (T, bones, lit, (T.tobytes(), bones.tobytes())))
+        return kept
+
+    def _pose_at(self, time_s: float, steering_rad: float) -> tuple[np.ndarray, np.ndarray]:
+        """(T_world_from_vehicle (4, 4), T_vehicle_from_wheel (4, 4, 4)) at `time_s`, the front wheels steered
+        `steering_rad` (`steer_rad` at that time). The route's point is the rear axle's middle (the kinematic
+        bicycle model's reference point, `camgen.motion.vehicle_route`); the vehicle's frame is centred on its
+        footprint ahead of it."""
         xy, heading = self.route.at(time_s)
         look = self.look
         T = np.eye(4)
         T[:3, :3] = _rot_z(float(heading))
         T[:2, 3] = np.asarray(xy, dtype=np.float64) - look.rear_axle_x_m * T[:2, 0]
         spin = _rot_y(wheel_spin_rad(self.route.distance_at(time_s), look.wheel_radius_m))
-        left, right = ackermann_rad(self.steer_rad(time_s), look.wheelbase_m, look.track_m)
+        left, right = ackermann_rad(steering_rad, look.wheelbase_m, look.track_m)
         wheels = np.tile(np.eye(4), (4, 1, 1))
         for w, steer in enumerate((left, right, 0.0, 0.0)):
             wheels[w, :3, :3] = _rot_z(steer) @ spin
@@ -206,13 +235,11 @@ class VehicleRig:
 
     def place(self, time_s: float) -> bool:
         """Pose the vehicle at `time_s`; whether anything drawn changed since the last call."""
-        T, wheels = self.pose(time_s)
+        T, wheels, lit, state = self._posed(time_s)
         self.T_world_from_vehicle = T
-        lit = self.lamps(time_s)
-        state = (T.tobytes(), wheels.tobytes())
         moved = state != self._state
         changed = moved or lit != self.lit
-        self.lit = lit
+        self.lit = dict(lit)
         if not moved:
             return changed
         self._state = state
@@ -220,24 +247,54 @@ class VehicleRig:
         M = np.empty((len(wheels) + 1, 4, 4))
         M[0] = T
         M[1:] = T @ wheels
-        chosen = M[self._wheel + 1]
-        self.vertices_m = np.einsum("vij,vj->vi", chosen[:, :3, :3], self._rest) + chosen[:, :3, 3]
-        self.normals = np.einsum("vij,vj->vi", chosen[:, :3, :3], self._rest_normals)
+        turned, normals = self._turn(M)
+        self.vertices_m = np.empty_like(turned)
+        for rows, bone in self._runs:
+            np.add(turned[rows], M[bone, :3, 3], out=self.vertices_m[rows])
+        self.normals = normals.copy()
         return True
+
+    def _turn(self, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The rest vertices and normals turned by their bone's rotation in `M` (B + 1, 4, 4; the body's first),
+        kept for the next placement: only the runs of a bone whose rotation changed are turned again, each row
+        by the product of its own matrix and vector (the rows kept are what turning them all again would give,
+        bit for bit)."""
+        keys = [M[b, :3, :3].tobytes() for b in range(len(M))]
+        if self._turned is None or len(self._turned[0]) != len(keys):
+            turned, normals = np.empty_like(self._rest), np.empty_like(self._rest_normals)
+            stale = [True] * len(keys)
+        else:
+            kept, turned, normals = self._turned
+            stale = [key != before for key, before in zip(keys, kept, strict=True)]
+        self._turned = (keys, turned, normals)
+        changed = [rows for rows, bone in self._runs if stale[bone]]
+        while changed:  # each stretch of consecutive changed runs in one product
+            first = changed.pop(0)
+            stop = first.stop
+            while changed and changed[0].start == stop:
+                stop = changed.pop(0).stop
+            rows = slice(first.start, stop)
+            chosen = np.take(M, self._bone[rows], axis=0)
+            turned[rows] = np.einsum("vij,vj->vi", chosen[:, :3, :3], self._rest[rows])
+            normals[rows] = np.einsum("vij,vj->vi", chosen[:, :3, :3], self._rest_normals[rows])
+        return turned, normals
 
     def lamps(self, time_s: float) -> dict[str, bool]:
         """Which lamps shine at `time_s`: head and tail lamps when the scene turns them on; brake
         lamps while a vehicle that drives stands at a stop; an indicator flashes on the side the
         front wheels turn to; a bus's destination display always."""
+        return self._lamps_at(time_s, self.steer_rad(time_s))
+
+    def _lamps_at(self, time_s: float, steering_rad: float) -> dict[str, bool]:
+        """`lamps` at `time_s`, the front wheels steered `steering_rad` (`steer_rad` at that time)."""
         standing = self.route.standing(time_s) if self.route.moves else None
-        steer = self.steer_rad(time_s)
         flash = (time_s * INDICATOR_HZ) % 1.0 < 0.5
         return {
             "head": self.lights_on,
             "tail": self.lights_on,
             "brake": standing is not None and math.isfinite(standing[1]),
-            "indicator_left": bool(steer > INDICATOR_STEER_RAD and flash),
-            "indicator_right": bool(steer < -INDICATOR_STEER_RAD and flash),
+            "indicator_left": bool(steering_rad > INDICATOR_STEER_RAD and flash),
+            "indicator_right": bool(steering_rad < -INDICATOR_STEER_RAD and flash),
             "destination": self._sign is not None,  # a bus in service shows its route (`camgen.vehicles.sign`)
         }
 
@@ -318,10 +375,10 @@ class TwoWheelerRig(VehicleRig):
         v, kappa = np.asarray(speed(times), np.float64), np.asarray(curvature(times), np.float64)
         return float(np.mean(np.arctan(v**2 * kappa / GRAVITY_M_S2)))
 
-    def pose(self, time_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """(T_world_from_vehicle (4, 4), T_vehicle_from_bone (B, 4, 4)) at `time_s`, bones as
-        `camgen.vehicles.two_wheeler.BONES` (a motorcycle has the first three). The vehicle rolls by
-        `lean_rad` about its contact line (its frame's x axis, on the ground)."""
+    def _pose_at(self, time_s: float, steering_rad: float) -> tuple[np.ndarray, np.ndarray]:
+        """(T_world_from_vehicle (4, 4), T_vehicle_from_bone (B, 4, 4)) at `time_s`, steered `steering_rad`
+        (`steer_rad` at that time), bones as `camgen.vehicles.two_wheeler.BONES` (a motorcycle has the first
+        three). The vehicle rolls by `lean_rad` about its contact line (its frame's x axis, on the ground)."""
         xy, heading = self.route.at(time_s)
         look, model = self.look, self.model
         T = np.eye(4)
@@ -329,7 +386,7 @@ class TwoWheelerRig(VehicleRig):
         T[:2, 3] = np.asarray(xy, dtype=np.float64) - look.rear_axle_x_m * T[:2, 0]
         spin = _rot_y(wheel_spin_rad(self.route.distance_at(time_s), look.wheel_radius_m))
         steer = np.eye(4)  # about the steering axis through the head tube
-        steer[:3, :3] = _rotation_about(model.steer_axis, handlebar_rad(self.steer_rad(time_s), model.rake_rad))
+        steer[:3, :3] = _rotation_about(model.steer_axis, handlebar_rad(steering_rad, model.rake_rad))
         steer[:3, 3] = model.steer_point_m - steer[:3, :3] @ model.steer_point_m
         bones = np.tile(np.eye(4), (3 if model.bottom_bracket_m is None else 6, 1, 1))
         front, rear = model.wheel_centres_m
@@ -345,10 +402,10 @@ class TwoWheelerRig(VehicleRig):
                 bones[bone, 1, 3] += side * PEDAL_Y_M
         return T, bones
 
-    def lamps(self, time_s: float) -> dict[str, bool]:
+    def _lamps_at(self, time_s: float, steering_rad: float) -> dict[str, bool]:
         """A motorcycle's head, tail and brake lamps as a car's (no indicators); a bicycle's front and
         rear lamps when its lights are on."""
-        lit = super().lamps(time_s)
+        lit = super()._lamps_at(time_s, steering_rad)
         lit = {key: value for key, value in lit.items() if not key.startswith("indicator")}
         return lit | {"cycle_head": self.lights_on, "cycle_tail": self.lights_on}
 
