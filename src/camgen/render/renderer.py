@@ -154,7 +154,13 @@ def gl_camera_pose(T_world_from_cam: np.ndarray) -> np.ndarray:
 
 
 class _LinearProgramCache(ShaderProgramCache):
-    """pyrender's program cache, answering with camgen's shaders for its lit and depth-only programs."""
+    """pyrender's program cache, answering with camgen's shaders for its lit and depth-only programs, each
+    compiled without the light loops of the kinds that the scene being drawn has none of (`absent_lights`:
+    the defines NO_SUNS, NO_POINT_LIGHTS, NO_SPOT_LIGHTS of `linear_mesh.frag`; a loop over no lights adds
+    nothing, so the same pixels)."""
+
+    absent_lights: tuple[str, ...] = ()
+    """The defines for the kinds of light the current scene has none of (`_PassRenderer.forward` sets it)."""
 
     OURS = {
         "mesh.vert": "linear_mesh.vert",
@@ -167,6 +173,8 @@ class _LinearProgramCache(ShaderProgramCache):
         def ours(name):
             return str(SHADER_DIR / self.OURS[name]) if name in self.OURS else name
 
+        if fragment_shader == "mesh.frag" and self.absent_lights:
+            defines = {**(defines or {}), **dict.fromkeys(self.absent_lights, 1)}
         program = super().get_program(ours(vertex_shader), ours(fragment_shader), geometry_shader, defines)
         if not isinstance(program, _RememberingProgram):
             program.__class__ = _RememberingProgram
@@ -602,6 +610,12 @@ class _PassRenderer(pyrender.Renderer):
         GL.glFrontFace(GL.GL_CW)  # gl_projection flips rows
         draw_flags = flags if lit else RenderFlags.DEPTH_ONLY
         program_flags = ProgramFlags.USE_MATERIAL if lit else ProgramFlags.NONE
+        kinds = (
+            ("NO_SUNS", scene.directional_light_nodes),
+            ("NO_POINT_LIGHTS", scene.point_light_nodes),
+            ("NO_SPOT_LIGHTS", scene.spot_light_nodes),
+        )
+        self._program_cache.absent_lights = tuple(define for define, lights in kinds if not lights)
         program = None
         for node, primitive in _draw_order(scene, nodes, cam_position, lit):
             program = self._get_primitive_program(primitive, draw_flags, program_flags)
