@@ -14,6 +14,7 @@ from camgen.vehicles.body import (
     DIFFUSER_BODIES,
     GRILLE_BODIES,
     LAMP_DEPTH_M,
+    REAR_BUMPER_BODIES,
     _end_heights,
     lamps_and_plates,
 )
@@ -57,7 +58,9 @@ def test_grilles_intakes_and_lower_bumpers_sit_on_the_ends(body):
         # The lower intake reaches above the front plate, which lies in front of it.
         plate = plates["front"]
         assert front[:, 2].max() > plate[:, 2].max() and plate[0, 0] > front[:, 0].max()
-    if body not in DIFFUSER_BODIES:
+    if body in REAR_BUMPER_BODIES:  # a van's black bumper with its step: tests/vehicles/test_van_rear.py
+        assert len(rear) and rear[:, 2].max() <= plates["rear"][:, 2].min()
+    elif body not in DIFFUSER_BODIES:
         assert len(rear) == 0
     else:
         # Under the rear plate, across most of the rear face.

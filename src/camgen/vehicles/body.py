@@ -25,7 +25,10 @@ with hand holes and a hub of ten nuts, `steel_disc_wheel_meshes`) and shows its 
 destination display over the windscreen (`destination_sign`, `camgen.vehicles.sign`) and carries its
 air-conditioning unit on the roof (`roof_unit`). Lamps are thin boxes half sunk into the shell's ends, in lamp
 units at the corners (`_lamp_housings`: a clear headlamp unit reaching back over the nose, a red rear cluster with
-a clear reversing lamp); plates are quads 5 mm in front of them. Exterior mirrors (`door_mirrors`) stand out of
+a clear reversing lamp; a van's upright on its rear pillars); plates are quads 5 mm in front of them. A van's rear
+overhang clears its departure angle (`Profile.departure_angle_deg`) under a black plastic rear bumper with a step; a
+box truck's load floor is raised behind its rear wheels (`Profile.rear_floor_m`) over an underrun guard
+(`_underrun_guard`). Exterior mirrors (`door_mirrors`) stand out of
 the outline at the front side windows' lower corners (a bus's on arms ahead of its front). What a car shows from
 above over the shell (`camgen.vehicles.roof`): a glass roof (the shell's own roof quads as glass, `_glass_roof`),
 roof rails, a shark-fin antenna, the cowl and wipers at the windscreen's foot and the bonnet's shut lines.
@@ -128,7 +131,32 @@ class Profile:
     arch, as a van's or a truck's pressed steel side does round its wheel. A van's 0.08 m and a box truck's 0.05 m
     are estimates from makers' side and rear views (a Transit's or Sprinter's side panel rolls under over a few
     centimetres above its sill; a box body's panels and its cab's meet their skirts at a nearly sharp edge)."""
+    departure_angle_deg: float | None = None
+    """With an angle, the underside behind the rear axle stays over the departure line: the line at this angle to
+    the road that touches the rear tyres (`departure_line_m`), so the rear bumper's lower edge is as high as the
+    maker's departure angle and rear overhang put it (`end_lift` then sets the front end alone where the line is
+    higher)."""
+    rear_floor_m: float | None = None
+    """With a height, m, the underside behind the rear wheel arches is a load floor this high over the road: a box
+    truck's body sits on its chassis frame, and under its rear overhang the road shows between the rear wheels and
+    the underrun guard (`UNDERRUN_GUARD_BODIES`), not a skirt down to the sills."""
 
+
+VAN_DEPARTURE_ANGLE_DEG = 20.0
+"""A panel van's departure angle, unladen: makers' dimension sheets put large vans' at about 18-23 deg (Ford
+Transit 2014- van, Mercedes Sprinter 907, VW Crafter 2017; figures recalled from the sheets, not rechecked in this
+change: an estimate). With the vans' rear overhangs here (0.95-1.13 m, half of `look.BODY_TYPES`' overhangs; a
+Sprinter L2's 1.27 m) it puts the rear bumper's lower edge 0.32-0.39 m over the road (`departure_line_m`), where a
+Transit's or Sprinter's black rear bumper ends, 0.35-0.45 m up in makers' rear views: seen from behind, the rear
+tyres show under it. The earlier `end_lift` alone put it 0.20-0.27 m up, a departure angle of about 11-14 deg."""
+
+BOX_FLOOR_M = 1.05
+"""Height of a box truck's load floor over the road, m: a 7.5 t rigid's box body stands on its chassis frame (about
+0.85-0.9 m up) and a subframe, its floor 1.0-1.2 m up, as high as a tail lift's platform rises (bodybuilders' data
+for MAN TGL and Iveco Eurocargo box bodies; an estimate)."""
+FLOOR_STEP_M = 0.01
+"""How far behind a rear wheel arch a load floor (`Profile.rear_floor_m`) starts, m: the step up from the arch's end
+to the floor, one station."""
 
 PROFILES: dict[str, Profile] = {
     "sedan": Profile(
@@ -166,12 +194,14 @@ PROFILES: dict[str, Profile] = {
              (1, 0.45)),
         belt=0.52, side_glass=(0.73, 0.89), windscreen=(0.80, 0.91), rear_cap_glass=(0.62, 0.90),
         clearance_m=0.18, end_lift=0.10, tumblehome=0.05, corner_share=0.03, end_width=0.85, sill_radius_m=0.08,
+        departure_angle_deg=VAN_DEPARTURE_ANGLE_DEG,
     ),
     "box_truck": Profile(
         top=((0, 0.99), (0.005, 1.0), (0.76, 1.0), (0.765, 0.80), (0.80, 0.81), (0.95, 0.80), (0.985, 0.74),
              (1, 0.40)),
         belt=0.44, side_glass=(0.86, 0.975), windscreen=(0.955, 1.0), clearance_m=0.45, end_lift=0.12,
         tumblehome=0.0, corner_share=0.01, end_width=0.92, section_exponent=10.0, sill_radius_m=0.05,
+        rear_floor_m=BOX_FLOOR_M,
     ),
     "bus": Profile(
         top=((0, 0.885), (0.01, 0.92), (0.02, 0.935), (0.98, 0.935), (0.99, 0.92), (1, 0.895)),
@@ -248,6 +278,8 @@ def _stations(look: VehicleLook, axles_x: tuple[float, float], arch_radius_m: fl
     xs.append(L / 2 - c * (1 - np.cos(np.linspace(0, np.pi / 2, 7))))
     for x0 in axles_x:
         xs.append(x0 + arch_radius_m * np.sin(np.linspace(-np.pi / 2, np.pi / 2, 17)))
+    if profile.rear_floor_m is not None:
+        xs.append([look.rear_axle_x_m - arch_radius_m - FLOOR_STEP_M])
     x = np.unique(np.round(np.clip(np.concatenate(xs), -L / 2, L / 2), 6))
     x[0], x[-1] = -L / 2, L / 2
     return x
@@ -262,12 +294,32 @@ def _bottom_m(look: VehicleLook, x: np.ndarray, axles_x, arch_radius_m: float) -
     ramp = 0.08 * L
     d = np.minimum(x + L / 2, L / 2 - x)
     bottom = profile.clearance_m + (end - profile.clearance_m) * np.clip(1 - d / ramp, 0, 1) ** 2
+    if profile.departure_angle_deg is not None:
+        # The rear overhang's lowest point is the bumper's lower rear edge, half the bumper's depth behind the end
+        # face (`REAR_BUMPER_M`): the shell's underside keeps the line's height that far behind each station, so the
+        # bumper's lower edge lies on the line and is the end face's lower edge, with nothing under it.
+        reach_m = REAR_BUMPER_M[0] / 2 if look.body_type in REAR_BUMPER_BODIES else 0.0
+        bottom = np.maximum(bottom, departure_line_m(look, x - reach_m))
+    if profile.rear_floor_m is not None:
+        behind = x <= look.rear_axle_x_m - arch_radius_m - FLOOR_STEP_M
+        bottom = np.where(behind, np.maximum(bottom, profile.rear_floor_m), bottom)
     r = look.wheel_radius_m
     for x0 in axles_x:
         inside = np.abs(x - x0) < arch_radius_m
         arch = r + np.sqrt(np.maximum(arch_radius_m**2 - (x - x0) ** 2, 0.0))
         bottom = np.where(inside, np.maximum(bottom, arch), bottom)
     return bottom
+
+
+def departure_line_m(look: VehicleLook, x_m: np.ndarray) -> np.ndarray:
+    """Height over the road at `x_m` of the departure line (`Profile.departure_angle_deg`), m, 0 ahead of its foot.
+
+    The line at angle theta to the road tangent to a rear tyre of radius r meets the road r tan(theta / 2) behind
+    the rear axle (the tangent's distance to the wheel's centre is r), so at a distance s behind the axle it is
+    (s - r tan(theta / 2)) tan(theta) up: a rear overhang's lowest point on it makes the departure angle theta."""
+    theta = np.radians(PROFILES[look.body_type].departure_angle_deg)
+    behind_m = look.rear_axle_x_m - np.asarray(x_m, dtype=np.float64)
+    return np.maximum(behind_m - look.wheel_radius_m * np.tan(theta / 2), 0.0) * np.tan(theta)
 
 
 SECTION_DENSE = 128
@@ -475,6 +527,14 @@ def shell(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nda
         at = index[:, rows].ravel()
         normals[at] = flat_normals[at]
     kind = _glass(profile, look, vertices, faces, len(tube) // 2)
+    if profile.rear_floor_m is not None:
+        # The step up to the load floor behind the rear wheels faces back under the floor: seen from behind between
+        # the rear wheels it is the chassis's dark underside (the rear axle, the frame), not a painted wall.
+        corners = vertices[faces]
+        cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        back = cross[:, 0] < -0.7 * np.maximum(np.linalg.norm(cross, axis=1), 1e-12)
+        under = (corners[:, :, 2].max(axis=1) <= profile.rear_floor_m + 1e-6) & (corners[:, :, 0].min(axis=1) > -L / 2)
+        kind[back & under & (kind == 0)] = 2
     return vertices, faces, normals, kind
 
 
@@ -844,6 +904,53 @@ def _end_heights(look: VehicleLook) -> tuple[tuple[float, float], tuple[float, f
     return (float(bottom[0]), float(top[0])), (float(bottom[1]), float(top[1]))
 
 
+VAN_REAR_CLUSTER_M = (0.20, 0.60)
+"""Width and height of a van's rear lamp cluster, m: a panel van's rear lamps are upright clusters on the rear
+pillars beside the rear doors (Ford Transit 2014-, VW Crafter 2017-, Mercedes Sprinter 907), about 0.2 m wide and
+0.5-0.7 m tall in makers' rear views (an estimate), the tail, stop, indicator and reversing lamps stacked."""
+VAN_REAR_CLUSTER_TOP_M = 1.35
+"""Height of a van's rear clusters' tops over the road, m (a Transit's about 1.3-1.4 m, at the rear doors' middle
+height, in makers' rear views; an estimate)."""
+
+
+def _rear_lamps_m(
+    look: VehicleLook, tail_z_m: float, rear_high_m: float
+) -> dict[str, tuple[float, float, float, float]]:
+    """Where the rear lamps lie on the rear face: name → (distance of its centre in from the face's side, height of
+    its centre, width, height), m, for the lit "tail", "brake" and "indicator" lenses, the "reversing" lamp and the
+    "cluster" round them (`_lamp_housings`): a car's cluster lies across each corner under the rear's top; a van's
+    stands upright on each rear pillar (`VAN_REAR_CLUSTER_M`), its lamps stacked from the tail lamp down."""
+    if look.body_type == "van":
+        width, height = VAN_REAR_CLUSTER_M
+        top = min(VAN_REAR_CLUSTER_TOP_M, rear_high_m - 0.3)
+        lens = width - 0.04
+        return {
+            "cluster": (width / 2, top - height / 2, width, height),
+            "tail": (width / 2, top - 0.08, lens, 0.10),
+            "brake": (width / 2, top - 0.21, lens, 0.10),
+            "indicator": (width / 2, top - 0.34, lens, 0.08),
+            "reversing": (width / 2, top - 0.47, lens, 0.08),
+        }
+    rear_w, rear_h = REAR_CLUSTER_M
+    rear_top = min(tail_z_m + 0.07, rear_high_m - 0.02)
+    return {
+        "cluster": (rear_w / 2, rear_top - rear_h / 2, rear_w, rear_h),
+        "tail": (0.13, tail_z_m, 0.22, 0.10),
+        "brake": (0.33, tail_z_m, 0.16, 0.07),
+        "indicator": (0.13, tail_z_m - 0.09, 0.14, 0.05),
+        "reversing": (0.33, tail_z_m - 0.085, 0.12, 0.04),
+    }
+
+
+def _rear_plate_z_m(look: VehicleLook, rear_low_m: float) -> float:
+    """Height of the rear plate's centre, m: over the bumper's lower edge, or on the rear doors 3 cm over a van's
+    rear bumper (`REAR_BUMPER_BODIES`)."""
+    ph = PLATE_SIZE_M[1]
+    if look.body_type in REAR_BUMPER_BODIES:
+        return rear_low_m + REAR_BUMPER_M[1] + 0.03 + ph / 2
+    return max(rear_low_m + 0.12 + ph / 2, 0.45)
+
+
 def lamps_and_plates(
     look: VehicleLook, shell_m: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 ) -> tuple[list[Part], dict[str, np.ndarray], list[Part], Part]:
@@ -858,8 +965,9 @@ def lamps_and_plates(
     xf, xr = L / 2, -L / 2
     lamp = lambda x, y, z, w, h: _box((LAMP_DEPTH_M, w, h), (x, y, z))  # noqa: E731
     head = [(lamp(xf, s * (half - 0.19), head_z, 0.26, 0.09), -1) for s in (1, -1)]
-    tail = [(lamp(xr, s * (half - 0.13), tail_z, 0.22, 0.10), -1) for s in (1, -1)]
-    brake = [(lamp(xr, s * (half - 0.33), tail_z, 0.16, 0.07), -1) for s in (1, -1)]
+    rear_lamps = _rear_lamps_m(look, tail_z, rear_high)
+    tail = [(lamp(xr, s * (half - rear_lamps["tail"][0]), *rear_lamps["tail"][1:]), -1) for s in (1, -1)]
+    brake = [(lamp(xr, s * (half - rear_lamps["brake"][0]), *rear_lamps["brake"][1:]), -1) for s in (1, -1)]
     lamps = [
         _part("head_lamps", "head", head),
         _part("tail_lamps", "tail", tail),
@@ -867,13 +975,13 @@ def lamps_and_plates(
     ]
     for name, s in (("left", 1), ("right", -1)):  # each side flashes on its own
         front = lamp(xf, s * (half - 0.035), head_z, 0.05, 0.07)
-        rear = lamp(xr, s * (half - 0.13), tail_z - 0.09, 0.14, 0.05)
+        rear = lamp(xr, s * (half - rear_lamps["indicator"][0]), *rear_lamps["indicator"][1:])
         lamps.append(_part(f"indicators_{name}", f"indicator_{name}", [(front, -1), (rear, -1)]))
     pw, ph = PLATE_SIZE_M
     plates, corners, backings = [], {}, []
     for side, x, z, sign in (
         ("front", xf + 0.005 + LAMP_DEPTH_M / 2, front_low + 0.10 + ph / 2, 1.0),
-        ("rear", xr - 0.005 - LAMP_DEPTH_M / 2, max(rear_low + 0.12 + ph / 2, 0.45), -1.0),
+        ("rear", xr - 0.005 - LAMP_DEPTH_M / 2, _rear_plate_z_m(look, rear_low), -1.0),
     ):
         # Read from outside: a viewer facing the front plate looks along −x, its left is −y; behind the
         # vehicle the viewer's left is +y.
@@ -941,12 +1049,13 @@ def _lamp_housings(
     pieces = []
     head_w, head_h = HEADLAMP_UNIT_M
     head_top = min(head_z_m + head_h / 2, front_high - 0.02)
-    rear_w, rear_h = REAR_CLUSTER_M
-    rear_top = min(tail_z_m + 0.07, rear_high - 0.02)
+    rear_lamps = _rear_lamps_m(look, tail_z_m, rear_high)
+    in_c, z_c, rear_w, rear_h = rear_lamps["cluster"]
+    in_r, z_r, w_r, h_r = rear_lamps["reversing"]
     for s in (1, -1):
         head = _box((HOUSING_DEPTH_M, head_w, head_h), (L / 2, s * (half - head_w / 2), head_top - head_h / 2))
-        rear = _box((HOUSING_DEPTH_M, rear_w, rear_h), (-L / 2, s * (half - rear_w / 2), rear_top - rear_h / 2))
-        reversing = _box((HOUSING_DEPTH_M + 0.008, 0.12, 0.04), (-L / 2, s * (half - 0.33), tail_z_m - 0.085))
+        rear = _box((HOUSING_DEPTH_M, rear_w, rear_h), (-L / 2, s * (half - in_c), z_c))
+        reversing = _box((HOUSING_DEPTH_M + 0.008, w_r, h_r), (-L / 2, s * (half - in_r), z_r))
         pieces += [(head, HEADLAMP_UNIT_RGB), (rear, REAR_LENS_RGB), (reversing, REVERSING_LENS_RGB)]
     if shell_m is not None:
         pieces += [(top, HEADLAMP_UNIT_RGB) for top in _headlamp_tops(look, shell_m, half - head_w)]
@@ -1011,6 +1120,32 @@ INTAKE_SHARE = 0.70
 """The lower intake's width as a share of the front end's flat face."""
 DIFFUSER_HEIGHT_M = 0.10
 """Height of the black lower rear bumper over the bumper's lower edge, m."""
+UNDERRUN_GUARD_BODIES = ("box_truck",)
+"""Body types with a rear underrun guard under a raised load floor (`Profile.rear_floor_m`): a horizontal bar on two
+brackets from the chassis frame's two rails, black steel (UN Regulation No. 58)."""
+GUARD_LOWER_EDGE_M = 0.50
+"""Height of the underrun guard's lower edge over the road, unladen, m: UN R58 allows at most 550 mm (its 03 series
+lowers the limit for some categories; 0.50 m is an estimate inside it)."""
+GUARD_BAR_M = (0.08, 0.12)
+"""Depth and height of the guard's bar, m (UN R58: a section at least 100 mm high; the depth an estimate)."""
+GUARD_SETBACK_M = 0.15
+"""How far the guard's rear face lies ahead of the rear end, m (UN R58: at most 400 mm, less in its 03 series)."""
+GUARD_TYRE_INSET_M = 0.05
+"""How far inside the rear tyres' outer faces the guard's ends lie, m (UN R58: at most 100 mm on each side)."""
+FRAME_RAIL_M = (0.85, 0.07, 0.22)
+"""A box truck's chassis frame under its floor: the two rails' outer width apart, each rail's width and depth, m (a
+light truck's frame about 0.85 m wide and 0.2 m deep; an estimate)."""
+REAR_BUMPER_BODIES = ("van",)
+"""Body types with a rear bumper of unpainted black plastic across the rear end, a step in its top: a panel van's
+(Transit, Sprinter, Crafter, Transporter: grained black polypropylene on the fleet trims, painted on a few top trims
+only), its lower edge the rear end's lower edge (`Profile.departure_angle_deg`)."""
+REAR_BUMPER_M = (0.10, 0.20)
+"""Depth (half sunk, like the lamps) and height of a van's rear bumper, m (a Transit's or Sprinter's about 0.2 m
+tall in makers' rear views; an estimate)."""
+REAR_STEP_M = (0.20, 0.90, 0.04)
+"""Depth, width and thickness of the step on a van's rear bumper's top, m: a tread across the middle standing out
+0.1 m past the bumper's face (a Transit's or Sprinter's integrated step, about 0.9 m wide and 0.1 m deep; an
+estimate)."""
 
 
 def _black_trim(look: VehicleLook, head_z_m: float) -> list[trimesh.Trimesh]:
@@ -1033,6 +1168,42 @@ def _black_trim(look: VehicleLook, head_z_m: float) -> list[trimesh.Trimesh]:
     if look.body_type in DIFFUSER_BODIES:
         size = (LAMP_DEPTH_M / 2, 2 * (half - 0.04), DIFFUSER_HEIGHT_M)
         pieces.append(_box(size, (-L / 2, 0.0, rear_low + 0.01 + DIFFUSER_HEIGHT_M / 2)))
+    if look.body_type in UNDERRUN_GUARD_BODIES:
+        pieces += _underrun_guard(look)
+    if look.body_type in REAR_BUMPER_BODIES:
+        depth, height = REAR_BUMPER_M
+        step_depth, step_width, step_thickness = REAR_STEP_M
+        # Its lower edge is the end face's (on the departure line at its rear face: `_bottom_m`).
+        pieces.append(_box((depth, 2 * half, height), (-L / 2, 0.0, rear_low + height / 2)))
+        step_z = rear_low + height - step_thickness / 2
+        pieces.append(_box((step_depth, step_width, step_thickness), (-L / 2, 0.0, step_z)))
+    return pieces
+
+
+def _underrun_guard(look: VehicleLook) -> list[trimesh.Trimesh]:
+    """A box truck's rear underrun guard and the frame that carries it under the raised floor
+    (`UNDERRUN_GUARD_BODIES`): the two chassis rails from the rear axle back to the guard, a bracket down from each
+    to the guard's bar, and the bar across the rear tyres' span, its lower edge `GUARD_LOWER_EDGE_M` up."""
+    L = look.length_m
+    floor_m = PROFILES[look.body_type].rear_floor_m
+    bar_depth, bar_height = GUARD_BAR_M
+    frame_width, rail_width, rail_depth = FRAME_RAIL_M
+    rail_y = frame_width / 2 - rail_width / 2
+    bar_x = -L / 2 + GUARD_SETBACK_M + bar_depth / 2
+    half_m = look.track_m / 2 + TYRE_WIDTH_SHARE * look.width_m / 2 - GUARD_TYRE_INSET_M
+    bar_top = GUARD_LOWER_EDGE_M + bar_height
+    front = look.rear_axle_x_m
+    pieces = [_box((bar_depth, 2 * half_m, bar_height), (bar_x, 0.0, GUARD_LOWER_EDGE_M + bar_height / 2))]
+    for side in (1, -1):
+        rail_length = front - (bar_x - bar_depth / 2)
+        pieces.append(
+            _box(
+                (rail_length, rail_width, rail_depth),
+                (front - rail_length / 2, side * rail_y, floor_m + 0.01 - rail_depth / 2),
+            )
+        )
+        bracket = floor_m - rail_depth - bar_top + 0.02
+        pieces.append(_box((bar_depth, rail_width, bracket), (bar_x, side * rail_y, bar_top - 0.01 + bracket / 2)))
     return pieces
 
 
