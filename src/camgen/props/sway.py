@@ -195,11 +195,17 @@ class PropSway:
     """(W, 3)."""
     flutter_frequencies_hz: np.ndarray
     flutter_phases_rad: np.ndarray
+    _rest: _RestTerms | None = dataclasses.field(default=None, init=False, repr=False, compare=False)
+    """The time-independent terms of `deformed` for the last rest vertices and normals it was given."""
 
     def tip_displacement_m(self, time_s) -> np.ndarray:
         """(…, 3) horizontal displacement D of the top (z = H) at `time_s` (scalar or array, s)."""
         t = np.asarray(time_s, dtype=np.float64)
-        g2 = self.gusts.factor(t, self.along_m) ** 2
+        return self._tip_displacement_m(t, self.gusts.factor(t, self.along_m))
+
+    def _tip_displacement_m(self, t: np.ndarray, gust_factor: np.ndarray) -> np.ndarray:
+        """`tip_displacement_m` at `t` (…) s, given the gusts' `factor` (…) there."""
+        g2 = gust_factor**2
         f = self.natural_frequency_hz
         along = self.lean_m * g2 * (1.0 + SWAY_TO_LEAN * np.sin(2 * math.pi * f * t + self.phase_rad))
         across = (
@@ -213,27 +219,39 @@ class PropSway:
         return along[..., None] * self.downwind + across[..., None] * crosswind
 
     def deformed(self, vertices_m: np.ndarray, normals: np.ndarray, time_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """The plant's vertices (V, 3) and unit normals (V, 3) at rest, bent and fluttering at `time_s`."""
-        s = np.clip(vertices_m[:, 2] / self.height_m, 0.0, None)
-        D = self.tip_displacement_m(time_s)
-        moved = vertices_m + (s**2)[:, None] * D
-        moved[:, 2] -= (2.0 / 3.0) * float(D @ D) * s**3 / self.height_m
+        """The plant's vertices (V, 3) and unit normals (V, 3) at rest, bent and fluttering at `time_s`.
+
+        What does not change with time (`_RestTerms`) is kept for the last rest vertices and normals given,
+        so that a plant bent to one time after another computes it once."""
+        rest = self._rest_terms(vertices_m, normals)
+        t = np.asarray(time_s, dtype=np.float64)
+        g = self.gusts.factor(t, self.along_m)
+        D = self._tip_displacement_m(t, g)
+        moved = vertices_m + rest.s_squared * D
+        moved[:, 2] -= (2.0 / 3.0) * float(D @ D) * rest.s_cubed / self.height_m
         turned = normals.copy()
-        turned[:, 2] -= (2.0 * s / self.height_m) * (normals @ D)
-        if self.leafy.any():
-            rest = vertices_m[self.leafy]
-            g = float(self.gusts.factor(time_s, self.along_m))
+        turned[:, 2] -= rest.tilt_per_m * (normals @ D)
+        if rest.leafy_rows is not None:
             theta = (
-                rest @ self.flutter_wave_vectors_rad_m.T
-                + 2 * math.pi * self.flutter_frequencies_hz * time_s
-                + self.flutter_phases_rad
+                rest.leafy_wave_phases_rad + rest.flutter_angular_frequencies_rad_s * time_s + self.flutter_phases_rad
             )
-            amplitude = g * self.flutter_m
-            moved[self.leafy] += (amplitude * np.sin(theta)) @ self.flutter_axes
-            tilt = amplitude * np.cos(theta) * (normals[self.leafy] @ self.flutter_axes.T)
-            turned[self.leafy] -= tilt @ self.flutter_wave_vectors_rad_m
+            amplitude = float(g) * self.flutter_m
+            moved[rest.leafy_rows] += (amplitude * np.sin(theta)) @ self.flutter_axes
+            tilt = amplitude * np.cos(theta) * rest.leafy_normals_along_axes
+            turned[rest.leafy_rows] -= tilt @ self.flutter_wave_vectors_rad_m
         turned /= np.linalg.norm(turned, axis=1, keepdims=True)
         return moved, turned
+
+    def _rest_terms(self, vertices_m: np.ndarray, normals: np.ndarray) -> _RestTerms:
+        """The time-independent terms of `deformed` for these rest vertices and normals: the kept ones when
+        they are the same arrays bit for bit (compared by content, so that arrays changed in place or new
+        arrays with other values get their own), else new ones, kept in their place."""
+        kept = self._rest
+        if kept is not None and kept.describes(vertices_m, normals):
+            return kept
+        kept = _RestTerms.of(self, vertices_m, normals)
+        object.__setattr__(self, "_rest", kept)
+        return kept
 
     def speed_max_m_s(self, duration_s: float | None = None) -> float:
         """An upper bound of any vertex's speed, m/s, at any time or over 0…`duration_s`: the tip's sway and
@@ -251,6 +269,72 @@ class PropSway:
         tip = self.lean_m * g2 * math.hypot(1.0 + SWAY_TO_LEAN, SWAY_TO_LEAN * CROSS_WIND_FRAC)
         flutter = self.gusts.factor_max() * float(self.flutter_m.sum()) if self.leafy.any() else 0.0
         return tip + (2.0 / 3.0) * tip**2 / self.height_m + flutter
+
+
+@dataclass(frozen=True)
+class _RestTerms:
+    """What `PropSway.deformed` computes from the rest vertices and normals alone, each array by the same
+    operations as the whole expression it stands in, so that the deformation comes out bit for bit the same."""
+
+    vertices_m: np.ndarray
+    """(V, 3) a read-only copy of the rest vertices these terms are of."""
+    normals: np.ndarray
+    """(V, 3) a read-only copy of the rest normals."""
+    s_squared: np.ndarray
+    """(V, 1) s², s = max(z/H, 0)."""
+    s_cubed: np.ndarray
+    """(V,) s³."""
+    tilt_per_m: np.ndarray
+    """(V,) 2s/H, 1/m: how much a normal's z changes per metre of its (n·D)."""
+    leafy_rows: slice | np.ndarray | None
+    """The leafy vertices (a slice where they are one run), None where none is."""
+    leafy_wave_phases_rad: np.ndarray | None
+    """(L, W) each leafy vertex's phase in each flutter wave at rest, k·x, rad."""
+    flutter_angular_frequencies_rad_s: np.ndarray
+    """(W,) 2πf of the flutter waves, rad/s."""
+    leafy_normals_along_axes: np.ndarray | None
+    """(L, W) each leafy vertex's rest normal along each wave's axis."""
+
+    @classmethod
+    def of(cls, sway: PropSway, vertices_m: np.ndarray, normals: np.ndarray) -> _RestTerms:
+        s = np.clip(vertices_m[:, 2] / sway.height_m, 0.0, None)
+        leafy_rows, phases, along_axes = None, None, None
+        if sway.leafy.any():
+            rows = np.flatnonzero(sway.leafy)
+            leafy_rows = slice(int(rows[0]), int(rows[-1]) + 1) if rows[-1] - rows[0] + 1 == len(rows) else rows
+            phases = vertices_m[sway.leafy] @ sway.flutter_wave_vectors_rad_m.T
+            along_axes = normals[sway.leafy] @ sway.flutter_axes.T
+        return cls(
+            vertices_m=_read_only_copy(vertices_m),
+            normals=_read_only_copy(normals),
+            s_squared=(s**2)[:, None],
+            s_cubed=s**3,
+            tilt_per_m=2.0 * s / sway.height_m,
+            leafy_rows=leafy_rows,
+            leafy_wave_phases_rad=phases,
+            flutter_angular_frequencies_rad_s=2 * math.pi * sway.flutter_frequencies_hz,
+            leafy_normals_along_axes=along_axes,
+        )
+
+    def describes(self, vertices_m: np.ndarray, normals: np.ndarray) -> bool:
+        """Whether these are the terms of `vertices_m` and `normals`: the same dtype, shape and bytes (not just
+        equal values: −0.0 and 0.0 differ)."""
+        return _same_bits(self.vertices_m, vertices_m) and _same_bits(self.normals, normals)
+
+
+def _read_only_copy(array: np.ndarray) -> np.ndarray:
+    copy = np.array(array, copy=True, order="C")
+    copy.flags.writeable = False
+    return copy
+
+
+def _same_bits(kept: np.ndarray, array: np.ndarray) -> bool:
+    """Whether `array` has `kept`'s dtype, shape and bytes (`kept` C-contiguous)."""
+    if not isinstance(array, np.ndarray) or array.dtype != kept.dtype or array.shape != kept.shape:
+        return False
+    if kept.dtype.itemsize != 8:
+        return kept.tobytes() == array.tobytes()
+    return bool(np.array_equal(kept.view(np.uint64), np.ascontiguousarray(array).view(np.uint64)))
 
 
 def bendable(model: PropModel) -> PropModel:
