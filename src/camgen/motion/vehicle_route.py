@@ -45,6 +45,11 @@ LEG_ARC_STEP_RAD = math.radians(5.0)
 TOUCH_TOLERANCE_M = 1e-9
 """Legs may be this much shorter than their fillets need (rounding), m."""
 
+STATE_MEMO_TIMES = 192
+"""How many single times' states (distance, speed, pose) a route keeps: a vehicle's pose at a time asks for its
+position, distance and curvature there, and a frame asks for the same few tens of times again; the same count
+as `camgen.actors.memo.POSE_MEMO_TIMES`, whose docstring counts a frame's times."""
+
 
 def rear_axle_radius_m(outer_radius_m: float, forward_m: float, outward_m: float) -> float:
     """Turning radius of the rear axle's middle, m, from the radius a point of the vehicle sweeps.
@@ -415,7 +420,7 @@ class VehicleRoute:
             return laps, since - laps * total, before
         return np.zeros(since.shape), np.minimum(since, total), before
 
-    def _state(self, time_s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _state_at(self, time_s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Laps (…), distance into the lap (…) m and speed (…) m/s at `time_s`."""
         times, s0s, v0s, accs, _ = self._motion
         laps, local, before = self._local(time_s)
@@ -430,23 +435,56 @@ class VehicleRoute:
         s = np.clip(s, s0s[i], np.maximum(ends[i], s0s[i]))
         return laps, s, speed
 
+    @cached_property
+    def _kept(self) -> dict[float, list]:
+        """Per time (s), its `_state_at` and, once asked for, its `_pose_at_distance` (None until then), the
+        arrays read-only; the oldest forgotten beyond `STATE_MEMO_TIMES` (first in, first out)."""
+        return {}
+
+    def _kept_at(self, time_s) -> list | None:
+        """The kept [laps, distance, speed, pose] of a single time `time_s` (made when new); None for an array
+        of times or −0.0 (a key equal to 0.0)."""
+        if isinstance(time_s, np.ndarray) or not isinstance(time_s, (float, int, np.floating, np.integer)):
+            return None
+        key = float(time_s)
+        if key == 0.0 and math.copysign(1.0, key) < 0:
+            return None
+        kept = self._kept.get(key)
+        if kept is None:
+            if len(self._kept) >= STATE_MEMO_TIMES:
+                del self._kept[next(iter(self._kept))]
+            kept = self._kept[key] = [*_read_only(*self._state_at(time_s)), None]
+        return kept
+
+    def _state(self, time_s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Laps (…), distance into the lap (…) m and speed (…) m/s at `time_s` (kept for a single time,
+        read-only then: `_kept_at`)."""
+        kept = self._kept_at(time_s)
+        return self._state_at(time_s) if kept is None else (kept[0], kept[1], kept[2])
+
+    def _pose_at(self, time_s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """`_pose_at_distance` at the distance into the lap at `time_s` (kept for a single time, read-only)."""
+        kept = self._kept_at(time_s)
+        if kept is None:
+            return self._pose_at_distance(self._state_at(time_s)[1])
+        if kept[3] is None:
+            kept[3] = _read_only(*self._pose_at_distance(kept[1]))
+        return kept[3]
+
     # --- the Route interface ---------------------------------------------------------------------------
 
     def at(self, time_s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
         """Ground position (…, 2) m and heading (…) rad (counter-clockwise from +X, in (−π, π]) at `time_s` (…)."""
-        _, s, _ = self._state(time_s)
-        point, heading, _ = self._pose_at_distance(s)
-        return point, heading
+        point, heading, _ = self._pose_at(time_s)
+        return _copy(point), _copy(heading)
 
     def speed_at(self, time_s: np.ndarray | float) -> np.ndarray:
         """Speed along the curve at `time_s` (…), m/s (0 before the start and while standing)."""
-        _, _, speed = self._state(time_s)
-        return speed
+        return _copy(self._state(time_s)[2])
 
     def curvature_at(self, time_s: np.ndarray | float) -> np.ndarray:
         """Signed curvature of the path at `time_s` (…), 1/m (positive: turning left)."""
-        _, s, _ = self._state(time_s)
-        return self._pose_at_distance(s)[2]
+        return _copy(self._pose_at(time_s)[2])
 
     def steer_rad_at(self, time_s: np.ndarray | float) -> np.ndarray:
         """Front-wheel steering angle of the bicycle model at `time_s` (…), rad, positive left: atan(L·κ)."""
@@ -536,6 +574,19 @@ class VehicleRoute:
                 covered = full if curvatures[i] != 0 else min(max(reached - begin, 0.0), full)
                 out_length.append(covered)
         return np.array(out_start), np.array(out_heading), np.array(out_length)
+
+
+def _read_only(*values):
+    """`values` with each array made read-only (numpy scalars are already), as a tuple."""
+    for value in values:
+        if isinstance(value, np.ndarray):
+            value.flags.writeable = False
+    return values
+
+
+def _copy(value):
+    """A writable copy of a kept array (a numpy scalar as it is), so a caller may change what it gets."""
+    return value.copy() if isinstance(value, np.ndarray) else value
 
 
 def _point(point_m: np.ndarray) -> str:
