@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from camgen.render.renderer import View, gl_projection, meshes_reach_clip_volume
+from camgen.render.renderer import SUN_CASCADES, View, gl_projection, meshes_reach_clip_volume
 from tests.render.conftest import camera_matrix, look_at, scene_from
 
 
@@ -126,15 +126,18 @@ def _shadow_maps(renderer, graph) -> list[np.ndarray]:
     from pyrender.light import DirectionalLight, SpotLight
 
     passes = renderer._renderer
-    textures = []
-    for node in graph.scene.light_nodes:
-        if isinstance(node.light, DirectionalLight):
-            textures += passes._sun_cascade_maps(node.light)
-        elif isinstance(node.light, SpotLight):
-            textures.append(node.light.shadow_texture)
     depths = []
-    for texture in textures:
-        GL.glBindTexture(GL.GL_TEXTURE_2D, texture._texid)
-        data = GL.glGetTexImage(GL.GL_TEXTURE_2D, 0, GL.GL_DEPTH_COMPONENT, GL.GL_FLOAT)
-        depths.append(np.frombuffer(data, np.float32).copy())
+    for node in graph.scene.light_nodes:
+        if isinstance(node.light, DirectionalLight):  # a layer of its array per cascade
+            from OpenGL.raw.GL.VERSION.GL_1_1 import glGetTexImage  # PyOpenGL's wrapper knows no 2D arrays
+
+            size = passes.shadow_map_texels
+            layers = np.zeros((SUN_CASCADES, size * size), np.float32)
+            GL.glBindTexture(GL.GL_TEXTURE_2D_ARRAY, passes._sun_cascade_array(node.light))
+            glGetTexImage(GL.GL_TEXTURE_2D_ARRAY, 0, GL.GL_DEPTH_COMPONENT, GL.GL_FLOAT, layers)
+            depths += list(layers)
+        elif isinstance(node.light, SpotLight):
+            GL.glBindTexture(GL.GL_TEXTURE_2D, node.light.shadow_texture._texid)
+            data = GL.glGetTexImage(GL.GL_TEXTURE_2D, 0, GL.GL_DEPTH_COMPONENT, GL.GL_FLOAT)
+            depths.append(np.frombuffer(data, np.float32).copy())
     return depths

@@ -36,9 +36,11 @@ struct DirectionalLight {
     vec3 direction;
 
     #ifdef DIRECTIONAL_LIGHT_SHADOWS
-    sampler2D shadow_map;
     mat4 light_matrix;
-    sampler2D cascade_maps[SUN_EXTRA_CASCADES];
+    // camgen: every cascade's map, one layer each, finest first (pyrender's own shadow_map is not read):
+    // one sampler whose layer a pixel chooses, where a map per cascade behind branches cost llvmpipe a
+    // filtered lookup in each (camgen.render.renderer._PassRenderer._sun_cascade_array).
+    sampler2DArray shadow_maps;
     mat4 cascade_matrices[SUN_EXTRA_CASCADES];
     #endif
 };
@@ -314,6 +316,30 @@ vec4 shadowed_2x2(sampler2D depths, vec2 corner_uv, float compare) {
     return vec4(greaterThan(vec4(compare), textureGather(depths, corner_uv)));
 }
 
+vec4 shadowed_2x2_layer(sampler2DArray depths, float layer, vec2 corner_uv, float compare) {
+    return vec4(greaterThan(vec4(compare), textureGather(depths, vec3(corner_uv, layer))));
+}
+
+// texture2DShadowPCF on one layer of an array of maps (a sun's cascades): the same texels and sums.
+float texture2DArrayShadowPCF(sampler2DArray depths, float layer, vec2 size, vec2 uv, float compare) {
+    vec2 texel = vec2(1.0) / size;
+    vec2 st = uv * size - 0.5;
+    vec2 f = fract(st);
+    vec2 corner = floor(st) * texel;
+    vec4 low_left = shadowed_2x2_layer(depths, layer, corner, compare);
+    vec4 low_right = shadowed_2x2_layer(depths, layer, corner + vec2(2.0, 0.0) * texel, compare);
+    vec4 high_left = shadowed_2x2_layer(depths, layer, corner + vec2(0.0, 2.0) * texel, compare);
+    vec4 high_right = shadowed_2x2_layer(depths, layer, corner + vec2(2.0, 2.0) * texel, compare);
+    vec4 wx = vec4(1.0 - f.x, 1.0, 1.0, f.x);
+    vec4 wy = vec4(1.0 - f.y, 1.0, 1.0, f.y);
+    float sum = 0.0;
+    sum += wy[0] * dot(wx, vec4(low_left.w, low_left.z, low_right.w, low_right.z));
+    sum += wy[1] * dot(wx, vec4(low_left.x, low_left.y, low_right.x, low_right.y));
+    sum += wy[2] * dot(wx, vec4(high_left.w, high_left.z, high_right.w, high_right.z));
+    sum += wy[3] * dot(wx, vec4(high_left.x, high_left.y, high_right.x, high_right.y));
+    return sum / 9.0;
+}
+
 float texture2DShadowPCF(sampler2D depths, vec2 size, vec2 uv, float compare) {
     vec2 texel = vec2(1.0) / size;
     vec2 st = uv * size - 0.5;
@@ -394,20 +420,20 @@ float shadow_calc_spot(mat4 light_matrix, sampler2D shadow_map, vec3 light_posit
 // one row of dots at 0.998: the rasterised depth of a plane clipped far outside the map slopes a little
 // off). The texel is the coarser of the map's two axes'. pyrender's bias, 0.001 (1 − n·l) of the
 // map's depth range, grew with the scene: tens of centimetres of detached shadow on a large site.
-float shadow_calc_ortho(mat4 light_matrix, sampler2D shadow_map, float nl)
+float shadow_calc_ortho(mat4 light_matrix, sampler2DArray shadow_maps, float layer, float nl)
 {
     vec4 proj_coords = vec4(light_matrix * vec4(frag_position.xyz, 1.0));
     vec3 light_coords = proj_coords.xyz / proj_coords.w;
     light_coords = light_coords * 0.5 + 0.5;
     float scale_x = length(vec3(light_matrix[0][0], light_matrix[1][0], light_matrix[2][0]));
     float scale_z = length(vec3(light_matrix[0][2], light_matrix[1][2], light_matrix[2][2]));
-    vec2 size = vec2(textureSize(shadow_map, 0));
+    vec2 size = vec2(textureSize(shadow_maps, 0).xy);
     float scale_y = length(vec3(light_matrix[0][1], light_matrix[1][1], light_matrix[2][1]));
     float texel_m = max(2.0 / (size.x * scale_x), 2.0 / (size.y * scale_y));
     float tan_incidence = sqrt(max(1.0 - nl * nl, 0.0)) / max(nl, 0.1);
     float bias_m = 0.005 + 4.0 * texel_m * tan_incidence;
     float compare = light_coords.z - bias_m * 0.5 * scale_z;
-    float shadow = texture2DShadowPCF(shadow_map, size, light_coords.xy, compare);
+    float shadow = texture2DArrayShadowPCF(shadow_maps, layer, size, light_coords.xy, compare);
     if (light_coords.z > 1.0) {
         shadow = 0.0;
     }
@@ -416,10 +442,10 @@ float shadow_calc_ortho(mat4 light_matrix, sampler2D shadow_map, float nl)
 
 // camgen: whether a sun's (orthographic) map holds the point with the filter's reach (texture2DShadowPCF
 // reaches 2 texels from the lookup; 3 kept): the shader takes the finest cascade that does.
-bool in_sun_cascade(mat4 light_matrix, sampler2D shadow_map)
+bool in_sun_cascade(mat4 light_matrix, sampler2DArray shadow_maps)
 {
     vec2 ndc = (light_matrix * vec4(frag_position, 1.0)).xy;
-    float margin = 2.0 * 3.0 / float(textureSize(shadow_map, 0).x);
+    float margin = 2.0 * 3.0 / float(textureSize(shadow_maps, 0).x);
     return all(lessThan(abs(ndc), vec2(1.0 - margin)));
 }
 
@@ -531,16 +557,17 @@ void main()
         // Compute shadow
 #ifdef DIRECTIONAL_LIGHT_SHADOWS
         float nl = clamp(dot(n,l), 0.0, 1.0);
-        float shadow;
-        if (in_sun_cascade(directional_lights[i].light_matrix, directional_lights[i].shadow_map)) {
-            shadow = shadow_calc_ortho(directional_lights[i].light_matrix, directional_lights[i].shadow_map, nl);
-        } else if (in_sun_cascade(directional_lights[i].cascade_matrices[0], directional_lights[i].cascade_maps[0])) {
-            shadow = shadow_calc_ortho(
-                directional_lights[i].cascade_matrices[0], directional_lights[i].cascade_maps[0], nl);
-        } else {
-            shadow = shadow_calc_ortho(
-                directional_lights[i].cascade_matrices[1], directional_lights[i].cascade_maps[1], nl);
+        // The finest cascade that holds the point; one filtered lookup in its layer.
+        mat4 cascade = directional_lights[i].cascade_matrices[1];
+        float layer = 2.0;
+        if (in_sun_cascade(directional_lights[i].light_matrix, directional_lights[i].shadow_maps)) {
+            cascade = directional_lights[i].light_matrix;
+            layer = 0.0;
+        } else if (in_sun_cascade(directional_lights[i].cascade_matrices[0], directional_lights[i].shadow_maps)) {
+            cascade = directional_lights[i].cascade_matrices[0];
+            layer = 1.0;
         }
+        float shadow = shadow_calc_ortho(cascade, directional_lights[i].shadow_maps, layer, nl);
         res = res * (1.0 - shadow);
 #endif
         color.xyz += res;
