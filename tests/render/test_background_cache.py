@@ -89,7 +89,7 @@ def test_kept_arrays_equal_the_functions_they_stand_for():
     some = below & (np.indices(below.shape).sum(axis=0) % 3 == 0)
     assert some.sum() > 500
     np.testing.assert_array_equal(
-        cache.ground_radiance(graph, VIEW)[some], far_ground_radiance(graph, VIEW, some)[some]
+        cache.ground_radiance(graph, VIEW, below)[some], far_ground_radiance(graph, VIEW, some)[some]
     )
     with pytest.raises(ValueError, match="read-only"):
         cache.sky(graph, VIEW)[0, 0] = 0.0
@@ -98,10 +98,11 @@ def test_kept_arrays_equal_the_functions_they_stand_for():
 def test_what_a_background_depends_on_computes_it_again():
     cache = BackgroundCache()
     base = _graph()
-    ground, sky = cache.ground_radiance(base, VIEW), cache.sky(base, VIEW)
+    below = np.isfinite(far_ground_depth_m(base.far_ground, VIEW))
+    ground, sky = cache.ground_radiance(base, VIEW, below), cache.sky(base, VIEW)
     misses = cache.misses
     turned = _graph(sun_azimuth_deg=120.0)  # another sun: another ground and sky
-    assert not np.array_equal(cache.ground_radiance(turned, VIEW), ground)
+    assert not np.array_equal(cache.ground_radiance(turned, VIEW, below), ground)
     assert not np.array_equal(cache.sky(turned, VIEW), sky)
     brighter = _graph(sky_cd_m2=8000.0)
     assert not np.array_equal(cache.sky(brighter, VIEW), sky)
@@ -145,3 +146,20 @@ def test_a_draw_that_covers_every_pixel_composites_nothing():
     composite_background(graph, VIEW, radiance, coverage, cache)
     changed = (radiance != 7.0).any(axis=-1)
     assert changed[5, 7] and changed.sum() == 1
+
+
+def test_a_smooth_ground_is_evaluated_at_the_asked_pixels_only_and_not_kept():
+    # A wet road's far ground is evaluated pixel by pixel (far_ground_step_px <= 2): keeping it would mean
+    # evaluating every pixel under the horizon, most of them hidden by the site.
+    from camgen.render.renderer import far_ground_step_px
+    from camgen.render.scene_graph import FarGround
+
+    graph = _graph()
+    graph.far_ground = FarGround(graph.far_ground.height_m, graph.far_ground.reflectance_rgb, roughness=0.1)
+    assert far_ground_step_px(graph.far_ground, VIEW) <= 2
+    cache = BackgroundCache()
+    below = np.isfinite(far_ground_depth_m(graph.far_ground, VIEW))
+    some = below & (np.indices(below.shape)[0] % 2 == 0)
+    got = cache.ground_radiance(graph, VIEW, some)
+    np.testing.assert_array_equal(got[some], far_ground_radiance(graph, VIEW, some)[some])
+    assert len(cache) == 0 and cache.misses == 0

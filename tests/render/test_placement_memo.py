@@ -127,3 +127,22 @@ def test_a_kept_pose_cannot_be_changed_in_place(graph):
         person.joints_m[0, 0] = 0.0
     with pytest.raises(ValueError, match="read-only"):
         graph.vehicles[0].T_world_from_vehicle[0, 3] = 0.0
+
+
+def test_a_vehicles_lamps_follow_lights_on_at_a_time_already_placed():
+    # The pose is kept per time; the lamps also follow `lights_on`, which a caller may switch between two
+    # placements at one time (review: the kept lamps stayed off).
+    from camgen.motion.trajectory import actor_routes
+    from camgen.vehicles import vehicle_rigs
+    from tests.render.conftest import scene_from
+
+    scene = scene_from(
+        lights=[{"type": "ambient", "illuminance_lux": 100}],
+        actors=[{"name": "car", "class": "car", "path": {"waypoints_m": [[0, 0], [20, 0]], "speed_m_s": 5}}],
+    )
+    rig = vehicle_rigs(scene, actor_routes(scene))["car"]
+    rig.place(1.0)
+    assert not rig.lit["head"]
+    rig.lights_on = True
+    rig.place(1.0)
+    assert rig.lit["head"] and rig.lit == rig.lamps(1.0)

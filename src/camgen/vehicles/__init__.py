@@ -206,14 +206,16 @@ class VehicleRig:
         return T, bones
 
     def _posed(self, time_s: float) -> tuple[np.ndarray, np.ndarray, dict[str, bool], tuple[bytes, bytes]]:
-        """(T_world_from_vehicle, T_vehicle_from_bone, lamps, the two as bytes) at `time_s`, kept for it."""
+        """(T_world_from_vehicle, T_vehicle_from_bone, lamps, the two as bytes) at `time_s`: the pose kept for
+        the time with its steering angle, the lamps worked out each call (they follow `lights_on` too, which
+        a caller may change between two calls at one time)."""
         kept = self._poses.get(time_s)
         if kept is None:
             steering = self.steer_rad(time_s)  # the pose's and the indicators' (one look-up on the route)
             T, bones = frozen(*self._pose_at(time_s, steering))
-            lit = self._lamps_at(time_s, steering)
-            kept = self._poses.put(time_s, (T, bones, lit, (T.tobytes(), bones.tobytes())))
-        return kept
+            kept = self._poses.put(time_s, (T, bones, steering, (T.tobytes(), bones.tobytes())))
+        T, bones, steering, as_bytes = kept
+        return T, bones, self._lamps_at(time_s, steering), as_bytes
 
     def _pose_at(self, time_s: float, steering_rad: float) -> tuple[np.ndarray, np.ndarray]:
         """(T_world_from_vehicle (4, 4), T_vehicle_from_wheel (4, 4, 4)) at `time_s`, the front wheels steered

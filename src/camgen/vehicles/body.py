@@ -1144,8 +1144,9 @@ REAR_BUMPER_M = (0.10, 0.20)
 tall in makers' rear views; an estimate)."""
 REAR_STEP_M = (0.20, 0.90, 0.04)
 """Depth, width and thickness of the step on a van's rear bumper's top, m: a tread across the middle standing out
-0.1 m past the bumper's face (a Transit's or Sprinter's integrated step, about 0.9 m wide and 0.1 m deep; an
-estimate)."""
+0.05 m past the bumper's face, 0.10 m past the body (a Transit's or Sprinter's integrated step, about 0.9 m wide;
+the 2015 Transit's "step bumper big enough for adult shoes", Ford Transit walk-around, foxcharlevoix.com; the
+sizes an estimate)."""
 
 
 def _black_trim(look: VehicleLook, head_z_m: float) -> list[trimesh.Trimesh]:

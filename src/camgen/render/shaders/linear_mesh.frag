@@ -298,10 +298,6 @@ vec3 compute_brdf(vec3 n, vec3 v, vec3 l,
         return color;
 }
 
-float texture2DCompare(sampler2D depths, vec2 uv, float compare) {
-    return compare > texture(depths, uv.xy).r ? 1.0 : 0.0;
-}
-
 // camgen: percentage-closer filtering (Reeves, Salesin and Cook 1987, "Rendering antialiased shadows with
 // depth maps"), the mean of 3 x 3 bilinear lookups one texel apart: a kernel four texels wide whose weights
 // fall off smoothly, so a shadow's edge is a soft ramp instead of following the map's texel staircase (the
