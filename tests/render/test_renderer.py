@@ -375,3 +375,20 @@ def test_a_wall_rising_past_a_spot_lights_plane_has_no_nan(renderer):
     radiance = renderer.draw(graph, view, ("radiance",)).radiance
     assert np.isfinite(radiance).all()
     assert radiance[:240, 320].max() < radiance[250:, 320].max()  # the wall is lit below the lamp only
+
+
+def test_an_opengl_without_texture_gathers_is_refused_with_what_to_do():
+    from camgen.errors import ConfigError
+    from camgen.render.renderer import check_gl_features
+
+    check_gl_features((4, 5), set(), "llvmpipe")  # Mesa's llvmpipe
+    check_gl_features((3, 3), {"GL_ARB_texture_gather"}, "an old driver with the extension")
+    with pytest.raises(ConfigError, match=r"OpenGL 3\.3 \(softpipe\) lacks texture gathers.*llvmpipe"):
+        check_gl_features((3, 3), {"GL_ARB_instanced_arrays"}, "softpipe")
+
+
+def test_this_machines_opengl_has_what_the_shaders_use(renderer):
+    from OpenGL import GL
+
+    renderer._make_current()
+    assert (int(GL.glGetIntegerv(GL.GL_MAJOR_VERSION)), int(GL.glGetIntegerv(GL.GL_MINOR_VERSION))) >= (4, 0)

@@ -41,6 +41,7 @@ import numpy as np
 
 from camgen.config.placement import box_corners
 from camgen.config.scene import MAX_LIGHTS
+from camgen.errors import ConfigError
 from camgen.render.gl import pyrender
 
 from OpenGL import GL  # isort: skip — after camgen.render.gl, which selects the EGL platform
@@ -356,6 +357,19 @@ class _Framebuffer:
     def delete(self) -> None:
         GL.glDeleteFramebuffers(1, [self.fbo])
         GL.glDeleteRenderbuffers(len(self.renderbuffers), self.renderbuffers)
+
+
+def check_gl_features(version: tuple[int, int], extensions: set[str], gl_renderer: str) -> None:
+    """Refuse an OpenGL without what camgen's shaders use beyond pyrender's 3.3: texture gathers (OpenGL 4.0 or
+    GL_ARB_texture_gather; the shadow lookups) and 2D array textures (3.0), with a message that says what to
+    do, instead of a shader compiler's log at the first draw."""
+    if version >= (4, 0) or "GL_ARB_texture_gather" in extensions:
+        return
+    raise ConfigError(
+        f"OpenGL {version[0]}.{version[1]} ({gl_renderer}) lacks texture gathers (OpenGL 4.0 or "
+        "GL_ARB_texture_gather), which camgen's shadow lookups use; render with Mesa's llvmpipe (headless EGL, "
+        "OpenGL 4.5, no GPU needed) or a GPU driver with OpenGL 4.0 or newer"
+    )
 
 
 def _origin_size(rect_px: tuple[int, int, int, int]) -> tuple[int, int, int, int]:
@@ -807,6 +821,11 @@ class Renderer:
         """The sky and far ground behind the views drawn lately (`BackgroundCache`)."""
         self.gl_renderer = GL.glGetString(GL.GL_RENDERER).decode()
         """The OpenGL implementation drawing (llvmpipe, or a GPU's name)."""
+        version = (int(GL.glGetIntegerv(GL.GL_MAJOR_VERSION)), int(GL.glGetIntegerv(GL.GL_MINOR_VERSION)))
+        count = int(GL.glGetIntegerv(GL.GL_NUM_EXTENSIONS))
+        check_gl_features(
+            version, {GL.glGetStringi(GL.GL_EXTENSIONS, i).decode() for i in range(count)}, self.gl_renderer
+        )
         self.max_size_px = int(GL.glGetIntegerv(GL.GL_MAX_RENDERBUFFER_SIZE))
         """The largest width or height of a render target here."""
 
