@@ -397,6 +397,8 @@ class _PassRenderer(pyrender.Renderer):
         `ShadowFit`'s), or None."""
         self._sun_cascades: dict[int, list[tuple[np.ndarray, np.ndarray]]] = {}
         """Per sun's node (by id): its cascades' (V, P) in the last shadow-map pass, finest first."""
+        self._sun_arrays_drawn: dict[int, int] = {}
+        """Per sun's node (by id): the array texture its cascades were drawn into in the last shadow-map pass."""
         self._cascade = 0
         """The cascade whose map `_shadow_mapping_pass` draws (and whose matrices pyrender binds: 0)."""
         self.shadow_map_texels = SHADOW_TEX_SZ
@@ -474,6 +476,7 @@ class _PassRenderer(pyrender.Renderer):
         the layers of its array, `_sun_cascade_array`; each spot light's in pyrender's map)."""
         GL.glFrontFace(GL.GL_CCW)  # the shadow cameras are pyrender's own, with rows bottom-up
         self._sun_cascades.clear()  # this draw's suns only (earlier scenes' nodes are gone)
+        self._sun_arrays_drawn.clear()
         for node in scene.light_nodes:
             if isinstance(node.light, DirectionalLight) and flags & RenderFlags.SHADOWS_DIRECTIONAL:
                 bounds = scene.bounds if self.shadow_bounds_m is None else self.shadow_bounds_m
@@ -481,6 +484,7 @@ class _PassRenderer(pyrender.Renderer):
                     scene.get_pose(node)[:3, :3], bounds, self.shadow_view, *self.shadow_clip_m, self.shadow_map_texels
                 )
                 array, size = self._sun_cascade_array(node.light), self.shadow_map_texels
+                self._sun_arrays_drawn[id(node)] = array
                 try:
                     for k in range(SUN_CASCADES):
                         self._cascade, self._sun_layer = k, (array, k, size)
@@ -585,7 +589,7 @@ class _PassRenderer(pyrender.Renderer):
             cascades = self._sun_cascades[id(sun)]
             unit = self._get_next_active_texture()
             GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
-            GL.glBindTexture(GL.GL_TEXTURE_2D_ARRAY, self._sun_cascade_array(sun.light))
+            GL.glBindTexture(GL.GL_TEXTURE_2D_ARRAY, self._sun_arrays_drawn[id(sun)])
             program.set_uniform(f"directional_lights[{i}].shadow_maps", unit)
             for k in range(1, SUN_CASCADES):
                 V, P = cascades[k]
