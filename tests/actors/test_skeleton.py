@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from camgen.actors.memo import TimeMemo
 from camgen.actors.skeleton import INDEX, JOINTS, PARENT_INDEX, Pose, global_transforms, joint_transforms
+from camgen.motion.memo import TimeMemo
 
 
 def _textbook(rest_joints_m: np.ndarray, pose: Pose) -> np.ndarray:

@@ -1,6 +1,6 @@
 """`SceneGraph.place_actors` at times asked for in any order, again and again (as a frame's sub-frames ask
 for them), places every actor as a fresh placement at that time does: the poses each rig keeps per time
-(`camgen.actors.memo`) and the vertices a vehicle keeps turned (`VehicleRig._turn`) change nothing."""
+(`camgen.motion.memo`) and the vertices a vehicle keeps turned (`VehicleRig._turn`) change nothing."""
 
 from __future__ import annotations
 

@@ -16,7 +16,6 @@ import numpy as np
 
 from camgen.actors.appearance import Appearance, draw_appearance
 from camgen.actors.gait import Walker
-from camgen.actors.memo import TimeMemo, frozen
 from camgen.actors.person import KEYPOINT_JOINT_ROWS, PersonModel, build_person
 from camgen.actors.riding import Rider
 from camgen.actors.skeleton import (
@@ -30,6 +29,7 @@ from camgen.actors.skeleton import (
 )
 from camgen.annotate.keypoints import COCO_KEYPOINTS
 from camgen.config.scene import Actor
+from camgen.motion.memo import TimeMemo, frozen
 from camgen.motion.trajectory import Route
 
 PERSON_SPAWN_KEY = 0x7065_7273

@@ -37,6 +37,7 @@ from functools import cached_property
 
 import numpy as np
 
+from camgen.motion.memo import POSE_MEMO_TIMES, TimeMemo, frozen
 from camgen.motion.route_fields import freeze_route_fields
 
 LEG_ARC_STEP_RAD = math.radians(5.0)
@@ -45,10 +46,10 @@ LEG_ARC_STEP_RAD = math.radians(5.0)
 TOUCH_TOLERANCE_M = 1e-9
 """Legs may be this much shorter than their fillets need (rounding), m."""
 
-STATE_MEMO_TIMES = 192
+STATE_MEMO_TIMES = POSE_MEMO_TIMES
 """How many single times' states (distance, speed, pose) a route keeps: a vehicle's pose at a time asks for its
-position, distance and curvature there, and a frame asks for the same few tens of times again; the same count
-as `camgen.actors.memo.POSE_MEMO_TIMES`, whose docstring counts a frame's times."""
+position, distance and curvature there, and a frame asks for the same few tens of times again; as many as an
+actor keeps poses (`camgen.motion.memo.POSE_MEMO_TIMES`, whose docstring counts a frame's times)."""
 
 
 def rear_axle_radius_m(outer_radius_m: float, forward_m: float, outward_m: float) -> float:
@@ -436,10 +437,10 @@ class VehicleRoute:
         return laps, s, speed
 
     @cached_property
-    def _kept(self) -> dict[float, list]:
+    def _kept(self) -> TimeMemo[list]:
         """Per time (s), its `_state_at` and, once asked for, its `_pose_at_distance` (None until then), the
         arrays read-only; the oldest forgotten beyond `STATE_MEMO_TIMES` (first in, first out)."""
-        return {}
+        return TimeMemo(STATE_MEMO_TIMES)
 
     def _kept_at(self, time_s) -> list | None:
         """The kept [laps, distance, speed, pose] of a single time `time_s` (made when new); None for an array
@@ -451,9 +452,7 @@ class VehicleRoute:
             return None
         kept = self._kept.get(key)
         if kept is None:
-            if len(self._kept) >= STATE_MEMO_TIMES:
-                del self._kept[next(iter(self._kept))]
-            kept = self._kept[key] = [*_read_only(*self._state_at(time_s)), None]
+            kept = self._kept.put(key, [*frozen(*self._state_at(time_s)), None])
         return kept
 
     def _state(self, time_s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -468,7 +467,7 @@ class VehicleRoute:
         if kept is None:
             return self._pose_at_distance(self._state_at(time_s)[1])
         if kept[3] is None:
-            kept[3] = _read_only(*self._pose_at_distance(kept[1]))
+            kept[3] = frozen(*self._pose_at_distance(kept[1]))
         return kept[3]
 
     # --- the Route interface ---------------------------------------------------------------------------
@@ -574,14 +573,6 @@ class VehicleRoute:
                 covered = full if curvatures[i] != 0 else min(max(reached - begin, 0.0), full)
                 out_length.append(covered)
         return np.array(out_start), np.array(out_heading), np.array(out_length)
-
-
-def _read_only(*values):
-    """`values` with each array made read-only (numpy scalars are already), as a tuple."""
-    for value in values:
-        if isinstance(value, np.ndarray):
-            value.flags.writeable = False
-    return values
 
 
 def _copy(value):

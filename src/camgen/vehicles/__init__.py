@@ -21,8 +21,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from camgen.actors.memo import TimeMemo, frozen
 from camgen.config.scene import Actor, Scene, is_procedural_vehicle
+from camgen.motion.memo import TimeMemo, frozen
 from camgen.motion.trajectory import Route
 from camgen.vehicles.body import Part, VehicleModel, build_vehicle
 from camgen.vehicles.look import TWO_WHEELERS, VehicleLook, draw_look

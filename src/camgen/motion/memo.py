@@ -1,4 +1,6 @@
-"""What a pure function of time gave at recent times, kept to be handed out again.
+"""What a pure function of time gave at recent times, kept to be handed out again: a person's or a
+vehicle's pose and lamps (`camgen.actors`, `camgen.vehicles`), a vehicle route's state and pose
+(`camgen.motion.vehicle_route`).
 
 The renderer places the actors at the same few tens of times several times over in a frame
 (`camgen.render.sequence`: the frame time, the exposure's start, middle and end, each motion-blur
@@ -47,8 +49,10 @@ class TimeMemo(Generic[Value]):
         return len(self._values)
 
 
-def frozen(*arrays: np.ndarray) -> tuple[np.ndarray, ...]:
-    """`arrays` made read-only, so that a kept value handed out again cannot be changed in place."""
-    for array in arrays:
-        array.flags.writeable = False
-    return arrays
+def frozen(*values):
+    """`values` with each array made read-only (numpy scalars are already), as a tuple, so that a kept value
+    handed out again cannot be changed in place."""
+    for value in values:
+        if isinstance(value, np.ndarray):
+            value.flags.writeable = False
+    return values
