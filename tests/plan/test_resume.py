@@ -94,12 +94,13 @@ def reference(job, renderer, tmp_path_factory) -> Path:
     return out / job_directory_name(job)
 
 
-@pytest.fixture(scope="module")
-def stopped(job, renderer, tmp_path_factory) -> Path:
-    """An output directory holding the render stopped after frame 4 (copy it before resuming it)."""
+@pytest.fixture(scope="module", params=[True, False], ids=["pipelined", "serial"])
+def stopped(request, job, renderer, tmp_path_factory) -> Path:
+    """An output directory holding the render stopped after frame 4 (copy it before resuming it), its writes
+    pipelined or serial (`execute`'s pipelined; the resumes are pipelined)."""
     out = tmp_path_factory.mktemp("stopped")
     with pytest.raises(StopError):
-        render(job, out, renderer, resume=True, on_frame=stop_after(STOP_AFTER_INDEX))
+        render(job, out, renderer, resume=True, pipelined=request.param, on_frame=stop_after(STOP_AFTER_INDEX))
     return out
 
 
@@ -120,7 +121,7 @@ def assert_same_files(job_dir: Path, reference: Path) -> None:
     assert verify(job_dir) == []
 
 
-def test_a_stopped_render_keeps_its_checkpoint(job, reference, stopped):
+def test_a_stopped_render_keeps_its_checkpoint(request, job, reference, stopped):
     partial = stopped / job_directory_name(job) / f"cam{PARTIAL_SUFFIX}"
     checkpoint = read_checkpoint(partial / CHECKPOINT_NAME)
     assert (checkpoint.frames_done, checkpoint.next_frame, checkpoint.complete) == (3, 3, False)
@@ -130,10 +131,15 @@ def test_a_stopped_render_keeps_its_checkpoint(job, reference, stopped):
     states = [json.loads(line) for line in (reference / "cam" / "camera.jsonl").read_text().splitlines()]
     assert checkpoint.pipeline["exposure_time_s"] == states[3]["exposure_time_s"] != states[0]["exposure_time_s"]
     assert checkpoint.pipeline["isp"]["limits"] is not None and checkpoint.pipeline["isp"]["white_balance_log"]
-    # Frames 3 and 4 were written after it: their lines and files are what a resume cuts away.
+    # Frames 3 and 4 were written after it (serial), or those of them the writer had started when the stop came
+    # (pipelined: it drops the frames it has not started): their lines and files are what a resume cuts away.
     lines, _ = checkpoint.spools["camera"]
-    assert lines == 3 and len((partial / ".spool" / "camera.lines").read_text().splitlines()) == 5
-    assert (partial / "frames" / "000004.png").is_file()
+    written = len((partial / ".spool" / "camera.lines").read_text().splitlines())
+    pngs = len(list((partial / "frames").glob("*.png")))
+    if request.node.callspec.params["stopped"]:
+        assert lines == 3 and 3 <= written <= 5 and pngs == written
+    else:
+        assert lines == 3 and written == 5 and pngs == 5
     assert not (partial / "video.mp4").exists() and not list(partial.rglob("*.partial*"))
 
 

@@ -27,11 +27,31 @@ and continues each camera from its checkpoint: spools cut back to their checkpoi
 later frames deleted, the pipeline's state restored. The renderer draws each frame alone, so it holds no
 state to save. A camera's finished checkpoint is written before its spools go, and the finished cameras keep
 theirs until the manifest (which leaves them out) is written: a stop at any point redoes no finished camera.
+
+Pipelining (issue 23): what follows the camera model and feeds no later frame (the video's encode, the frame,
+raw, depth, radiance, flow and pass files, the annotation lines, images, re-ID crops and detections,
+camera.jsonl) runs in one writer thread (`camgen.plan.writer.FrameWriter`), in frame order, at most
+`camgen.plan.writer.PIPELINE_FRAMES` (2) frames behind, while the main thread renders the next frame. The
+main thread keeps what carries state into the next frame or needs OpenGL: the render, the camera model
+(auto-exposure, the ISP's adaptation), the lens applied to the passes, the annotations' geometry and unoccluded
+draws, the flow (it moves the actors). The writer gets copies of the arrays (`_detached`), so the same bytes
+come out as from the serial render (``pipelined=False``). The writer is drained before each checkpoint and
+before a camera's files are finished, so a checkpoint describes only frames fully written; a write that fails
+stops the render with its own exception at the next frame (or the drain), and the render then unwinds as from
+any error.
+
+Timing with the pipeline: a frame's `CameraResult.stage_frames` record adds the writer thread's stages of that
+frame (timed in that thread) to the main thread's; ``io.wait`` is the main thread's time waiting for the writer
+(a free slot, a drain). The stages of a frame then overlap and can sum to more than its wall time
+(`frame_wall_s`): a stage's share of the wall time says how long it kept its thread busy, the main thread's
+stages plus ``io.wait`` are the wall time, and a large ``io.wait`` says the writer set the pace.
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
+import functools
 import glob
 import hashlib
 import json
@@ -41,7 +61,7 @@ import shutil
 import time
 from collections.abc import Callable, Collection, Iterable, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path, PurePosixPath
 
 import numpy as np
@@ -64,6 +84,7 @@ from camgen.plan.camera_pipeline import CameraPipeline, cuts_reid_crops, frame_r
 from camgen.plan.flow import FlowField
 from camgen.plan.lens_stages import LensStages
 from camgen.plan.timing import StageClock, stage_sums
+from camgen.plan.writer import FrameWriter
 from camgen.render.renderer import Passes, Renderer
 from camgen.render.scene_graph import build_scene_graph, instance_table
 from camgen.render.sequence import CameraRenderer
@@ -134,7 +155,8 @@ class CameraResult:
     total_s: float = 0.0
     stage_frames: list[dict[str, float]] = field(default_factory=list)
     """Wall time per stage of each frame rendered, s (`camgen.plan.timing.StageClock`). The first
-    frame carries the one-off costs: the scene upload, lens maps, auto-exposure's convergence."""
+    frame carries the one-off costs: the scene upload, lens maps, auto-exposure's convergence. Pipelined,
+    the writer thread's stages of the frame are added and the stages overlap (see the module docstring)."""
     frame_wall_s: list[float] = field(default_factory=list)
     """Wall time of each frame, s (the first from the camera's setup on)."""
     finish_s: dict[str, float] = field(default_factory=dict)
@@ -177,6 +199,7 @@ def execute(
     checkpoint_frames: int | None = None,
     on_resume: Callable[[str, int, int], None] | None = None,
     on_note: Callable[[str], None] | None = None,
+    pipelined: bool = True,
 ) -> list[CameraResult]:
     """Render `job` into ``out_dir/<scene>-<hash>/<camera>/`` and return what was written.
 
@@ -196,6 +219,11 @@ def execute(
     compared byte for byte use the same).
     on_resume(camera, frames_done, frames) is called for each camera taken up from a checkpoint (a
     finished camera: frames_done = frames); on_note(message) gets the one-line notes.
+
+    pipelined: each frame's writes (the video's encode, the files, the annotation lines and images,
+    camera.jsonl) run in a background thread while the next frame renders (`camgen.plan.writer`; see
+    "Pipelining" in the module docstring); False writes each frame before rendering the next. The files are
+    the same bytes either way.
     """
     checkpoint_frames = CHECKPOINT_FRAMES if checkpoint_frames is None else checkpoint_frames
     if isinstance(checkpoint_frames, bool) or not isinstance(checkpoint_frames, int) or checkpoint_frames < 1:
@@ -241,7 +269,9 @@ def execute(
                 # A camera's files (per-frame images included) are written under a temporary name and the
                 # folder is renamed when the camera is complete; a render stopped part-way leaves none.
                 partial = job_dir / f"{camera.name}{PARTIAL_SUFFIX}"
-                context = _Context(job, camera_index, partial, renderer, maps, executor, identities[camera.name])
+                context = _Context(
+                    job, camera_index, partial, renderer, maps, executor, identities[camera.name], pipelined
+                )
                 try:
                     result = _execute_camera(
                         context, indices, resolve_path, save_passes, on_frame, checkpoint, on_resume
@@ -649,6 +679,48 @@ class _Context:
     executor: ThreadPoolExecutor
     identity: dict
     """The render's `_identity` for this camera's checkpoints."""
+    pipelined: bool = True
+    """Whether the frames' writes run in the writer thread (`FrameWriter`)."""
+
+
+@dataclass(frozen=True)
+class _WrittenFrame:
+    """The frame the writes are of: its index (not the renderer's passes, which the next frame overwrites)."""
+
+    index: int
+
+
+@dataclass
+class _FrameResult:
+    """What a frame's writes see of the camera's `CameraResult`: the frames done before this frame (the main
+    thread counts on meanwhile), and the list of files, which the writes extend in frame order."""
+
+    frames: int
+    files: list[Path]
+
+
+def _detached(value):
+    """`value` sharing no array with anything: arrays copied, dataclasses, lists, tuples and dicts rebuilt around
+    detached members; anything else (numbers, strings, frozen states) as it is. What the writer thread gets:
+    the renderer draws the next frame into the arrays the passes are views of, and a rig poses its next frame."""
+    if isinstance(value, np.ndarray):
+        return value.copy()
+    if isinstance(value, list | tuple):
+        return type(value)(_detached(item) for item in value)
+    if isinstance(value, dict):
+        return {key: _detached(item) for key, item in value.items()}
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        fields = dataclasses.fields(value)
+        return replace(value, **{f.name: _detached(getattr(value, f.name)) for f in fields if f.init})
+    return value
+
+
+def _add_stage_records(frames: list[dict[str, float]], written: list[dict[str, float]]) -> None:
+    """Add the writer thread's seconds per stage of each frame (`FrameWriter.frames`) to the main thread's
+    record of the same frame (`frames`, in order, from the first frame of this run)."""
+    for record, writes in zip(frames, written, strict=True):
+        for stage, seconds in writes.items():
+            record[stage] = record.get(stage, 0.0) + seconds
 
 
 def _execute_camera(
@@ -667,6 +739,7 @@ def _execute_camera(
     )
     lens = pipeline.lens if pipeline is not None else LensStages(camera, context.maps)
     video = None
+    segment = ""
     width_px, height_px = camera.output_size_px or (camera.width_px, camera.height_px)
     video_settings = {
         "width_px": width_px,
@@ -732,6 +805,70 @@ def _execute_camera(
     converge = (
         pipeline is not None and camera.exposure_mode == "auto" and job.settings.auto_exposure_start == "converged"
     )
+    frame_writer = FrameWriter(clock, threaded=context.pipelined)
+
+    def write_frame_outputs(
+        clock: StageClock, *, frame, done, state, captured, rgb8, stream, scene_radiance, annotated, flow
+    ) -> None:
+        """One frame's writes, in this order (`FrameWriter`: in the writer thread when pipelined). `done`: the
+        frames done before this one and the camera's list of files, which these writes extend."""
+        nonlocal video, segment
+        if rgb8 is not None and "io.video" in stages:
+            with clock("io.video"):
+                if video is None:  # a segment from each checkpoint on (see the module docstring)
+                    from camgen.io.video import VideoWriter  # PyAV only where a video is written
+
+                    segment = _SEGMENT_NAME.format(done.frames)
+                    video = VideoWriter(spool_dir / segment, **video_settings)
+                video.write(rgb8)
+        with clock("io.files"):
+            _write_files(context, stages, state, frame, captured, rgb8, stream, done)
+        if scene_radiance is not None:
+            with clock("io.radiance"):
+                done.files.append(radiance_files.write(f"{frame.index:06d}", scene_radiance))
+        if annotated is not None:
+            with clock("annotate"):
+                sequence.add(annotated)
+                if cuts_reid_crops(stages) and rgb8 is not None:
+                    done.files += write_reid_crops(directory, annotated, rgb8, camera_number=context.camera_index + 1)
+            if rgb8 is not None:
+                with clock("io.annotation_images"):
+                    if "mot" in formats:
+                        done.files.append(sequence.write_mot_image(directory, frame.index, rgb8))
+                    if "yolo" in formats:
+                        done.files += sequence.write_yolo_frame(directory, annotated, rgb8)
+                if detector is not None:
+                    with clock("annotate.detect"):
+                        sequence.add_detections(frame.index, detect_people(detector, rgb8[..., ::-1]))
+        if flow is not None:
+            flow_px, displacement_m = flow
+            with clock("io.flow"):
+                if "io.flow" in stages:
+                    done.files.append(directory / "flow" / f"{frame.index:06d}.flo")
+                    write_flo(done.files[-1], flow_px)
+                if "io.scene_flow" in stages:
+                    done.files.append(directory / "scene_flow" / f"{frame.index:06d}.exr")
+                    write_scene_flow(done.files[-1], displacement_m)
+        if "io.camera_metadata" in stages:
+            record = state.model_dump(mode="json")
+            output_K = record.pop("output_K_px")
+            if state.window_px is not None:  # K_px describes the stream; the sensor's is kept beside it
+                record["sensor_K_px"] = record["K_px"]
+                record["K_px"] = output_K
+            if captured is not None:
+                record["metered_level_frac"] = captured.metered_level_frac
+                if captured.white_balance_rgb is not None:
+                    record["white_balance_rgb"] = captured.white_balance_rgb
+            metadata.append(json.dumps(record, separators=(",", ":")))
+        if save_passes:
+            if done.frames == 0:
+                table = [vars(instance) for instance in instance_table(job.scene)]
+                done.files.append(directory / "passes" / "instances.json")
+                write_text_atomic(done.files[-1], json.dumps(table, indent=1))
+            raw = None if captured is None else captured.raw_dn
+            with clock("io.passes"):
+                _save_passes(directory / "passes" / f"{frame.index:06d}.npz", stream, raw, done)
+
     try:
         if checkpoint is not None:
             segments = _restore(checkpoint, directory, indices, spools, pipeline, radiance_files, result)
@@ -739,6 +876,7 @@ def _execute_camera(
             if on_resume is not None:
                 on_resume(camera.name, result.frames, len(indices))
         for index in indices[result.frames :]:
+            frame_writer.check()  # a write that failed stops the render here
             state = camera.states[index] if pipeline is None else pipeline.state_for(index)
             with clock("render"):
                 # A frame drawn to meter the view is drawn sharp: its exposure is the profile's guess.
@@ -760,24 +898,19 @@ def _execute_camera(
             if rgb8 is not None and state.window_px is not None:
                 with clock("isp.eptz"):
                     rgb8 = crop_and_scale(rgb8, state.window_px, camera.output_size_px)
-            if rgb8 is not None and "io.video" in stages:
-                with clock("io.video"):
-                    if video is None:  # a segment from each checkpoint on (see the module docstring)
-                        from camgen.io.video import VideoWriter  # PyAV only where a video is written
-
-                        segment = _SEGMENT_NAME.format(result.frames)
-                        video = VideoWriter(spool_dir / segment, **video_settings)
-                    video.write(rgb8)
             with clock("optics.passes"):
                 stream = _stream_passes(camera, stages, state, frame.passes, lens, save_passes)
-            with clock("io.files"):
-                _write_files(context, stages, state, frame, captured, rgb8, stream, result)
+            # What the writer gets must not change under it: the renderer draws the next frame into the passes
+            # these are views of (without a lens stage the stream is a crop of them).
+            detach = _detached if context.pipelined else (lambda value: value)
+            stream = detach(stream)
+            scene_radiance = None
             if radiance_files is not None:
                 with clock("io.radiance"):
                     scene_radiance = lens.scene_radiance(state, frame.passes.radiance)
                     if state.window_px is not None:
                         scene_radiance = crop_and_scale(scene_radiance, state.window_px, camera.output_size_px)
-                    result.files.append(radiance_files.write(f"{frame.index:06d}", scene_radiance))
+            annotated = None
             if annotator is not None:
                 window = state.window_px
 
@@ -786,52 +919,28 @@ def _execute_camera(
                         image if window is None else crop_and_scale(image, window, camera.output_size_px, nearest=True)
                     )
 
-                with clock("annotate"):
+                with clock("annotate"):  # draws each actor alone: OpenGL, so in this thread
                     annotated = annotator.annotate(state, stream, post=None if window is None else to_stream)
-                    sequence.add(annotated)
-                    if cuts_reid_crops(stages) and rgb8 is not None:
-                        result.files += write_reid_crops(
-                            directory, annotated, rgb8, camera_number=context.camera_index + 1
-                        )
-                if rgb8 is not None:
-                    with clock("io.annotation_images"):
-                        if "mot" in formats:
-                            result.files.append(sequence.write_mot_image(directory, frame.index, rgb8))
-                        if "yolo" in formats:
-                            result.files += sequence.write_yolo_frame(directory, annotated, rgb8)
-                    if detector is not None:
-                        with clock("annotate.detect"):
-                            sequence.add_detections(frame.index, detect_people(detector, rgb8[..., ::-1]))
+            flow = None
             if flow_field is not None and frame.index + 1 < job.frame_count:
                 with clock("io.flow"):  # after the annotations: it moves the actors to the next frame
-                    flow_px, displacement_m = flow_field.flow(state, camera.states[frame.index + 1], stream)
-                    if "io.flow" in stages:
-                        result.files.append(directory / "flow" / f"{frame.index:06d}.flo")
-                        write_flo(result.files[-1], flow_px)
-                    if "io.scene_flow" in stages:
-                        result.files.append(directory / "scene_flow" / f"{frame.index:06d}.exr")
-                        write_scene_flow(result.files[-1], displacement_m)
-            if "io.camera_metadata" in stages:
-                record = state.model_dump(mode="json")
-                output_K = record.pop("output_K_px")
-                if state.window_px is not None:  # K_px describes the stream; the sensor's is kept beside it
-                    record["sensor_K_px"] = record["K_px"]
-                    record["K_px"] = output_K
-                if captured is not None:
-                    record["metered_level_frac"] = captured.metered_level_frac
-                    if captured.white_balance_rgb is not None:
-                        record["white_balance_rgb"] = captured.white_balance_rgb
-                metadata.append(json.dumps(record, separators=(",", ":")))
-            if save_passes:
-                if result.frames == 0:
-                    table = [vars(instance) for instance in instance_table(job.scene)]
-                    result.files.append(directory / "passes" / "instances.json")
-                    write_text_atomic(result.files[-1], json.dumps(table, indent=1))
-                raw = None if captured is None else captured.raw_dn
-                with clock("io.passes"):
-                    _save_passes(directory / "passes" / f"{frame.index:06d}.npz", stream, raw, result)
+                    flow = flow_field.flow(state, camera.states[frame.index + 1], stream)
+            writes = functools.partial(
+                write_frame_outputs,
+                frame=_WrittenFrame(frame.index),
+                done=_FrameResult(result.frames, result.files),
+                state=state,
+                captured=None if captured is None else detach(replace(captured, rgb8=None)),
+                rgb8=detach(rgb8),
+                stream=stream,
+                scene_radiance=detach(scene_radiance),
+                annotated=detach(annotated),
+                flow=detach(flow),
+            )
+            frame_writer.submit(writes)
             result.frames += 1
             if result.frames % interval == 0 and result.frames < len(indices):
+                frame_writer.drain()  # a checkpoint describes frames written, every one of them
                 if video is not None:  # the segment ends here: the next starts with a fresh encoder
                     _close_segment(video, segment, segments, clock)
                     video = None
@@ -849,6 +958,9 @@ def _execute_camera(
             clock.end_frame()
             if on_frame is not None:
                 on_frame(camera.name, frame.index)
+        frame_writer.close()
+        if frame_writer.threaded:
+            _add_stage_records(clock.frames, frame_writer.frames)
         if video is not None:
             _close_segment(video, segment, segments, clock)
             video = None
@@ -885,7 +997,9 @@ def _execute_camera(
         result.frame_wall_s = clock.frame_wall_s[:-1]
     except BaseException:
         # The folder is deleted (`discard_unfinished`) or, for a render that resumes, kept with its spools
-        # and the segments up to its last checkpoint; the segment being written is never finished.
+        # and the segments up to its last checkpoint; the segment being written is never finished. The writer
+        # ends first: nothing writes into the folder after this.
+        frame_writer.stop()
         if video is not None:
             video.abort()
         for spool in spools.values():
