@@ -2,7 +2,8 @@
 
 - The roof kit (glass roof, rails, shark fin) is drawn from the identity seed at its shares, the same for the same
   seed; vans, trucks and buses carry none of it.
-- A glass roof is the shell's own roof between its edge rows: its faces face up, it lies behind the windscreen and
+- A glass roof is the shell's own roof between its edge rows, the darkest glass of the car (`ROOF_GLASS_T`, under
+  the 15–26 % of makers' privacy glass): its faces face up, it lies behind the windscreen and
   ahead of the rear window, at most `GLASS_ROOF_LENGTH_M` long, and its outline is a rectangle of the mesh's lines
   (four corners, no stairs); the paint, glass and underbody stay one closed shell.
 - Roof rails stand on the roof's edges (their undersides in the roof, their tops `RAIL_SIZE_M` over it) along most
@@ -124,8 +125,9 @@ def test_a_glass_roof_is_the_roofs_own_faces_between_its_edges(body):
         with pytest.MonkeyPatch.context() as patch:  # the same vehicle without its glass roof
             patch.setattr(roof, "GLASS_ROOF_SHARE", {})
             _, _, _, plain = shell(look)
-        roof_glass = (kind == 1) & (plain != 1)
+        roof_glass = kind == 3  # the glass roof's own kind (its own transmittance)
         assert roof_glass.sum() >= 8 and np.all(n[roof_glass, 2] > ROOF_NORMAL_Z), (body, seed)
+        assert np.all(plain[roof_glass] == 0)  # paint without the glass roof
         assert np.array_equal(kind[~roof_glass], plain[~roof_glass])  # nothing else changes
         centres = corners[roof_glass].mean(axis=1)
         # Behind the windscreen and ahead of the rear window, at most the longest glass roof long.
@@ -232,3 +234,27 @@ def test_cowl_wipers_and_shut_lines_lie_on_the_shell(body):
     assert np.all(left[:, 1] > 0) and np.allclose(left * (1, -1, 1), right)  # mirror images
     assert np.allclose(left[:, 1], plan_half_width_m(look, left[:, 0]) - BONNET_EDGE_INSET_M)
     assert left[:, 0].min() > foot_m and left[:, 0].max() < look.length_m / 2
+
+
+@pytest.mark.parametrize("body", ["hatchback", "estate", "suv"])
+def test_a_glass_roof_is_darker_than_every_other_pane(body):
+    """A glass roof's faces pass `ROOF_GLASS_T`, less than any other pane of the car, and less than the 15 % at the
+    dark end of makers' privacy glass; the car's other panes keep their transmittances."""
+    from camgen.vehicles.cabin import PRIVACY_T, ROOF_GLASS_T
+
+    assert 0.0 < ROOF_GLASS_T < 0.15 < PRIVACY_T
+    (seed,) = _seeds_with(body, lambda kit: kit.glass_roof, 1)
+    look = _look(body, seed)
+    vertices, faces, _, kind = shell(look)
+    glass = {part.name: part for part in build_vehicle(look).parts}["body_glass"]
+    transmittance = 1.0 - glass.colours[glass.faces[:, 0], 3]
+    centres = glass.vertices_m[glass.faces].mean(axis=1)
+    roof_centres = vertices[faces[kind == 3]].mean(axis=1)
+    on_roof = (np.abs(centres[:, None, :] - roof_centres[None]).max(axis=2) < 1e-9).any(axis=1)
+    assert on_roof.sum() == len(roof_centres) >= 8
+    assert np.allclose(transmittance[on_roof], ROOF_GLASS_T)
+    assert transmittance[~on_roof].min() > ROOF_GLASS_T
+    with pytest.MonkeyPatch.context() as patch:  # the same car without its glass roof: the other panes alike
+        patch.setattr(roof, "GLASS_ROOF_SHARE", {})
+        plain = {part.name: part for part in build_vehicle(look).parts}["body_glass"]
+    assert np.allclose(np.sort(1.0 - plain.colours[plain.faces[:, 0], 3]), np.sort(transmittance[~on_roof]))

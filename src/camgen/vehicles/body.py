@@ -458,7 +458,8 @@ def _sections(
 
 def shell(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The body shell: (vertices (V, 3) m, faces (F, 3), per-vertex normals (V, 3), face kind (F,) 0
-    paint, 1 glass, 2 black trim (`_black_pillars`)), closed and wound counter-clockwise seen from outside."""
+    paint, 1 glass, 2 black trim (`_black_pillars`), 3 a glass roof (`_glass_roof`: glass of its own
+    transmittance, `camgen.vehicles.cabin.ROOF_GLASS_T`)), closed and wound counter-clockwise seen from outside."""
     profile = PROFILES[look.body_type]
     L, W, H = look.length_m, look.width_m, look.height_m
     axles = (look.front_axle_x_m, look.rear_axle_x_m)
@@ -549,8 +550,8 @@ def _vertex_normals(vertices: np.ndarray, faces: np.ndarray, count: int) -> np.n
 
 
 def _glass(profile: Profile, look: VehicleLook, vertices, faces, quads: int) -> np.ndarray:
-    """1 for each face of glass, 0 for paint. The tube's two triangles of a quad (faces k and
-    k + `quads`) are judged together, by the quad's centre and normal (`_glass_by_quad`); then each
+    """1 for each face of glass (3 of a glass roof), 0 for paint, 2 for black trim. The tube's two triangles of a
+    quad (faces k and k + `quads`) are judged together, by the quad's centre and normal (`_glass_by_quad`); then each
     window of the tube (side windows, windscreen, rear window) is made to follow rows of section points
     (`_window_rows`), so that its outline runs along the mesh's edges instead of stepping between rows
     from one station to the next."""
@@ -588,11 +589,12 @@ def _glass(profile: Profile, look: VehicleLook, vertices, faces, quads: int) -> 
     tube &= ~_screen_pillars(tube, top_row.max() if top_row.size else -1)
     doors = grid(glass) & ~np.any([grid(w) for w in windows], axis=0)  # a bus's doors reach below the belt
     tube |= doors
-    tube |= _glass_roof(look, vertices, faces, quads, tube)
-    black = _black_pillars(profile, look, vertices, faces, quads, tube, top_row.max() if top_row.size else -1)
+    glass_roof = _glass_roof(look, vertices, faces, quads, tube)
+    side_top = top_row.max() if top_row.size else -1
+    black = _black_pillars(profile, look, vertices, faces, quads, tube | glass_roof, side_top)
     kind = glass.astype(np.int8)
     for half in (slice(0, quads), slice(quads, 2 * quads)):
-        kind[half] = np.where(black, 2, tube).reshape(-1)
+        kind[half] = np.where(black, 2, np.where(glass_roof, 3, tube)).reshape(-1)
     return kind
 
 
@@ -1496,10 +1498,11 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
     used, remapped = np.unique(np.concatenate([paint[below], faces[kind == 2]]), return_inverse=True)
     underbody = Part("underbody", "gear", vertices[used], normals[used], remapped.reshape(-1, 3),
                      np.full(len(used), -1, np.int8), colours=np.tile(UNDERBODY_RGB, (len(used), 1)))  # fmt: skip
-    if (kind == 1).any():
-        glass = glass_part(look, vertices, normals, faces[kind == 1])
+    glazed = (kind == 1) | (kind == 3)
+    if glazed.any():
+        glass = glass_part(look, vertices, normals, faces[glazed], roof=kind[glazed] == 3)
         parts += [inner_glass_part(glass), glass]  # the far panes first (the renderer keeps the order)
-    cabin = [lining_part(vertices, normals, faces[kind != 1])]
+    cabin = [lining_part(vertices, normals, faces[~glazed])]
     if look.body_type == "bus":  # its seats, and its passengers when it is in service (driven)
         cabin += [bus_interior_part(look)] + ([bus_passengers_part(look)] if driver else [])
     cabin += [driver_part(look)] if driver else []

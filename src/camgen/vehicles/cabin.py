@@ -7,7 +7,10 @@ the windscreen must let at least 75 % of the light through and the front side wi
 1986); UN ECE Regulation 43 asks at least 70 % of the glazing the driver needs to see ahead. Clear
 laminated windscreens pass about 78 % (78 % here), toughened side glass about 72 % (72 %). Behind the
 driver no minimum applies: SUVs and vans usually carry factory "privacy" glass passing 20–30 % (25 %
-here); other cars' rear glass is the side glass's. The renderer draws glass (`glass_part`; its inner
+here; makers' privacy glass is quoted at 15–26 %, e.g. engineerfix.com, "What percent tint do cars come with
+from the factory"); other cars' rear glass is the side glass's. A glass roof (`ROOF_GLASS_T`) is darker still:
+laminated with a tinted interlayer (Sekisui's S-LEC roof interlayers come in greys for any visible
+transmittance a maker asks), it is the darkest glass of a car. The renderer draws glass (`glass_part`; its inner
 faces, `inner_glass_part`, for a view through two panes) as the reflection its material gives plus the
 transmitted share (1 − F) × T of what lies behind it, F the Fresnel reflectance (about 4 % per surface
 at normal incidence, rising to 1 at grazing), so that the dark cabin lets the reflection dominate
@@ -72,6 +75,10 @@ WINDSCREEN_T = 0.78
 FRONT_SIDE_T = 0.72
 PRIVACY_T = 0.25
 PRIVACY_BODIES = ("suv", "van")
+ROOF_GLASS_T = 0.10
+"""Visible transmittance of a glass roof (`camgen.vehicles.roof`): an estimate. No maker's figure was found here;
+panoramic roofs are laminated with a dark grey interlayer and look darker than the 15–26 % privacy glass beside
+them in makers' pictures (and a car owner's measurement of a Cadillac Lyriq's rear glass, 17 %), so 10 %."""
 
 
 @dataclass(frozen=True)
@@ -117,13 +124,16 @@ def drive_side(look: VehicleLook) -> str:
     return "right" if UK_PLATE_PATTERN.match(look.plate_text) else "left"
 
 
-def glass_transmittance(look: VehicleLook, centre_m: np.ndarray, windscreen: np.ndarray) -> np.ndarray:
+def glass_transmittance(
+    look: VehicleLook, centre_m: np.ndarray, windscreen: np.ndarray, roof: np.ndarray | None = None
+) -> np.ndarray:
     """(F,) visible transmittance of glass faces with centres `centre_m` (F, 3), `windscreen` (F,) bool:
     the windscreen's, the front side windows' (ahead of `driver_zone_x_m`), and behind them the rear
-    glass's (privacy glass on SUVs and vans)."""
+    glass's (privacy glass on SUVs and vans); `roof` (F,) bool: a glass roof's (`ROOF_GLASS_T`)."""
     front = centre_m[:, 0] > driver_zone_x_m(look)
     rear_t = PRIVACY_T if look.body_type in PRIVACY_BODIES else FRONT_SIDE_T
-    return np.where(windscreen, WINDSCREEN_T, np.where(front, FRONT_SIDE_T, rear_t))
+    panes = np.where(windscreen, WINDSCREEN_T, np.where(front, FRONT_SIDE_T, rear_t))
+    return panes if roof is None else np.where(roof, ROOF_GLASS_T, panes)
 
 
 def windscreen_x_m(look: VehicleLook) -> tuple[float, float]:
@@ -246,14 +256,16 @@ def lining_part(vertices_m: np.ndarray, normals: np.ndarray, paint_faces: np.nda
                 np.full(len(used), -1, np.int8), colours=np.tile(INTERIOR_RGB, (len(used), 1)))  # fmt: skip
 
 
-def glass_part(look: VehicleLook, vertices_m: np.ndarray, normals: np.ndarray, faces: np.ndarray) -> Part:
+def glass_part(
+    look: VehicleLook, vertices_m: np.ndarray, normals: np.ndarray, faces: np.ndarray, roof: np.ndarray | None = None
+) -> Part:
     """The shell's glass faces with their own vertices (each face's transmittance exact), coloured (1, 1, 1,
     1 − T): the opacity the renderer blends with (`glass_transmittance`). The windscreen is the glass
-    facing forward at the front."""
+    facing forward at the front; `roof` (F,) bool marks a glass roof's faces."""
     corners = faces.reshape(-1)
     centre = vertices_m[faces].mean(axis=1)
     windscreen = (normals[faces].mean(axis=1)[:, 0] > 0.35) & (centre[:, 0] > 0)
-    transmittance = glass_transmittance(look, centre, windscreen)
+    transmittance = glass_transmittance(look, centre, windscreen, roof)
     colours = np.ones((len(corners), 4))
     colours[:, 3] = np.repeat(1.0 - transmittance, 3)
     return Part("body_glass", "glass", vertices_m[corners], normals[corners], np.arange(len(corners)).reshape(-1, 3),
