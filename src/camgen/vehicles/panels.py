@@ -1,0 +1,208 @@
+"""The shut lines of a vehicle's doors and of a van's sliding side door, in the vehicle's frame
+(`camgen.vehicles.body`).
+
+A real car's side is not one smooth panel: its doors' edges show as dark lines (the 3–5 mm gaps between panels,
+`camgen.vehicles.roof.SHUT_LINE_WIDTH_M`), seen from the side, from a mast and from behind at an angle. A
+five-door car shows three on each side under its windows: the front door's leading edge behind the front wing, the
+B-pillar between the doors and the rear door's trailing edge at the C-pillar (a pickup's double cab likewise, at
+its cab's rear). A panel van shows its cab doors' edges on both sides and, on the nearside (the kerb's,
+`camgen.vehicles.body.nearside_sign`), its sliding door: two upright edges from the sill to near the roof, the
+door's top edge between them, and behind it the rail the door runs on, at the side's middle, back to the rear.
+
+Sources and estimates:
+
+- Where a car's front door starts (`FRONT_DOOR_BEHIND_ARCH_M`): makers' side views put the front door's leading
+  edge 0.1–0.25 m behind the front wheel arch (VW Golf 8, Toyota Corolla), so 0.15 m behind the arch here (the
+  procedural greenhouse sits further forward over the front wheels than a real car's, so the door is placed by the
+  arch, not by the windscreen). A van's cab door stands over the front wheel's rear half, its lower edge cut round
+  the arch (Ford Transit, Mercedes Sprinter), about 1.0 m wide (`VAN_CAB_DOOR_WIDTH_M`, an estimate from makers'
+  side views).
+- Where the doors meet (`DOOR_EDGES_U`): at the B-pillar (`camgen.vehicles.body.Profile.pillars`), and the rear
+  door's trailing edge at the C-pillar's foot, read from the body types' profiles (shares of the length).
+- A van's sliding door (`SLIDING_DOOR_WIDTH_M`): 1.30 m wide, as the Ford Transit's and Mercedes Sprinter's
+  side-door openings in their dimension sheets (recalled, not rechecked here: an estimate), its top at
+  `SLIDING_DOOR_TOP_SHARE` of the van's height (the openings are 1.6–1.8 m tall over a 0.55 m floor).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+
+from camgen.vehicles.look import VehicleLook
+from camgen.vehicles.roof import SHUT_LINE_RGB, SHUT_LINE_WIDTH_M
+
+DOOR_BODIES = ("hatchback", "sedan", "estate", "suv", "pickup", "van")
+FRONT_DOOR_BEHIND_ARCH_M = 0.15
+VAN_CAB_DOOR_WIDTH_M = 1.0
+DOOR_EDGES_U = {
+    "sedan": (0.535, 0.32),
+    "hatchback": (0.445, 0.15),
+    "estate": (0.515, 0.295),
+    "suv": (0.475, 0.20),
+    "pickup": (0.535, 0.39),
+    "van": (0.73,),
+}
+"""Per body type, the doors' edges behind the front door's leading edge, as shares of the length (rear 0 → front 1):
+the B-pillar's middle and the rear door's trailing edge (a van's cab door has only the first)."""
+SLIDING_DOOR_WIDTH_M = 1.30
+SLIDING_DOOR_GAP_M = 0.10
+"""How far behind the cab door's trailing edge the sliding door starts (the B-pillar's width), m; an estimate."""
+SLIDING_DOOR_TOP_SHARE = 0.85
+SLIDING_RAIL_SHARE = 0.50
+"""The sliding door's rail, behind the door, at this share of the van's height (makers' side views; an estimate)."""
+SIDE_NORMAL_Y = 0.8
+"""A shut line on the side stops where the surface turns under (its outward normal less sideways than this)."""
+LINE_SAMPLES = 10
+SIDE_LIFT_M = 0.005
+"""How far out along the side's normals the shut lines lie, m: more than the roof's lines' 3 mm
+(`camgen.vehicles.roof.LIFT_M`), since a line follows the side interpolated between stations at one height, and the
+shell's quads, split into two triangles, bend off that by up to 1.2 mm (a sedan's rear door's edge, measured)."""
+
+
+def _side_chain(count: int, upper_points: int, side_quads: int) -> np.ndarray:
+    """The left side's section points from its roof-edge row down over the belt to the underside (index 0 is the
+    left beltline, 1…`side_quads` run up the greenhouse, the last ones down the side under the belt)."""
+    up = np.arange(side_quads, 0, -1)
+    down = (count - np.arange(0, count - upper_points)) % count
+    return np.concatenate([up, down])
+
+
+class SideSurface:
+    """The shell's side at any (x, z): y on the left (mirror for the right) and the outward normal, interpolated
+    between the two stations around x along the side's section points (`_side_chain`)."""
+
+    def __init__(self, vertices_m: np.ndarray, normals: np.ndarray, count: int, upper_points: int, side_quads: int):
+        self.grid = vertices_m.reshape(-1, count, 3)
+        self.grid_n = normals.reshape(-1, count, 3)
+        self.x = self.grid[:, 0, 0]
+        self.chain = _side_chain(count, upper_points, side_quads)
+        self.belt_index = side_quads
+        """Where the left beltline (section point 0) is in the chain."""
+
+    def _side_run(self, station: int) -> tuple[np.ndarray, np.ndarray]:
+        """(points, normals) of one station's left side: the run of `_side_chain` through the beltline that faces
+        out (`SIDE_NORMAL_Y`), from its top down."""
+        points = self.grid[station, self.chain]
+        normals = self.grid_n[station, self.chain]
+        side = normals[:, 1] > SIDE_NORMAL_Y
+        belt = self.belt_index
+        if not side[belt]:
+            return points[belt : belt + 1], normals[belt : belt + 1]
+        start = belt - int(np.argmin(side[belt::-1])) + 1 if not side[: belt + 1].all() else 0
+        stop = belt + int(np.argmin(side[belt:])) if not side[belt:].all() else len(side)
+        return points[start:stop], normals[start:stop]
+
+    def _station(self, station: int, z_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(y, normals (n, 3)) at heights `z_m` on one station's left side (`_side_run`)."""
+        points, normals = self._side_run(station)
+        order = np.argsort(points[:, 2])
+        z = points[order, 2]
+        y = np.interp(z_m, z, points[order, 1])
+        n = np.stack([np.interp(z_m, z, normals[order, k]) for k in range(3)], axis=1)
+        return y, n
+
+    def at(self, x_m: float, z_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(points (n, 3) on the left side at `x_m` and heights `z_m`, unit outward normals (n, 3))."""
+        i = int(np.clip(np.searchsorted(self.x, x_m) - 1, 0, len(self.x) - 2))
+        t = float(np.clip((x_m - self.x[i]) / max(self.x[i + 1] - self.x[i], 1e-12), 0.0, 1.0))
+        y0, n0 = self._station(i, z_m)
+        y1, n1 = self._station(i + 1, z_m)
+        n = (1 - t) * n0 + t * n1
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+        return np.stack([np.full_like(z_m, x_m), (1 - t) * y0 + t * y1, z_m], axis=1), n
+
+    def z_range(self, x_m: float) -> tuple[float, float]:
+        """(lowest, highest) height at which the side faces out at both stations around `x_m`."""
+        i = int(np.clip(np.searchsorted(self.x, x_m) - 1, 0, len(self.x) - 2))
+        runs = [self._side_run(station)[0][:, 2] for station in (i, i + 1)]
+        return max(z.min() for z in runs), min(z.max() for z in runs)
+
+
+def _strip(edge_m: np.ndarray, other_edge_m: np.ndarray, outward: np.ndarray) -> trimesh.Trimesh:
+    """A strip between two polylines (n, 3), its faces wound towards `outward` (n, 3) normals."""
+    vertices = np.concatenate([edge_m, other_edge_m])
+    n = len(edge_m)
+    k = np.arange(n - 1)
+    faces = np.concatenate([np.stack([k, k + 1, n + k + 1], 1), np.stack([k, n + k + 1, n + k], 1)])
+    corners = vertices[faces]
+    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    towards = np.concatenate([outward, outward])[faces].mean(axis=1)
+    inward = np.einsum("ij,ij->i", cross, towards) < 0
+    faces[inward] = faces[inward][:, ::-1]
+    return trimesh.Trimesh(vertices, faces, process=False)
+
+
+def upright_line(surface: SideSurface, x_m: float, z_low_m: float, z_high_m: float, sign: float):
+    """A shut line up the side (left for `sign` +1, right for −1) at `x_m` from `z_low_m` to `z_high_m` (clipped to
+    where the side faces out), `SHUT_LINE_WIDTH_M` wide, `SIDE_LIFT_M` out along the surface's normals; None where the
+    side does not reach."""
+    low, high = surface.z_range(x_m)
+    low, high = max(low, z_low_m), min(high, z_high_m)
+    if high - low < 0.05:
+        return None
+    z = np.linspace(low, high, LINE_SAMPLES)
+    edges, normals = [], []
+    for x in (x_m - SHUT_LINE_WIDTH_M / 2, x_m + SHUT_LINE_WIDTH_M / 2):
+        points, n = surface.at(x, z)
+        edges.append(points + SIDE_LIFT_M * n)
+        normals.append(n)
+    mirror = np.array([1.0, sign, 1.0])
+    return _strip(edges[0] * mirror, edges[1] * mirror, normals[0] * mirror)
+
+
+def level_line(surface: SideSurface, x_from_m: float, x_to_m: float, z_m: float, sign: float):
+    """A shut line along the side at height `z_m` from `x_from_m` to `x_to_m` (where the side faces out there),
+    `SHUT_LINE_WIDTH_M` tall; None where too short."""
+    x = np.linspace(x_from_m, x_to_m, max(2, int(np.ceil((x_to_m - x_from_m) / 0.08)) + 1))
+    keep = np.array([surface.z_range(xi)[0] <= z_m - 0.01 and surface.z_range(xi)[1] >= z_m + 0.01 for xi in x])
+    x = x[keep]
+    if len(x) < 2 or x[-1] - x[0] < 0.05:
+        return None
+    edges, normals = [], []
+    for z in (z_m - SHUT_LINE_WIDTH_M / 2, z_m + SHUT_LINE_WIDTH_M / 2):
+        rows = [surface.at(xi, np.array([z])) for xi in x]
+        points = np.concatenate([p for p, _ in rows])
+        n = np.concatenate([q for _, q in rows])
+        edges.append(points + SIDE_LIFT_M * n)
+        normals.append(n)
+    mirror = np.array([1.0, sign, 1.0])
+    return _strip(edges[0] * mirror, edges[1] * mirror, normals[0] * mirror)
+
+
+def door_shut_lines(
+    look: VehicleLook,
+    shell_m: tuple[np.ndarray, np.ndarray, np.ndarray],
+    count: int,
+    upper_points: int,
+    side_quads: int,
+) -> list[tuple[trimesh.Trimesh, tuple[float, float, float]]]:
+    """The doors' shut lines on both sides (a van's sliding door on its nearside) as [(mesh, linear albedo)] for the
+    running gear; [] for a body type without doors drawn (`DOOR_BODIES`). `shell_m`: the shell's vertices, normals
+    and faces (`camgen.vehicles.body.shell`)."""
+    from camgen.vehicles.body import ARCH_GAP_M, PROFILES, nearside_sign
+
+    if look.body_type not in DOOR_BODIES:
+        return []
+    vertices, normals, _ = shell_m
+    surface = SideSurface(vertices, normals, count, upper_points, side_quads)
+    L, H = look.length_m, look.height_m
+    belt = PROFILES[look.body_type].belt * H
+    edges = [(u - 0.5) * L for u in DOOR_EDGES_U[look.body_type]]
+    if look.body_type == "van":
+        edges.insert(0, edges[0] + VAN_CAB_DOOR_WIDTH_M)
+    else:
+        edges.insert(0, look.front_axle_x_m - look.wheel_radius_m - ARCH_GAP_M - FRONT_DOOR_BEHIND_ARCH_M)
+    lines = []
+    for sign in (1.0, -1.0):
+        for x in edges:
+            lines.append(upright_line(surface, x, 0.0, belt, sign))
+    if look.body_type == "van":
+        sign = nearside_sign(look)
+        front = edges[1] - SLIDING_DOOR_GAP_M
+        rear = front - SLIDING_DOOR_WIDTH_M
+        top = SLIDING_DOOR_TOP_SHARE * H
+        lines += [upright_line(surface, x, 0.0, top, sign) for x in (front, rear)]
+        lines.append(level_line(surface, rear, front, top, sign))
+        lines.append(level_line(surface, -L / 2 + 0.15, rear, SLIDING_RAIL_SHARE * H, sign))
+    return [(line, SHUT_LINE_RGB) for line in lines if line is not None]
