@@ -154,3 +154,13 @@ def test_a_turning_head_blurs_its_frames_along_the_turn(renderer, tmp_path):
     sweep_px = turning.state.K_px[0][0] * np.radians(100.0) * turning.state.exposure_time_s
     assert _crate_edge_width_px(turning.rgb8) == pytest.approx(0.8 * sweep_px, abs=1.5)
     assert _crate_edge_width_px(still.rgb8) <= 2
+
+
+def test_a_resolution_finer_than_a_sensor_is_a_clear_error(world):
+    """Binning keeps each pixel's electrons (quantum efficiency over the area ratio): a finer grid would need a
+    quantum efficiency over 1, which the profile's validation refused with a traceback."""
+    from camgen.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=r"resolution_px 320×120 is finer than the sensor of camera '\w+' \(160×120 px, "):
+        Simulation(world, resolution_px=(320, 120))
+    Simulation(world, resolution_px=(160, 120)).close()  # the sensors' own size still opens

@@ -150,7 +150,8 @@ class Simulation:
         Also deliver the raw mosaic (uint16 DN) of each frame.
     resolution_px : (int, int) or None
         Read every camera out at (W, H) over the same sensor area (the field of view is kept), for
-        speed; None keeps the profiles' resolutions.
+        speed: binned, so at most each sensor's own size (a `ConfigError` otherwise); None keeps the
+        profiles' resolutions.
     renderer : Renderer or None
         An OpenGL renderer to draw with (shared with the caller); default: the simulation opens its
         own, closed by `close`.
@@ -198,6 +199,16 @@ class Simulation:
             width_px, height_px = resolution_px
             if not (isinstance(width_px, int) and isinstance(height_px, int) and width_px >= 2 and height_px >= 2):
                 raise ConfigError(f"resolution_px must be two whole numbers ≥ 2 (W, H), got {resolution_px!r}")
+            for camera, profile in profiles.items():  # binning keeps each pixel's electrons: only coarser
+                sensor = profile.sensor
+                if width_px > sensor.width_px or height_px > sensor.height_px:
+                    raise ConfigError(
+                        f"{loaded.name}: resolution_px {width_px}×{height_px} is finer than the sensor of camera "
+                        f"{camera!r} ({sensor.width_px}×{sensor.height_px} px, profile "
+                        f"{loaded.profile_names[camera]!r}): the simulation reads a sensor out at its own size or "
+                        f"binned to a coarser one; ask for at most {sensor.width_px}×{sensor.height_px}, or None "
+                        "for each profile's own"
+                    )
             profiles = {name: _binned(profile, (width_px, height_px)) for name, profile in profiles.items()}
         self.resolution_px = None if resolution_px is None else (int(resolution_px[0]), int(resolution_px[1]))
         """The readout size every camera was asked for, or None (the profiles' own)."""
