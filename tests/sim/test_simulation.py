@@ -164,3 +164,27 @@ def test_a_resolution_finer_than_a_sensor_is_a_clear_error(world):
     with pytest.raises(ConfigError, match=r"resolution_px 320×120 is finer than the sensor of camera '\w+' \(160×120 px, "):
         Simulation(world, resolution_px=(320, 120))
     Simulation(world, resolution_px=(160, 120)).close()  # the sensors' own size still opens
+
+
+def test_a_held_head_tests_no_mover_for_blur_the_plan_left_out(renderer, monkeypatch, tmp_path):
+    """The plan finds a slow walker too slow to blur, so it has no motion-blur stage; the simulation adds
+    one for the dome's turns only (``actors_blur`` False): a held step places the actors at the frame time
+    alone, as `camgen render`'s frames of the plan do (the blur test places them at the exposure's ends too)."""
+    from camgen.render.scene_graph import SceneGraph
+
+    times: list[float] = []
+    placing = SceneGraph.place_actors
+
+    def place(self, time_s):
+        times.append(time_s)
+        return placing(self, time_s)
+
+    slow = write_world(tmp_path, speed_m_s=0.05, illuminance_lux=20000.0)
+    with Simulation(slow, renderer=renderer, cameras=["dome"]) as sim:
+        stage = next(s for s in sim.camera_job("dome").stages if s.name == "optics.motion_blur")
+        assert stage.params["actors_blur"] is False and stage.params["displacement_max_px"] == 0.0
+        sim.reset(0)
+        monkeypatch.setattr(SceneGraph, "place_actors", place)
+        observed = [sim.step({}) for _ in range(2)]
+    frame_times = {observation.time_s for observation in observed}
+    assert times and set(times) <= frame_times, (sorted(set(times)), frame_times)

@@ -447,13 +447,14 @@ class CameraRenderer:
         The same decision at a fraction of the cost: the actors are placed at the start and the end first and
         at the frame time last (where the frame's draws want them); a node whose look holds over the three
         (`SceneGraph.look_versions`: a parked car) moves by 0 px; a node whose paths `_path_bound_px` bounds
-        under the threshold is not projected; the others are, vertex by vertex."""
+        under the threshold is not projected; the others are, vertex by vertex. A stage whose ``actors_blur`` is
+        False (`camgen.sim` adds one for a head's turns to a plan that blurs nothing) blurs no node: {}."""
         p, graph, spec = self._motion, self.graph, self.spec
         exposure_s = state.exposure_time_s
         ends = (-0.5, 0.0, 0.5)
         if any(not _same_view(view_at(state, spec, offset * exposure_s), view) for offset in ends):
             return None
-        if p is None or not blur:
+        if p is None or not blur or not p.get("actors_blur", True):
             return {}
         scene, moving = graph.scene, graph.moving_nodes
         casting = _shadow_lights(scene) if graph.shadows else []

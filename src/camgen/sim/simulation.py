@@ -400,7 +400,9 @@ class Simulation:
     def _with_camera_blur(self, index: int, camera_job: CameraJob, scene: Scene, job: Job) -> CameraJob:
         """A mechanical PTZ camera's job with a motion-blur stage whose per-frame camera motion the
         simulation fills in from the head's rates as it goes (zero until the head turns, which draws
-        exactly what the plan draws: one sub-frame when nothing moves)."""
+        exactly what the plan draws: one sub-frame when nothing moves). A stage added here, where the plan
+        found no motion to blur, blurs the head's turns only (``actors_blur`` False): a held head's frames are
+        the plan's, whose actors move too little to blur, without testing each mover's path at every step."""
         camera = scene.cameras[index]
         if camera.ptz is None or camera.eptz is not None or "radiance" not in camera_job.render.passes:
             return camera_job
@@ -421,6 +423,7 @@ class Simulation:
             )
             params = {
                 "displacement_max_px": 0.0,
+                "actors_blur": False,
                 "camera_motion_px": blur,
                 "exposure_longest_s": longest_s,
                 "sample_step_px": MOTION_SAMPLE_STEP_PX,
