@@ -1,8 +1,10 @@
 """Closed-loop cases: one `Simulation.step` of the parking lot's PTZ dome (scenes/ptz_follow.yaml) read
 out at 1280×720 with the full camera model (lens, sensor with auto-exposure, ISP), the head turning
 under a ContinuousMove (so its frames carry motion blur, as a tracking head's do), held, and turning
-with the ground truth asked for. A case's time is one step: the head's control steps, the state, the
-draw, the camera model and, where asked, the annotation of one frame."""
+with the ground truth asked for; then held and turning again without supersampling (`PlanSettings`'
+supersampling 1: one radiance sample a pixel, the option a closed loop that wants speed takes; the
+tradeoffs section measures what it costs in error). A case's time is one step: the head's control
+steps, the state, the draw, the camera model and, where asked, the annotation of one frame."""
 
 from __future__ import annotations
 
@@ -20,31 +22,36 @@ REPEATS = 10
 def sim_cases(repo: Path, stage_frames: dict[str, list[dict[str, float]]], facts: dict | None = None) -> list[Case]:
     """The cases; after each runs, `stage_frames[name]` holds the per-stage wall time of its timed steps
     and `facts` the dome's render size (with its margin) and supersampling."""
+    from camgen.plan import PlanSettings
     from camgen.render.renderer import Renderer
     from camgen.sim import ContinuousMove, Simulation
 
     scene = repo / "scenes" / "ptz_follow.yaml"
     renderer = Renderer()
+    size = f"{STEP_SIZE_PX[0]}×{STEP_SIZE_PX[1]}"
+    turning = {CAMERA: ContinuousMove(pan=PAN)}
     variants = {
-        f"sim step {STEP_SIZE_PX[0]}×{STEP_SIZE_PX[1]} PTZ, head turning": (False, {CAMERA: ContinuousMove(pan=PAN)}),
-        f"sim step {STEP_SIZE_PX[0]}×{STEP_SIZE_PX[1]} PTZ, head held": (False, {}),
-        f"sim step {STEP_SIZE_PX[0]}×{STEP_SIZE_PX[1]} PTZ, head turning, ground truth": (
-            True,
-            {CAMERA: ContinuousMove(pan=PAN)},
-        ),
+        f"sim step {size} PTZ, head turning": (False, turning, None),
+        f"sim step {size} PTZ, head held": (False, {}, None),
+        f"sim step {size} PTZ, head turning, ground truth": (True, turning, None),
+        f"sim step {size} PTZ, head turning, supersampling 1": (False, turning, 1),
+        f"sim step {size} PTZ, head held, supersampling 1": (False, {}, 1),
     }
     cases = []
-    for name, (ground_truth, commands) in variants.items():
+    for name, (ground_truth, commands, supersampling) in variants.items():
         state: dict = {}
+        settings = None if supersampling is None else PlanSettings(supersampling=supersampling)
 
-        def setup(name=name, ground_truth=ground_truth, commands=commands, state=state) -> None:
-            sim = Simulation(scene, ground_truth=ground_truth, resolution_px=STEP_SIZE_PX, renderer=renderer)
+        def setup(name=name, ground_truth=ground_truth, commands=commands, state=state, settings=settings) -> None:
+            sim = Simulation(
+                scene, ground_truth=ground_truth, resolution_px=STEP_SIZE_PX, renderer=renderer, settings=settings
+            )
             sim.reset(0)
             sim.step(commands)  # the head starts turning after the command latency
             sim.step(commands)
             sim.step(commands)
             state["sim"], state["first"] = sim, len(sim.stage_seconds(CAMERA))
-            if facts is not None:
+            if facts is not None and settings is None:
                 render = sim.camera_job(CAMERA).render
                 facts.update(width_px=render.width_px, height_px=render.height_px, supersampling=render.supersampling)
 
