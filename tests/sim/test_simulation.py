@@ -161,7 +161,8 @@ def test_a_resolution_finer_than_a_sensor_is_a_clear_error(world):
     quantum efficiency over 1, which the profile's validation refused with a traceback."""
     from camgen.errors import ConfigError
 
-    with pytest.raises(ConfigError, match=r"resolution_px 320×120 is finer than the sensor of camera '\w+' \(160×120 px, "):
+    finer = r"resolution_px 320×120 is finer than the sensor of camera '\w+' \(160×120 px, "
+    with pytest.raises(ConfigError, match=finer):
         Simulation(world, resolution_px=(320, 120))
     Simulation(world, resolution_px=(160, 120)).close()  # the sensors' own size still opens
 
