@@ -90,8 +90,15 @@ def children_of(pid: int) -> dict[int, bytes]:
 
 
 def workers_of(pid: int) -> list[int]:
-    """The pool's worker processes among `pid`'s children (not multiprocessing's resource tracker)."""
-    return [child for child, cmdline in children_of(pid).items() if b"spawn_main" in cmdline]
+    """The pool's worker processes: the children of `pid`'s fork server (`pid`'s children are that server and
+    multiprocessing's resource tracker)."""
+    servers = [child for child, cmdline in children_of(pid).items() if b"multiprocessing.forkserver" in cmdline]
+    return [worker for server in servers for worker in children_of(server)]
+
+
+def descendants_of(pid: int) -> list[int]:
+    """`pid`'s children (the fork server, the resource tracker) and the pool's workers."""
+    return [*children_of(pid), *workers_of(pid)]
 
 
 def is_running(pid: int) -> bool:
@@ -133,7 +140,7 @@ def stop_batch(tmp_path: Path, signum: int, *, to_group: bool, after: Callable[[
     out = tmp_path / "out"
     process = start_batch(dataset, out)
     wait_for(lambda: after(out) and len(workers_of(process.pid)) == 2, f"{what} and two workers")
-    children = children_of(process.pid)
+    children = descendants_of(process.pid)
     signalled = time.monotonic()
     (os.killpg if to_group else os.kill)(process.pid, signum)
     try:
@@ -195,17 +202,21 @@ def test_a_killed_worker_then_resume_gives_the_uninterrupted_dataset(tmp_path, u
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the parent-death signal is Linux's prctl")
 def test_workers_of_a_batch_killed_outright_stop_with_it(tmp_path):
-    # SIGKILL runs no handler in the batch: the kernel's parent-death signal (SIGTERM) stops its workers, which
-    # delete the temporary files of the jobs they were writing, instead of rendering on as orphans.
+    # SIGKILL runs no handler in the batch. Its workers' parent is the fork server, which lives on while they
+    # do; each worker sees the batch end and stops as on SIGTERM, deleting the temporary files of the job it
+    # was writing, instead of rendering on as an orphan; then the server ends too.
     dataset = make_dataset(tmp_path, DATASET)
     out = tmp_path / "out"
     process = start_batch(dataset, out)
     wait_for(lambda: rendering(out) and len(workers_of(process.pid)) == 2, "a job being written and two workers")
-    workers = workers_of(process.pid)
+    descendants = descendants_of(process.pid)
     os.kill(process.pid, signal.SIGKILL)
-    process.communicate(timeout=STOP_BOUND_S)  # the pipes close when every child has exited too
     deadline = time.monotonic() + STOP_BOUND_S
-    while any(is_running(worker) for worker in workers) and time.monotonic() < deadline:
+    while any(is_running(pid) for pid in descendants) and time.monotonic() < deadline:
         time.sleep(0.05)
-    assert not any(is_running(worker) for worker in workers), "a worker went on rendering as an orphan"
+    orphans = [pid for pid in descendants if is_running(pid)]
+    for pid in orphans:
+        os.kill(pid, signal.SIGKILL)
+    process.communicate()  # the pipes close when every descendant has exited too
+    assert not orphans, "a worker went on rendering as an orphan"
     assert_unfinished_jobs_hold_no_files(out)

@@ -7,17 +7,22 @@ and both run the same `render_job`, so they write the same bytes. The executors 
 nothing of `run`; `run` imports the Ray executor only when a batch asks for it.
 
 A worker process opens one OpenGL `Renderer` on its first job and keeps it for the rest (a context per
-process). A pool worker's signals (`init_pool_worker`): SIGINT is ignored (the parent decides), SIGTERM
-unwinds the running job, deleting its temporary files (or, in a batch that resumes, keeping its checkpoints
-for the next run), and ends the worker.
+process). The local pool's workers are forked from a fork server (`pool_context`) that has imported what a
+job needs (`POOL_PRELOAD_MODULES`) and nothing more: no OpenGL context, no thread of its own at the fork, so
+a worker starts in milliseconds instead of seconds of imports, without inheriting the batch's state. A pool
+worker's signals (`init_pool_worker`): SIGINT is ignored (the parent decides), SIGTERM unwinds the running
+job, deleting its temporary files (or, in a batch that resumes, keeping its checkpoints for the next run),
+and ends the worker, as does the end of the batch process, however it ends (`_stop_with_parent`).
 """
 
 from __future__ import annotations
 
 import multiprocessing
+import multiprocessing.connection
+import multiprocessing.forkserver
 import os
 import signal
-import sys
+import threading
 import time
 import traceback
 from collections.abc import Collection, Hashable
@@ -94,39 +99,84 @@ class _WorkerStop(BaseException):
     Not an Exception, so that `_render` does not report it as the job's error."""
 
 
+POOL_PRELOAD_MODULES = (
+    "camgen.plan.execute",
+    "camgen.render.renderer",
+    "camgen.render.sequence",
+    "camgen.io.video",
+    "camgen.actors",
+    "camgen.vehicles",
+    "camgen.props",
+)
+"""What the local pool's fork server imports, in this order, before it forks a worker: what `render_job`
+imports for the usual scenes (people, vehicles, props, a video), and under it numpy, SciPy, OpenCV,
+colour-science (with its plotting and matplotlib: 1.9 s alone), pyrender and PyAV, which a spawned worker
+spent about 3 s importing before its first job. camgen's modules come first: `camgen.render.gl` chooses
+PyOpenGL's EGL platform before PyOpenGL is imported (pyrender first would have made it GLX). The imports
+load the EGL libraries but open no display and no context, and start no Python thread; the only threads
+they start are OpenBLAS's (numpy's, SciPy's and OpenCV's copies), which OpenBLAS stops before every fork
+and starts again in the worker, as many, at its first BLAS call (tests/batch/test_pool_workers.py)."""
+
+
+def pool_context() -> multiprocessing.context.BaseContext:
+    """The local pool's "forkserver" start: a worker is forked from a server process started (once per batch
+    process) by `start_pool_server`, which has imported `POOL_PRELOAD_MODULES`, and not from the batch
+    process, whose threads (a progress display, the pool's own) and their locks a fork would copy."""
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(list(POOL_PRELOAD_MODULES))
+    return context
+
+
+def start_pool_server() -> None:
+    """Start the local pool's fork server now, if it is not running, and return at once (it imports
+    `POOL_PRELOAD_MODULES` in the background, about 3 s, while this process goes on); the pool's first worker
+    waits for it. It ends when the batch process and every worker forked from it have ended.
+
+    SIGINT is blocked while the server starts: a signal mask outlives exec and fork, so the server and
+    every worker forked from it start with SIGINT blocked, until `init_pool_worker` ignores it; a Ctrl-C
+    while the server imports or a worker starts up does not end either with a traceback."""
+    pool_context()
+    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        multiprocessing.forkserver.ensure_running()
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
+
+
 def init_pool_worker() -> None:
     """A pool worker's signals: SIGINT is the parent's to act on (Ctrl-C reaches the whole process group, and
     the parent then stops the workers); SIGTERM stops the worker. SIGINT was blocked until now (see
-    `camgen.batch.run.PoolExecutor.submit`); a SIGTERM before now ended the worker at once, before it had
-    written anything."""
+    `start_pool_server`); a SIGTERM before now ended the worker at once, before it had written anything."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, _stop_worker)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     _stop_with_parent()
 
 
-PR_SET_PDEATHSIG = 1
-"""prctl(2) option: the signal the kernel sends this process when its parent dies (Linux)."""
-
-
 def _stop_with_parent() -> None:
-    """On Linux, ask the kernel for SIGTERM when the parent dies, so that a parent killed with SIGKILL (no
-    handler runs) leaves no worker rendering as an orphan; a parent that died before the request was made
-    is caught by the worker's parent no longer being the pid that started it. The kernel sends the signal
-    when the *thread* that started the worker ends: `run_batch` starts and waits for its workers in one
-    thread. Elsewhere nothing: the parent's handlers stop the workers."""
-    if not sys.platform.startswith("linux"):
-        return
-    import ctypes
+    """Stop this worker, as SIGTERM does, when the batch process that started it ends, however it ends: a batch
+    killed with SIGKILL runs no handler, and its workers must not go on rendering as orphans.
 
-    parent = multiprocessing.parent_process()  # the pid the batch had when it started this worker
-    try:
-        if ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0) != 0:
-            return
-    except (OSError, AttributeError):
+    The worker's parent process is the fork server, not the batch, and the server outlives the batch until
+    its last worker has ended, so the kernel's parent-death signal (prctl PR_SET_PDEATHSIG) cannot tell.
+    Instead a thread waits on `multiprocessing.parent_process().sentinel`, a pipe whose other end only the
+    batch process holds: it reads as ended when the batch has ended, at once if it already had. The thread
+    then sends SIGTERM to the main thread, whose handler unwinds the job (or ends an idle worker); the
+    thread starts with SIGINT and SIGTERM blocked, so that it takes none sent to the process."""
+    parent = multiprocessing.parent_process()
+    if parent is None:
         return
-    if parent is not None and os.getppid() != parent.pid:
-        os._exit(128 + signal.SIGTERM)
+    main_thread = threading.main_thread().ident
+
+    def watch() -> None:
+        multiprocessing.connection.wait([parent.sentinel])
+        signal.pthread_kill(main_thread, signal.SIGTERM)
+
+    unblocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    try:
+        threading.Thread(target=watch, name="camgen-batch-watch", daemon=True).start()
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, unblocked)
 
 
 def _stop_worker(signum: int, frame) -> None:

@@ -3,7 +3,8 @@
 Both executors run the same `render_job`, so they write the same bytes; the skip, retry, record and summary
 logic is shared (`run_batch` talks to a `JobExecutor`; both are in `camgen.batch.executor`). Each worker
 process opens one OpenGL `Renderer` on its first job and keeps it for the rest (a context per process; the
-pool uses a "spawn" start, so no worker inherits the parent's OpenGL or thread state). A job whose
+pool's workers are forked from a fork server that has imported what a job needs, not from the batch process,
+so no worker inherits the parent's OpenGL or thread state, and none spends seconds importing). A job whose
 directory already holds a manifest that `verify` passes, for the same job hash and the same frames, is
 skipped. Anything else is rendered again: `execute` clears stale files and writes the manifest last,
 so a job that was killed half-way never looks complete. With ``resume`` (``camgen batch --resume``) a job
@@ -15,15 +16,16 @@ Stopping: SIGINT (Ctrl-C, to this process or its whole process group) or SIGTERM
 stop) stops the batch within seconds, not after the running renders. The parent alone decides: pool
 workers ignore SIGINT, and the parent sends each worker SIGTERM, on which the worker unwinds its job
 (its temporary ``.partial`` files are deleted, no manifest is written) and exits; one still alive after
-`STOP_GRACE_S` is killed. The interrupted jobs are recorded as such and a rerun renders them again. In a batch
-that resumes, the stopped workers keep their jobs' ``.partial`` folders (checkpoints, spools, video segments)
-and so does the parent for a killed one; a rerun with ``resume`` continues each from its last checkpoint.
+`STOP_GRACE_S` is killed. A batch killed outright (SIGKILL) cannot stop its workers: each stops itself, as on
+SIGTERM, when it sees the batch process end. The interrupted jobs are recorded as such and a rerun renders
+them again. In a batch that resumes, the stopped workers keep their jobs' ``.partial`` folders (checkpoints,
+spools, video segments) and so does the parent for a killed one; a rerun with ``resume`` continues each from
+its last checkpoint.
 """
 
 from __future__ import annotations
 
 import json
-import multiprocessing
 import signal
 import threading
 import time
@@ -42,7 +44,9 @@ from camgen.batch.executor import (
     error_text,
     first_frames,
     init_pool_worker,
+    pool_context,
     render_job,
+    start_pool_server,
 )
 from camgen.batch.expand import BatchJob
 from camgen.errors import ConfigError
@@ -126,14 +130,14 @@ def is_complete(job: Job, job_dir: Path, frame_count: int | None) -> bool:
 
 
 class PoolExecutor:
-    """Jobs on a local "spawn" process pool of `workers` processes."""
+    """Jobs on a local process pool of `workers` processes, forked from the fork server
+    (`camgen.batch.executor.pool_context`), which starts now if it is not running."""
 
     name = "local"
 
     def __init__(self, workers: int) -> None:
-        self._pool = ProcessPoolExecutor(
-            max_workers=workers, mp_context=multiprocessing.get_context("spawn"), initializer=init_pool_worker
-        )
+        start_pool_server()
+        self._pool = ProcessPoolExecutor(max_workers=workers, mp_context=pool_context(), initializer=init_pool_worker)
 
     def submit(
         self,
@@ -144,9 +148,10 @@ class PoolExecutor:
         resume: bool,
         checkpoint_frames: int | None,
     ) -> Future:
-        # The pool starts its workers in submit. A signal mask outlives exec, so with SIGINT blocked here a
-        # worker starts with it blocked, until `init_pool_worker` ignores it: a Ctrl-C while the worker starts up
-        # does not kill it with a traceback. (Here, the signal waits for the mask to be restored.)
+        # The pool starts a worker in submit: it asks the fork server for one, and the first waits until the
+        # server has imported (`start_pool_server`). SIGINT stays blocked meanwhile, so that a Ctrl-C does not
+        # cut the pool's bookkeeping short, and a server started again here (one that died) starts with it
+        # blocked, as its workers then do. (Here, the signal waits for the mask to be restored.)
         unblocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
         try:
             return self._pool.submit(render_job, job_json, out_dir, frames, scene_path, resume, checkpoint_frames)
