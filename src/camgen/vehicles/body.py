@@ -1478,7 +1478,7 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
         inner_glass_part,
         lining_part,
     )
-    from camgen.vehicles.panels import door_shut_lines
+    from camgen.vehicles.panels import door_shut_lines, rear_details
     from camgen.vehicles.roof import roof_details
 
     vertices, faces, normals, kind = shell(look)
@@ -1535,9 +1535,9 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
     )  # fmt: skip
     painted_fin = details.pop("fin_paint")
     dark_details = [piece for pieces in details.values() for piece in pieces]
-    dark_details += door_shut_lines(
-        look, (vertices, normals, faces), UPPER_POINTS + LOWER_POINTS, UPPER_POINTS, GREENHOUSE_SIDE_QUADS
-    )
+    count = UPPER_POINTS + LOWER_POINTS
+    dark_details += door_shut_lines(look, (vertices, normals, faces), count, UPPER_POINTS, GREENHOUSE_SIDE_QUADS)
+    dark_details += rear_details(look, vertices, faces[kind == 1], count)
     if dark_details:
         gear.append(_coloured_part("roof_gear", "gear", dark_details))
     if painted_fin:

@@ -206,3 +206,120 @@ def door_shut_lines(
         lines.append(level_line(surface, rear, front, top, sign))
         lines.append(level_line(surface, -L / 2 + 0.15, rear, SLIDING_RAIL_SHARE * H, sign))
     return [(line, SHUT_LINE_RGB) for line in lines if line is not None]
+
+
+TAILGATE_BODIES = ("hatchback", "sedan", "estate", "suv")
+REAR_WIPER_BODIES = ("hatchback", "estate", "suv")
+REAR_WIPER_REACH_M = 0.33
+"""From the rear wiper's pivot to its blade's tip, m: Bosch's rear blades for hatchbacks, estates and SUVs are
+250–400 mm long (its Rear range); an estimate for the arm and blade parked along the screen's foot."""
+REAR_WIPER_UP_SCREEN_M = 0.04
+"""How far over the rear window's lowest edge the parked wiper lies, m; an estimate."""
+REAR_WIPER_BOSS_M = (0.06, 0.06, 0.03)
+"""The wiper's pivot boss (the motor's spindle cover) at the screen's foot: width, height and depth, m; an estimate."""
+
+
+def _rear_cap_half_width_m(grid: np.ndarray, z_m: np.ndarray) -> np.ndarray:
+    """(n,) the rear end face's half-width at heights `z_m`, m: the first station's section (the cap's outline)."""
+    section = grid[0]
+    left = section[section[:, 1] > 0]
+    order = np.argsort(left[:, 2])
+    return np.interp(z_m, left[order, 2], left[order, 1], left=0.0, right=0.0)
+
+
+def _rear_face_line(start_yz: tuple[float, float], stop_yz: tuple[float, float], x_m: float) -> trimesh.Trimesh:
+    """A shut line on the flat rear end face (at `x_m`, facing −x) from (y, z) `start_yz` to `stop_yz`,
+    `SHUT_LINE_WIDTH_M` wide."""
+    a, b = np.array(start_yz, dtype=np.float64), np.array(stop_yz, dtype=np.float64)
+    along = (b - a) / np.linalg.norm(b - a)
+    side = np.array([-along[1], along[0]]) * SHUT_LINE_WIDTH_M / 2
+    t = np.linspace(0.0, 1.0, 2)[:, None]
+    line = a + t * (b - a)
+    edges = [np.column_stack([np.full(len(line), x_m), line + s * side]) for s in (-1, 1)]
+    return _strip(*edges, np.tile((-1.0, 0.0, 0.0), (len(line), 1)))
+
+
+def _on_glass(corners: np.ndarray, normals: np.ndarray, points_yz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where lines along x through `points_yz` (n, 2) meet the glass triangles `corners` (F, 3, 3) with unit normals
+    (F, 3): (points (n, 3), normals (n, 3)), the rearmost hit of each (NaN where none)."""
+    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
+    v0, v1 = b[:, 1:] - a[:, 1:], c[:, 1:] - a[:, 1:]
+    den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
+    ok = np.abs(den) > 1e-12
+    points = np.full((len(points_yz), 3), np.nan)
+    out_n = np.full((len(points_yz), 3), np.nan)
+    for i, point in enumerate(points_yz):
+        v2 = point - a[:, 1:]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = (v2[:, 0] * v1[:, 1] - v1[:, 0] * v2[:, 1]) / den
+            t = (v0[:, 0] * v2[:, 1] - v2[:, 0] * v0[:, 1]) / den
+        inside = ok & (s >= -1e-9) & (t >= -1e-9) & (s + t <= 1 + 1e-9)
+        if inside.any():
+            x = a[inside, 0] + s[inside] * (b[inside, 0] - a[inside, 0]) + t[inside] * (c[inside, 0] - a[inside, 0])
+            k = int(np.argmin(x))
+            points[i] = (x[k], point[0], point[1])
+            out_n[i] = normals[inside][k]
+    return points, out_n
+
+
+def rear_details(
+    look: VehicleLook, vertices_m: np.ndarray, glass_faces: np.ndarray, count: int
+) -> list[tuple[trimesh.Trimesh, tuple[float, float, float]]]:
+    """What a car's rear shows beyond its lamps and plate, as [(mesh, linear albedo)] for the running gear: the
+    tailgate's or boot lid's shut lines on the rear end face (its lower edge across between the rear lamp clusters,
+    at their lower edge, and its sides up the clusters' inner edges: `TAILGATE_BODIES`), and on a hatchback, estate or
+    SUV the rear wiper parked along its rear window's foot (`REAR_WIPER_BODIES`). `vertices_m`: the shell's vertices
+    (`camgen.vehicles.body.shell`, `count` section points a station), `glass_faces`: its glass faces (kind 1)."""
+    from camgen.vehicles.body import PROFILES, _end_heights, _rear_lamps_m
+    from camgen.vehicles.roof import WIPER_OVER_GLASS_M, WIPER_RGB, WIPER_SIZE_M, _sweep
+
+    if look.body_type not in TAILGATE_BODIES:
+        return []
+    vertices = vertices_m
+    grid = vertices.reshape(-1, count, 3)
+    L, W = look.length_m, look.width_m
+    (rear_low, rear_high), _ = _end_heights(look)
+    tail_z = float(np.clip(rear_high - 0.12, rear_low + 0.25, 1.2))  # as `lamps_and_plates`
+    _, z_cluster, cluster_w, cluster_h = _rear_lamps_m(look, tail_z, rear_high)["cluster"]
+    half = W / 2 * PROFILES[look.body_type].end_width
+    inner_y = half - cluster_w
+    low_z = z_cluster - cluster_h / 2
+    x = -L / 2 - SIDE_LIFT_M
+    top_z = rear_high - 0.02
+    pieces = []
+    if top_z - low_z > 0.05 and _rear_cap_half_width_m(grid, np.array([low_z]))[0] > inner_y + 0.02:
+        pieces.append(_rear_face_line((-inner_y, low_z), (inner_y, low_z), x))
+        for s in (1.0, -1.0):
+            pieces.append(_rear_face_line((s * inner_y, low_z), (s * inner_y, top_z), x))
+    lines = [(mesh, SHUT_LINE_RGB) for mesh in pieces]
+    if look.body_type not in REAR_WIPER_BODIES or not len(glass_faces):
+        return lines
+    # The rear window: the glass behind the middle that faces back.
+    corners = vertices[glass_faces]
+    n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+    rear = (n[:, 0] < -0.35) & (corners.mean(axis=1)[:, 0] < 0)
+    if not rear.any():
+        return lines
+    corners, n = corners[rear], n[rear]
+    z_m = corners[:, :, 2].min() + REAR_WIPER_UP_SCREEN_M
+    half_m = min(REAR_WIPER_REACH_M, float(np.abs(corners[:, :, 1]).max()) - 0.05)
+    y = np.linspace(0.0, -half_m, 8)
+    on_glass, up = _on_glass(corners, n, np.column_stack([y, np.full_like(y, z_m)]))
+    if not np.isfinite(on_glass).all():
+        return lines
+    at = on_glass + WIPER_OVER_GLASS_M * up
+    across = np.cross(up, np.tile((0.0, 1.0, 0.0), (len(y), 1)))
+    across /= np.linalg.norm(across, axis=1, keepdims=True)
+    wiper = [(_sweep(at, across, up, *WIPER_SIZE_M), WIPER_RGB)]
+    boss_w, boss_h, boss_d = REAR_WIPER_BOSS_M
+    boss = trimesh.creation.box((boss_d, boss_w, boss_h))
+    # Centred on the pivot, its depth along the glass's normal (half sunk into the glass), a right-handed frame.
+    lateral = np.array([0.0, 1.0, 0.0]) - up[0][1] * up[0]
+    lateral /= np.linalg.norm(lateral)
+    frame = np.eye(4)
+    frame[:3, 0], frame[:3, 1], frame[:3, 2] = up[0], lateral, np.cross(up[0], lateral)
+    frame[:3, 3] = on_glass[0]
+    boss.apply_transform(frame)
+    wiper.append((boss, WIPER_RGB))
+    return lines + wiper
