@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import errno
 import os
+import signal
 import threading
 import time
 from pathlib import Path
@@ -138,6 +139,35 @@ def test_the_writers_stages_are_in_each_frames_record(job, renderer, tmp_path):
     for record in result.stage_frames:
         assert {"render", "io.video", "io.files", "io.radiance", "annotate", "io.wait"} <= set(record)
     assert "io.wait" in result.finish_s  # the last frames' writes, waited for
+
+
+class Terminated(BaseException):
+    """What the test's SIGTERM handler raises (as `camgen.cli.main`'s and a batch worker's do)."""
+
+
+def test_a_sigterm_while_waiting_for_the_writer_unwinds(job, renderer, monkeypatch, tmp_path):
+    """SIGTERM lands while the main thread waits for the (slowed) writer: the render unwinds at once, the writer
+    ends after the frame it is writing, and nothing of the render stays."""
+    write_depth = camgen.plan.execute.write_depth
+
+    def slow_depth(path, depth_m, **kwargs):
+        time.sleep(0.3)
+        if Path(path).stem == "000002":
+            os.kill(os.getpid(), signal.SIGTERM)
+        return write_depth(path, depth_m, **kwargs)
+
+    def terminate(signum, frame):
+        raise Terminated
+
+    monkeypatch.setattr(camgen.plan.execute, "write_depth", slow_depth)
+    previous = signal.signal(signal.SIGTERM, terminate)
+    try:
+        with pytest.raises(Terminated):
+            render(job, tmp_path, renderer)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    assert writer_threads() == []
+    assert list(tmp_path.iterdir()) == []
 
 
 def disk_full_at(index: int, monkeypatch) -> list[OSError]:

@@ -35,10 +35,11 @@ camera.jsonl) runs in one writer thread (`camgen.plan.writer.FrameWriter`), in f
 main thread keeps what carries state into the next frame or needs OpenGL: the render, the camera model
 (auto-exposure, the ISP's adaptation), the lens applied to the passes, the annotations' geometry and unoccluded
 draws, the flow (it moves the actors). The writer gets copies of the arrays (`_detached`), so the same bytes
-come out as from the serial render (``pipelined=False``). The writer is drained before each checkpoint and
-before a camera's files are finished, so a checkpoint describes only frames fully written; a write that fails
-stops the render with its own exception at the next frame (or the drain), and the render then unwinds as from
-any error.
+come out as from the serial render (``pipelined=False``; the default on a software rasterizer, where the
+writer thread only takes cores from the drawing: `pipelines_by_default`). The writer is drained before each
+checkpoint and before a camera's files are finished, so a checkpoint describes only frames fully written; a
+write that fails stops the render with its own exception at the next frame (or the drain), and the render then
+unwinds as from any error.
 
 Timing with the pipeline: a frame's `CameraResult.stage_frames` record adds the writer thread's stages of that
 frame (timed in that thread) to the main thread's; ``io.wait`` is the main thread's time waiting for the writer
