@@ -27,8 +27,8 @@ air-conditioning unit on the roof (`roof_unit`). Lamps are thin boxes half sunk 
 units at the corners (`_lamp_housings`: a clear headlamp unit reaching back over the nose, a red rear cluster with
 a clear reversing lamp; a van's upright on its rear pillars); plates are quads 5 mm in front of them. A van's rear
 overhang clears its departure angle (`Profile.departure_angle_deg`) under a black plastic rear bumper with a step; a
-box truck's load floor is raised behind its rear wheels (`Profile.rear_floor_m`) over an underrun guard
-(`_underrun_guard`). Exterior mirrors (`door_mirrors`) stand out of
+box truck's load floor is raised from its cab's back (`Profile.rear_floor_m`) over its wheels, side guards
+(`_side_guards`) and an underrun guard (`_underrun_guard`). Exterior mirrors (`door_mirrors`) stand out of
 the outline at the front side windows' lower corners (a bus's on arms ahead of its front). What a car shows from
 above over the shell (`camgen.vehicles.roof`): a glass roof (the shell's own roof quads as glass, `_glass_roof`),
 roof rails, a shark-fin antenna, the cowl and wipers at the windscreen's foot and the bonnet's shut lines.
@@ -137,9 +137,13 @@ class Profile:
     maker's departure angle and rear overhang put it (`end_lift` then sets the front end alone where the line is
     higher)."""
     rear_floor_m: float | None = None
-    """With a height, m, the underside behind the rear wheel arches is a load floor this high over the road: a box
-    truck's body sits on its chassis frame, and under its rear overhang the road shows between the rear wheels and
-    the underrun guard (`UNDERRUN_GUARD_BODIES`), not a skirt down to the sills."""
+    """With a height, m, the underside from `floor_start_u` back is a load floor this high over the road: a box
+    truck's body sits on its chassis frame behind its cab, and under it the road shows between the wheels, past the
+    side guards (`_side_guards`) and under the rear overhang past the underrun guard (`UNDERRUN_GUARD_BODIES`), not a
+    skirt down to the sills."""
+    floor_start_u: float = 0.0
+    """Where the load floor (`rear_floor_m`) starts, as a share of the length (rear 0 → front 1): the box body's
+    front, over the cab's back."""
 
 
 VAN_DEPARTURE_ANGLE_DEG = 20.0
@@ -155,8 +159,8 @@ BOX_FLOOR_M = 1.05
 0.85-0.9 m up) and a subframe, its floor 1.0-1.2 m up, as high as a tail lift's platform rises (bodybuilders' data
 for MAN TGL and Iveco Eurocargo box bodies; an estimate)."""
 FLOOR_STEP_M = 0.01
-"""How far behind a rear wheel arch a load floor (`Profile.rear_floor_m`) starts, m: the step up from the arch's end
-to the floor, one station."""
+"""The step up to a load floor (`Profile.rear_floor_m`) at the cab's back, m: one station from the cab's underside to
+the floor's."""
 
 PROFILES: dict[str, Profile] = {
     "sedan": Profile(
@@ -201,7 +205,7 @@ PROFILES: dict[str, Profile] = {
              (1, 0.40)),
         belt=0.44, side_glass=(0.86, 0.975), windscreen=(0.955, 1.0), clearance_m=0.45, end_lift=0.12,
         tumblehome=0.0, corner_share=0.01, end_width=0.92, section_exponent=10.0, sill_radius_m=0.05,
-        rear_floor_m=BOX_FLOOR_M,
+        rear_floor_m=BOX_FLOOR_M, floor_start_u=0.76,
     ),
     "bus": Profile(
         top=((0, 0.885), (0.01, 0.92), (0.02, 0.935), (0.98, 0.935), (0.99, 0.92), (1, 0.895)),
@@ -279,7 +283,7 @@ def _stations(look: VehicleLook, axles_x: tuple[float, float], arch_radius_m: fl
     for x0 in axles_x:
         xs.append(x0 + arch_radius_m * np.sin(np.linspace(-np.pi / 2, np.pi / 2, 17)))
     if profile.rear_floor_m is not None:
-        xs.append([look.rear_axle_x_m - arch_radius_m - FLOOR_STEP_M])
+        xs.append([floor_start_x_m(look), floor_start_x_m(look) - FLOOR_STEP_M])
     x = np.unique(np.round(np.clip(np.concatenate(xs), -L / 2, L / 2), 6))
     x[0], x[-1] = -L / 2, L / 2
     return x
@@ -300,15 +304,20 @@ def _bottom_m(look: VehicleLook, x: np.ndarray, axles_x, arch_radius_m: float) -
         # bumper's lower edge lies on the line and is the end face's lower edge, with nothing under it.
         reach_m = REAR_BUMPER_M[0] / 2 if look.body_type in REAR_BUMPER_BODIES else 0.0
         bottom = np.maximum(bottom, departure_line_m(look, x - reach_m))
-    if profile.rear_floor_m is not None:
-        behind = x <= look.rear_axle_x_m - arch_radius_m - FLOOR_STEP_M
-        bottom = np.where(behind, np.maximum(bottom, profile.rear_floor_m), bottom)
     r = look.wheel_radius_m
     for x0 in axles_x:
         inside = np.abs(x - x0) < arch_radius_m
         arch = r + np.sqrt(np.maximum(arch_radius_m**2 - (x - x0) ** 2, 0.0))
         bottom = np.where(inside, np.maximum(bottom, arch), bottom)
+    if profile.rear_floor_m is not None:  # over the wheels too: they run under the floor, not in arches
+        behind = x <= floor_start_x_m(look) - FLOOR_STEP_M + 1e-9
+        bottom = np.where(behind, np.maximum(bottom, profile.rear_floor_m), bottom)
     return bottom
+
+
+def floor_start_x_m(look: VehicleLook) -> float:
+    """Where a load floor (`Profile.rear_floor_m`) starts along the vehicle, m: the cab's back."""
+    return (PROFILES[look.body_type].floor_start_u - 0.5) * look.length_m
 
 
 def departure_line_m(look: VehicleLook, x_m: np.ndarray) -> np.ndarray:
@@ -528,14 +537,6 @@ def shell(look: VehicleLook) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nda
         at = index[:, rows].ravel()
         normals[at] = flat_normals[at]
     kind = _glass(profile, look, vertices, faces, len(tube) // 2)
-    if profile.rear_floor_m is not None:
-        # The step up to the load floor behind the rear wheels faces back under the floor: seen from behind between
-        # the rear wheels it is the chassis's dark underside (the rear axle, the frame), not a painted wall.
-        corners = vertices[faces]
-        cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        back = cross[:, 0] < -0.7 * np.maximum(np.linalg.norm(cross, axis=1), 1e-12)
-        under = (corners[:, :, 2].max(axis=1) <= profile.rear_floor_m + 1e-6) & (corners[:, :, 0].min(axis=1) > -L / 2)
-        kind[back & under & (kind == 0)] = 2
     return vertices, faces, normals, kind
 
 
@@ -1172,7 +1173,7 @@ def _black_trim(look: VehicleLook, head_z_m: float) -> list[trimesh.Trimesh]:
         size = (LAMP_DEPTH_M / 2, 2 * (half - 0.04), DIFFUSER_HEIGHT_M)
         pieces.append(_box(size, (-L / 2, 0.0, rear_low + 0.01 + DIFFUSER_HEIGHT_M / 2)))
     if look.body_type in UNDERRUN_GUARD_BODIES:
-        pieces += _underrun_guard(look)
+        pieces += _underrun_guard(look) + _side_guards(look)
     if look.body_type in REAR_BUMPER_BODIES:
         depth, height = REAR_BUMPER_M
         step_depth, step_width, step_thickness = REAR_STEP_M
@@ -1185,7 +1186,7 @@ def _black_trim(look: VehicleLook, head_z_m: float) -> list[trimesh.Trimesh]:
 
 def _underrun_guard(look: VehicleLook) -> list[trimesh.Trimesh]:
     """A box truck's rear underrun guard and the frame that carries it under the raised floor
-    (`UNDERRUN_GUARD_BODIES`): the two chassis rails from the rear axle back to the guard, a bracket down from each
+    (`UNDERRUN_GUARD_BODIES`): the two chassis rails from the cab's back to the guard, a bracket down from each
     to the guard's bar, and the bar across the rear tyres' span, its lower edge `GUARD_LOWER_EDGE_M` up."""
     L = look.length_m
     floor_m = PROFILES[look.body_type].rear_floor_m
@@ -1195,7 +1196,7 @@ def _underrun_guard(look: VehicleLook) -> list[trimesh.Trimesh]:
     bar_x = -L / 2 + GUARD_SETBACK_M + bar_depth / 2
     half_m = look.track_m / 2 + TYRE_WIDTH_SHARE * look.width_m / 2 - GUARD_TYRE_INSET_M
     bar_top = GUARD_LOWER_EDGE_M + bar_height
-    front = look.rear_axle_x_m
+    front = floor_start_x_m(look)
     pieces = [_box((bar_depth, 2 * half_m, bar_height), (bar_x, 0.0, GUARD_LOWER_EDGE_M + bar_height / 2))]
     for side in (1, -1):
         rail_length = front - (bar_x - bar_depth / 2)
@@ -1207,6 +1208,52 @@ def _underrun_guard(look: VehicleLook) -> list[trimesh.Trimesh]:
         )
         bracket = floor_m - rail_depth - bar_top + 0.02
         pieces.append(_box((bar_depth, rail_width, bracket), (bar_x, side * rail_y, bar_top - 0.01 + bracket / 2)))
+    return pieces
+
+
+SIDE_GUARD_RAILS_M = ((0.45, 0.10), (0.75, 0.10))
+"""A box truck's side guards (UN Regulation No. 73, lateral protection of N2 and N3 goods vehicles): each rail's
+lower edge over the road and height, m. R73 asks the lower edge at most 550 mm up, rails at most 300 mm apart and
+at least 50 mm high on an N2 vehicle (a 7.5 t truck), and the upper edge at most 350 mm under the body's structure
+(here the floor, `BOX_FLOOR_M`): 0.45 m, 0.20 m apart, 0.10 m high, the upper edge 0.20 m under the floor (figures of
+the Regulation as recalled, not rechecked here; the rails' sizes an estimate from bodybuilders' aluminium
+guards)."""
+SIDE_GUARD_DEPTH_M = 0.03
+"""A side guard rail's depth across the vehicle, m (an aluminium extrusion; an estimate)."""
+SIDE_GUARD_INSET_M = 0.08
+"""How far inside the body's side the rails' outer faces lie, m (UN R73: at most 120 mm)."""
+SIDE_GUARD_TYRE_GAP_M = 0.20
+"""How far from the tyres ahead and behind the guards' ends lie, m (UN R73: at most 300 mm for an N2 vehicle)."""
+SIDE_GUARD_POSTS = 3
+"""Posts carrying each side's rails from the floor's cross members (evenly along them)."""
+MUDGUARD_M = (0.25, 0.06, 0.02, 0.08)
+"""A box truck's rear mudguards over the tyres under its floor: length beyond the tyre's diameter, width beyond the
+tyre's, thickness, and height over the tyre's top, m (black plastic wings on brackets; an estimate from makers'
+pictures of MAN TGL and Iveco Eurocargo box trucks)."""
+
+
+def _side_guards(look: VehicleLook) -> list[trimesh.Trimesh]:
+    """A box truck's lateral protection under its floor (`SIDE_GUARD_RAILS_M`): on each side two rails between the
+    front and rear tyres on `SIDE_GUARD_POSTS` posts up to the floor, and a mudguard over each rear tyre."""
+    floor_m = PROFILES[look.body_type].rear_floor_m
+    r = look.wheel_radius_m
+    front_m = look.front_axle_x_m - r - SIDE_GUARD_TYRE_GAP_M
+    rear_m = look.rear_axle_x_m + r + SIDE_GUARD_TYRE_GAP_M
+    outer_m = look.width_m / 2 - SIDE_GUARD_INSET_M
+    y_m = outer_m - SIDE_GUARD_DEPTH_M / 2
+    lowest_m = SIDE_GUARD_RAILS_M[0][0]
+    tyre_m = TYRE_WIDTH_SHARE * look.width_m
+    extra_length, extra_width, thickness, over = MUDGUARD_M
+    pieces = []
+    for side in (1, -1):
+        for bottom, height in SIDE_GUARD_RAILS_M:
+            size = (front_m - rear_m, SIDE_GUARD_DEPTH_M, height)
+            pieces.append(_box(size, ((front_m + rear_m) / 2, side * y_m, bottom + height / 2)))
+        for x in np.linspace(rear_m + 0.05, front_m - 0.05, SIDE_GUARD_POSTS):
+            size = (0.05, SIDE_GUARD_DEPTH_M, floor_m + 0.01 - lowest_m)
+            pieces.append(_box(size, (x, side * (y_m - SIDE_GUARD_DEPTH_M), (floor_m + 0.01 + lowest_m) / 2)))
+        mudguard = (2 * r + extra_length, tyre_m + extra_width, thickness)
+        pieces.append(_box(mudguard, (look.rear_axle_x_m, side * look.track_m / 2, 2 * r + over + thickness / 2)))
     return pieces
 
 
