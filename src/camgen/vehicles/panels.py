@@ -1,5 +1,5 @@
-"""The shut lines of a vehicle's doors and of a van's sliding side door, in the vehicle's frame
-(`camgen.vehicles.body`).
+"""The shut lines of a vehicle's doors and of a van's sliding side door, a car's tailgate or boot lid and its rear
+wiper, in the vehicle's frame (`camgen.vehicles.body`).
 
 A real car's side is not one smooth panel: its doors' edges show as dark lines (the 3–5 mm gaps between panels,
 `camgen.vehicles.roof.SHUT_LINE_WIDTH_M`), seen from the side, from a mast and from behind at an angle. A
@@ -8,6 +8,9 @@ B-pillar between the doors and the rear door's trailing edge at the C-pillar (a 
 its cab's rear). A panel van shows its cab doors' edges on both sides and, on the nearside (the kerb's,
 `camgen.vehicles.body.nearside_sign`), its sliding door: two upright edges from the sill to near the roof, the
 door's top edge between them, and behind it the rail the door runs on, at the side's middle, back to the rear.
+At the rear (`rear_details`) a car's tailgate or boot lid shows its lower edge across the rear between the lamp
+clusters and its sides up their inner edges; hatchbacks, estates and SUVs carry a rear wiper parked along the rear
+window's foot (nearly all do; saloons' rear windows are not wiped).
 
 Sources and estimates:
 
