@@ -169,7 +169,19 @@ class _LinearProgramCache(ShaderProgramCache):
         "mesh_depth.frag": "geometry.frag",
     }
 
+    def __init__(self, shader_dir=None):
+        super().__init__(shader_dir)
+        self._answers: dict[tuple, _RememberingProgram] = {}
+        """Each asked-for program by what it was asked with (and `absent_lights`): pyrender is asked once per
+        primitive and draw, and its own lookup splits paths, asks PyOpenGL for the context and sorts the
+        defines each time (about a tenth of a millisecond; 300 primitives a step of a small simulated view)."""
+
     def get_program(self, vertex_shader, fragment_shader, geometry_shader=None, defines=None):
+        key = (vertex_shader, fragment_shader, geometry_shader, tuple((defines or {}).items()), self.absent_lights)
+        program = self._answers.get(key)
+        if program is not None:
+            return program
+
         def ours(name):
             return str(SHADER_DIR / self.OURS[name]) if name in self.OURS else name
 
@@ -179,7 +191,12 @@ class _LinearProgramCache(ShaderProgramCache):
         if not isinstance(program, _RememberingProgram):
             program.__class__ = _RememberingProgram
             program.locations, program.values = {}, {}
+        self._answers[key] = program
         return program
+
+    def clear(self):
+        self._answers.clear()
+        super().clear()
 
 
 @contextmanager
@@ -461,6 +478,8 @@ class _PassRenderer(pyrender.Renderer):
         when a draw renders its shadow maps (`Renderer.draw`), so that the maps and the lookups share it."""
         self._shadow_pass: tuple | None = None
         """(light node, flags) of the shadow map being drawn (`_shadow_mapping_pass`), else None."""
+        self._max_n_lights: dict[int, list[int]] = {}
+        """`_compute_max_n_lights` per flags: the texture units of this context do not change."""
         self.caster_versions: dict[int, int] = {}
         """Per mesh node (by id) of the current draw's graph whose look is counted (`SceneGraph.look_versions`;
         0 for the still environment): equal counts, the same triangles where they were (`_StillCasters`)."""
@@ -498,15 +517,20 @@ class _PassRenderer(pyrender.Renderer):
         With shadows on, pyrender shares the texture units left by the materials among the kinds of light
         that cast them, one a shadow map; a sun is given `SUN_CASCADES` (it takes two: pyrender's own map, which
         its lighting still binds though the shader reads none, and the array of its cascades; room to spare).
-        """
+        Kept per flags (`_max_n_lights`): pyrender asks OpenGL for its texture units at each call, and its
+        lighting calls this for every primitive it shades."""
+        kept = self._max_n_lights.get(flags)
+        if kept is not None:
+            return list(kept)
         directional, spot, _ = super()._compute_max_n_lights(flags)
-        return [
+        kept = self._max_n_lights[flags] = [
             min(directional // SUN_CASCADES, MAX_LIGHTS["sun"])
             if flags & RenderFlags.SHADOWS_DIRECTIONAL
             else MAX_LIGHTS["sun"],
             min(spot, MAX_LIGHTS["spot"]) if flags & RenderFlags.SHADOWS_SPOT else MAX_LIGHTS["spot"],
             MAX_LIGHTS["point"],
         ]
+        return list(kept)
 
     def check_light_counts(self, scene, flags) -> None:
         """pyrender drops lights beyond the shader's room without a word; refuse instead."""
