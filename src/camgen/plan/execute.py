@@ -317,11 +317,12 @@ def pipelines_by_default(renderer: Renderer) -> bool:
     """Whether `execute` pipelines a render on `renderer` when not told: not on a software rasterizer.
 
     A GPU draws while the CPU waits for it, so the writes of the frame before overlap the draw. llvmpipe draws
-    on every core, and the writer thread takes cores from it. Measured on 2 cores (`camgen render` of
-    scenes/parking_lot.yaml, 1920×1080, 12 frames; median frame of frames 2–12; 8 rounds pipelined and serial
-    in turn, beside other renders): the pipelined render's draws took 2.32–2.47 s per frame against 1.86–1.95 s
-    serial, more than the 0.29 s of writes they hid; its frame time was 0.93–1.60 times the serial one, median
-    1.04 (1.48 and 1.60 with the machine least loaded: 1.96 and 2.23 s against 1.32 and 1.39 s)."""
+    on every core, and the writer thread takes cores from it. Measured on 2 cores (`execute` of
+    scenes/parking_lot.yaml, 1920×1080, 12 frames; the median frame of frames 2–12; 8 rounds of a pipelined and
+    a serial render in turn, beside other renders): the pipelined frame took 0.93–1.60 times the serial one,
+    median 1.04 (1.48 and 1.60 with the machine least loaded: 1.96 and 2.23 s against 1.32 and 1.39 s). In the 3
+    rounds timed by stage, the pipelined render's draws took 2.32–2.47 s per frame against 1.86–1.95 s serial:
+    more than the 0.29 s of writes the pipeline hid."""
     name = getattr(renderer, "gl_renderer", "").lower()
     return not any(word in name for word in SOFTWARE_RASTERIZERS)
 
@@ -706,7 +707,8 @@ class _Context:
 
 @dataclass(frozen=True)
 class _WrittenFrame:
-    """The frame the writes are of: its index (not the renderer's passes, which the next frame overwrites)."""
+    """The frame the writes are of: its index (not the renderer's passes, which a renderer may draw the next
+    frame into)."""
 
     index: int
 
