@@ -101,6 +101,7 @@ def test_list_names_every_section(capsys):
         "long",
         "other",
         "device",
+        "scale",
     ]
 
 
