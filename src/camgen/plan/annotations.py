@@ -100,6 +100,8 @@ class Annotator:
             None if graph.rig(index) else _mesh_geometry(node) for index, node in enumerate(graph.actor_nodes)
         ]
         self._ids = [graph.instance_ids[node] for node in graph.actor_nodes]
+        self._alone_kept: dict[int, tuple[tuple, tuple[int, np.ndarray | None]]] = {}
+        """Per actor (index): its last draw alone in its window (`_alone_in_window`), by what it depends on."""
 
     def annotate(self, state: CameraState, passes: Passes, *, post=None) -> FrameAnnotations:
         """`passes`: the frame's passes after the lens (output size). The graph's actors must stand
@@ -140,7 +142,9 @@ class Annotator:
             skeleton = rig is not None and rig.keypoints_m is not None
             alone_passes = ("depth_m", "instance_id") if skeleton else ("instance_id",)
             if direct:
-                unoccluded_pixels, own_depth = self._alone_in_window(state, view, node, alone_passes, clip, clipped)
+                unoccluded_pixels, own_depth = self._alone_kept_or_drawn(
+                    index, state, view, node, alone_passes, clip, clipped
+                )
             else:
                 alone = self.renderer.draw(graph, view, alone_passes, nodes=[node], clip_range_m=clip)
                 lensed = self.lens.apply(state, Passes(depth_m=alone.depth_m, instance_id=alone.instance_id))
@@ -184,6 +188,32 @@ class Annotator:
                 )
             )
         return result
+
+    def _alone_kept_or_drawn(self, index: int, state: CameraState, view, node, passes, clip, box) -> tuple:
+        """`_alone_in_window` of actor `index`, or its last answer when the actor's look (`SceneGraph.look_versions`:
+        a parked vehicle's never changes), the view, the lens, the passes, the clip range and the box are those
+        it was drawn with: the same draw, so the same answer. A held camera's parked vehicles are drawn alone
+        once, not at every frame."""
+        versions = self.graph.look_versions
+        key = (
+            versions[index] if index < len(versions) else None,
+            view.width_px,
+            view.height_px,
+            np.asarray(view.K_px, np.float64).tobytes(),
+            np.asarray(view.T_world_from_cam, np.float64).tobytes(),
+            self.lens.geometry(state),
+            passes,
+            clip,
+            tuple(box),
+        )
+        kept = self._alone_kept.get(index)
+        if key[0] is not None and kept is not None and kept[0] == key:
+            return kept[1]
+        answer = self._alone_in_window(state, view, node, passes, clip, box)
+        if answer[1] is not None:
+            answer[1].setflags(write=False)
+        self._alone_kept[index] = (key, answer)
+        return answer
 
     def _alone_in_window(self, state: CameraState, view, node, passes: tuple[str, ...], clip, box) -> tuple:
         """An actor drawn alone, only where it can show: the output pixels of its amodal `box` (pixel edges,
