@@ -1524,6 +1524,7 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
         glass_part,
         inner_glass_part,
         lining_part,
+        seats_part,
     )
     from camgen.vehicles.panels import door_shut_lines, rear_details
     from camgen.vehicles.roof import roof_details
@@ -1553,6 +1554,8 @@ def build_vehicle(look: VehicleLook, driver: bool = False) -> VehicleModel:
     cabin = [lining_part(vertices, normals, faces[~glazed])]
     if look.body_type == "bus":  # its seats, and its passengers when it is in service (driven)
         cabin += [bus_interior_part(look)] + ([bus_passengers_part(look)] if driver else [])
+    seats = seats_part(look)
+    cabin += [seats] if seats is not None else []
     cabin += [driver_part(look)] if driver else []
     parts.append(_merge("cabin", "cabin", cabin))
     width_m = TYRE_WIDTH_SHARE * look.width_m

@@ -282,6 +282,94 @@ def inner_glass_part(glass: Part) -> Part:
     )
 
 
+SEAT_BODIES = ("hatchback", "sedan", "estate", "suv", "pickup", "van")
+"""Body types whose seats are drawn (`seats_part`): a car's two front seats and rear bench, a van's cab seats."""
+SEAT_RGB = (0.04, 0.04, 0.042)
+"""Linear albedo of the seats' upholstery: black or anthracite cloth or leather, most cars' (an estimate)."""
+SEAT_CUSHION_M = (0.50, 0.50, 0.12)
+"""A front seat's cushion: depth, width and thickness, m (a car seat's cushion 0.45–0.55 m deep and wide)."""
+SEAT_BACK_M = (0.55, 0.10)
+"""A seat back's height from the cushion and thickness, m (the torso's support up to the shoulders: 0.5–0.65 m)."""
+HEADREST_M = (0.26, 0.20, 0.10, 0.05)
+"""A head restraint's width, height, thickness and gap over the seat back, m (UN Regulation No. 17: at least 0.17 m
+wide; its top at least 0.80 m over the H-point along the back for front seats; the sizes an estimate)."""
+HEAD_ABOVE_H_POINT_M = 0.75
+"""The head's centre over the H-point along the torso, m (SAE J826's manikin with a 50th-percentile head: an
+estimate); with the back angle it places the seat behind the driver's head (`SEATS`)."""
+COUPLE_DISTANCE_M = 0.80
+"""Front to rear H-point along the car, m (SAE J1100's L50 "couple distance": about 0.75–0.95 m in small to large
+cars; an estimate in that range)."""
+REAR_SEAT_RISE_M = 0.03
+"""How much higher the rear bench's H-point lies than the front seats', m (an estimate: rear seats are raised a
+little for the view ahead)."""
+
+
+def _seat_pieces(
+    h_point_m: np.ndarray, width_m: float, back_angle_rad: float, roof_m: float, headrests: list[float], front_m: float
+):
+    """A seat's cushion, back and head restraints (at the lateral offsets `headrests` from its middle, m) for an
+    H-point `h_point_m` (x, y, z): the back's front face `H_POINT_BEFORE_BACK_M` behind it, leaning back by
+    `back_angle_rad`, the restraints kept `CLEARANCE_M` under the roof `roof_m`, the cushion ending at `front_m` at
+    the most (clear of the front wheel arches, which span the shell's width); boxes in the vehicle's frame."""
+    x, y, z = h_point_m
+    depth, _, thickness = SEAT_CUSHION_M
+    depth = min(depth, front_m - (x - H_POINT_BEFORE_BACK_M))
+    back_height, back_thickness = SEAT_BACK_M
+    rest_w, rest_h, rest_t, rest_gap = HEADREST_M
+    lean = np.array([-math.sin(back_angle_rad), 0.0, math.cos(back_angle_rad)])  # up the back
+    behind = np.array([-math.cos(back_angle_rad), 0.0, -math.sin(back_angle_rad)])  # through it, rearwards
+    foot = np.array([x - H_POINT_BEFORE_BACK_M, y, z - 0.08])  # the back's front face meets the cushion's top
+    # The back and the restraints shrink (the restraints first drop) as the roof asks.
+    top_room = roof_m - CLEARANCE_M - foot[2]
+    back_height = min(back_height, max(top_room / math.cos(back_angle_rad) - rest_gap - rest_h, 0.3))
+    pieces = []
+    cushion = trimesh.creation.box((depth, width_m, thickness))
+    cushion.apply_translation((foot[0] + depth / 2, y, foot[2] - thickness / 2))
+    pieces.append(cushion)
+
+    def slab(size, centre):
+        box = trimesh.creation.box(size)
+        box.apply_transform(trimesh.transformations.rotation_matrix(-back_angle_rad, (0.0, 1.0, 0.0)))
+        box.apply_translation(centre)
+        return box
+
+    pieces.append(
+        slab((back_thickness, width_m, back_height), foot + lean * back_height / 2 + behind * back_thickness / 2)
+    )
+    for offset in headrests:
+        centre = foot + lean * (back_height + rest_gap + rest_h / 2) + behind * rest_t / 2 + np.array([0, offset, 0])
+        pieces.append(slab((rest_t, rest_w, rest_h), centre))
+    return [(piece, SEAT_RGB) for piece in pieces]
+
+
+def seats_part(look: VehicleLook) -> Part | None:
+    """The seats seen through the glass (`SEAT_BODIES`): two front seats (a van's driver's seat and a two-seat bench)
+    behind the driver's head (`SEATS`: the head `head_behind_windscreen_m` behind the windscreen, the back at A40),
+    and on a car a rear bench `COUPLE_DISTANCE_M` further back with two head restraints, as one part of the cabin;
+    None for other body types. A cabin was its dark lining alone: through the side windows the far windows showed,
+    from above an empty tub."""
+    if look.body_type not in SEAT_BODIES:
+        return None
+    seat = SEATS[look.body_type]
+    head_x = windscreen_x_m(look)[0] - seat.head_behind_windscreen_m
+    h_x = head_x + HEAD_ABOVE_H_POINT_M * math.sin(seat.back_angle_rad)
+    lateral = DRIVER_LATERAL_SHARE * look.width_m
+    width_m = SEAT_CUSHION_M[1]
+    front_m = look.front_axle_x_m - look.wheel_radius_m - ARCH_GAP_M - CLEARANCE_M
+    pieces = []
+    for y in (lateral, -lateral):
+        roof = _roof_z_m(look, h_x - 0.4)
+        h_point = np.array([h_x, y, seat.h_point_z_m])
+        pieces += _seat_pieces(h_point, width_m, seat.back_angle_rad, roof, [0.0], front_m)
+    if look.body_type != "van":
+        rear_x = h_x - COUPLE_DISTANCE_M
+        bench = 2 * lateral + width_m
+        roof = _roof_z_m(look, rear_x - 0.4)
+        h_point = np.array([rear_x, 0.0, seat.h_point_z_m + REAR_SEAT_RISE_M])
+        pieces += _seat_pieces(h_point, bench, seat.back_angle_rad, roof, [lateral, -lateral], front_m)
+    return _coloured_part("seats", "cabin", pieces)
+
+
 BUS_FLOOR_M = 0.37
 """A low-floor city bus's floor over the road, m (Mercedes-Benz Citaro: 370 mm at the doors)."""
 BUS_SEAT_PITCH_M = 0.78
