@@ -934,7 +934,9 @@ def _scale(repo: Path) -> Section:
                 f"{facts.jobs - 1} of one walker through a 160×120 camera, {facts.frames} frames a job) through "
                 "`camgen batch`, on a local Ray cluster started with README's commands (`ray start --head "
                 f"--num-cpus={NODE_CPUS}`, and `ray start --address=127.0.0.1:PORT --num-cpus={NODE_CPUS}` for a "
-                f"second node on this same machine; {nodes}) with `--executor ray --address 127.0.0.1:PORT`, and "
+                "second node on this same machine, each in the foreground with `--block`, the cluster with its own "
+                "`--temp-dir`, ports and token so that no other Ray on the machine finds it and it is stopped alone; "
+                f"{nodes}) with `--executor ray --address 127.0.0.1:PORT`, and "
                 f"on the local pool with `--workers {POOL_WORKERS}`. The runs are interleaved "
                 f"({', '.join(ORDER)}), each into a fresh directory; a run's time is its command's, from start "
                 "(imports, the pool's fork server or Ray's workers, their OpenGL contexts) to exit.",
