@@ -17,10 +17,10 @@ at normal incidence, rising to 1 at grazing), so that the dark cabin lets the re
 (`camgen.render.scene_graph.GLASS_RGB`, the shader's `transmissive` path).
 
 Interior (`lining_part`): the shell's painted faces again, facing inwards, in a dark trim colour
-(`INTERIOR_RGB`): the roof lining, door cards and floor as one dark surface, so that the glass
-shows a cabin rather than the road through the car; in it a car's front seats and rear bench and a van's cab seats
-(`seats_part`), their backs and head restraints seen through the side windows and from above. It lies just inside the shell and faces inwards, so
-the vehicle's silhouette, depth and instance mask are the shell's.
+(`INTERIOR_RGB`): the roof lining, door cards and floor as one dark surface, so that the glass shows a cabin
+rather than the road through the car. It lies just inside the shell and faces inwards, so the vehicle's silhouette,
+depth and instance mask are the shell's. In it stand a car's front seats and rear bench and a van's cab seats
+(`seats_part`), their backs and head restraints seen through the side windows and from above.
 
 Driver (`driver_part`): a procedural person (`camgen.actors`) drawn from the vehicle's identity seed,
 always an adult without a bag, seated by `camgen.actors.driving` at the seat of the body type's package
