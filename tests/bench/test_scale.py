@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
-import os
+import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
+from camgen.bench import scale_cases
 from camgen.bench.report import Plots
 from camgen.bench.scale_cases import (
     LocalCluster,
@@ -137,12 +138,42 @@ def test_without_ray_the_section_is_skipped_with_its_reason(tmp_path, monkeypatc
     assert "Skipped in this run: Ray is not installed" in text and "camgen[ray]" in text
 
 
-def _running(pid: int) -> bool:
-    try:
-        os.killpg(pid, 0)
-    except ProcessLookupError:
-        return False
-    return True
+def _running(pgid: int) -> bool:
+    """Whether a live process of group `pgid` is left: `ps`'s view, independent of the module's /proc reading."""
+    listing = subprocess.run(["ps", "-eo", "pgid=,stat="], capture_output=True, text=True, check=True).stdout
+    return any(int(g) == pgid and not s.startswith("Z") for g, s in (line.split() for line in listing.splitlines()))
+
+
+def _fake_ray(tmp_path: Path, body: str) -> Path:
+    script = tmp_path / "ray"
+    script.write_text(f"#!/bin/sh\n{body}\n", encoding="utf-8")
+    script.chmod(0o755)
+    return script
+
+
+def test_the_cluster_is_stopped_with_every_process_of_its_groups_when_the_work_fails(tmp_path, monkeypatch):
+    # A stand-in for `ray start --block`: says it runs, leaves a child in its process group (as Ray's daemons
+    # are), and waits; SIGTERM ends it but not the child, which the stop's SIGKILL to the group must end.
+    fake = _fake_ray(tmp_path, f'echo "{scale_cases.READY_LINE}."; sleep 300 & exec sleep 300')
+    monkeypatch.setattr(scale_cases, "executable", lambda name: str(fake))
+    with pytest.raises(RuntimeError, match="the batch failed"):
+        with LocalCluster(tmp_path, nodes=2) as cluster:
+            pids = list(cluster.pids)
+            assert len(pids) == 2 and all(_running(pid) for pid in pids)
+            raise RuntimeError("the batch failed")
+    assert not any(_running(pid) for pid in pids)
+
+
+def test_a_node_that_fails_to_start_is_reported_and_nothing_is_left(tmp_path, monkeypatch):
+    fake = _fake_ray(
+        tmp_path, 'case "$*" in *--head*) echo "Ray runtime started."; exec sleep 300;; esac; echo boom; exit 3'
+    )
+    monkeypatch.setattr(scale_cases, "executable", lambda name: str(fake))
+    cluster = LocalCluster(tmp_path, nodes=2)
+    with pytest.raises(RuntimeError, match=r"--address=127\.0\.0\.1:\d+ .*exited with 3 before its node ran:\nboom"):
+        with cluster:
+            pass
+    assert len(cluster.pids) == 2 and not any(_running(pid) for pid in cluster.pids)
 
 
 @needs_ray

@@ -46,6 +46,8 @@ ORDER = ("pool", "ray", "ray", "pool")
 START_TIMEOUT_S = 180.0
 STOP_TIMEOUT_S = 60.0
 BATCH_TIMEOUT_S = 900.0
+KILL_SETTLE_S = 10.0
+"""After SIGKILL to a node's process group, how long to wait for its processes to be gone."""
 READY_LINE = "Ray runtime started"
 """What `ray start` prints once its node runs (before it blocks)."""
 
@@ -166,6 +168,20 @@ def free_ports(count: int) -> list[int]:
             s.close()
 
 
+def process_group_members(pgid: int) -> list[int]:
+    """The ids of the live processes (not zombies) in process group `pgid`, read from /proc (Linux)."""
+    members = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            text = stat.read_text(encoding="utf-8", errors="replace")
+        except OSError:  # the process ended meanwhile
+            continue
+        state, _ppid, pgrp = text[text.rindex(")") + 2 :].split()[:3]  # after "pid (comm) "
+        if int(pgrp) == pgid and state not in ("Z", "X"):
+            members.append(int(stat.parent.name))
+    return members
+
+
 # --- the cluster --------------------------------------------------------------------------------------
 
 
@@ -248,6 +264,9 @@ class LocalCluster:
             except ProcessLookupError:
                 pass
             process.wait()
+            deadline = time.monotonic() + KILL_SETTLE_S
+            while process_group_members(process.pid) and time.monotonic() < deadline:
+                time.sleep(0.05)
 
     def nodes_that_ran_workers(self) -> int:
         """How many of the cluster's nodes started a worker process (read from Ray's worker logs, which
