@@ -132,7 +132,10 @@ def test_a_failing_job_is_retried_reported_and_the_others_complete(tmp_path, cap
 # with is this module's `reference`, rendered once for the module (--dist loadfile keeps a module on one process).
 # In its own file the test rendered the pool's output again, a third of its time.
 @needs_ray
-def test_a_local_ray_cluster_writes_the_same_bytes_as_the_local_pool(reference, tmp_path):
+def test_a_local_ray_cluster_writes_the_same_bytes_as_the_local_pool(reference, tmp_path, monkeypatch):
+    # Without --address camgen starts a Ray of its own, even where RAY_ADDRESS names a cluster (Ray would
+    # connect there and refuse the CPU count): here one nobody listens at.
+    monkeypatch.setenv("RAY_ADDRESS", "127.0.0.1:9")
     ray_dir = tmp_path / "ray"
     ray_dataset = make_dataset(ray_dir)
     args = ["batch", str(ray_dataset), "-o", str(ray_dir / "out"), "--executor", "ray", "--workers", "2", *FRAMES]

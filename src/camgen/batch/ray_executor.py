@@ -45,7 +45,9 @@ class RayExecutor:
         handlers = {signum: signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)}
         try:
             if address is None:
-                ray.init(num_cpus=workers, include_dashboard=False)
+                # "local": a Ray of its own even where RAY_ADDRESS is set or a `ray start` cluster runs on this
+                # machine (Ray would connect to that instead, and refuse the CPU count).
+                ray.init(address="local", num_cpus=workers, include_dashboard=False)
             else:
                 _check_reachable(address)
                 ray.init(address=address)
