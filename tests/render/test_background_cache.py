@@ -108,14 +108,18 @@ def test_what_a_background_depends_on_computes_it_again():
     assert not np.array_equal(cache.sky(brighter, VIEW), sky)
     moved = View(VIEW.K_px, look_at((0.5, -7.0, 1.7), (0.5, 0.0, 1.0)), WIDTH_PX, HEIGHT_PX)
     assert not np.array_equal(cache.sky(base, moved), sky)
-    assert cache.misses == misses + 4  # the turned sun's ground took the kept depth (same level and view)
+    # Each a grid and its pixels (the turned sun's ground took the kept depth: the same level and view).
+    assert cache.misses == misses + 8
     assert cache.hits >= 1
     np.testing.assert_array_equal(cache.sky(base, VIEW), sky)  # the first is still kept
 
 
 def test_the_kept_bytes_stay_under_the_budget():
     graph = _graph(fog=False)
-    one = sky_view(graph, VIEW).nbytes
+    probe = BackgroundCache()
+    probe.sky(graph, VIEW)
+    one = probe.nbytes  # a view's sky: its grid and its pixels
+    assert len(probe) == 2 and one > sky_view(graph, VIEW).nbytes
     cache = BackgroundCache(max_bytes=3 * one)
     views = [
         View(VIEW.K_px, look_at((0.5, -7.0, 1.6 + 0.01 * k), (0.5, 0.0, 1.0)), WIDTH_PX, HEIGHT_PX) for k in range(6)
@@ -123,13 +127,13 @@ def test_the_kept_bytes_stay_under_the_budget():
     for view in views:
         cache.sky(graph, view)
         assert cache.nbytes <= cache.max_bytes
-    assert len(cache) == 3
+    assert len(cache) == 2 * 3
     misses = cache.misses
     cache.sky(graph, views[-1])  # the latest is kept
-    cache.sky(graph, views[0])  # the oldest went first
-    assert cache.misses == misses + 1
-    small = BackgroundCache(max_bytes=one - 1)  # an array over the budget is returned, not kept
-    assert small.sky(graph, VIEW).shape == (HEIGHT_PX, WIDTH_PX, 3) and len(small) == 0
+    cache.sky(graph, views[0])  # the oldest went first, grid and pixels
+    assert cache.misses == misses + 2
+    small = BackgroundCache(max_bytes=one - 1)  # an array over the budget is returned, not kept (its grid is)
+    assert small.sky(graph, VIEW).shape == (HEIGHT_PX, WIDTH_PX, 3) and len(small) == 1
 
 
 def test_a_draw_that_covers_every_pixel_composites_nothing():
@@ -162,4 +166,62 @@ def test_a_smooth_ground_is_evaluated_at_the_asked_pixels_only_and_not_kept():
     some = below & (np.indices(below.shape)[0] % 2 == 0)
     got = cache.ground_radiance(graph, VIEW, some)
     np.testing.assert_array_equal(got[some], far_ground_radiance(graph, VIEW, some)[some])
-    assert len(cache) == 0 and cache.misses == 0
+    assert cache.nbytes == 0  # no pixels kept (only the grid's place: a smooth ground has none)
+
+
+@pytest.mark.parametrize("roughness", [None, 0.1])
+def test_regions_and_pixels_are_the_whole_views_values(roughness):
+    """The sky and the far ground made over a region, or at scattered pixels (those behind glass), are the
+    whole view's values there bit for bit, for a rough ground whose grid has nodes evaluated exactly (a low
+    sun) and for a smooth one evaluated pixel by pixel; and a composite of a frame with open pixels and glass
+    equals one made from the whole view's arrays."""
+    from camgen.render.renderer import Behind, _bounding_rect, far_ground_step_px
+    from camgen.render.scene_graph import FarGround
+
+    graph = _graph(fog=False)
+    if roughness is not None:
+        graph.far_ground = FarGround(graph.far_ground.height_m, graph.far_ground.reflectance_rgb, roughness=roughness)
+    assert (far_ground_step_px(graph.far_ground, VIEW) <= 2) == (roughness is not None)
+    cache = BackgroundCache()
+    depth_m = far_ground_depth_m(graph.far_ground, VIEW)
+    below = np.isfinite(depth_m)
+    sky, ground = sky_view(graph, VIEW), far_ground_radiance(graph, VIEW, below)
+    if roughness is None:
+        assert cache.ground_nodes(graph, VIEW).far_off.any()  # some pixels are evaluated exactly
+    region = (13, 5, 131, 77)
+    x0, y0, x1, y1 = region
+    np.testing.assert_array_equal(cache.sky(graph, VIEW, region), sky[y0:y1, x0:x1])
+    np.testing.assert_array_equal(cache.ground_depth_m(graph, VIEW, region), depth_m[y0:y1, x0:x1])
+    part = cache.ground_radiance(graph, VIEW, below[y0:y1, x0:x1], region)
+    np.testing.assert_array_equal(part[below[y0:y1, x0:x1]], ground[y0:y1, x0:x1][below[y0:y1, x0:x1]])
+    rng = np.random.default_rng(5)
+    rows, cols = rng.integers(0, HEIGHT_PX, 300), rng.integers(0, WIDTH_PX, 300)
+    np.testing.assert_array_equal(cache.sky_points(graph, VIEW, rows, cols), sky[rows, cols])
+    under = below[rows, cols]
+    np.testing.assert_array_equal(
+        cache.ground_points(graph, VIEW, rows[under], cols[under]), ground[rows[under], cols[under]]
+    )
+
+    # A frame: an opaque block, open pixels around it, glass over part of both.
+    coverage = np.ones((HEIGHT_PX, WIDTH_PX), np.float32)
+    coverage[:40, 20:150] = 0.0
+    coverage[30:60, 60:90] = 0.3
+    radiance = rng.uniform(0.0, 50.0, (HEIGHT_PX, WIDTH_PX, 3)).astype(np.float32)
+    expected = radiance.copy()
+    behind = composite_background(graph, VIEW, radiance, coverage, BackgroundCache())
+    assert _bounding_rect(coverage == 0.0) == (20, 0, 150, 40)
+    # The same composite from the whole view's sky and ground (as it was made before regions).
+    open_sky = coverage == 0.0
+    glass_rows, glass_cols = np.nonzero((coverage > 0.0) & (coverage < 1.0))
+    expected[open_sky] = sky[open_sky]
+    open_below = below & open_sky
+    expected[open_below] = ground[open_below]
+    reference = sky[glass_rows, glass_cols]
+    reference[below[glass_rows, glass_cols]] = ground[glass_rows, glass_cols][below[glass_rows, glass_cols]]
+    clear = np.float32(graph.sky_luminance_cd_m2)
+    t = 1.0 - coverage[glass_rows, glass_cols]
+    expected[glass_rows, glass_cols] += t[:, None] * (reference - clear)
+    np.testing.assert_array_equal(radiance, expected)
+    assert isinstance(behind, Behind)
+    np.testing.assert_array_equal(behind.open_depth_m, np.where(open_sky, depth_m, np.float32(np.inf)))
+    np.testing.assert_array_equal(behind.depth_m, depth_m[glass_rows, glass_cols])

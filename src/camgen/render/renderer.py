@@ -1156,16 +1156,17 @@ SKY_STEP_PX = 8
 """The sky is evaluated every this many pixels and interpolated (it varies smoothly over degrees)."""
 
 
-def sky_view(graph, view: View) -> np.ndarray:
+def sky_view(graph, view: View, region: tuple[int, int, int, int] | None = None) -> np.ndarray:
     """(H, W, 3) radiance of the graph's CIE sky through each pixel of `view` (`camgen.world.sky`),
-    evaluated on a grid every `SKY_STEP_PX` pixels and interpolated bilinearly."""
-    return _sky_on_grid(graph, view, horizontal=False)
+    evaluated on a grid every `SKY_STEP_PX` pixels and interpolated bilinearly; with `region` (x0, y0, x1, y1),
+    its pixels only ((y1 − y0, x1 − x0, 3)), each the value the whole view's has there."""
+    return _sky_on_grid(graph, view, horizontal=False, region=region)
 
 
-def _sky_on_grid(graph, view: View, *, horizontal: bool) -> np.ndarray:
-    """(H, W, 3) the graph's CIE sky radiance in the world direction of each pixel's ray (or, with
-    `horizontal`, at the horizon under or over it), evaluated every `SKY_STEP_PX` pixels and
-    interpolated bilinearly (the sky varies smoothly over degrees)."""
+def _sky_nodes(graph, view: View, *, horizontal: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The sky's grid (`_grid_rays` every `SKY_STEP_PX` pixels): columns, rows and the radiance at each node
+    (len(vs), len(us), 3), in the world direction of the node's ray (or, with `horizontal`, at the horizon
+    under or over it)."""
     from camgen.world.sky import sky_radiance
 
     us, vs, rays = _grid_rays(view, SKY_STEP_PX)
@@ -1174,7 +1175,23 @@ def _sky_on_grid(graph, view: View, *, horizontal: bool) -> np.ndarray:
         vertical = np.linalg.norm(rays, axis=-1, keepdims=True) < 1e-9  # straight down or up: any azimuth
         rays = np.where(vertical, np.array([1.0, 0.0, 0.0]), rays)
     sun = graph.sun_direction if graph.sun_direction is not None else np.array([0.0, 0.0, 1.0])
-    return _grid_interpolated(sky_radiance(rays, sun, graph.sky, graph.sky_luminance_cd_m2), us, vs, view)
+    return us, vs, np.ascontiguousarray(sky_radiance(rays, sun, graph.sky, graph.sky_luminance_cd_m2))
+
+
+def _sky_on_grid(graph, view: View, *, horizontal: bool, region: tuple[int, int, int, int] | None = None) -> np.ndarray:
+    """(H, W, 3) the graph's CIE sky radiance in the world direction of each pixel's ray (or, with
+    `horizontal`, at the horizon under or over it), evaluated every `SKY_STEP_PX` pixels and
+    interpolated bilinearly (the sky varies smoothly over degrees); with `region`, its pixels only."""
+    us, vs, nodes = _sky_nodes(graph, view, horizontal=horizontal)
+    return _grid_interpolated(nodes, us, vs, view, at=_region_axes(view, region))
+
+
+def _region_axes(view: View, region: tuple[int, int, int, int] | None) -> tuple[np.ndarray, np.ndarray] | None:
+    """The pixel columns and rows of `region` (x0, y0, x1, y1; x1, y1 exclusive) of `view`, None for all."""
+    if region is None or tuple(region) == (0, 0, view.width_px, view.height_px):
+        return None
+    x0, y0, x1, y1 = region
+    return np.arange(x0, x1), np.arange(y0, y1)
 
 
 def _grid_rays(view: View, step_px: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -1200,18 +1217,36 @@ def _grid_interpolated(
     return cv2.remap(np.ascontiguousarray(coarse), mx, my, cv2.INTER_LINEAR)
 
 
-def far_ground_depth_m(ground, view: View) -> np.ndarray:
+def _grid_points(coarse: np.ndarray, us: np.ndarray, vs: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """(N, C): `coarse` (len(vs), len(us), C), given at the grid nodes, interpolated at the pixels (`rows`,
+    `cols`) as `_grid_interpolated` interpolates them (the same map coordinates through the same `cv2.remap`:
+    the same values bit for bit)."""
+    if not len(rows):
+        return np.zeros((0, coarse.shape[-1]), coarse.dtype)
+    map_u = np.interp(cols, us, np.arange(len(us))).astype(np.float32)[:, None]
+    map_v = np.interp(rows, vs, np.arange(len(vs))).astype(np.float32)[:, None]
+    return cv2.remap(np.ascontiguousarray(coarse), map_u, map_v, cv2.INTER_LINEAR).reshape(len(rows), -1)
+
+
+def far_ground_depth_m(ground, view: View, region: tuple[int, int, int, int] | None = None) -> np.ndarray:
     """(H, W) float32 camera-z depth at which each pixel's ray meets the far ground's level plane
     (`camgen.render.scene_graph.FarGround`), +inf where the ray does not go down to it (or the camera is
-    not above it)."""
+    not above it); with `region` (x0, y0, x1, y1), its pixels only."""
+    x0, y0, x1, y1 = region or (0, 0, view.width_px, view.height_px)
+    u = np.arange(x0, x1, dtype=np.float64)
+    v = np.arange(y0, y1, dtype=np.float64)
+    return _far_ground_depth_at(ground, view, v[:, None], u[None, :])
+
+
+def _far_ground_depth_at(ground, view: View, v: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """float32 camera-z depth of the far ground at pixel rows `v` and columns `u` (float64, broadcast
+    together): `far_ground_depth_m` pixel by pixel, the same operations."""
     K_inv = np.linalg.inv(view.K_px)
     R = view.T_world_from_cam[:3, :3]
     height_m = float(view.T_world_from_cam[2, 3]) - ground.height_m
     # The world z of the ray (u, v, 1) through K⁻¹ is linear in u and v.
     a, b, c = R[2] @ K_inv
-    u = np.arange(view.width_px, dtype=np.float64)
-    v = np.arange(view.height_px, dtype=np.float64)
-    dz = (a * u[None, :] + (b * v[:, None] + c)).astype(np.float32)
+    dz = (a * u + (b * v + c)).astype(np.float32)
     with np.errstate(divide="ignore"):
         depth_m = np.where(dz < 0, np.float32(height_m) / -dz, np.float32(np.inf))
     return depth_m if height_m > 0 else np.full_like(depth_m, np.inf)
@@ -1226,22 +1261,81 @@ FAR_GROUND_TOLERANCE = 1e-3
 twice as coarse at which the finer one is used as it is; its cells beyond are evaluated pixel by pixel."""
 
 
-def far_ground_radiance(graph, view: View, below: np.ndarray) -> np.ndarray:
+def far_ground_radiance(
+    graph, view: View, below: np.ndarray, region: tuple[int, int, int, int] | None = None
+) -> np.ndarray:
     """(H, W, 3) float32 radiance of the far ground at the pixels `below` (H, W bool) of `view` (others
     undefined): the shader's BRDF for a level surface of the ground's material (`far_ground_brdf_radiance`).
+    With `region` (x0, y0, x1, y1), its pixels only: `below` and the result are the region's.
 
     A rough ground's radiance changes over degrees, not pixels, so it is evaluated on a grid (nodes every
     `far_ground_step_px` / 2 pixels, placed as the sky's) and interpolated bilinearly, and checked against
     the same interpolation from a grid twice as coarse: a cell of the fine grid with a node where the two
     differ by more than `FAR_GROUND_TOLERANCE` of the radiance (near the horizon under a low sun, where
     Fresnel's grazing term turns fast) is evaluated at every pixel. Measured on the examples at 1280×720,
-    max relative error 4e-4 against every pixel evaluated (a tenth of an 8-bit code at full scale)."""
+    max relative error 4e-4 against every pixel evaluated (a tenth of an 8-bit code at full scale). A pixel's
+    value does not depend on which others are asked (`_FarGroundNodes`)."""
+    return _far_ground_nodes(graph, view).region(graph, view, below, region)
+
+
+@dataclass(frozen=True)
+class _FarGroundNodes:
+    """The far ground's grid for one view and lighting (`far_ground_radiance`): the fine nodes' columns `us`,
+    rows `vs` and radiance `values` (float32), and `far_off`, the nodes where the coarse grid's interpolation
+    strays; `values` None for a ground smooth enough to be evaluated at every pixel (`far_ground_step_px` ≤ 2).
+    Small (a node every 4 or 8 pixels): kept per view (`BackgroundCache`), the pixels interpolated as asked."""
+
+    us: np.ndarray | None
+    vs: np.ndarray | None
+    values: np.ndarray | None
+    far_off: np.ndarray | None
+
+    def region(self, graph, view: View, below: np.ndarray, region: tuple[int, int, int, int] | None) -> np.ndarray:
+        """(h, w, 3) float32 radiance at the pixels `below` (h, w bool) of `region` (None: the view)."""
+        x0, y0, x1, y1 = region or (0, 0, view.width_px, view.height_px)
+        if self.values is None:
+            out = np.zeros((y1 - y0, x1 - x0, 3), np.float32)
+            rows, cols = np.nonzero(below)
+            out[rows, cols] = _far_ground_exact(graph, view, rows + y0, cols + x0)
+            return out
+        out = _grid_interpolated(self.values, self.us, self.vs, view, at=_region_axes(view, region))
+        if self.far_off.any():
+            # A pixel is evaluated where a node its interpolation reads is far off: the nodes at or before and
+            # at or after it on each axis (its cell's four corners; on a grid line, only that line's two), so a
+            # crop whose edges lie on grid lines decides each pixel as the whole view does.
+            u_nodes, v_nodes = _cell_nodes(self.us, np.arange(x0, x1)), _cell_nodes(self.vs, np.arange(y0, y1))
+            exact = np.zeros(below.shape, bool)
+            for v in v_nodes:
+                for u in u_nodes:
+                    exact |= self.far_off[np.ix_(v, u)]
+            rows, cols = np.nonzero(exact & below)
+            out[rows, cols] = _far_ground_exact(graph, view, rows + y0, cols + x0)
+        return out
+
+    def points(self, graph, view: View, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """(N, 3) float32 radiance at the pixels (`rows`, `cols`), each as `region` gives it."""
+        if self.values is None:
+            return _far_ground_exact(graph, view, rows, cols)
+        out = _grid_points(self.values, self.us, self.vs, rows, cols)
+        if self.far_off.any() and len(rows):
+            exact = np.zeros(len(rows), bool)
+            for v in _cell_nodes(self.vs, rows):
+                for u in _cell_nodes(self.us, cols):
+                    exact |= self.far_off[v, u]
+            out[exact] = _far_ground_exact(graph, view, rows[exact], cols[exact])
+        return out
+
+
+def _cell_nodes(nodes: np.ndarray, pixels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The grid nodes at or before and at or after each pixel on one axis (`far_ground_radiance`)."""
+    return np.searchsorted(nodes, pixels, side="right") - 1, np.searchsorted(nodes, pixels, side="left")
+
+
+def _far_ground_nodes(graph, view: View) -> _FarGroundNodes:
+    """The far ground's grid for `view` under the graph's lights now (`_FarGroundNodes`)."""
     coarse_px = far_ground_step_px(graph.far_ground, view)
     if coarse_px <= 2:
-        out = np.zeros((view.height_px, view.width_px, 3), np.float32)
-        rows, cols = np.nonzero(below)
-        out[rows, cols] = _far_ground_exact(graph, view, rows, cols)
-        return out
+        return _FarGroundNodes(None, None, None, None)
     fine_px = coarse_px // 2
     us_c, vs_c, rays_c = _grid_rays(view, coarse_px)
     us_f, vs_f, rays_f = _grid_rays(view, fine_px)
@@ -1251,21 +1345,7 @@ def far_ground_radiance(graph, view: View, below: np.ndarray) -> np.ndarray:
     from_coarse = _grid_interpolated(nodes_c, us_c, vs_c, view, at=(us_f, vs_f))
     scale = np.maximum(nodes_f.max(axis=-1), 1e-30)
     far_off = np.abs(from_coarse - nodes_f).max(axis=-1) / scale > FAR_GROUND_TOLERANCE
-    out = _grid_interpolated(nodes_f.astype(np.float32), us_f, vs_f, view)
-    if far_off.any():
-        # A pixel is evaluated where a node its interpolation reads is far off: the nodes at or before and
-        # at or after it on each axis (its cell's four corners; on a grid line, only that line's two), so a
-        # crop whose edges lie on grid lines decides each pixel as the whole view does.
-        columns, rows = np.arange(view.width_px), np.arange(view.height_px)
-        u_nodes = (np.searchsorted(us_f, columns, side="right") - 1, np.searchsorted(us_f, columns, side="left"))
-        v_nodes = (np.searchsorted(vs_f, rows, side="right") - 1, np.searchsorted(vs_f, rows, side="left"))
-        exact = np.zeros(below.shape, bool)
-        for v in v_nodes:
-            for u in u_nodes:
-                exact |= far_off[np.ix_(v, u)]
-        rows, cols = np.nonzero(exact & below)
-        out[rows, cols] = _far_ground_exact(graph, view, rows, cols)
-    return out
+    return _FarGroundNodes(us_f, vs_f, np.ascontiguousarray(nodes_f.astype(np.float32)), far_off)
 
 
 def _far_ground_exact(graph, view: View, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
@@ -1355,12 +1435,16 @@ class BackgroundCache:
     draws the same crops frame after frame. Arrays are kept read-only; the least recently used go first
     past `max_bytes` (0: keep nothing).
 
-    The far ground's radiance is kept at every pixel whose ray meets it (`far_ground_radiance`'s `below`
-    all of them): a pixel's value does not depend on which others are asked (tests/render/test_far_ground.py)."""
+    Each is kept as its grid (the sky's and the far ground's nodes, small) and as its pixels over the
+    rectangle a draw asked for (`composite_background`: the one holding the draw's open pixels; the far
+    ground at every pixel of it whose ray meets the ground); pixels behind glass are interpolated from the
+    kept grid, not kept. A pixel's value does not depend on which others are asked
+    (tests/render/test_far_ground.py, test_background_cache.py)."""
 
     def __init__(self, max_bytes: int = BACKGROUND_CACHE_BYTES):
         self.max_bytes = max_bytes
-        self._entries: OrderedDict[tuple, np.ndarray] = OrderedDict()
+        self._entries: OrderedDict[tuple, tuple[object, int]] = OrderedDict()
+        """Each kept value (an array, or a grid's arrays) and its bytes, least recently used first."""
         self._bytes = 0
         self.hits = self.misses = 0
 
@@ -1371,8 +1455,21 @@ class BackgroundCache:
     def nbytes(self) -> int:
         return self._bytes
 
-    def sky(self, graph, view: View) -> np.ndarray:
-        return self._get(("sky", _view_key(view), *_sky_key(graph)), lambda: sky_view(graph, view))
+    def sky(self, graph, view: View, region: tuple[int, int, int, int] | None = None) -> np.ndarray:
+        """`sky_view` of `view`, or of its `region`: kept by both."""
+        key = ("sky", _view_key(view), *_sky_key(graph), _region_key(view, region))
+        return self._get(key, lambda: _sky_interpolated(self.sky_nodes(graph, view), view, region))
+
+    def sky_nodes(self, graph, view: View) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The sky's grid of `view` (`_sky_nodes`): what every region and pixel of it is interpolated from."""
+        key = ("sky nodes", _view_key(view), *_sky_key(graph))
+        return self._get(key, lambda: _sky_nodes(graph, view, horizontal=False))
+
+    def sky_points(self, graph, view: View, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """(N, 3) the sky at the pixels (`rows`, `cols`), each as `sky` gives it; not kept (few, and another
+        set each frame: those behind glass), interpolated from the kept grid."""
+        us, vs, nodes = self.sky_nodes(graph, view)
+        return _grid_points(nodes, us, vs, rows, cols)
 
     def airlight(self, graph, view: View) -> np.ndarray:
         return self._get(("airlight", _view_key(view), *_sky_key(graph)), lambda: horizon_airlight(graph, view))
@@ -1381,40 +1478,81 @@ class BackgroundCache:
         key = ("ray lengths", view.width_px, view.height_px, view.K_px.tobytes())  # not the pose: a turning head's
         return self._get(key, lambda: ray_lengths(view))
 
-    def ground_depth_m(self, graph, view: View) -> np.ndarray:
-        key = ("ground depth", _view_key(view), graph.far_ground.height_m)
-        return self._get(key, lambda: far_ground_depth_m(graph.far_ground, view))
+    def ground_depth_m(self, graph, view: View, region: tuple[int, int, int, int] | None = None) -> np.ndarray:
+        key = ("ground depth", _view_key(view), graph.far_ground.height_m, _region_key(view, region))
+        return self._get(key, lambda: far_ground_depth_m(graph.far_ground, view, region))
 
-    def ground_radiance(self, graph, view: View, below: np.ndarray) -> np.ndarray:
-        """The far ground's radiance, right at the pixels `below` (`far_ground_radiance`). A ground smooth
-        enough to be evaluated pixel by pixel (`far_ground_step_px` ≤ 2: a wet road) is not kept: evaluating
-        every pixel under the horizon to keep them cost 7 times the open ones' (a 1280 × 720 view, 14 % open)."""
-        if far_ground_step_px(graph.far_ground, view) <= 2:
-            return far_ground_radiance(graph, view, below)
+    def ground_radiance(
+        self, graph, view: View, below: np.ndarray, region: tuple[int, int, int, int] | None = None
+    ) -> np.ndarray:
+        """The far ground's radiance, right at the pixels `below` (`far_ground_radiance`; of `region` with
+        one). Kept at every pixel of the view or region whose ray meets the ground. A ground smooth enough to
+        be evaluated pixel by pixel (`far_ground_step_px` ≤ 2: a wet road) is not kept: evaluating every pixel
+        under the horizon to keep them cost 7 times the open ones' (a 1280 × 720 view, 14 % open)."""
+        nodes = self.ground_nodes(graph, view)
+        if nodes.values is None:
+            return nodes.region(graph, view, below, region)
+        key = ("ground", *self._ground_key(graph, view), _region_key(view, region))
+        return self._get(
+            key, lambda: nodes.region(graph, view, np.isfinite(self.ground_depth_m(graph, view, region)), region)
+        )
+
+    def ground_nodes(self, graph, view: View) -> _FarGroundNodes:
+        """The far ground's grid of `view` under the graph's lights (`_FarGroundNodes`), kept."""
+        return self._get(("ground nodes", *self._ground_key(graph, view)), lambda: _far_ground_nodes(graph, view))
+
+    def ground_points(self, graph, view: View, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """(N, 3) float32 the far ground at the pixels (`rows`, `cols`), each as `ground_radiance` gives it;
+        not kept, interpolated from the kept grid."""
+        return self.ground_nodes(graph, view).points(graph, view, rows, cols)
+
+    @staticmethod
+    def _ground_key(graph, view: View) -> tuple:
         scene = graph.scene
         lights = tuple(
             (scene.get_pose(node)[:3, 2].tobytes(), float(node.light.intensity), _bytes_of(node.light.color))
             for node in scene.directional_light_nodes
         )
-        key = ("ground", _view_key(view), graph.far_ground, _bytes_of(scene.ambient_light), lights)
-        return self._get(key, lambda: far_ground_radiance(graph, view, np.isfinite(self.ground_depth_m(graph, view))))
+        return _view_key(view), graph.far_ground, _bytes_of(scene.ambient_light), lights
 
-    def _get(self, key: tuple, make) -> np.ndarray:
-        array = self._entries.get(key)
-        if array is not None:
+    def _get(self, key: tuple, make):
+        kept = self._entries.get(key)
+        if kept is not None:
             self._entries.move_to_end(key)
             self.hits += 1
-            return array
+            return kept[0]
         self.misses += 1
-        array = make()
-        array.setflags(write=False)
-        if array.nbytes <= self.max_bytes:
-            self._entries[key] = array
-            self._bytes += array.nbytes
+        value = make()
+        nbytes = _frozen_bytes(value)
+        if nbytes <= self.max_bytes:
+            self._entries[key] = (value, nbytes)
+            self._bytes += nbytes
             while self._bytes > self.max_bytes:
-                _, dropped = self._entries.popitem(last=False)
-                self._bytes -= dropped.nbytes
-        return array
+                _, (_, dropped) = self._entries.popitem(last=False)
+                self._bytes -= dropped
+        return value
+
+
+def _frozen_bytes(value) -> int:
+    """The bytes of the arrays in `value` (an array, a tuple of them or a dataclass holding them), each made
+    read-only: what `BackgroundCache` keeps is shared by every caller."""
+    if isinstance(value, np.ndarray):
+        value.setflags(write=False)
+        return value.nbytes
+    if isinstance(value, tuple):
+        return sum(_frozen_bytes(item) for item in value)
+    if hasattr(value, "__dataclass_fields__"):
+        return sum(_frozen_bytes(getattr(value, name)) for name in value.__dataclass_fields__)
+    return 0
+
+
+def _region_key(view: View, region: tuple[int, int, int, int] | None) -> tuple[int, int, int, int]:
+    return tuple(int(x) for x in region) if region is not None else (0, 0, view.width_px, view.height_px)
+
+
+def _sky_interpolated(nodes: tuple, view: View, region: tuple[int, int, int, int] | None) -> np.ndarray:
+    us, vs, values = nodes
+    return _grid_interpolated(values, us, vs, view, at=_region_axes(view, region))
 
 
 def _view_key(view: View) -> tuple:
@@ -1439,7 +1577,12 @@ def composite_background(
     (0 < alpha < 1), radiance += τ·(B − clear): the draw blended the panes over the clear colour (the
     uniform `sky_luminance_cd_m2`), which the background B replaces in the share τ = 1 − alpha of it
     that the glass transmits. Returns what fog needs (`fogged_radiance`). `backgrounds`: the sky and far
-    ground of views drawn before (`BackgroundCache`; the same values, computed once)."""
+    ground of views drawn before (`BackgroundCache`; the same values, computed once).
+
+    The sky and far ground are made over the rectangle of the open pixels only, and at the pixels behind
+    glass one by one, each the whole view's value bit for bit: a turning head's new view each step made them
+    over every pixel, where a site's own ground hides most (a 1408 × 812 turning sim step of the parking lot:
+    466 → 433 ms of CPU; the same frames)."""
     if not (coverage < 1.0).any():  # opaque throughout (most crops of motion blur's sub-frames): nothing behind
         empty = np.zeros(0, np.int64)
         nothing = np.zeros(0, np.float32)
@@ -1448,33 +1591,46 @@ def composite_background(
     open_sky = coverage == 0.0
     rows, cols = np.nonzero((coverage > 0.0) & (coverage < 1.0))
     clear = np.float32(graph.sky_luminance_cd_m2)
-    any_background = bool(len(rows)) or bool(open_sky.any())
+    region = _bounding_rect(open_sky)  # the open pixels' rectangle: the sky and far ground are made there only
+    any_background = bool(len(rows)) or region is not None
+    if region is not None:
+        x0, y0, x1, y1 = region
+        opened, open_sky = radiance[y0:y1, x0:x1], open_sky[y0:y1, x0:x1]
     if getattr(graph, "sky", "uniform") != "uniform" and any_background:
-        sky = cache.sky(graph, view)
-        if open_sky.any():
-            radiance[open_sky] = sky[open_sky]
-        behind = sky[rows, cols]
+        if region is not None:
+            sky = cache.sky(graph, view, region)
+            opened[open_sky] = sky[open_sky]
+        behind = cache.sky_points(graph, view, rows, cols)
     else:
         behind = np.full((len(rows), 3), clear, np.float32)
     behind_depth_m = np.full(len(rows), np.inf, np.float32)
     open_depth_m = None
     if getattr(graph, "far_ground", None) is not None and any_background:
-        ground_depth_m = cache.ground_depth_m(graph, view).copy()
-        behind_depth_m = ground_depth_m[rows, cols]
-        seen = open_sky.copy()
-        seen[rows, cols] = True
-        ground_depth_m[~seen] = np.inf
-        below = np.isfinite(ground_depth_m)
-        if below.any():
-            ground = cache.ground_radiance(graph, view, below)
-            np.copyto(radiance, ground, where=(below & open_sky)[..., None])
-            under = np.isfinite(behind_depth_m)
-            behind[under] = ground[rows[under], cols[under]]
-        ground_depth_m[~open_sky] = np.inf
-        open_depth_m = ground_depth_m
+        behind_depth_m = _far_ground_depth_at(graph.far_ground, view, rows.astype(np.float64), cols.astype(np.float64))
+        open_depth_m = np.full(coverage.shape, np.inf, np.float32)
+        if region is not None:
+            ground_depth_m = cache.ground_depth_m(graph, view, region).copy()
+            ground_depth_m[~open_sky] = np.inf
+            below = np.isfinite(ground_depth_m)
+            if below.any():
+                ground = cache.ground_radiance(graph, view, below, region)
+                np.copyto(opened, ground, where=below[..., None])
+            open_depth_m[y0:y1, x0:x1] = ground_depth_m
+        under = np.isfinite(behind_depth_m)
+        if under.any():
+            behind[under] = cache.ground_points(graph, view, rows[under], cols[under])
     transmittance = 1.0 - coverage[rows, cols]
     radiance[rows, cols] += transmittance[:, None] * (behind - clear)
     return Behind(open_depth_m, rows, cols, transmittance, behind, behind_depth_m)
+
+
+def _bounding_rect(mask: np.ndarray) -> tuple[int, int, int, int] | None:
+    """(x0, y0, x1, y1) of the smallest rectangle holding every True of `mask` (x1, y1 exclusive), or None."""
+    columns = np.flatnonzero(mask.any(axis=0))
+    if not len(columns):
+        return None
+    rows = np.flatnonzero(mask[:, columns[0] : columns[-1] + 1].any(axis=1))
+    return int(columns[0]), int(rows[0]), int(columns[-1]) + 1, int(rows[-1]) + 1
 
 
 def ray_lengths(view: View) -> np.ndarray:
