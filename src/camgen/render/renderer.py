@@ -1220,12 +1220,23 @@ def _grid_interpolated(
 def _grid_points(coarse: np.ndarray, us: np.ndarray, vs: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
     """(N, C): `coarse` (len(vs), len(us), C), given at the grid nodes, interpolated at the pixels (`rows`,
     `cols`) as `_grid_interpolated` interpolates them (the same map coordinates through the same `cv2.remap`:
-    the same values bit for bit)."""
-    if not len(rows):
+    the same values bit for bit). The pixels are laid out in rows of `_POINTS_ROW` for remap, which refuses an
+    image 32767 pixels or more on a side (a near bus's windows hold more pixels than that)."""
+    count = len(rows)
+    if not count:
         return np.zeros((0, coarse.shape[-1]), coarse.dtype)
-    map_u = np.interp(cols, us, np.arange(len(us))).astype(np.float32)[:, None]
-    map_v = np.interp(rows, vs, np.arange(len(vs))).astype(np.float32)[:, None]
-    return cv2.remap(np.ascontiguousarray(coarse), map_u, map_v, cv2.INTER_LINEAR).reshape(len(rows), -1)
+    padded = -(-count // _POINTS_ROW) * _POINTS_ROW
+    map_u = np.zeros(padded, np.float32)
+    map_v = np.zeros(padded, np.float32)
+    map_u[:count] = np.interp(cols, us, np.arange(len(us)))
+    map_v[:count] = np.interp(rows, vs, np.arange(len(vs)))
+    shape = (padded // _POINTS_ROW, _POINTS_ROW)
+    out = cv2.remap(np.ascontiguousarray(coarse), map_u.reshape(shape), map_v.reshape(shape), cv2.INTER_LINEAR)
+    return out.reshape(padded, -1)[:count]
+
+
+_POINTS_ROW = 4096
+"""Pixels per row of `_grid_points`'s maps: under remap's 32767 a side, and 32766 rows of them hold 134 million."""
 
 
 def far_ground_depth_m(ground, view: View, region: tuple[int, int, int, int] | None = None) -> np.ndarray:
