@@ -20,6 +20,7 @@ from __future__ import annotations
 import multiprocessing
 import multiprocessing.connection
 import multiprocessing.forkserver
+import multiprocessing.resource_tracker
 import os
 import signal
 import threading
@@ -134,8 +135,10 @@ def start_pool_server() -> None:
 
     SIGINT is blocked while the server starts: a signal mask outlives exec and fork, so the server and
     every worker forked from it start with SIGINT blocked, until `init_pool_worker` ignores it; a Ctrl-C
-    while the server imports or a worker starts up does not end either with a traceback."""
+    while the server imports or a worker starts up does not end either with a traceback. multiprocessing's
+    resource tracker is started first: starting it (on the server's way) unblocks SIGINT in the caller."""
     pool_context()
+    multiprocessing.resource_tracker.ensure_running()
     blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         multiprocessing.forkserver.ensure_running()
