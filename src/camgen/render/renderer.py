@@ -389,6 +389,13 @@ def check_gl_features(version: tuple[int, int], extensions: set[str], gl_rendere
     )
 
 
+def copies_images(version: tuple[int, int], extensions: set[str]) -> bool:
+    """Whether this OpenGL has glCopyImageSubData (4.3 or GL_ARB_copy_image), with which a sun's cascades start
+    from the kept depths of the casters that held still (`_PassRenderer.keep_still_casters`); without it (an
+    OpenGL 4.0–4.2 that `check_gl_features` accepts) every caster is drawn, the same texels."""
+    return version >= (4, 3) or "GL_ARB_copy_image" in extensions
+
+
 def _origin_size(rect_px: tuple[int, int, int, int]) -> tuple[int, int, int, int]:
     """(x, y, width, height) of a rectangle (x0, y0, x1, y1), x1 and y1 exclusive."""
     x0, y0, x1, y1 = rect_px
@@ -963,9 +970,9 @@ class Renderer:
         """The OpenGL implementation drawing (llvmpipe, or a GPU's name)."""
         version = (int(GL.glGetIntegerv(GL.GL_MAJOR_VERSION)), int(GL.glGetIntegerv(GL.GL_MINOR_VERSION)))
         count = int(GL.glGetIntegerv(GL.GL_NUM_EXTENSIONS))
-        check_gl_features(
-            version, {GL.glGetStringi(GL.GL_EXTENSIONS, i).decode() for i in range(count)}, self.gl_renderer
-        )
+        extensions = {GL.glGetStringi(GL.GL_EXTENSIONS, i).decode() for i in range(count)}
+        check_gl_features(version, extensions, self.gl_renderer)
+        self._renderer.keep_still_casters = copies_images(version, extensions)
         self.max_size_px = int(GL.glGetIntegerv(GL.GL_MAX_RENDERBUFFER_SIZE))
         """The largest width or height of a render target here."""
 
