@@ -19,7 +19,7 @@ def _view() -> View:
 
 def test_more_pixels_than_remap_takes_in_one_column_are_the_whole_views_values():
     view = _view()
-    us, vs, rays = _grid_rays(view, 8)
+    us, vs, _ = _grid_rays(view, 8)
     nodes = np.ascontiguousarray(np.random.default_rng(5).random((len(vs), len(us), 3), dtype=np.float32))
     whole = _grid_interpolated(nodes, us, vs, view)
     rows, cols = np.nonzero(np.ones((HEIGHT_PX, WIDTH_PX), bool))
