@@ -293,7 +293,8 @@ SEAT_BACK_M = (0.55, 0.10)
 """A seat back's height from the cushion and thickness, m (the torso's support up to the shoulders: 0.5–0.65 m)."""
 HEADREST_M = (0.26, 0.20, 0.10, 0.05)
 """A head restraint's width, height, thickness and gap over the seat back, m (UN Regulation No. 17: at least 0.17 m
-wide; its top at least 0.80 m over the H-point along the back for front seats; the sizes an estimate)."""
+wide; its top at least 0.80 m over the H-point along the back in its highest position and 0.75 m in its lowest, for
+front seats; modelled in the lowest: the built front restraints' tops stand 0.77-0.79 m up; the sizes an estimate)."""
 HEAD_ABOVE_H_POINT_M = 0.75
 """The head's centre over the H-point along the torso, m (SAE J826's manikin with a 50th-percentile head: an
 estimate); with the back angle it places the seat behind the driver's head (`SEATS`)."""
