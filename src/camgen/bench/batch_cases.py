@@ -20,23 +20,35 @@ from camgen.bench.harness import Case
 
 JOBS = 20
 FRAMES = 5
-PROFILE = """\
-description: bench camera, 320×240
-sensor: {width_px: 320, height_px: 240, pixel_pitch_um: 3.0, cfa: RGGB, full_well_e: 10000,
-         conversion_gain_dn_per_e: 0.4, black_level_dn: 64, noise: {read_noise_e: 2.0}}
-lens: {focal_length_mm: 2.0, f_number: 2.0}
+
+
+def bench_profile(width_px: int, height_px: int, focal_length_mm: float, what: str) -> str:
+    """A small camera profile (YAML) for batch benches: `width_px` × `height_px`, a lens of `focal_length_mm`."""
+    return f"""\
+description: {what}, {width_px}×{height_px}
+sensor: {{width_px: {width_px}, height_px: {height_px}, pixel_pitch_um: 3.0, cfa: RGGB, full_well_e: 10000,
+         conversion_gain_dn_per_e: 0.4, black_level_dn: 64, noise: {{read_noise_e: 2.0}}}}
+lens: {{focal_length_mm: {float(focal_length_mm)!r}, f_number: 2.0}}
 """
-SCENE = """\
+
+
+def walker_scene(profile: str) -> str:
+    """A one-second scene (YAML) of one walker crossing a plane, seen by one camera of profile `profile`."""
+    return f"""\
 duration_s: 1
 fps: 10
 environment:
-  meshes: [{type: plane, name: ground, size_m: [20, 20]}]
-lights: [{type: ambient, illuminance_lux: 1000}]
+  meshes: [{{type: plane, name: ground, size_m: [20, 20]}}]
+lights: [{{type: ambient, illuminance_lux: 1000}}]
 actors:
-  - {name: walker, class: person, path: {waypoints_m: [[-3, 5], [3, 5]], speed_m_s: 1.4}}
+  - {{name: walker, class: person, path: {{waypoints_m: [[-3, 5], [3, 5]], speed_m_s: 1.4}}}}
 cameras:
-  - {name: cam, profile: bench, mount: {position_m: [0, -5, 3], yaw_deg: 90, pitch_deg: -20}}
+  - {{name: cam, profile: {profile}, mount: {{position_m: [0, -5, 3], yaw_deg: 90, pitch_deg: -20}}}}
 """
+
+
+PROFILE = bench_profile(320, 240, 2.0, "bench camera")
+SCENE = walker_scene("bench")
 DATASET = f"""\
 description: {JOBS} seeds of one walker through a 320×240 camera
 scenes: [scene.yaml]

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from camgen.batch.dataset_files import CARD_PLOTS_DIR
+from camgen.bench.batch_cases import bench_profile, walker_scene
 from camgen.bench.harness import Case
 
 JOBS = 100
@@ -51,23 +52,8 @@ KILL_SETTLE_S = 10.0
 READY_LINE = "Ray runtime started"
 """What `ray start` prints once its node runs (before it blocks)."""
 
-PROFILE = """\
-description: scale bench camera, 160×120
-sensor: {width_px: 160, height_px: 120, pixel_pitch_um: 3.0, cfa: RGGB, full_well_e: 10000,
-         conversion_gain_dn_per_e: 0.4, black_level_dn: 64, noise: {read_noise_e: 2.0}}
-lens: {focal_length_mm: 1.0, f_number: 2.0}
-"""
-SCENE = """\
-duration_s: 1
-fps: 10
-environment:
-  meshes: [{type: plane, name: ground, size_m: [20, 20]}]
-lights: [{type: ambient, illuminance_lux: 1000}]
-actors:
-  - {name: walker, class: person, path: {waypoints_m: [[-3, 5], [3, 5]], speed_m_s: 1.4}}
-cameras:
-  - {name: cam, profile: small, mount: {position_m: [0, -5, 3], yaw_deg: 90, pitch_deg: -20}}
-"""
+PROFILE = bench_profile(160, 120, 1.0, "scale bench camera")
+SCENE = walker_scene("small")
 
 
 def dataset_text(jobs: int) -> str:
