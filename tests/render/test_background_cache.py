@@ -167,6 +167,10 @@ def test_a_smooth_ground_is_evaluated_at_the_asked_pixels_only_and_not_kept():
     got = cache.ground_radiance(graph, VIEW, some)
     np.testing.assert_array_equal(got[some], far_ground_radiance(graph, VIEW, some)[some])
     assert cache.nbytes == 0  # no pixels kept (only the grid's place: a smooth ground has none)
+    nothing = BackgroundCache(max_bytes=0)  # keeps nothing at all, not even an empty grid
+    nothing.ground_radiance(graph, VIEW, some)
+    nothing.sky(graph, VIEW)
+    assert len(nothing) == 0 and nothing.nbytes == 0
 
 
 @pytest.mark.parametrize("roughness", [None, 0.1])

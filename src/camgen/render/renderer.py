@@ -1542,7 +1542,7 @@ class BackgroundCache:
         self.misses += 1
         value = make()
         nbytes = _frozen_bytes(value)
-        if nbytes <= self.max_bytes:
+        if self.max_bytes and nbytes <= self.max_bytes:  # 0 keeps nothing, an empty grid neither
             self._entries[key] = (value, nbytes)
             self._bytes += nbytes
             while self._bytes > self.max_bytes:
