@@ -66,6 +66,12 @@ def add_parser(subparsers) -> None:
 
 
 def run(args: argparse.Namespace, out: Console, err: Console) -> int:
+    if args.executor == "local" and not args.plan:
+        # The local pool's fork server imports what a job needs (about 3 s) while this process does the same
+        # and compiles the jobs, instead of after: a 20-job batch on 1 worker 9.6 → 7.4 s.
+        from camgen.batch.executor import start_pool_server
+
+        start_pool_server()
     from camgen.batch.expand import compile_dataset
     from camgen.batch.run import check_options, frames_of, run_batch
     from camgen.config.loader import load_dataset
