@@ -943,6 +943,12 @@ def _draw_geometry(primitive, pose: np.ndarray, program) -> None:
     primitive._unbind()
 
 
+SCRATCH_FRAMEBUFFERS = 4
+"""Render targets a `Renderer` keeps for draws that are not kept as backgrounds (one per size and set of passes):
+a frame's supersampled radiance, its 1× sub-frames, its depth and ids, an actor's ids alone. Each holds
+16-20 bytes a pixel (a 4268 × 2484 radiance target 212 MB)."""
+
+
 class Renderer:
     """A headless OpenGL context (EGL) that draws camgen scene graphs into float passes.
 
@@ -964,6 +970,10 @@ class Renderer:
         self._platform = platform
         self._renderer = _PassRenderer()
         self._framebuffers: dict[tuple, _Framebuffer] = {}
+        """The draws kept as backgrounds (`keep_as`), by key: one each, of the size it was last drawn at."""
+        self._scratch: OrderedDict[tuple, _Framebuffer] = OrderedDict()
+        """The targets of draws that are not kept, by key, size and passes, least recently used first (at most
+        `SCRATCH_FRAMEBUFFERS`)."""
         self.backgrounds = BackgroundCache()
         """The sky and far ground behind the views drawn lately (`BackgroundCache`)."""
         self.gl_renderer = GL.glGetString(GL.GL_RENDERER).decode()
@@ -994,7 +1004,7 @@ class Renderer:
         if self._platform is None:
             return
         self._make_current()
-        for framebuffer in self._framebuffers.values():
+        for framebuffer in [*self._framebuffers.values(), *self._scratch.values()]:
             framebuffer.delete()
         self._renderer.delete()
         self._release_context()
@@ -1008,6 +1018,23 @@ class Renderer:
             framebuffer.delete()
 
     def _framebuffer(self, key: tuple, width_px: int, height_px: int, passes: tuple[str, ...]) -> _Framebuffer:
+        """The target for a draw: a kept one's (``("main", name)``) of this size and passes, made anew when they
+        change; a scratch one (``("main", None)``, ``("composite",)``) kept per size and passes, so that draws
+        taking turns at two sizes or sets of passes (a frame's supersampled radiance, then its depth and ids,
+        then each actor's ids alone) do not make their targets again each time: allocating a 4268 × 2484
+        radiance target took 107 ms on llvmpipe, at every frame of the parking lot. A target is cleared (or
+        copied from a kept one) before each draw, so which one is used changes no pixel."""
+        if key[-1] is None or key == ("composite",):
+            scratch_key = (key, width_px, height_px, passes)
+            framebuffer = self._scratch.get(scratch_key)
+            if framebuffer is None:
+                framebuffer = self._scratch[scratch_key] = _Framebuffer(width_px, height_px, passes)
+                while len(self._scratch) > SCRATCH_FRAMEBUFFERS:
+                    _, dropped = self._scratch.popitem(last=False)
+                    dropped.delete()
+            else:
+                self._scratch.move_to_end(scratch_key)
+            return framebuffer
         framebuffer = self._framebuffers.get(key)
         if framebuffer is None or (framebuffer.width_px, framebuffer.height_px, framebuffer.passes) != (
             width_px,
