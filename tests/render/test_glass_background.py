@@ -65,7 +65,8 @@ def glass(renderer):
 
         def draw(view=view, **kwargs):
             passes = renderer.draw(build_scene_graph(_scene(**kwargs)), view, ("radiance", "depth_m", "instance_id"))
-            return passes, renderer._framebuffers[("main", None)].coverage.copy()  # the draw's alpha
+            target = renderer._scratch[(("main", None), WIDTH_PX, HEIGHT_PX, ("radiance", "depth_m", "instance_id"))]
+            return passes, target.coverage.copy()  # the draw's alpha
 
         (one, alpha), (two, _) = draw(sky_cd_m2=S1_CD_M2), draw(sky_cd_m2=S2_CD_M2)
         tau = (one.radiance[..., 1] - two.radiance[..., 1]) / (S1_CD_M2 - S2_CD_M2)
