@@ -197,10 +197,7 @@ class Annotator:
         versions = self.graph.look_versions
         key = (
             versions[index] if index < len(versions) else None,
-            view.width_px,
-            view.height_px,
-            np.asarray(view.K_px, np.float64).tobytes(),
-            np.asarray(view.T_world_from_cam, np.float64).tobytes(),
+            view.key(),
             self.lens.geometry(state),
             passes,
             clip,

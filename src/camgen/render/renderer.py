@@ -86,6 +86,10 @@ class View:
         K[1, 2] = (K[1, 2] + 0.5) * factor - 0.5
         return View(K, self.T_world_from_cam, self.width_px * factor, self.height_px * factor)
 
+    def key(self) -> tuple:
+        """What a draw through this view depends on, as a hashable key: its size, K and pose (bytes)."""
+        return self.width_px, self.height_px, self.K_px.tobytes(), self.T_world_from_cam.tobytes()
+
     def cropped(self, rect_px: tuple[int, int, int, int]) -> View:
         """The part (x0, y0, x1, y1) of this view (x1, y1 exclusive) as a view of its own: its pixel (u, v)
         sees what this view sees at (u + x0, v + y0)."""
@@ -427,8 +431,7 @@ class _StillCasters:
         last, self._last[slot] = self._last.get(slot), (weakref.ref(scene), key, counts)
         if kept is not None and kept[0]() is scene and kept[1] == key:
             if all(counts.get(node) == count for node, count in kept[2].items()):
-                held = kept[2]
-                return "hit", [n for n in nodes if id(n) in held], [n for n in nodes if id(n) not in held]
+                return "hit", *_split(nodes, kept[2])
         self._kept.pop(slot, None)
         if last is None or last[0]() is not scene or last[1] != key:
             return "none", [], nodes
@@ -436,7 +439,12 @@ class _StillCasters:
         if not held:
             return "none", [], nodes
         self._kept[slot] = (weakref.ref(scene), key, held)
-        return "keep", [n for n in nodes if id(n) in held], [n for n in nodes if id(n) not in held]
+        return "keep", *_split(nodes, held)
+
+
+def _split(nodes: list, held: dict[int, int]) -> tuple[list, list]:
+    """`nodes` in and out of `held` (by id), each in their order."""
+    return [n for n in nodes if id(n) in held], [n for n in nodes if id(n) not in held]
 
 
 def caster_versions(graph) -> dict[int, int]:
@@ -1216,8 +1224,7 @@ def _sky_on_grid(graph, view: View, *, horizontal: bool, region: tuple[int, int,
     """(H, W, 3) the graph's CIE sky radiance in the world direction of each pixel's ray (or, with
     `horizontal`, at the horizon under or over it), evaluated every `SKY_STEP_PX` pixels and
     interpolated bilinearly (the sky varies smoothly over degrees); with `region`, its pixels only."""
-    us, vs, nodes = _sky_nodes(graph, view, horizontal=horizontal)
-    return _grid_interpolated(nodes, us, vs, view, at=_region_axes(view, region))
+    return _sky_interpolated(_sky_nodes(graph, view, horizontal=horizontal), view, region)
 
 
 def _region_axes(view: View, region: tuple[int, int, int, int] | None) -> tuple[np.ndarray, np.ndarray] | None:
@@ -1502,12 +1509,12 @@ class BackgroundCache:
 
     def sky(self, graph, view: View, region: tuple[int, int, int, int] | None = None) -> np.ndarray:
         """`sky_view` of `view`, or of its `region`: kept by both."""
-        key = ("sky", _view_key(view), *_sky_key(graph), _region_key(view, region))
+        key = ("sky", view.key(), *_sky_key(graph), _region_key(view, region))
         return self._get(key, lambda: _sky_interpolated(self.sky_nodes(graph, view), view, region))
 
     def sky_nodes(self, graph, view: View) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The sky's grid of `view` (`_sky_nodes`): what every region and pixel of it is interpolated from."""
-        key = ("sky nodes", _view_key(view), *_sky_key(graph))
+        key = ("sky nodes", view.key(), *_sky_key(graph))
         return self._get(key, lambda: _sky_nodes(graph, view, horizontal=False))
 
     def sky_points(self, graph, view: View, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
@@ -1517,14 +1524,14 @@ class BackgroundCache:
         return _grid_points(nodes, us, vs, rows, cols)
 
     def airlight(self, graph, view: View) -> np.ndarray:
-        return self._get(("airlight", _view_key(view), *_sky_key(graph)), lambda: horizon_airlight(graph, view))
+        return self._get(("airlight", view.key(), *_sky_key(graph)), lambda: horizon_airlight(graph, view))
 
     def ray_lengths(self, view: View) -> np.ndarray:
         key = ("ray lengths", view.width_px, view.height_px, view.K_px.tobytes())  # not the pose: a turning head's
         return self._get(key, lambda: ray_lengths(view))
 
     def ground_depth_m(self, graph, view: View, region: tuple[int, int, int, int] | None = None) -> np.ndarray:
-        key = ("ground depth", _view_key(view), graph.far_ground.height_m, _region_key(view, region))
+        key = ("ground depth", view.key(), graph.far_ground.height_m, _region_key(view, region))
         return self._get(key, lambda: far_ground_depth_m(graph.far_ground, view, region))
 
     def ground_radiance(
@@ -1558,7 +1565,7 @@ class BackgroundCache:
             (scene.get_pose(node)[:3, 2].tobytes(), float(node.light.intensity), _bytes_of(node.light.color))
             for node in scene.directional_light_nodes
         )
-        return _view_key(view), graph.far_ground, _bytes_of(scene.ambient_light), lights
+        return view.key(), graph.far_ground, _bytes_of(scene.ambient_light), lights
 
     def _get(self, key: tuple, make):
         kept = self._entries.get(key)
@@ -1596,12 +1603,9 @@ def _region_key(view: View, region: tuple[int, int, int, int] | None) -> tuple[i
 
 
 def _sky_interpolated(nodes: tuple, view: View, region: tuple[int, int, int, int] | None) -> np.ndarray:
+    """The sky over `region` of `view` (None: all of it) from its grid `nodes` (`_sky_nodes`)."""
     us, vs, values = nodes
     return _grid_interpolated(values, us, vs, view, at=_region_axes(view, region))
-
-
-def _view_key(view: View) -> tuple:
-    return view.width_px, view.height_px, view.K_px.tobytes(), view.T_world_from_cam.tobytes()
 
 
 def _sky_key(graph) -> tuple:
