@@ -20,6 +20,7 @@ from pydantic import (
 )
 
 from camgen.config.base import Model, Why, invalid
+from camgen.config.markings import Marking, marking_names
 from camgen.config.profile import ZoomSweepTime
 from camgen.config.props import Prop, ScatterRule
 from camgen.config.ptz_program import FollowProgram, PtzPreset, PtzProgram, program_presets
@@ -416,6 +417,12 @@ class Environment(Model):
     """Props placed by rule (`camgen.props.scatter`): ``{type, along: [[x, y], …], spacing_m}`` or
     ``{type, region_m: [[x0, y0], [x1, y1]], count}``, with ``seed`` and ``min_gap_m``; the same seed
     places the same props. Their instance ids follow the props'."""
+    markings: list[Marking] = []
+    """Painted road markings (`camgen.config.markings`): ``{type: line, along_m: [[x, y], …]}`` (solid, or
+    dashed with ``dash_m`` and ``gap_m``), ``{type: bays, first_centre_m, heading_deg, count}`` (a row of
+    parking bays) and ``{type: crossing, from_m, to_m}`` (a zebra crosswalk from kerb to kerb), white or
+    yellow, worn from a seed. Ground, not occluders: they receive shadows but cast none, leave coverage and
+    the far ground alone, and take instance ids after the props' (`<type>_<index>` unless named)."""
     night_sky: Literal["natural", "rural", "suburban", "urban"] | None = None
     """A night scene: the moonless sky's luminance for its setting (`camgen.world.night.
     NIGHT_SKY_LUMINANCE_CD_M2`: 0.17 mcd/m² natural to 10 mcd/m² urban skyglow) fills in
@@ -429,6 +436,22 @@ class Environment(Model):
     shadows: bool = True
     """Sun and spot lights cast shadows (shadow maps); point lights never do. Shadows of moving actors
     fall on the environment, so a static camera then renders every frame in full."""
+
+    @model_validator(mode="after")
+    def _check_marking_names(self) -> Environment:
+        taken = {mesh.name for mesh in self.meshes} | {
+            prop.name or f"{prop.type}_{i}" for i, prop in enumerate(self.props)
+        }
+        seen: set[str] = set()
+        for i, name in enumerate(marking_names(self.markings)):
+            if name in taken or name in seen:
+                raise invalid(
+                    f"markings[{i}]" + (".name" if self.markings[i].name else ""),
+                    f"is the instance {name!r}, a name another mesh, prop or marking has already; give the marking "
+                    "another name",
+                )
+            seen.add(name)
+        return self
 
 
 class ActorPath(Model):

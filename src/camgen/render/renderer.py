@@ -804,7 +804,10 @@ class _PassRenderer(pyrender.Renderer):
         in alpha; for the duration of the draw its glBlendFunc becomes glBlendFuncSeparate with alpha's
         factors (ONE, ONE_MINUS_SRC_ALPHA), so alpha becomes a + (1 − a)·behind: 1 − τ after every pane,
         τ the product of their transmittances (`Renderer.draw` composites the background behind it).
-        Opaque primitives are drawn by pyrender unchanged."""
+        Opaque primitives are drawn by pyrender unchanged, except that a material whose `casts_shadow` is False
+        (road paint, `scene_graph.PaintMaterial`) is left out of the shadow maps too."""
+        if flags & RenderFlags.DEPTH_ONLY and not getattr(primitive.material, "casts_shadow", True):
+            return None
         if primitive.material.alphaMode != "BLEND":
             return super()._bind_and_draw_primitive(primitive, pose, program, flags)
         if flags & RenderFlags.DEPTH_ONLY:

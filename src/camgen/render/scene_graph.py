@@ -15,7 +15,8 @@ luminance in cd/m² once gamma and clamping are removed (`camgen.render.renderer
   distance (`camgen.world.fog`), drawing the depth it needs in the same draw.
 
 Instance ids: actors take 1…A in scene order (so an actor's id is its track id), environment meshes
-A+1…A+M; 0 is the background. Ids are 32-bit, so any realistic number of instances fits.
+A+1…A+M, then props, then road markings (so a marking added to a scene changes no other id); 0 is the
+background. Ids are 32-bit, so any realistic number of instances fits.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import trimesh
 
 from camgen.actors import Crowd, PersonRig, person_rig, rider_rig
 from camgen.actors.character import CharacterRig, character_rig
+from camgen.config.markings import marking_names
 from camgen.config.placement import placement
 from camgen.config.scene import (
     Actor,
@@ -67,6 +69,7 @@ from camgen.vehicles import LAMP_COLOUR_RGB, LAMP_LUMINANCE_CD_M2, VehicleRig, p
 from camgen.vehicles.sign import display_luminance_cd_m2
 from camgen.world.ies import flux_lm as ies_flux_lm
 from camgen.world.ies import grid_intensity_cd, intensity_grid_cd
+from camgen.world.markings import PAINT_ROUGHNESS, PaintMesh, marking_paint, wet_reflectance
 from camgen.world.night import SPOT_FULL_INTENSITY_FRACTION, peak_intensity_cd
 from camgen.world.rain import WET_ALBEDO_FACTOR, WET_ROUGHNESS_FACTOR
 from camgen.world.site import SiteDaylight, daylight_change, site_daylight
@@ -245,7 +248,7 @@ class SceneGraph:
     vehicles: list[VehicleRig | None] = field(default_factory=list)
     """Each actor's procedural vehicle (its mesh posed in world coordinates), or None."""
     prop_nir: dict[int, np.ndarray] = field(default_factory=dict)
-    """id() of each prop's primitive → its vertices' reflectance at 850 nm (`camgen.render.nir`)."""
+    """id() of each prop's or road marking's primitive → its vertices' reflectance at 850 nm (`camgen.render.nir`)."""
     swaying: list[SwayingProp] = field(default_factory=list)
     """The props that sway in the scene's wind (`environment.wind`), moved with the actors; empty when calm."""
     source: tuple[Scene, Callable[[str], Path] | None] | None = None
@@ -342,11 +345,13 @@ class SceneGraph:
 
 
 def instance_table(scene: Scene) -> tuple[Instance, ...]:
-    """Every instance id the render assigns: actors 1…A in scene order, then environment meshes, then props."""
+    """Every instance id the render assigns: actors 1…A in scene order, then environment meshes, then props,
+    then road markings."""
     named = (
         [(actor.name, "actor") for actor in scene.actors]
         + [(m.name, "environment") for m in scene.environment.meshes]
         + [(name, "environment") for name in prop_names(scene.environment)]
+        + [(name, "environment") for name in marking_names(scene.environment.markings)]
     )
     return tuple(Instance(i, name, kind) for i, (name, kind) in enumerate(named, start=1))
 
@@ -560,6 +565,34 @@ class ClearcoatMaterial(pyrender.MetallicRoughnessMaterial):
     (people, the ground, props) keep their diffuse-only ambient term."""
 
     clearcoat = True
+
+
+class PaintMaterial(pyrender.MetallicRoughnessMaterial):
+    """Road paint (`camgen.world.markings`): drawn and shadowed like the ground it lies on, but left out of
+    the shadow maps (`camgen.render.renderer`): a plate a few millimetres over the road would only shade the
+    road along its own edges (acne and a dark rim), while the road already casts the ground's shadow."""
+
+    casts_shadow = False
+
+
+def paint_mesh_node(paint: PaintMesh, *, wet: bool) -> pyrender.Mesh:
+    """A marking's worn paint as one primitive with per-vertex reflectance (COLOR_0), facing up; wet: its
+    reflectance darkened under a water film (`camgen.world.markings.wet_reflectance`) and its roughness
+    × `camgen.world.rain.WET_ROUGHNESS_FACTOR`, as the wet ground's."""
+    colours = wet_reflectance(paint.colours) if wet else paint.colours
+    primitive = pyrender.Primitive(
+        positions=paint.vertices_m,
+        normals=np.tile(np.array([0.0, 0.0, 1.0], dtype=np.float32), (len(paint.vertices_m), 1)),
+        color_0=np.asarray(colours, dtype=np.float32),
+        indices=paint.faces,
+        material=PaintMaterial(
+            baseColorFactor=(1.0, 1.0, 1.0, 1.0),
+            metallicFactor=0.0,
+            roughnessFactor=PAINT_ROUGHNESS * (WET_ROUGHNESS_FACTOR if wet else 1.0),
+            doubleSided=False,
+        ),
+    )
+    return pyrender.Mesh(primitives=[primitive])
 
 
 class ShadeMaterial(pyrender.MetallicRoughnessMaterial):
@@ -1029,6 +1062,12 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         if swings:
             vertices, normals = model.arrays()[:2]
             swaying.append(SwayingProp(node, prop_sway(model, prop.T_world_from_prop, gusts), vertices, normals))
+    names = marking_names(scene.environment.markings)
+    for index, marking in enumerate(scene.environment.markings):
+        paint = marking_paint(marking, scene_seed=scene.seed, index=index)
+        mesh = paint_mesh_node(paint, wet=wet)
+        prop_nir[id(mesh.primitives[0])] = paint.nir_reflectance
+        environment_nodes.append(graph.add(mesh, name=f"environment:{names[index]}"))
     nodes = actor_nodes + environment_nodes
     instance_ids = {node: instance.instance_id for node, instance in zip(nodes, instances, strict=True)}
     result = SceneGraph(
