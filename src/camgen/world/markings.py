@@ -3,11 +3,11 @@
 
 A marking is a set of painted rectangles (`PaintRect`): a line's dashes along its polyline, a row of bays'
 lines, a crosswalk's bars. Each rectangle is laid out as a grid of cells about `WEAR_CELL_M` on a side,
-and the cells where the paint has worn off are left out: wear is a share `wear` of the cells, chosen where a
-seeded value-noise field of the world position (patches 0.1–0.4 m across, as tyres and weather wear them)
-is lowest, the cells along a rectangle's edges more readily (frayed edges), so that lines are not CAD
-strips and the asphalt shows through. The remaining cells of each row merge into one quad per run, flat,
-facing up, `PAINT_LIFT_M` over the surface the marking lies on.
+and the cells where the paint has worn off are left out: wear is a share `wear` of each rectangle's
+cells, chosen where a seeded value-noise field of the world position (patches 0.1–0.4 m across, as tyres
+and weather wear them) is lowest, the cells nearer a rectangle's edges more readily (frayed edges), so
+that lines are not CAD strips and the asphalt shows through. The remaining cells of each row merge into
+one quad per run, flat, facing up, `PAINT_LIFT_M` over the surface the marking lies on.
 
 Paint reflectance (linear RGB, `PAINT_RGB`) and 850 nm reflectance (`PAINT_NIR_REFLECTANCE`) per colour,
 with a small seeded variation (dirt) per vertex.
@@ -54,8 +54,12 @@ PAINT_ROUGHNESS = 0.7
 DIRT_VARIATION = 0.08
 """Half the spread of a marking's reflectance about its colour (dirt, tyre rubber): ±8 %."""
 
-EDGE_WEAR_BIAS = 0.25
-"""How much more readily the cells along a rectangle's edges wear, in units of the noise's range."""
+EDGE_WEAR_BIAS = 0.12
+"""How much better a cell holds for each cell it lies inside its rectangle's edge (up to
+`EDGE_WEAR_DEPTH_CELLS`), in units of the noise's range: paint frays from its edges, and a worn patch seldom
+takes a line's whole width."""
+EDGE_WEAR_DEPTH_CELLS = 3
+"""Cells in from the edge beyond which a cell holds no better."""
 
 WATER_N = 1.333
 """Refractive index of water."""
@@ -260,8 +264,8 @@ def paint_mesh(
 ) -> PaintMesh:
     """The worn paint of `rects` at `height_m` (the surface's height plus `PAINT_LIFT_M`): each rectangle's
     grid of cells (rows across its width, columns along its length, each about `cell_m`), a share `wear`
-    of all the cells left out where `wear_score` less `EDGE_WEAR_BIAS` on edge cells is lowest, and each
-    row's runs of kept cells as one quad."""
+    of each rectangle's cells left out where `wear_score` plus `EDGE_WEAR_BIAS` per cell in from the edge
+    is lowest, and each row's runs of kept cells as one quad."""
     grids = []
     for rect in rects:
         rows = max(1, round(rect.width_m / cell_m))
@@ -271,16 +275,18 @@ def paint_mesh(
         u, c = np.asarray(rect.axis), np.asarray(rect.centre_m)
         v = np.array([-u[1], u[0]])
         centres = c + su[None, :, None] * u + sv[:, None, None] * v  # (rows, cols, 2)
-        edge = np.zeros((rows, cols), dtype=bool)
-        edge[[0, -1], :] = True
-        edge[:, [0, -1]] = True
-        grids.append((rect, rows, cols, centres, edge))
-    scores = np.concatenate([wear_score(g[3].reshape(-1, 2), seed) - EDGE_WEAR_BIAS * g[4].ravel() for g in grids])
+        row, col = np.arange(rows), np.arange(cols)
+        inward = np.minimum.outer(np.minimum(row, rows - 1 - row), np.minimum(col, cols - 1 - col))
+        grids.append((rect, rows, cols, centres, np.minimum(inward, EDGE_WEAR_DEPTH_CELLS)))
+    scores = np.concatenate([wear_score(g[3].reshape(-1, 2), seed) + EDGE_WEAR_BIAS * g[4].ravel() for g in grids])
     sizes = [g[1] * g[2] for g in grids]
     areas = np.concatenate([np.full(n, g[0].length_m * g[0].width_m / n) for g, n in zip(grids, sizes, strict=True)])
     kept_all = np.ones(len(scores), dtype=bool)
-    if wear > 0:
-        kept_all[np.argsort(scores, kind="stable")[: round(wear * len(scores))]] = False
+    start = 0
+    for n in sizes:  # each rectangle loses its share: a thin line as much as a wide bar
+        if wear > 0:
+            kept_all[start + np.argsort(scores[start : start + n], kind="stable")[: round(wear * n)]] = False
+        start += n
     quads = []
     offset = 0
     for (rect, rows, cols, _, _), n in zip(grids, sizes, strict=True):
