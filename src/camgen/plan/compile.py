@@ -49,7 +49,7 @@ from camgen.plan.visibility import Bounds, box_corners, local_bounds, placement,
 from camgen.props import prop_box_corners
 from camgen.props.sway import swaying_props
 from camgen.sensor.capture import NOISE_TERM_OFF, NOISE_TERMS, noise_term_is_on
-from camgen.world.rain import STREAK_RANGE_M
+from camgen.world.rain import STREAK_RANGE_M, ground_is_wet
 
 WAVELENGTH_UM = 0.55  # mid-visible, for the diffraction estimate
 MOTION_SAMPLE_STEP_PX = 1.0
@@ -697,6 +697,7 @@ def _compile_camera(
             ("depth output", outputs.depth is not None),
             (" and ".join(motion_outputs) + " output", bool(motion_outputs)),
             ("rain's depth test", scene.environment.rain is not None and needs_image),
+            ("the wet ground's reflections", ground_is_wet(scene.environment) and needs_image),
         )
         if use
     ]
@@ -730,6 +731,15 @@ def _compile_camera(
                 included=True,
                 reason=f"{rain.rate_mm_h:g} mm/h: drop streaks over each frame's exposure within "
                 f"{STREAK_RANGE_M:g} m, depth-tested, and haze beyond (camgen.world.rain)",
+            )
+        )
+    if ground_is_wet(scene.environment) and needs_image:
+        decisions.append(
+            Decision(
+                stage="render.wet_reflections",
+                included=True,
+                reason="wet ground: the scene mirrored in its water film, drawn coarsely at each frame time, spread "
+                "by the film's ripples and added by water's Fresnel reflectance (camgen.render.wet)",
             )
         )
     wind = scene.environment.wind
@@ -1196,3 +1206,4 @@ def compile_scene(loaded: LoadedScene, settings: PlanSettings | None = None) -> 
             Problem(p.path, p.message, loaded.locate(p.path)) if p.path and not p.location else p for p in exc.problems
         ]
         raise ConfigError(located) from None
+

@@ -467,6 +467,9 @@ class _PassRenderer(pyrender.Renderer):
         """Per scene (by id, with a weak reference to tell a reused id): its spot-light table texture."""
         self.texture_lod_bias = 0.0
         """Added to every material texture's level of detail in the current draw (`Renderer.draw`)."""
+        self.mirrored = False
+        """Whether the current draw's view is mirrored (an improper pose: `camgen.render.wet`), which reverses
+        the winding of its triangles on screen."""
         self.shadow_view: View | None = None
         """The view (and `shadow_clip_m` its near and far planes, m) a sun's cascaded shadow maps are fitted
         to in the current draw: the `ShadowFit`'s, or the draw's own."""
@@ -825,7 +828,9 @@ class _PassRenderer(pyrender.Renderer):
         GL.glDepthFunc(GL.GL_LESS)
         GL.glDepthRange(0.0, 1.0)
         GL.glDisable(GL.GL_MULTISAMPLE)
-        GL.glFrontFace(GL.GL_CW)  # gl_projection flips rows
+        # gl_projection flips rows, which reverses the triangles' winding; a mirrored view (an improper pose:
+        # camgen.render.wet) reverses it again
+        GL.glFrontFace(GL.GL_CCW if self.mirrored else GL.GL_CW)
         draw_flags = flags if lit else RenderFlags.DEPTH_ONLY
         program_flags = ProgramFlags.USE_MATERIAL if lit else ProgramFlags.NONE
         kinds = (
@@ -1113,6 +1118,7 @@ class Renderer:
         renderer.texture_lod_bias = float(texture_lod_bias)
         flags = renderer.shadow_flags(scene, graph.shadows) if lit else RenderFlags.NONE
         pose_gl = gl_camera_pose(view.T_world_from_cam)
+        renderer.mirrored = bool(np.linalg.det(view.T_world_from_cam[:3, :3]) < 0.0)
         scene.set_pose(scene.main_camera_node, pose_gl)
         renderer.check_light_counts(scene, flags)
         _upload_deformed(graph)

@@ -95,6 +95,7 @@ from camgen.render.renderer import (
     sun_cascade_matrices,
 )
 from camgen.render.scene_graph import SceneGraph, build_scene_graph
+from camgen.render.wet import wet_ground_height_m
 
 
 def render_view(state: CameraState, spec: RenderSpec) -> View:
@@ -267,6 +268,12 @@ class CameraRenderer:
         self._motion = motion[0] if motion else None
         self._nir: SceneGraph | None = None
         """The NIR graph of a night-mode camera (`camgen.render.nir`), built at its first night frame."""
+        self._wet_ground_m = wet_ground_height_m(graph.source[0]) if graph.source is not None else None
+        """The height of a wet ground that mirrors the scene (`camgen.render.wet`), m; None when dry."""
+        self._wet_view = None
+        """The last view's `camgen.render.wet.view_geometry` (a held camera's frames share it)."""
+        self._flat_node_ids: set[int] | None = None
+        """id() of the environment nodes lying flat on the wet ground, left out of its mirror (found once)."""
         self._kept_base: _KeptBase | None = None
         """The last still frame's radiance (`_base_radiance`)."""
         self._sun_texels_m: dict[int, tuple[tuple, float]] = {}
@@ -404,6 +411,8 @@ class CameraRenderer:
             self.graph.place_actors(state.time_s)
             coarse = self._draw(view, geometric, "geometric")
             result.depth_m, result.instance_id = coarse.depth_m, coarse.instance_id
+        if "radiance" in passes and self._wet_ground_m is not None:
+            result.radiance = self._wet(view, state, result.radiance, result.depth_m)
         if "radiance" in passes and self.graph.rain_rate_mm_h is not None:
             result.radiance = self._rain(view, state, result.radiance, result.depth_m)
         return Frame(index, state.time_s, result)
@@ -775,6 +784,48 @@ class CameraRenderer:
             texel_m = _shadow_texel_m(self.graph.scene, node, fit, clip_m, self._caster_box_m, np.zeros((1, 3)))
             kept = self._sun_texels_m[id(node)] = (key, texel_m)
         return kept[1]
+
+    def _wet(self, view: View, state: CameraState, radiance: np.ndarray, depth_m: np.ndarray | None) -> np.ndarray:
+        """The frame's radiance with the wet ground's mirror image in its water film (`camgen.render.wet`): the
+        scene reflected in the ground drawn coarsely at the frame time, spread by the film and added at the
+        pixels that show the wet ground by the water's Fresnel reflectance (the plan draws depth for it)."""
+        from camgen.render.wet import (
+            coarse_view,
+            film_blur,
+            film_spread_px,
+            flat_nodes,
+            mirror_step_px,
+            mirrored_view,
+            reflected_radiance,
+            view_geometry,
+            wet_pixels,
+        )
+
+        if depth_m is None:
+            raise ValueError(
+                f"camera {self.camera.name!r}: the wet ground's reflections need the depth pass, which the plan did not draw"
+            )
+        height_m, graph = self._wet_ground_m, self.graph
+        far_ground_m = graph.far_ground.height_m if graph.far_ground is not None else None
+        if self._wet_view is None or self._wet_view.key != view.key():
+            self._wet_view = view_geometry(view)
+        geometry = self._wet_view
+        wet = wet_pixels(view, depth_m, height_m, far_ground_m, geometry.rise_per_m)
+        if not wet.any():
+            return radiance
+        sigmas_px = film_spread_px(view, float(np.median(geometry.cos_incidence[wet])))
+        steps_px = (mirror_step_px(sigmas_px[0]), mirror_step_px(sigmas_px[1]))
+        mirror = coarse_view(mirrored_view(view, height_m), *steps_px)
+        if self._flat_node_ids is None:
+            self._flat_node_ids = flat_nodes(graph, height_m)
+        nodes = [n for n in graph.environment_nodes + graph.actor_nodes if id(n) not in self._flat_node_ids]
+        graph.place_actors(state.time_s)
+        drawn = self.renderer.draw(
+            graph, mirror, ("radiance",), nodes=nodes, clip_range_m=self.clip_range_m(mirror),
+            shadow_fit=self.shadow_fit(view),
+        )
+        spread = film_blur(drawn.radiance, steps_px, sigmas_px, (view.width_px, view.height_px))
+        return reflected_radiance(radiance, spread, wet, geometry.fresnel)
 
     def _rain(self, view: View, state: CameraState, radiance: np.ndarray, depth_m: np.ndarray | None) -> np.ndarray:
         """The frame's radiance in the scene's rain (`camgen.render.rain`): streaks over the exposure the

@@ -52,12 +52,22 @@ range, over the part of each pixel's distance beyond STREAK_RANGE_M.
 **Not modelled.** Drops fall straight down (no wind); the streak ignores the camera's own motion during
 the exposure (a panning PTZ); drops nearer than NEAR_M or imaged wider than DROP_IMAGE_MAX_PX (out of
 focus) are left out rather than blurred; lamps do not light the drops (at night they show the dark
-environment's mean); no splashes, no drops on the lens or its dome, no reflections in the wet road.
+environment's mean); no splashes, no drops on the lens or its dome.
 
 **Wet ground.** A water film darkens a rough surface (light that the film reflects back inside is
 absorbed again: Lekner & Dorf 1988, "Why some things are darker when wet", Appl. Opt. 27, 1278–1280;
 Twomey, Bohren & Mergenthaler 1986, Appl. Opt. 25, 431–437 measure 0.5–0.7 of the dry reflectance for
 soils, sand and asphalt-like materials) and smooths it: WET_ALBEDO_FACTOR and WET_ROUGHNESS_FACTOR.
+
+**Reflections in the wet road.** Over the wet surface lies a film of water whose own surface mirrors the
+scene: the share `water_fresnel` of the light reaching it from the mirror direction is reflected (Fresnel's
+equations for unpolarised light at water's refractive index, 1.333: 2 % looking straight down, 6 % at
+60° from the vertical, 13 % at 70°, 35 % at 80°, 80 % at 88°, so a road seen at a grazing angle mirrors the sky brightly
+while the road under the camera barely does), and the rest (1 − F) reaches the road beneath, which is
+shaded as before. The film is not flat: rain's ripples and the road's texture tilt it, which spreads each
+mirrored ray (`WATER_FILM_SLOPE_RAD`): a tilt δ in the plane of incidence turns the reflected ray by 2δ,
+a tilt across it by 2δ·cos θᵢ, so at a grazing angle a reflection is smeared up and down far more than
+sideways — the vertical streaks of lamps and lit windows on a wet street.
 """
 
 from __future__ import annotations
@@ -102,7 +112,35 @@ WET_ALBEDO_FACTOR = 0.6
 WET_ROUGHNESS_FACTOR = 0.35
 """Wet over dry roughness: a dry asphalt's 0.8–0.9 becomes 0.28–0.32, the 0.2–0.4 of a wet road's glossy
 lobe (measured wet-asphalt BRDFs are far sharper than dry ones; a film of standing water would be a mirror,
-which this renderer, without screen-space reflections, cannot show)."""
+the water film's own mirror reflection is added on top: `water_fresnel`, `camgen.render.wet`)."""
+
+WATER_REFRACTIVE_INDEX = 1.333
+"""Refractive index of water for visible light (1.333 at 589 nm and 20 °C: CRC Handbook of Chemistry and
+Physics; 1.331–1.337 over 400–700 nm)."""
+WATER_FILM_SLOPE_RAD = 0.02
+"""RMS tilt of the water film's surface on a wet road, rad (≈ 1.1°): rain's ripples and the asphalt's
+macrotexture under a thin film. Not a measured value: no published slope statistics of rain-struck road
+films were found (Cox & Munk 1954 measure wind-driven sea slopes of 0.1–0.2 rad, far rougher than a
+film between kerbs); chosen so that a lamp's reflection is a streak several times taller than wide at
+the grazing angles a street camera sees (σ = 2·0.02·f px tall: 40 px at f = 1000 px), as photographs of
+wet streets at night show."""
+
+
+def ground_is_wet(environment) -> bool:
+    """Whether a scene's ground is wet: its `environment.wet`, or while it rains when that is left out."""
+    return environment.rain is not None if environment.wet is None else bool(environment.wet)
+
+
+def water_fresnel(cos_incidence: np.ndarray, n: float = WATER_REFRACTIVE_INDEX) -> np.ndarray:
+    """Reflectance of a smooth water surface for unpolarised light arriving at angle θᵢ from its normal
+    (`cos_incidence` = cos θᵢ, 0–1): the mean of Fresnel's s and p reflectances,
+    r_s = (cos θᵢ − n cos θₜ)/(cos θᵢ + n cos θₜ), r_p = (n cos θᵢ − cos θₜ)/(n cos θᵢ + cos θₜ),
+    sin θₜ = sin θᵢ / n (Born & Wolf, *Principles of Optics*, §1.5.2). 0.020 at normal incidence, 1 at grazing."""
+    cos_i = np.clip(np.asarray(cos_incidence, np.float64), 0.0, 1.0)
+    cos_t = np.sqrt(1.0 - (1.0 - cos_i * cos_i) / (n * n))
+    r_s = (cos_i - n * cos_t) / (cos_i + n * cos_t)
+    r_p = (n * cos_i - cos_t) / (n * cos_i + cos_t)
+    return 0.5 * (r_s * r_s + r_p * r_p)
 
 
 def marshall_palmer_lambda_per_mm(rate_mm_h: float) -> float:

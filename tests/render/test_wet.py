@@ -1,0 +1,184 @@
+"""Reflections in a wet road (`camgen.render.wet`): the mirror's geometry, the water's reflectance, which
+pixels are wet, and a rendered wet frame against the closed form."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from camgen.config import load_scene
+from camgen.plan import PlanSettings, compile_scene
+from camgen.render.renderer import View
+from camgen.render.wet import (
+    WET_SURFACE_TOLERANCE_M,
+    coarse_view,
+    flat_nodes,
+    mirrored_view,
+    view_geometry,
+    wet_pixels,
+)
+from camgen.world.rain import WATER_REFRACTIVE_INDEX, water_fresnel
+from tests.conftest import SCENE, write
+from tests.render.conftest import camera_matrix, look_at, scene_from
+
+
+def _project(view: View, points_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel coordinates (N, 2) and camera z (N,) of world points through `view`."""
+    T_cam = np.linalg.inv(view.T_world_from_cam)
+    p = points_m @ T_cam[:3, :3].T + T_cam[:3, 3]
+    uv = p @ view.K_px.T
+    return uv[:, :2] / uv[:, 2:], p[:, 2]
+
+
+def test_water_reflectance_matches_fresnels_sine_and_tangent_laws():
+    # An independent form of Fresnel's equations: r_s = −sin(θi − θt)/sin(θi + θt), r_p = tan(θi − θt)/tan(θi + θt).
+    n = WATER_REFRACTIVE_INDEX
+    theta_i = np.radians(np.linspace(1.0, 89.5, 200))
+    theta_t = np.arcsin(np.sin(theta_i) / n)
+    r_s = -np.sin(theta_i - theta_t) / np.sin(theta_i + theta_t)
+    r_p = np.tan(theta_i - theta_t) / np.tan(theta_i + theta_t)
+    np.testing.assert_allclose(water_fresnel(np.cos(theta_i)), (r_s**2 + r_p**2) / 2, rtol=1e-9)
+    assert water_fresnel(1.0) == pytest.approx(((n - 1) / (n + 1)) ** 2, rel=1e-12)  # 0.0204 straight down
+    assert water_fresnel(0.0) == pytest.approx(1.0)
+    brewster = np.arctan(n)  # p-polarised light is not reflected: F = r_s²/2 there
+    theta_t = np.arcsin(np.sin(brewster) / n)
+    assert water_fresnel(np.cos(brewster)) == pytest.approx(np.sin(brewster - theta_t) ** 2 / np.sin(brewster + theta_t) ** 2 / 2)
+
+
+def test_the_mirrored_view_sees_at_each_pixel_what_the_ground_there_reflects():
+    view = View(camera_matrix(800.0, 820.0, 319.5, 239.5), look_at((0.0, -5.0, 6.0), (0.5, 10.0, 0.0)), 640, 480)
+    height_m = 0.2
+    mirror = mirrored_view(view, height_m)
+    assert np.linalg.det(mirror.T_world_from_cam[:3, :3]) == pytest.approx(-1.0)
+    rng = np.random.default_rng(3)
+    points_m = np.column_stack([rng.uniform(-4, 4, 50), rng.uniform(5, 20, 50), rng.uniform(0.5, 4.0, 50)])
+    camera_m = view.T_world_from_cam[:3, 3]
+    # The bounce point on the ground: where the line from the camera to the point's mirror image crosses z = h.
+    images_m = points_m * [1, 1, -1] + [0, 0, 2 * height_m]
+    t = (camera_m[2] - height_m) / (camera_m[2] - images_m[:, 2])
+    bounces_m = camera_m + t[:, None] * (images_m - camera_m)
+    seen_px, _ = _project(mirror, points_m)
+    bounce_px, _ = _project(view, bounces_m)
+    np.testing.assert_allclose(seen_px, bounce_px, atol=1e-9)
+    # and its distance to the point is the reflected path's length (what fog must see)
+    _, depth_m = _project(mirror, points_m)
+    ray_len = np.linalg.norm(np.column_stack([(seen_px - view.K_px[:2, 2]) / np.diag(view.K_px)[:2], np.ones(50)]), axis=1)
+    path_m = np.linalg.norm(bounces_m - camera_m, axis=1) + np.linalg.norm(points_m - bounces_m, axis=1)
+    np.testing.assert_allclose(depth_m * ray_len, path_m, rtol=1e-9)
+
+
+def test_a_coarse_view_samples_the_middle_of_each_block_of_pixels():
+    view = View(camera_matrix(900.0, 900.0, 333.0, 201.0), look_at((0, 0, 3), (0, 10, 0)), 640, 360)
+    points_m = np.array([[0.3, 8.0, 0.0], [-2.0, 12.0, 1.0], [1.5, 6.0, 0.5]])
+    full_px, _ = _project(view, points_m)
+    for step_x, step_y in ((1, 1), (2, 5), (3, 8)):
+        coarse = coarse_view(view, step_x, step_y)
+        coarse_px, _ = _project(coarse, points_m)
+        np.testing.assert_allclose(coarse_px * [step_x, step_y] + [(step_x - 1) / 2, (step_y - 1) / 2], full_px, atol=1e-9)
+        assert coarse.width_px * step_x >= 640 and coarse.height_px * step_y >= 360
+        assert (coarse.width_px - 1) * step_x < 640 and (coarse.height_px - 1) * step_y < 360
+
+
+def test_wet_pixels_are_the_grounds_and_not_what_stands_on_it():
+    height_m = 0.01
+    view = View(camera_matrix(500.0, 500.0, 159.5, 40.0), look_at((0, 0, 4.0), (0, 10, 0.0)), 320, 240)
+    geometry = view_geometry(view)
+    rise = geometry.rise_per_m.astype(np.float64)
+    with np.errstate(divide="ignore"):
+        depth_m = np.where(rise < 0, (height_m - 4.0) / rise, np.inf).astype(np.float32)  # the ground plane
+    wet = wet_pixels(view, depth_m, height_m, far_ground_m=None, rise_per_m=geometry.rise_per_m)
+    np.testing.assert_array_equal(wet, np.isfinite(depth_m))
+    # a box standing on the ground from 5 cm up hides some of it: those pixels are not wet
+    standing = depth_m.copy()
+    standing[150:200, 100:200] *= 0.9  # points nearer along the same rays: above the ground
+    lifted_m = 4.0 + standing[150:200, 100:200] * rise[150:200, 100:200] - height_m
+    assert lifted_m.min() > WET_SURFACE_TOLERANCE_M
+    assert not wet_pixels(view, standing, height_m, None)[150:200, 100:200].any()
+    # beyond the ground's mesh, the ground continued to the horizon is wet too; the sky never is
+    open_depth = np.where(np.arange(240)[:, None] > 60, np.inf, depth_m)
+    far = wet_pixels(view, open_depth, height_m, far_ground_m=0.0)
+    np.testing.assert_array_equal(far, rise < 0)
+    assert not wet_pixels(view, open_depth, height_m, far_ground_m=None)[61:].any()
+
+
+WET_SCENE = SCENE.replace("      size_m: [20, 20]", "      size_m: [40, 40]\n  wet: true\n  sky_luminance_cd_m2: 800").replace(
+    "actors:\n  - name: walker\n    class: person\n    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n      speed_m_s: 1.4\n",
+    "actors: []\n",
+)
+
+
+def _wet_camera(workspace, text):
+    path = write(workspace, "scenes/wet.yaml", text)
+    job = compile_scene(load_scene(path), PlanSettings(supersampling=1))
+    return job, job.cameras[0]
+
+
+def test_the_plan_draws_depth_for_a_wet_ground_and_says_why(workspace):
+    job, camera = _wet_camera(workspace, WET_SCENE)
+    assert "depth_m" in camera.render.passes
+    decision = next(d for d in camera.decisions if d.stage == "render.wet_reflections")
+    assert decision.included and "Fresnel" in decision.reason
+    _, dry = _wet_camera(workspace, WET_SCENE.replace("  wet: true\n", ""))
+    assert "depth_m" not in dry.render.passes
+    assert not any(d.stage == "render.wet_reflections" for d in dry.decisions)
+
+
+@pytest.mark.opengl
+def test_a_wet_ground_under_a_uniform_sky_mirrors_it_by_waters_reflectance(workspace, renderer):
+    # Nothing stands on the ground, so the mirror holds the sky alone (800 cd/m² everywhere): at each wet pixel
+    # the frame must be (1 − F)·L + F·800 for the frame L drawn without the mirror, F the water's reflectance at
+    # that pixel's angle; the sky's pixels are untouched.
+    from camgen.render.scene_graph import build_scene_graph
+    from camgen.render.sequence import CameraRenderer, render_view
+
+    job, camera = _wet_camera(workspace, WET_SCENE.replace("pitch_deg: -20", "pitch_deg: -8"))
+    graph = build_scene_graph(job.scene)
+    wet_frame = CameraRenderer(renderer, graph, camera).frame(0).passes
+    plain = CameraRenderer(renderer, graph, camera)
+    plain._wet_ground_m = None
+    base = plain.frame(0).passes
+    depth_m = base.depth_m
+    view = render_view(camera.states[0], camera.render)
+    geometry = view_geometry(view)
+    wet = wet_pixels(view, depth_m, 0.0, graph.far_ground.height_m if graph.far_ground else None, geometry.rise_per_m)
+    assert 0.3 < wet.mean() < 0.95 and (~wet).any()  # ground and sky both in view
+    F = water_fresnel(geometry.cos_incidence.astype(np.float64))[wet][:, None]
+    expected = (1 - F) * base.radiance[wet] + F * 800.0
+    np.testing.assert_allclose(wet_frame.radiance[wet], expected, rtol=2e-4)
+    np.testing.assert_array_equal(wet_frame.radiance[~wet], base.radiance[~wet])
+    assert F.max() > 0.2  # grazing rays near the horizon: a bright sheen, not a rounding error
+
+
+@pytest.mark.opengl
+def test_a_box_on_the_wet_ground_is_mirrored_under_itself_with_its_front_faces(workspace, renderer):
+    # The mirror is drawn with the winding reversed: were the box drawn with its back faces, the mirror would
+    # show its far side, and its depth along the reflected ray would be the far side's.
+    from camgen.render.scene_graph import build_scene_graph
+
+    scene = scene_from(
+        environment={
+            "meshes": [
+                {"type": "plane", "name": "ground", "size_m": [40, 40]},
+                {"type": "box", "name": "crate", "size_m": [2, 2, 2], "position_m": [0, 10, 1]},
+            ],
+            "wet": True,
+        },
+        lights=[{"type": "ambient", "illuminance_lux": 1000}],
+    )
+    graph = build_scene_graph(scene)
+    view = View(camera_matrix(400.0, 400.0, 159.5, 119.5), look_at((0, 0, 3.0), (0, 10, 0.5)), 320, 240)
+    mirror = mirrored_view(view, 0.0)
+    flat = flat_nodes(graph, 0.0)
+    assert len(flat) == 1  # the ground, not the crate
+    nodes = [n for n in graph.environment_nodes if id(n) not in flat]
+    drawn = renderer.draw(graph, mirror, ("depth_m", "instance_id"), nodes=nodes)
+    crate = next(i for node, i in graph.instance_ids.items() if node.name == "environment:crate")
+    # The crate's near face (y = 9) at x = 0, z = 0.5: seen in the mirror at the pixel of its bounce point.
+    near_face_m = np.array([[0.0, 9.0, 0.5]])
+    px, depth_m = _project(mirror, near_face_m)
+    u, v = np.round(px[0]).astype(int)
+    assert drawn.instance_id[v, u] == crate
+    assert drawn.depth_m[v, u] == pytest.approx(depth_m[0], rel=1e-3)
+    # The same pixel in the camera's own view shows the ground in front of the crate (the bounce point).
+    seen = renderer.draw(graph, view, ("depth_m", "instance_id"))
+    assert seen.instance_id[v, u] != crate and seen.instance_id[v, u] != 0
