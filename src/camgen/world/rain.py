@@ -117,13 +117,14 @@ the water film's own mirror reflection is added on top: `water_fresnel`, `camgen
 WATER_REFRACTIVE_INDEX = 1.333
 """Refractive index of water for visible light (1.333 at 589 nm and 20 °C: CRC Handbook of Chemistry and
 Physics; 1.331–1.337 over 400–700 nm)."""
-WATER_FILM_SLOPE_RAD = 0.02
-"""RMS tilt of the water film's surface on a wet road, rad (≈ 1.1°): rain's ripples and the asphalt's
-macrotexture under a thin film. Not a measured value: no published slope statistics of rain-struck road
-films were found (Cox & Munk 1954 measure wind-driven sea slopes of 0.1–0.2 rad, far rougher than a
-film between kerbs); chosen so that a lamp's reflection is a streak several times taller than wide at
-the grazing angles a street camera sees (σ = 2·0.02·f px tall: 40 px at f = 1000 px), as photographs of
-wet streets at night show."""
+WATER_FILM_SLOPE_RAD = 0.008
+"""RMS tilt of the water film's surface on a wet road, rad (≈ 0.5°): rain's ripples and the asphalt's
+macrotexture under a thin film. Not a measured value: no published slope statistics of films on roads
+were found (Cox & Munk 1954 measure wind-driven sea slopes of 0.1–0.2 rad, far rougher than a film
+between kerbs). A mirror image is spread by σ = 2·0.008·f px up and down (16 px at f = 1000 px) and
+less across; the broad glossy highlight of each lamp on the wet asphalt itself is the shader's
+(WET_ROUGHNESS_FACTOR). At 0.02 rad a lantern's mirror image on the night street became a saturated
+disc 150 px across."""
 
 
 def ground_is_wet(environment) -> bool:
