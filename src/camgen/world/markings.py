@@ -61,6 +61,9 @@ takes a line's whole width."""
 EDGE_WEAR_DEPTH_CELLS = 3
 """Cells in from the edge beyond which a cell holds no better."""
 
+RUN_END_JITTER_CELLS = 0.4
+"""How far a worn end of a run of paint moves along its row, at most, in cells (ragged worn edges)."""
+
 WATER_N = 1.333
 """Refractive index of water."""
 WATER_EXTERNAL_DIFFUSE_REFLECTANCE = 0.066
@@ -97,7 +100,7 @@ class PaintMesh:
     nir_reflectance: np.ndarray
     """(V,) float32 reflectance at 850 nm."""
     painted_area_m2: float
-    """Area of the paint left."""
+    """Area of the paint left, m²."""
     design_area_m2: float
     """Area of the marking's rectangles as designed (no wear)."""
 
@@ -280,7 +283,6 @@ def paint_mesh(
         grids.append((rect, rows, cols, centres, np.minimum(inward, EDGE_WEAR_DEPTH_CELLS)))
     scores = np.concatenate([wear_score(g[3].reshape(-1, 2), seed) + EDGE_WEAR_BIAS * g[4].ravel() for g in grids])
     sizes = [g[1] * g[2] for g in grids]
-    areas = np.concatenate([np.full(n, g[0].length_m * g[0].width_m / n) for g, n in zip(grids, sizes, strict=True)])
     kept_all = np.ones(len(scores), dtype=bool)
     start = 0
     for n in sizes:  # each rectangle loses its share: a thin line as much as a wide bar
@@ -298,8 +300,16 @@ def paint_mesh(
         _, stop = np.nonzero(steps == -1)  # row-major: each row's stops pair with its starts in order
         u, c = np.asarray(rect.axis), np.asarray(rect.centre_m)
         v = np.array([-u[1], u[0]])
-        u0 = start / cols * rect.length_m - rect.length_m / 2
-        u1 = stop / cols * rect.length_m - rect.length_m / 2
+        # A worn end of a run moves by up to ±0.4 of a cell (seeded by where it lies), so that the worn edges
+        # are ragged rather than steps on the grid; a run's end at the rectangle's own end stays put.
+        cell_u = rect.length_m / cols
+        u0 = start * cell_u - rect.length_m / 2
+        u1 = stop * cell_u - rect.length_m / 2
+        v_mid = (row_of_start + 0.5) / rows * rect.width_m - rect.width_m / 2
+        for ends, index, keep in ((u0, start, 0), (u1, stop, cols)):
+            at = c + ends[:, None] * u + v_mid[:, None] * v
+            shift = RUN_END_JITTER_CELLS * cell_u * (2.0 * value_noise(at, cell_m, seed + 4) - 1.0)
+            ends += np.where(index == keep, 0.0, shift)
         v0 = row_of_start / rows * rect.width_m - rect.width_m / 2
         v1 = (row_of_start + 1) / rows * rect.width_m - rect.width_m / 2
         corners = np.stack(
@@ -319,9 +329,15 @@ def paint_mesh(
         faces=faces,
         colours=colours,
         nir_reflectance=nir,
-        painted_area_m2=float(areas[kept_all].sum()),
+        painted_area_m2=_quads_area_m2(corners),
         design_area_m2=float(sum(r.length_m * r.width_m for r in rects)),
     )
+
+
+def _quads_area_m2(corners: np.ndarray) -> float:
+    """Total area of quads (Q, 4, 2), each ½ |d₀₂ × d₁₃| of its diagonals."""
+    d02, d13 = corners[:, 2] - corners[:, 0], corners[:, 3] - corners[:, 1]
+    return float(np.sum(d02[:, 0] * d13[:, 1] - d02[:, 1] * d13[:, 0]) / 2)
 
 
 def marking_seed(scene_seed: int, index: int) -> int:
