@@ -164,39 +164,38 @@ the floor's."""
 
 PROFILES: dict[str, Profile] = {
     "sedan": Profile(
-        top=((0, 0.50), (0.02, 0.62), (0.06, 0.66), (0.24, 0.69), (0.30, 0.73), (0.40, 0.97), (0.44, 1.0),
-             (0.62, 1.0), (0.66, 0.96), (0.76, 0.69), (0.80, 0.66), (0.97, 0.61), (1, 0.50)),
-        belt=0.66, side_glass=(0.32, 0.75), pillars=((0.52, 0.55),), windscreen=(0.64, 0.78),
-        rear_window=(0.29, 0.43),
+        top=((0, 0.50), (0.02, 0.64), (0.06, 0.70), (0.13, 0.72), (0.28, 0.96), (0.31, 1.0), (0.45, 1.0),
+             (0.486, 0.95), (0.654, 0.68), (0.97, 0.55), (1, 0.46)),
+        belt=0.66, side_glass=(0.25, 0.645), pillars=((0.425, 0.455),), windscreen=(0.465, 0.675),
+        rear_window=(0.12, 0.30),
     ),
     "hatchback": Profile(
-        top=((0, 0.52), (0.02, 0.70), (0.06, 0.92), (0.12, 1.0), (0.55, 1.0), (0.60, 0.95), (0.72, 0.68),
-             (0.76, 0.66), (0.97, 0.61), (1, 0.50)),
-        belt=0.64, side_glass=(0.06, 0.71), pillars=((0.06, 0.15), (0.43, 0.46)), windscreen=(0.57, 0.74),
-        rear_window=(0.015, 0.10),
+        top=((0, 0.52), (0.02, 0.70), (0.055, 0.92), (0.10, 1.0), (0.42, 1.0), (0.463, 0.95), (0.663, 0.665),
+             (0.97, 0.53), (1, 0.44)),
+        belt=0.64, side_glass=(0.055, 0.655), pillars=((0.055, 0.15), (0.385, 0.415)), windscreen=(0.44, 0.685),
+        rear_window=(0.015, 0.075),
     ),
     "estate": Profile(
-        top=((0, 0.52), (0.015, 0.70), (0.03, 0.93), (0.06, 1.0), (0.60, 1.0), (0.64, 0.95), (0.74, 0.68),
-             (0.78, 0.66), (0.97, 0.61), (1, 0.50)),
-        belt=0.64, side_glass=(0.03, 0.73), pillars=((0.03, 0.07), (0.28, 0.31), (0.50, 0.53)),
-        windscreen=(0.61, 0.76), rear_window=(0.01, 0.05),
+        top=((0, 0.52), (0.015, 0.70), (0.03, 0.93), (0.06, 1.0), (0.45, 1.0), (0.488, 0.95), (0.66, 0.665),
+             (0.97, 0.55), (1, 0.46)),
+        belt=0.64, side_glass=(0.03, 0.65), pillars=((0.03, 0.07), (0.25, 0.28), (0.43, 0.46)),
+        windscreen=(0.465, 0.685), rear_window=(0.01, 0.05),
     ),
     "suv": Profile(
-        top=((0, 0.52), (0.015, 0.70), (0.035, 0.94), (0.07, 1.0), (0.60, 1.0), (0.65, 0.95), (0.74, 0.70),
-             (0.78, 0.68), (0.97, 0.63), (1, 0.52)),
-        belt=0.66, side_glass=(0.035, 0.73), pillars=((0.035, 0.11), (0.46, 0.49)), windscreen=(0.62, 0.76),
+        top=((0, 0.52), (0.015, 0.70), (0.035, 0.94), (0.07, 1.0), (0.475, 1.0), (0.514, 0.95), (0.66, 0.69),
+             (0.97, 0.60), (1, 0.50)),
+        belt=0.66, side_glass=(0.035, 0.66), pillars=((0.035, 0.11), (0.435, 0.465)), windscreen=(0.49, 0.69),
         rear_window=(0.01, 0.06), clearance_m=0.19,
     ),
     "pickup": Profile(
-        top=((0, 0.56), (0.02, 0.58), (0.36, 0.58), (0.375, 0.96), (0.39, 1.0), (0.62, 1.0), (0.66, 0.95),
-             (0.73, 0.68), (0.77, 0.66), (0.97, 0.62), (1, 0.52)),
-        belt=0.64, side_glass=(0.39, 0.72), pillars=((0.52, 0.55),), windscreen=(0.63, 0.76),
-        rear_window=(0.36, 0.385), clearance_m=0.22,
+        top=((0, 0.56), (0.02, 0.58), (0.29, 0.58), (0.305, 0.96), (0.32, 1.0), (0.50, 1.0), (0.529, 0.95),
+             (0.672, 0.70), (0.97, 0.62), (1, 0.52)),
+        belt=0.64, side_glass=(0.32, 0.662), pillars=((0.45, 0.48),), windscreen=(0.515, 0.69),
+        rear_window=(0.29, 0.315), clearance_m=0.22,
     ),
     "van": Profile(
-        top=((0, 0.96), (0.015, 1.0), (0.78, 1.0), (0.84, 0.93), (0.90, 0.62), (0.94, 0.55), (0.99, 0.50),
-             (1, 0.45)),
-        belt=0.52, side_glass=(0.73, 0.89), windscreen=(0.80, 0.91), rear_cap_glass=(0.62, 0.90),
+        top=((0, 0.96), (0.015, 1.0), (0.55, 1.0), (0.587, 0.93), (0.79, 0.49), (0.97, 0.44), (1, 0.39)),
+        belt=0.52, side_glass=(0.55, 0.785), windscreen=(0.56, 0.80), rear_cap_glass=(0.62, 0.90),
         clearance_m=0.18, end_lift=0.10, tumblehome=0.05, corner_share=0.03, end_width=0.85, sill_radius_m=0.08,
         departure_angle_deg=VAN_DEPARTURE_ANGLE_DEG,
     ),
@@ -215,7 +214,20 @@ PROFILES: dict[str, Profile] = {
         tumblehome=0.02, corner_share=0.012, end_width=0.90, section_exponent=10.0,
     ),
 }  # fmt: skip
-"""The bus is a two-door low-floor city bus after Mercedes-Benz's "The Citaro: Technical Information"
+"""The cars' and the van's side views put their greenhouses where real ones stand over the wheels: the windscreen's foot
+(the cowl, where the bonnet ends) 0.48-0.67 m behind the front axle on cars (0.75-0.82 m on the pickup's long bonnet,
+0.15-0.28 m on the van's short one), windscreens raked 25-32 degrees from the horizontal (the van's 40-45), a
+saloon's roof ending 0.42-0.51 m ahead of its rear axle over a rear window raked 25 degrees down to a boot lid, a
+hatchback's, estate's and SUV's 0.24-0.33 m from the tail over a steep tailgate glass, a double-cab pickup's cab
+ending 0.48-0.54 m ahead of its rear axle: each station within the range its segment's real models span, for every
+seed (`camgen.vehicles.proportions`, which measures them from the shell and cites the models;
+tests/vehicles/test_proportions.py). The knots are shares of the length: with the overhangs a fixed share of what the
+wheelbase leaves (`camgen.vehicles.look.BODY_TYPES`), a station's distance from the front axle varies by a few
+centimetres over a segment's sizes. The van's profile scales with its height, so a high-roofed van (2.69 m, a
+Sprinter L2H2) has a taller cab and windscreen than its maker's, whose high roof rises over a cab of the low-roofed
+van's height.
+
+The bus is a two-door low-floor city bus after Mercedes-Benz's "The Citaro: Technical Information"
 (Citaro 628.083, 2 doors): 11,950 mm long, 3,076 mm high with its air conditioning, floor 370 mm above
 the road and the waistline (the side windows' lower edge) 950 mm above the floor, so the beltline is
 1,320 mm up, 0.43 of the height; front overhang 2,705 mm with door 1 (1,250 mm clear) in it ahead of
@@ -275,8 +287,8 @@ def _stations(look: VehicleLook, axles_x: tuple[float, float], arch_radius_m: fl
     """Station positions along x, m: even spacing, denser over the wheel arches, every profile knot."""
     L = look.length_m
     profile = PROFILES[look.body_type]
-    xs = [np.linspace(-L / 2, L / 2, max(8, round(L / STATION_SPACING_M)) + 1)]
-    xs.append((np.array([u for u, _ in profile.top]) - 0.5) * L)
+    even = np.linspace(-L / 2, L / 2, max(8, round(L / STATION_SPACING_M)) + 1)
+    xs = [(np.array([u for u, _ in profile.top]) - 0.5) * L]
     c = profile.corner_share * L
     xs.append(-L / 2 + c * (1 - np.cos(np.linspace(0, np.pi / 2, 7))))
     xs.append(L / 2 - c * (1 - np.cos(np.linspace(0, np.pi / 2, 7))))
@@ -284,7 +296,11 @@ def _stations(look: VehicleLook, axles_x: tuple[float, float], arch_radius_m: fl
         xs.append(x0 + arch_radius_m * np.sin(np.linspace(-np.pi / 2, np.pi / 2, 17)))
     if profile.rear_floor_m is not None:
         xs.append([floor_start_x_m(look), floor_start_x_m(look) - FLOOR_STEP_M])
-    x = np.unique(np.round(np.clip(np.concatenate(xs), -L / 2, L / 2), 6))
+    kept = np.concatenate(xs)
+    # An even station within an eighth of a spacing of a kept one (a profile knot's) would make a sliver of quads whose
+    # rows kink across it (a window's outline steps there, a shut line leaves the side).
+    near = np.abs(even[:, None] - kept[None, :]).min(axis=1) < STATION_SPACING_M / 8
+    x = np.unique(np.round(np.clip(np.concatenate([kept, even[~near | (np.abs(even) >= L / 2)]]), -L / 2, L / 2), 6))
     x[0], x[-1] = -L / 2, L / 2
     return x
 

@@ -102,7 +102,7 @@ SEATS: dict[str, Seat] = {
     "sedan": Seat(0.50, 0.26, math.radians(25.0), 0.12),
     "estate": Seat(0.50, 0.26, math.radians(25.0), 0.12),
     "suv": Seat(0.66, 0.33, math.radians(23.0), 0.12),
-    "pickup": Seat(0.78, 0.33, math.radians(23.0), 0.12),
+    "pickup": Seat(0.78, 0.33, math.radians(23.0), 0.0),
     "van": Seat(0.98, 0.40, math.radians(20.0), 0.15),
     "box_truck": Seat(1.45, 0.43, math.radians(18.0), 0.55),
     "bus": Seat(1.10, 0.45, math.radians(15.0), 1.00),
@@ -113,9 +113,11 @@ SEATS: dict[str, Seat] = {
 hatchbacks put the H-point about 0.50 m above the ground, SUVs 0.6–0.7 m, pickups and vans 0.75–1.0 m,
 a 7.5 t truck's cab about 1.4–1.5 m and a low-floor city bus's raised driver's seat about 1.1 m. The
 seat's place along the vehicle follows the glass (`head_behind_windscreen_m`: the head in the front side
-window, behind the windscreen), not the wheels: the procedural shell's greenhouse sits further forward
-over the front wheels than a real car's, and its wheel arches span its whole width, so the legs under
-the dashboard, hidden there, are left out (`FOOTWELL_FROM_H_POINT_M`)."""
+window, behind the windscreen; a double-cab pickup's at the header, so that its rear bench fits ahead of the cab's
+back), which stands over the wheels as on real cars (`camgen.vehicles.proportions`): the cars' front H-points lie
+1.1-1.4 m behind the front axle. The shell's wheel arches span its whole width, so the legs under the dashboard,
+hidden there, are left out (`FOOTWELL_FROM_H_POINT_M`), and a rear bench keeps clear of the rear arches
+(`seats_part`)."""
 
 
 def drive_side(look: VehicleLook) -> str:
@@ -347,7 +349,9 @@ def _seat_pieces(
 def seats_part(look: VehicleLook) -> Part | None:
     """The seats seen through the glass (`SEAT_BODIES`): two front seats (a van's driver's seat and a two-seat bench)
     behind the driver's head (`SEATS`: the head `head_behind_windscreen_m` behind the windscreen, the back at A40),
-    and on a car a rear bench `COUPLE_DISTANCE_M` further back with two head restraints, as one part of the cabin;
+    and on a car a rear bench `COUPLE_DISTANCE_M` further back (nearer where that keeps it clear of the rear wheel
+    arches, which span the shell's width: the smallest hatchbacks', down to about 0.6 m) with two head restraints,
+    as one part of the cabin;
     None for other body types. A cabin was its dark lining alone: through the side windows the far windows showed,
     from above an empty tub."""
     if look.body_type not in SEAT_BODIES:
@@ -364,7 +368,10 @@ def seats_part(look: VehicleLook) -> Part | None:
         h_point = np.array([h_x, y, seat.h_point_z_m])
         pieces += _seat_pieces(h_point, width_m, seat.back_angle_rad, roof, [0.0], front_m)
     if look.body_type != "van":
-        rear_x = h_x - COUPLE_DISTANCE_M
+        # Clear of the rear wheel arches, which span the shell's width (a real bench sits between them): a small
+        # hatchback's couple distance shrinks.
+        arch_front = look.rear_axle_x_m + look.wheel_radius_m + ARCH_GAP_M
+        rear_x = max(h_x - COUPLE_DISTANCE_M, arch_front + H_POINT_BEFORE_BACK_M + SEAT_BACK_M[1] + CLEARANCE_M)
         bench = 2 * lateral + width_m
         roof = _roof_z_m(look, rear_x - 0.4)
         h_point = np.array([rear_x, 0.0, seat.h_point_z_m + REAR_SEAT_RISE_M])

@@ -15,13 +15,15 @@ window's foot (nearly all do; saloons' rear windows are not wiped).
 Sources and estimates:
 
 - Where a car's front door starts (`FRONT_DOOR_BEHIND_ARCH_M`): makers' side views put the front door's leading
-  edge 0.1–0.25 m behind the front wheel arch (VW Golf 8, Toyota Corolla), so 0.15 m behind the arch here (the
-  procedural greenhouse sits further forward over the front wheels than a real car's, so the door is placed by the
-  arch, not by the windscreen). A van's cab door stands over the front wheel's rear half, its lower edge cut round
-  the arch (Ford Transit, Mercedes Sprinter), about 1.0 m wide (`VAN_CAB_DOOR_WIDTH_M`, an estimate from makers'
-  side views).
+  edge 0.1–0.25 m behind the front wheel arch (VW Golf 8, Toyota Corolla), so 0.15 m behind the arch here: 0.50-0.55 m
+  behind the front axle, within 0.1 m of the windscreen's foot (the A-pillar's base, 0.48-0.67 m behind it on the cars
+  here, `camgen.vehicles.proportions`), as on those cars, whose front door opens under the A-pillar. A van's cab door
+  stands over the front wheel's rear half, its lower edge cut round the arch (Ford Transit, Mercedes Sprinter), and
+  reaches back to about the windscreen's header, 1.15 m wide (`VAN_CAB_DOOR_WIDTH_M`, an estimate from makers' side
+  views).
 - Where the doors meet (`DOOR_EDGES_U`): at the B-pillar (`camgen.vehicles.body.Profile.pillars`), and the rear
-  door's trailing edge at the C-pillar's foot, read from the body types' profiles (shares of the length).
+  door's trailing edge at the C-pillar's foot (a saloon's where its rear side window ends), read from the body types'
+  profiles (shares of the length); a van's cab door ends where its side window does.
 - A van's sliding door (`SLIDING_DOOR_WIDTH_M`): 1.30 m wide, as the Ford Transit's and Mercedes Sprinter's
   side-door openings in their dimension sheets (recalled, not rechecked here: an estimate), its top at
   `SLIDING_DOOR_TOP_SHARE` of the van's height (the openings are 1.6–1.8 m tall over a 0.55 m floor).
@@ -37,14 +39,14 @@ from camgen.vehicles.roof import SHUT_LINE_RGB, SHUT_LINE_WIDTH_M
 
 DOOR_BODIES = ("hatchback", "sedan", "estate", "suv", "pickup", "van")
 FRONT_DOOR_BEHIND_ARCH_M = 0.15
-VAN_CAB_DOOR_WIDTH_M = 1.0
+VAN_CAB_DOOR_WIDTH_M = 1.15
 DOOR_EDGES_U = {
-    "sedan": (0.535, 0.32),
-    "hatchback": (0.445, 0.15),
-    "estate": (0.515, 0.295),
-    "suv": (0.475, 0.20),
-    "pickup": (0.535, 0.39),
-    "van": (0.73,),
+    "sedan": (0.44, 0.25),
+    "hatchback": (0.40, 0.15),
+    "estate": (0.445, 0.265),
+    "suv": (0.45, 0.20),
+    "pickup": (0.465, 0.32),
+    "van": (0.55,),
 }
 """Per body type, the doors' edges behind the front door's leading edge, as shares of the length (rear 0 → front 1):
 the B-pillar's middle and the rear door's trailing edge (a van's cab door has only the first)."""
@@ -83,18 +85,21 @@ class SideSurface:
         self.belt_index = side_quads
         """Where the left beltline (section point 0) is in the chain."""
 
-    def _side_run(self, station: int) -> tuple[np.ndarray, np.ndarray]:
-        """(points, normals) of one station's left side: the run of `_side_chain` through the beltline that faces
-        out (`SIDE_NORMAL_Y`), from its top down."""
-        points = self.grid[station, self.chain]
-        normals = self.grid_n[station, self.chain]
-        side = normals[:, 1] > SIDE_NORMAL_Y
+    def _run_bounds(self, station: int) -> tuple[int, int]:
+        """(start, stop) in `_side_chain` of one station's left side: the run through the beltline that faces out
+        (`SIDE_NORMAL_Y`), from its top down."""
+        side = self.grid_n[station, self.chain][:, 1] > SIDE_NORMAL_Y
         belt = self.belt_index
         if not side[belt]:
-            return points[belt : belt + 1], normals[belt : belt + 1]
+            return belt, belt + 1
         start = belt - int(np.argmin(side[belt::-1])) + 1 if not side[: belt + 1].all() else 0
         stop = belt + int(np.argmin(side[belt:])) if not side[belt:].all() else len(side)
-        return points[start:stop], normals[start:stop]
+        return start, stop
+
+    def _side_run(self, station: int) -> tuple[np.ndarray, np.ndarray]:
+        """(points, normals) of one station's left side (`_run_bounds`)."""
+        start, stop = self._run_bounds(station)
+        return self.grid[station, self.chain[start:stop]], self.grid_n[station, self.chain[start:stop]]
 
     def _station(self, station: int, z_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(y, normals (n, 3)) at heights `z_m` on one station's left side (`_side_run`)."""
@@ -105,15 +110,45 @@ class SideSurface:
         n = np.stack([np.interp(z_m, z, normals[order, k]) for k in range(3)], axis=1)
         return y, n
 
+    def _between(self, i: int, t: float, z_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """((n,) y, (n, 2) the cut's outward unit normal in (y, z)) at heights `z_m` on the left side between stations i
+        and i + 1, a share `t` of the way: on the shell's own triangles. Each quad of the tube is split along
+        its diagonal from point k at station i to point k + 1 at station i + 1 (`camgen.vehicles.body.shell`),
+        so the side's cut at that x runs through each row's point and each diagonal's point in turn;
+        interpolating the two stations' sides at one height instead misses a quad's bend by up to a centimetre
+        where the sections change fast (at the cowl, where the belt leaves the bonnet)."""
+        bounds = [self._run_bounds(station) for station in (i, i + 1)]
+        start, stop = min(b[0] for b in bounds), max(b[1] for b in bounds)
+        chain = self.chain[start:stop]
+        rows = (1 - t) * self.grid[i, chain] + t * self.grid[i + 1, chain]
+        count = self.grid.shape[1]
+        cut = [rows[0]]
+        for j in range(len(chain) - 1):
+            p, q = int(chain[j]), int(chain[j + 1])
+            low = p if q == (p + 1) % count else q
+            cut += [(1 - t) * self.grid[i, low] + t * self.grid[i + 1, (low + 1) % count], rows[j + 1]]
+        cut = np.array(cut)
+        order = np.argsort(cut[:, 2], kind="stable")
+        z, y = cut[order, 2], cut[order, 1]
+        segment = np.clip(np.searchsorted(z, z_m) - 1, 0, len(z) - 2)
+        along = np.stack([y[segment + 1] - y[segment], z[segment + 1] - z[segment]], axis=1)
+        out = np.stack([along[:, 1], -along[:, 0]], axis=1)  # along turned clockwise: +y on a side rising in z
+        out /= np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-12)
+        return np.interp(z_m, z, y), out
+
     def at(self, x_m: float, z_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(points (n, 3) on the left side at `x_m` and heights `z_m`, unit outward normals (n, 3))."""
         i = int(np.clip(np.searchsorted(self.x, x_m) - 1, 0, len(self.x) - 2))
         t = float(np.clip((x_m - self.x[i]) / max(self.x[i + 1] - self.x[i], 1e-12), 0.0, 1.0))
-        y0, n0 = self._station(i, z_m)
-        y1, n1 = self._station(i + 1, z_m)
+        _, n0 = self._station(i, z_m)
+        _, n1 = self._station(i + 1, z_m)
         n = (1 - t) * n0 + t * n1
         n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
-        return np.stack([np.full_like(z_m, x_m), (1 - t) * y0 + t * y1, z_m], axis=1), n
+        # The normal's fore-and-aft lean from the stations', its part across from the cut it lies on.
+        y, cut_normal = self._between(i, t, z_m)
+        across = np.sqrt(np.maximum(1 - n[:, 0] ** 2, 0.0))[:, None] * cut_normal
+        n = np.concatenate([n[:, :1], across], axis=1)
+        return np.stack([np.full_like(z_m, x_m), y, z_m], axis=1), n
 
     def z_range(self, x_m: float) -> tuple[float, float]:
         """(lowest, highest) height at which the side faces out at both stations around `x_m`."""
