@@ -139,6 +139,11 @@ def glass_transmittance(
     return panes if roof is None else np.where(roof, ROOF_GLASS_T, panes)
 
 
+WINDSCREEN_REACH_M = 0.1
+"""How far behind the windscreen's band (`windscreen_x_m`) forward-facing glass still counts as the windscreen, m:
+the band's edge lies in the roof's rounding over the header."""
+
+
 def windscreen_x_m(look: VehicleLook) -> tuple[float, float]:
     """(upper edge, lower edge) of the windscreen along the vehicle, m (`camgen.vehicles.body.PROFILES`): a
     bus's upright windscreen is its front end."""
@@ -264,10 +269,13 @@ def glass_part(
 ) -> Part:
     """The shell's glass faces with their own vertices (each face's transmittance exact), coloured (1, 1, 1,
     1 − T): the opacity the renderer blends with (`glass_transmittance`). The windscreen is the glass
-    facing forward at the front; `roof` (F,) bool marks a glass roof's faces."""
+    facing forward up to its top edge (`windscreen_x_m`; a saloon's reaches back past the vehicle's middle);
+    `roof` (F,) bool marks a glass roof's faces."""
     corners = faces.reshape(-1)
     centre = vertices_m[faces].mean(axis=1)
-    windscreen = (normals[faces].mean(axis=1)[:, 0] > 0.35) & (centre[:, 0] > 0)
+    windscreen = (normals[faces].mean(axis=1)[:, 0] > 0.35) & (
+        centre[:, 0] > windscreen_x_m(look)[0] - WINDSCREEN_REACH_M
+    )
     transmittance = glass_transmittance(look, centre, windscreen, roof)
     colours = np.ones((len(corners), 4))
     colours[:, 3] = np.repeat(1.0 - transmittance, 3)
