@@ -59,3 +59,25 @@ def test_stations_follow_the_shell_not_the_profile_alone():
 def test_a_vehicle_without_a_sloped_windscreen_is_refused_with_a_reason():
     with pytest.raises(ValueError, match="windscreen"):
         side_stations(draw_look(1, "bus", pinned={"body_type": "bus"}))
+
+
+@pytest.mark.parametrize(("body", "cls"), [("sedan", "car"), ("hatchback", "car"), ("pickup", "car"), ("van", "truck")])
+def test_the_whole_windscreen_has_the_windscreens_transmittance(body, cls):
+    """A windscreen raked as a real one reaches back past the vehicle's middle on a saloon: every outer glass face
+    facing forward (the windscreen's) lets WINDSCREEN_T through, not the side windows' (their glass never faces
+    forward that much)."""
+    from camgen.vehicles.body import build_vehicle
+    from camgen.vehicles.cabin import WINDSCREEN_T
+
+    look = draw_look(2, cls, pinned={"body_type": body})
+    glass = next(part for part in build_vehicle(look).parts if part.name == "body_glass")
+    centre = glass.vertices_m[glass.faces].mean(axis=1)
+    forward = glass.normals[glass.faces].mean(axis=1)[:, 0] > 0.35
+    transmittance = 1.0 - glass.colours[glass.faces[:, 0], 3]
+    assert forward.sum() > 50
+    assert np.allclose(transmittance[forward], WINDSCREEN_T), (
+        body,
+        centre[forward][~np.isclose(transmittance[forward], WINDSCREEN_T)][:3],
+    )
+    if body == "sedan":
+        assert centre[forward, 0].min() < 0.0  # the raked screen's top lies behind the middle
