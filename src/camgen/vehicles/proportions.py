@@ -18,20 +18,24 @@ Sources and estimates:
   reported by the press at their launches: VW Golf 8 4,284 mm long, 1,456 mm high, wheelbase 2,636 mm (bvz.at,
   November 2019; motor1 Italy, May 2022); Toyota Corolla saloon 4.63 m, 1.43 m, 2.70 m (webmotors.com.br); Skoda
   Octavia Combi (4th generation) 4.69-4.70 m, wheelbase 2.68-2.69 m (ntz.de; red-live.it, which gives the Passat
-  Variant's 2.79 m); Toyota RAV4 (5th generation) 4.60 m, wheelbase 2.69 m (businessday.ng, de.motor1.com); Ford
+  Variant's 2.79 m); Toyota RAV4 (5th generation) 4.60 m long, its wheelbase 30 mm longer than the 4th generation's
+  2.66 m (businessday.ng, de.motor1.com; a 2012 Los Angeles show report on yo-mardeemociones.blogspot.com); Ford
   Ranger about 5.35 m long and 1.85 m high (aol.co.uk, 2011); and `camgen.vehicles.look`'s sources. A typical
   saloon's front and rear overhangs, 0.9 and 1.0 m of a 4.7 m car with a 2.8 m wheelbase (MathWorks, Automated
-  Driving Toolbox, `vehicleDimensions`), match the sedans' here (0.96-1.06 and 0.88-0.98 m).
+  Driving Toolbox, `vehicleDimensions`), are near the sedans' here (0.99-1.07 and 0.91-0.99 m, from
+  `look.BODY_TYPES`' overhang share, unchanged here).
 - The stations (`SIDE_STATION_RANGES`): no published table of cowl, header or roof-end positions was found (makers
-  publish overall dimensions, overhangs and angles of approach, not greenhouse stations). The ranges are estimates
-  read from makers' side elevations of the models named per body type, as distances from the anchors real cars keep
-  across a segment: the cowl from the front axle (a transverse engine and its gearbox fill 0.35-0.7 m behind the
-  axle's line on a front-wheel-drive hatchback, 0.45-0.85 m on a saloon or estate and more on a longitudinal
-  engine's pickup), the windscreen's rake as its chord from the cowl to the header, a saloon's roof end and rear
-  window base from the rear axle, a hatchback's, estate's or SUV's roof end and tailgate glass base from the
-  vehicle's tail. They are wide enough for the segment (a Fiat 500 to a Golf), and narrow enough to fail the earlier
-  profiles, whose greenhouses stood 0.3-0.6 m too far forward with windscreens raked 36-47 degrees (cars) and 55
-  degrees (vans, whose windscreens then started 0.4-0.6 m ahead of their front axles).
+  publish overall dimensions, overhangs and angles of approach, not greenhouse stations), nor of windscreen angles.
+  The ranges are estimates from the named models' side views (not measured from drawings in this change), as
+  distances from the anchors real cars keep across a segment: the cowl from the front axle (a transverse engine and
+  its gearbox fill 0.35-0.7 m behind the axle's line on a front-wheel-drive hatchback, 0.45-0.85 m on a saloon or
+  estate and more on a pickup's longitudinal engine), the windscreen's rake as its chord from the cowl to the header
+  (25-30 degrees from the horizontal on saloons and hatchbacks, the figure of camgen's realism review, a few degrees
+  steeper on SUVs and pickups, 10-15 steeper on vans), a saloon's roof end and rear window base from the rear axle,
+  a hatchback's, estate's or SUV's roof end and tailgate glass base from the vehicle's tail. They are wide enough for
+  the segment (a Fiat 500 to a Golf), and narrow enough to fail the earlier profiles, whose greenhouses stood
+  0.3-0.6 m too far forward with windscreens raked 35-48 degrees (cars) and 54-58 degrees (vans, whose windscreens
+  then started 0.44-0.66 m ahead of their front axles).
 """
 
 from __future__ import annotations
@@ -182,7 +186,7 @@ SIDE_STATION_RANGES: dict[str, dict[str, tuple[float, float]]] = {
     },
 }
 """Per body type, station name (`SideStations`) → (low, high), m or degrees: the range the segment's representative
-models span (the module's sources; estimates from makers' side elevations). Hatchback: Fiat 500, VW Polo, VW Golf 8,
+models span (the module's sources: estimates from their side views). Hatchback: Fiat 500, VW Polo, VW Golf 8,
 Ford Focus. Sedan: Toyota Corolla saloon, VW Passat saloon, Toyota Camry. Estate: Skoda Octavia Combi, VW Passat
 Variant. SUV: Peugeot 2008, VW Tiguan, Toyota RAV4, BMW X5. Pickup: Toyota Hilux and Ford Ranger double cabs (the cab's
 back, its upright rear window, 0.3-0.7 m ahead of the rear axle, where a 1.5-1.6 m load bed ahead of the tail starts).
