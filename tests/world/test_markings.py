@@ -68,7 +68,7 @@ def test_perpendicular_bays_lines_between_and_around_them():
 
 def test_a_closed_row_has_a_front_line_that_the_side_lines_meet():
     """Closed: a line across the bays' front end (x = L/2 for heading 0), 3·w + line width long; the side lines
-    run from the back (x = −L/2) to the front line's middle, so the paint neither overlaps nor gaps."""
+    run from the back (x = −L/2) to the front line's near edge, so the paint neither overlaps nor gaps."""
     w, L, lw = 2.5, 5.0, 0.1
     rects = bay_rects([0, 0], 0, 3, w, L, lw, closed=True)
     sides, front = rects[:4], rects[4]
@@ -116,7 +116,7 @@ def test_unworn_paint_covers_each_rectangle_exactly():
     assert np.all(areas > 0)  # counter-clockwise from above: facing up
     assert areas.sum() == pytest.approx(7 * 0.6 * 3.0, rel=1e-5)
     assert mesh.painted_area_m2 == pytest.approx(mesh.design_area_m2)
-    assert len(mesh.faces) == 2 * sum(round(r.width_m / 0.02) for r in rects)  # one run per row
+    assert len(mesh.faces) == 2 * sum(round(r.width_m / 0.01) for r in rects)  # one run per 1 cm row
     np.testing.assert_allclose(mesh.vertices_m[:, 2], 0.013)
 
 

@@ -2,7 +2,7 @@
 (`camgen.config.markings`) and a seed.
 
 A marking is a set of painted rectangles (`PaintRect`): a line's dashes along its polyline, a row of bays'
-lines, a crosswalk's bars. Each rectangle is laid out as a grid of cells about `WEAR_CELL_M` on a side,
+lines, a crosswalk's bars. Each rectangle is laid out as a grid of cells (`WEAR_CELL_M` × `WEAR_ROW_M`),
 and the cells where the paint has worn off are left out: wear is a share `wear` of each rectangle's
 cells, chosen where a seeded value-noise field of the world position (patches 0.1–0.4 m across, as tyres
 and weather wear them) is lowest, the cells nearer a rectangle's edges more readily (frayed edges), so
@@ -32,8 +32,11 @@ more than 2× out to d = 3 mm / (2 · 1.2e-6 · h) (210 m for a camera 6 m up), 
 a pixel wide."""
 
 WEAR_CELL_M = 0.02
-"""Side of the wear grid's cells, m: the raggedness of a worn edge (a pixel spans 2 cm about 10–20 m from
-a 1080p camera of 60–90° field of view)."""
+"""Length of the wear grid's cells along a painted rectangle, m: the raggedness of a worn edge (a pixel spans
+2 cm about 10–20 m from a 1080p camera of 60–90° field of view)."""
+WEAR_ROW_M = 0.01
+"""Width of the wear grid's rows across a rectangle, m: half a cell, since the steps of a worn long edge show
+most (a 4K camera at 8 mm resolves 2.5 mm 10 m away)."""
 
 PAINT_RGB = {"white": (0.50, 0.50, 0.48), "yellow": (0.45, 0.30, 0.04)}
 """Diffuse reflectance of road paint in daylight, linear RGB. EN 1436:2007 classes the luminance factor β
@@ -54,11 +57,11 @@ PAINT_ROUGHNESS = 0.7
 DIRT_VARIATION = 0.08
 """Half the spread of a marking's reflectance about its colour (dirt, tyre rubber): ±8 %."""
 
-EDGE_WEAR_BIAS = 0.12
+EDGE_WEAR_BIAS = 0.07
 """How much better a cell holds for each cell it lies inside its rectangle's edge (up to
 `EDGE_WEAR_DEPTH_CELLS`), in units of the noise's range: paint frays from its edges, and a worn patch seldom
 takes a line's whole width."""
-EDGE_WEAR_DEPTH_CELLS = 3
+EDGE_WEAR_DEPTH_CELLS = 5
 """Cells in from the edge beyond which a cell holds no better."""
 
 RUN_END_JITTER_CELLS = 0.4
@@ -152,7 +155,7 @@ def bay_rects(
 
     Perpendicular: bays side by side, the k-th centred k·width_m to the left (+90°) of the first; a line
     `length_m` long along each of the count + 1 bay sides, centred on the side; closed: a line across the
-    row's front end (its centre on the bays' front edge), the side lines then stopping at its middle.
+    row's front end (its centre on the bays' front edge), the side lines then stopping at its near edge.
     Parallel: bays nose to tail, the k-th k·length_m ahead; a line `width_m` long across each of the
     count + 1 bay ends; closed: a line along the row's left side, the end lines stopping at it."""
     h = math.radians(heading_deg)
@@ -264,14 +267,15 @@ def paint_mesh(
     wear: float,
     seed: int,
     cell_m: float = WEAR_CELL_M,
+    row_m: float = WEAR_ROW_M,
 ) -> PaintMesh:
     """The worn paint of `rects` at `height_m` (the surface's height plus `PAINT_LIFT_M`): each rectangle's
-    grid of cells (rows across its width, columns along its length, each about `cell_m`), a share `wear`
+    grid of cells (rows about `row_m` wide across it, columns about `cell_m` long along it), a share `wear`
     of each rectangle's cells left out where `wear_score` plus `EDGE_WEAR_BIAS` per cell in from the edge
     is lowest, and each row's runs of kept cells as one quad."""
     grids = []
     for rect in rects:
-        rows = max(1, round(rect.width_m / cell_m))
+        rows = max(1, round(rect.width_m / row_m))
         cols = max(1, math.ceil(rect.length_m / cell_m))
         su = (np.arange(cols) + 0.5) / cols * rect.length_m - rect.length_m / 2
         sv = (np.arange(rows) + 0.5) / rows * rect.width_m - rect.width_m / 2
