@@ -71,7 +71,7 @@ from camgen.world.ies import flux_lm as ies_flux_lm
 from camgen.world.ies import grid_intensity_cd, intensity_grid_cd
 from camgen.world.markings import PAINT_ROUGHNESS, PaintMesh, marking_paint, wet_reflectance
 from camgen.world.night import SPOT_FULL_INTENSITY_FRACTION, peak_intensity_cd
-from camgen.world.rain import WET_ALBEDO_FACTOR, WET_ROUGHNESS_FACTOR
+from camgen.world.rain import WET_ALBEDO_FACTOR, WET_ROUGHNESS_FACTOR, ground_is_wet
 from camgen.world.site import SiteDaylight, daylight_change, site_daylight
 from camgen.world.sky import LUMINANCE_WEIGHTS
 from camgen.world.textures import TYPICAL_ALBEDO_RGB, encode_srgb8, surface_maps
@@ -977,9 +977,9 @@ def _character_rig(actor: Actor, route: Route, characters: dict[str, Character],
 
 
 def is_wet(scene: Scene) -> bool:
-    """Whether the scene's ground is wet: `environment.wet`, or while it rains when that is left out."""
-    wet = scene.environment.wet
-    return scene.environment.rain is not None if wet is None else wet
+    """Whether the scene's ground is wet: `environment.wet`, or while it rains when that is left out
+    (`camgen.world.rain.ground_is_wet`)."""
+    return ground_is_wet(scene.environment)
 
 
 def wet_ground(mesh, node_mesh: pyrender.Mesh) -> None:
