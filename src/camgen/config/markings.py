@@ -2,9 +2,10 @@
 a level surface of the scene; `camgen.world.markings` turns them into worn paint geometry.
 
 Dimensions default to published practice, each cited where it is set: line widths and dash patterns of the
-US MUTCD (FHWA, Manual on Uniform Traffic Control Devices, 2009 edition, §3A.06, §3B.16, §3B.18), parking
-bays of UK practice (IStructE, "Design recommendations for multi-storey and underground car parks", 4th
-ed. 2011: 2.4 × 4.8 m; parallel bays about 2.0 × 6.0 m, DfT "Manual for Streets" 2007 §8.3).
+US MUTCD (FHWA, Manual on Uniform Traffic Control Devices, 2009 edition, §3A.06, §3B.16, §3B.18) and the UK
+Traffic Signs Manual (DfT, chapter 5 "Road Markings", 2003, table 4-1), the perpendicular bays of UK car
+parks (IStructE, "Design recommendations for multi-storey and underground car parks", 4th ed. 2011:
+2.4 × 4.8 m). The parallel bay's 2.0 × 6.0 m is an estimate (`PARALLEL_BAY_M`).
 """
 
 from __future__ import annotations
@@ -20,21 +21,32 @@ HEADING = Annotated[float, Field(ge=-360, le=360), Why("a direction, −360° to
 MarkingName = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[A-Za-z0-9_.-]+$")]
 
 LINE_WIDTH_M = 0.1
-"""A normal line, m: MUTCD §3A.06 "4 to 6 inches" (0.10–0.15 m); the UK's 100 mm (TSRGD 2016)."""
+"""A normal line, m: MUTCD §3A.06's normal line is 4 to 6 in (0.10–0.15 m; FHWA, "Research – Pavement
+Markings", ch. 3 "Pavement marking width"); the UK's centre line to diagram 1008 and its lane lines are
+100 mm (150 mm on roads 10 m or more wide: Traffic Signs Manual ch. 5, 2003, table 4-1 and para 4.3)."""
 BAY_LINE_WIDTH_M = 0.1
-"""Parking-bay lines, m (UK and US practice: 100 mm, 4 in)."""
+"""Parking-bay lines, m: AS/NZS 2890.1:2004 asks unbroken lines 80–100 mm wide; US stall lines are commonly
+4 in (0.10 m). No UK figure for off-street bay lines was found; 0.1 matches the UK's 100 mm road lines."""
 PERPENDICULAR_BAY_M = (2.4, 4.8)
-"""(width, length) of a perpendicular (or echelon) parking bay, m: IStructE 2011's standard bay."""
+"""(width, length) of a perpendicular (or echelon) parking bay, m: the standard bay of IStructE's car-park
+recommendations from the 1st (1976; 2.3 m wide for long stays to 2.5 for short) to the 4th (2011) edition,
+and what UK contractors still mark. Its successor, IStructE's "Car park design" (announced 2022), raises the
+bay to about 2.6 × 5.0 m for today's larger cars."""
 PARALLEL_BAY_M = (2.0, 6.0)
-"""(width, length) of a parallel (kerbside) parking bay, m: Manual for Streets (DfT 2007) §8.3."""
+"""(width, length) of a parallel (kerbside) parking bay, m. An estimate: no published UK length for a
+kerbside bay was found (Manual for Streets, DfT 2007, ch. 8 gives guidance on parking-space sizes, but its
+figure could not be checked; UK designers report none nationally, with 1.8 m the usual minimum width and
+6.1 m an older handbook's length). 6 m holds a 4.5–5 m car with room to manoeuvre in; 2.0 m a 1.8 m wide one."""
 CROSSING_WIDTH_M = 3.0
-"""Width of a crosswalk along the traffic, m: MUTCD §3B.18 asks ≥ 6 ft (1.83 m); 10 ft (3.05 m) is common."""
+"""Width of a crosswalk along the traffic, m: MUTCD §3B.18 asks at least 6 ft (1.83 m); 3 m (10 ft) is an
+estimate of common practice, not a figure of the MUTCD."""
 CROSSING_STRIPE_M = 0.6
 """Width of a crosswalk's bar, m: MUTCD §3B.18, longitudinal bars 12–24 in (0.30–0.61 m) wide."""
 CROSSING_GAP_M = 0.6
-"""Gap between a crosswalk's bars, m: MUTCD §3B.18, 12–60 in (0.30–1.52 m), at most 2.5 bar widths."""
+"""Gap between a crosswalk's bars, m: MUTCD §3B.18, 12–60 in (0.30–1.52 m)."""
 CROSSING_GAP_MAX_STRIPES = 2.5
-"""MUTCD §3B.18: "the gap between the lines should not exceed 2.5 times the width of the … lines"."""
+"""MUTCD 2009 §3B.18 guidance: the gap between the bars should not exceed 2.5 times their width (quoted
+from the 2009 text; not found in the copies searched, where the 12–24 in bars and 12–60 in gaps were)."""
 WEAR = 0.15
 """Share of a marking's paint worn away by default (edges and patches, `camgen.world.markings`)."""
 
@@ -66,11 +78,13 @@ class LineMarking(_Paint):
         Field(ge=0.05, le=1.0),
         Why("road lines are 0.05–1 m wide (MUTCD: normal 0.10–0.15, stop lines 0.30–0.61)"),
     ] = LINE_WIDTH_M
-    """Width, m (`LINE_WIDTH_M`; a stop line 0.3–0.6: MUTCD §3B.16, 12–24 in)."""
+    """Width, m (`LINE_WIDTH_M`; a stop line 0.3–0.6: MUTCD §3B.16, 12–24 in; a UK centre line 0.1 or 0.15)."""
     dash_m: Annotated[float, Field(gt=0, le=100), Why("a dash is at most 100 m long")] | None = None
-    """A dash's length, m (MUTCD §3A.06's broken line: 10 ft, 3.05 m); null with gap_m: a solid line."""
+    """A dash's length, m (MUTCD §3A.06's broken line: 10 ft, 3.05 m; the UK's diagram 1008 centre line, 40 mph or
+    less: 2 m, and 1008.1 above 40 mph: 3 m); null with gap_m: a solid line."""
     gap_m: Annotated[float, Field(gt=0, le=100), Why("a gap is at most 100 m long")] | None = None
-    """The gap between dashes, m (MUTCD §3A.06: 30 ft, 9.14 m); the pattern runs on around the polyline's bends."""
+    """The gap between dashes, m (MUTCD §3A.06: 30 ft, 9.14 m; diagrams 1008 and 1008.1: 4 and 6 m); the pattern runs
+    on around the polyline's bends."""
 
     @model_validator(mode="after")
     def _check(self) -> LineMarking:
@@ -119,7 +133,7 @@ class BaysMarking(_Paint):
 
     @model_validator(mode="after")
     def _check(self) -> BaysMarking:
-        width, length = self.bay_size_m
+        width = self.bay_size_m[0]
         if self.line_width_m >= width / 5:
             raise invalid(
                 "line_width_m",

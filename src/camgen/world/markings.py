@@ -24,12 +24,12 @@ import numpy as np
 from camgen.config.markings import BaysMarking, CrossingMarking, LineMarking
 
 PAINT_LIFT_M = 0.003
-"""Height of the paint over the surface it lies on, m: thermoplastic road marking is laid 2–3 mm thick
-(thin paint 0.3–0.5 mm). It also keeps the paint in front of the surface in the depth test: with the
-renderer's float32 depth and 0.05 m near plane, depth steps are about 1.2e-6·d² m at distance d, and a
-camera h metres up sees the paint's lift as h_lift·d/h of depth along its ray, so 3 mm clears the steps by
-more than 2× out to d = 3 mm / (2 · 1.2e-6 · h) (210 m for a camera 6 m up), beyond where a 0.1 m line is
-a pixel wide."""
+"""Height of the paint over the surface it lies on, m: hot thermoplastic road marking is laid 1–3 mm thick
+(0.040–0.125 in; sprayed 1.0–2.5 mm), thin paint a fraction of a millimetre. It also keeps the paint in
+front of the surface in the depth test: with the renderer's float32 depth and 0.05 m near plane, depth
+steps are about 1.2e-6·d² m at distance d, and a camera h metres up sees the paint's lift as h_lift·d/h of
+depth along its ray, so 3 mm clears the steps by more than 2× out to d = 3 mm / (2 · 1.2e-6 · h) (210 m for
+a camera 6 m up), beyond where a 0.1 m line is a pixel wide."""
 
 WEAR_CELL_M = 0.02
 """Length of the wear grid's cells along a painted rectangle, m: the raggedness of a worn edge (a pixel spans
@@ -39,17 +39,26 @@ WEAR_ROW_M = 0.01
 most (a 4K camera at 8 mm resolves 2.5 mm 10 m away)."""
 
 PAINT_RGB = {"white": (0.50, 0.50, 0.48), "yellow": (0.45, 0.30, 0.04)}
-"""Diffuse reflectance of road paint in daylight, linear RGB. EN 1436:2007 classes the luminance factor β
-of dry markings: white on asphalt B2 ≥ 0.20 … B5 ≥ 0.50, yellow B1 ≥ 0.15 … B3 ≥ 0.30; new white
-thermoplastic and paint measure 0.6–0.8 and fall towards 0.3–0.4 after a few years of traffic. White here:
-β = Y = 0.50 (a marking in service); yellow: Y = 0.31 (B3), chromaticity of a traffic yellow (R > G ≫ B)."""
+"""Diffuse reflectance of road paint in daylight, linear RGB. EN 1436 classes the luminance factor β of dry
+markings in steps of 0.10: a white class B4 marking has β ≥ 0.50, a yellow class B2 one β ≥ 0.30 (as a
+supplier's EN 1436 specification of white and yellow sprayed thermoplastic states them; the standard's
+table itself was not read). Edge lines measured on 965 km of Michigan highways reflected around 28 % or
+60 % (two modes; Johnson, Kluge & Ervin 1995, UMTRI-95-42). White here: β = Y = 0.50, class B4's minimum;
+yellow: Y = 0.31, B2's, with the chromaticity of a traffic yellow (R > G ≫ B). As Lambertian surfaces their
+luminance coefficients under diffuse light Qd = 1000·ρ/π are 159 and 99 mcd m⁻² lx⁻¹, above EN 1436's
+classes Q3 (white on asphalt, ≥ 130) and Q1 (yellow, ≥ 80). Retroreflection (RL: R2 ≥ 100 … R5 ≥ 300
+mcd m⁻² lx⁻¹ for white) is not modelled: the paint is diffuse."""
 
 PAINT_NIR_REFLECTANCE = {"white": 0.80, "yellow": 0.70}
-"""Reflectance at 850 nm (the IR night mode, `camgen.render.nir`): TiO₂ (rutile) white pigments reflect
-0.8–0.9 through the near infrared, and the yellow pigments of road paint (lead chromate, organic yellows
-over a TiO₂ filler) turn reflective above 550 nm (Levinson, Berdahl & Akbari 2005, "Solar spectral optical
-properties of pigments — Part II", Sol. Energy Mater. Sol. Cells 89: 351–389); a little less here for the
-dirt and binder of a marking in service. Estimates to two digits, not measured for camgen."""
+"""Reflectance at 850 nm (the IR night mode, `camgen.render.nir`). Estimates: no measured 850 nm reflectance
+of road-marking paint was found. Chosen from the pigments: rutile TiO₂, the white of road paint, scatters
+strongly through the near infrared and absorbs almost nothing there (Levinson, Berdahl & Akbari 2005, "Solar
+spectral optical properties of pigments — Part II: survey of common colorants", Sol. Energy Mater. Sol.
+Cells 89: 351–389), so clean white paint is taken to reflect about as much at 850 nm as in the visible
+(0.8–0.9); a yellow absorbs the blue and, without carbon or iron oxide in it, little beyond, so a little
+less. These are clean paint's values: `PAINT_RGB`'s white 0.50 is a marking in service, and the dirt and
+tyre rubber that darken it absorb the near infrared too, so a worn marking may reflect nearer 0.5–0.6 at
+850 nm (`camgen.world.night.default_nir_reflectance`, a colour's red reflectance, gives 0.50 and 0.45)."""
 
 PAINT_ROUGHNESS = 0.7
 """glTF roughness of road paint: a matte binder with glass beads pressed in."""
