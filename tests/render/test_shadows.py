@@ -250,3 +250,37 @@ def test_sun_cascades_split_what_a_camera_above_every_caster_sees():
         assert 2.0 / (min(P[0, 0], P[1, 1]) * 2048) <= one_texel_m * 2 ** (1 / 8)  # the texel ladder's step
         ndc = np.c_[seen, np.ones(len(seen))] @ (P @ V).T
         assert np.any(np.all(np.abs(ndc[:, :2]) <= 1.0, axis=1))  # it holds some of what the view sees
+
+
+def test_a_draw_takes_the_cascades_fitted_to_its_own_view_box_and_map_size(renderer):
+    """The renderer keeps the cascades it fitted lately (`_PassRenderer._cascade_matrices`): draws through two
+    views, two shadow boxes and two sizes, taking turns, each shade with `sun_cascade_matrices` of its own view,
+    box, clip range and map size, bit for bit, whether fitted afresh or kept."""
+    from camgen.render.renderer import ShadowFit, shadow_map_size_texels, sun_cascade_matrices
+
+    graph = _shadow_scene(40.0, 40.0)
+    sun = next(node for node in graph.scene.light_nodes if type(node.light).__name__ == "DirectionalLight")
+    views = [
+        View(camera_matrix(300.0, 300.0, 159.5, 99.5), look_at((-6.0, -8.0, 5.0), (0.0, 0.0, 0.0)), 320, 200),
+        View(camera_matrix(300.0, 300.0, 159.5, 99.5), look_at((6.0, -8.0, 5.0), (0.0, 1.0, 0.0)), 320, 200),
+        View(camera_matrix(700.0, 700.0, 639.5, 399.5), look_at((6.0, -8.0, 5.0), (0.0, 1.0, 0.0)), 1280, 800),
+    ]
+    boxes = [
+        (np.array([-20.0, -20.0, 0.0]), np.array([20.0, 20.0, 3.0])),
+        (np.array([-5.0, -5.0, 0.0]), np.array([5.0, 5.0, 3.0])),
+    ]
+    clip_m = (0.1, 60.0)
+    draws = [(0, 0), (1, 0), (0, 1), (0, 0), (2, 0), (1, 0), (2, 0)]
+    fitted = []
+    for v, b in draws:
+        fit = ShadowFit(views[v], *boxes[b])
+        renderer.draw(graph, views[v], ("radiance",), shadow_fit=fit, clip_range_m=clip_m)
+        size = renderer._renderer.shadow_map_texels
+        assert size == shadow_map_size_texels(views[v])
+        expected = sun_cascade_matrices(graph.scene.get_pose(sun)[:3, :3], boxes[b], views[v], *clip_m, size)
+        drawn = renderer._renderer._sun_cascades[id(sun)]
+        for (V, P), (V_expected, P_expected) in zip(drawn, expected, strict=True):
+            assert np.array_equal(V, V_expected) and np.array_equal(P, P_expected)
+        fitted.append(drawn)
+    assert fitted[3] is fitted[0] and fitted[5] is fitted[1]  # kept, not fitted again
+    assert len({id(cascades) for cascades in fitted}) == 4

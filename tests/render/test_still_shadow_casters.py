@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from camgen.render.renderer import ShadowFit, View, _StillCasters, caster_versions
+import camgen.render.renderer as renderer_module
+from camgen.render.renderer import ShadowFit, View, _StillCasters, _texel_rects, caster_versions
 from tests.render.conftest import camera_matrix, look_at, scene_from
 from tests.render.test_shadow_culling import _shadow_maps
 
@@ -84,6 +85,14 @@ def test_kept_casters_shade_the_same_frames(renderer, monkeypatch):
         return result
 
     monkeypatch.setattr(_StillCasters, "plan", counted)
+    copied: list[tuple[int, int]] = []  # (width, height) of each copy of texels between the layers
+    copy = renderer_module.GL.glCopyImageSubData
+
+    def counted_copy(*args):
+        copied.append((args[-3], args[-2]))
+        return copy(*args)
+
+    monkeypatch.setattr(renderer_module.GL, "glCopyImageSubData", counted_copy)
 
     def frames(keep: bool) -> list[tuple[np.ndarray, list[np.ndarray]]]:
         monkeypatch.setattr(renderer._renderer, "keep_still_casters", keep)
@@ -96,6 +105,9 @@ def test_kept_casters_shade_the_same_frames(renderer, monkeypatch):
 
     kept, every = frames(True), frames(False)
     assert plans.count("hit") >= 3 * 3, plans  # each cascade at 0.4 s and, once the car drove off, again
+    size = renderer._renderer.shadow_map_texels
+    partial = [(w, h) for w, h in copied if w * h < size * size]
+    assert len(partial) >= 3, copied  # hits after a pass of the same kept set restored only what it drew over
     assert len(caster_versions(graph)) == len(posts) + 3  # the ground, the posts, the walker and the car
     for (kept_radiance, kept_maps), (radiance, maps) in zip(kept, every, strict=True):
         assert len(maps) == 3
@@ -105,3 +117,56 @@ def test_kept_casters_shade_the_same_frames(renderer, monkeypatch):
     assert not np.array_equal(kept[0][0], kept[-1][0])  # the walker and its shadow moved
     assert not all(np.array_equal(a, b) for a, b in zip(kept[0][1], kept[-1][1], strict=True))
     assert _PassRenderer is type(renderer._renderer)
+
+
+@pytest.mark.opengl
+def test_a_casters_texels_lie_in_its_texel_rectangle(renderer, monkeypatch):
+    """`_texel_rects` bounds what a depth-only draw of a node writes to each cascade: a walker and a car drawn
+    alone (every other mesh hidden) into the maps of a held view write texels, and every one of them lies in
+    the node's rectangle of that cascade, which is not much larger than the texels written."""
+    from pyrender.light import DirectionalLight
+
+    from camgen.render.scene_graph import build_scene_graph
+
+    graph = build_scene_graph(
+        scene_from(
+            environment={"meshes": [{"type": "plane", "name": "ground", "size_m": [60.0, 60.0]}]},
+            lights=[{"type": "sun", "illuminance_lux": 50000, "azimuth_deg": 150.0, "elevation_deg": 40.0}],
+            actors=[
+                {"name": "walker", "class": "person",
+                 "path": {"waypoints_m": [[-2.0, 3.0], [4.0, 5.0]], "speed_m_s": 1.4}},
+                {"name": "car", "class": "car", "vehicle": {"seed": 4, "body_type": "sedan"},
+                 "path": {"waypoints_m": [[-6.0, 9.0], [8.0, 9.0]], "speed_m_s": 6.0}},
+            ],
+        )
+    )  # fmt: skip
+    view = View(camera_matrix(150.0, 150.0, 79.5, 59.5), look_at((0.0, -6.0, 4.0), (0.0, 6.0, 0.5)), 160, 120)
+    fit = ShadowFit(view, np.array([-30.0, -30.0, 0.0]), np.array([30.0, 30.0, 3.0]))
+    monkeypatch.setattr(renderer._renderer, "keep_still_casters", False)
+    graph.place_actors(1.0)
+    sun = next(node for node in graph.scene.light_nodes if isinstance(node.light, DirectionalLight))
+    for alone in graph.actor_nodes:
+        hidden = [node for node in graph.scene.mesh_nodes if node is not alone]
+        for node in hidden:
+            node.mesh.is_visible = False
+        try:
+            renderer.draw(graph, view, ("radiance",), shadow_fit=fit)
+            maps = _shadow_maps(renderer, graph)
+        finally:
+            for node in hidden:
+                node.mesh.is_visible = True
+        size = renderer._renderer.shadow_map_texels
+        written_somewhere = False
+        for cascade, depths in enumerate(maps):
+            V, P = renderer._renderer._sun_cascades[id(sun)][cascade]
+            rows, cols = np.nonzero(depths.reshape(size, size) < 1.0)
+            rects = _texel_rects(graph.scene, [alone], P @ V, size)
+            if not len(rows):
+                continue
+            written_somewhere = True
+            assert len(rects) == 1, (alone.name, cascade, rects)
+            x0, y0, x1, y1 = rects[0]
+            assert np.all((cols >= x0) & (cols < x1) & (rows >= y0) & (rows < y1)), (alone.name, cascade, rects)
+            written = (cols.max() - cols.min() + 1) * (rows.max() - rows.min() + 1)
+            assert (x1 - x0) * (y1 - y0) < 2 * written + 4 * (x1 - x0 + y1 - y0), (alone.name, cascade, rects)
+        assert written_somewhere, alone.name

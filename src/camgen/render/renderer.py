@@ -441,6 +441,11 @@ class _StillCasters:
         self._kept[slot] = (weakref.ref(scene), key, held)
         return "keep", *_split(nodes, held)
 
+    def kept_entry(self, light_node, layer: int) -> tuple | None:
+        """The kept set of a sun's cascade (`plan` made it: a new object whenever the kept layer is drawn again),
+        or None."""
+        return self._kept.get((id(light_node), layer))
+
 
 def _split(nodes: list, held: dict[int, int]) -> tuple[list, list]:
     """`nodes` in and out of `held` (by id), each in their order."""
@@ -455,6 +460,25 @@ def caster_versions(graph) -> dict[int, int]:
     if counts:
         versions.update((id(node), count) for node, count in zip(graph.moving_nodes, counts, strict=True))
     return versions
+
+
+CASCADE_FITS_KEPT = 8
+"""Cascade fits a renderer keeps (`_PassRenderer._cascade_matrices`): each of a few views' suns."""
+
+
+@dataclass
+class _SunPassPlan:
+    """What one cascade's pass draws (`_PassRenderer._sun_shadow_plan`): `mode` ("hit", "keep" or "none",
+    `_StillCasters.plan`), the casters whose depths are kept and the others, the kept set (`_StillCasters.kept_entry`),
+    the array of kept depths, and the cascade's (V, P)."""
+
+    mode: str
+    kept: list
+    others: list
+    entry: tuple | None
+    kept_array: int | None
+    V: np.ndarray
+    P: np.ndarray
 
 
 class _PassRenderer(pyrender.Renderer):
@@ -502,6 +526,12 @@ class _PassRenderer(pyrender.Renderer):
         """Per mesh node (by id) of the current draw's graph whose look is counted (`SceneGraph.look_versions`;
         0 for the still environment): equal counts, the same triangles where they were (`_StillCasters`)."""
         self._still_casters = _StillCasters()
+        self._cascade_fits: OrderedDict[tuple, list[tuple[np.ndarray, np.ndarray]]] = OrderedDict()
+        """The last `CASCADE_FITS_KEPT` `sun_cascade_matrices` results, by what they were fitted to
+        (`_cascade_matrices`)."""
+        self._drawn_over_kept: dict[tuple[int, int], tuple[tuple, list[tuple[int, int, int, int]]]] = {}
+        """Per (sun's array texture, layer) whose last pass drew over kept depths: that kept set
+        (`_StillCasters.kept_entry`) and the rectangles of texels (x0, y0, x1, y1) it drew its other casters in."""
         self.keep_still_casters = True
         """Whether a sun's cascades start from the kept depths of the casters that held still (a test turns it off
         to compare with every caster drawn)."""
@@ -577,33 +607,93 @@ class _PassRenderer(pyrender.Renderer):
         for node in scene.light_nodes:
             if isinstance(node.light, DirectionalLight) and flags & RenderFlags.SHADOWS_DIRECTIONAL:
                 bounds = scene.bounds if self.shadow_bounds_m is None else self.shadow_bounds_m
-                self._sun_cascades[id(node)] = sun_cascade_matrices(
-                    scene.get_pose(node)[:3, :3], bounds, self.shadow_view, *self.shadow_clip_m, self.shadow_map_texels
-                )
+                self._sun_cascades[id(node)] = self._cascade_matrices(scene.get_pose(node)[:3, :3], bounds)
                 array, size = self._sun_cascade_array(node.light), self.shadow_map_texels
                 self._sun_arrays_drawn[id(node)] = array
                 try:
+                    # Every cascade's copies of kept depths before any cascade's draw: a copy into the array waits
+                    # for the draws into it to be rasterised, a draw does not (`_sun_shadow_pass`).
+                    planned = []
                     for k in range(SUN_CASCADES):
                         self._cascade, self._sun_layer = k, (array, k, size)
-                        self._shadow_mapping_pass(scene, node, flags)
+                        planned.append(self._sun_shadow_plan(scene, node, flags))
+                    for k, plan in enumerate(planned):
+                        self._cascade, self._sun_layer = k, (array, k, size)
+                        self._shadow_mapping_pass(scene, node, flags, plan)
                 finally:
                     self._cascade, self._sun_layer = 0, None
             elif isinstance(node.light, SpotLight) and flags & RenderFlags.SHADOWS_SPOT:
                 self._shadow_mapping_pass(scene, node, flags)
 
-    def _shadow_mapping_pass(self, scene, light_node, flags):
+    def _cascade_matrices(self, R_world_from_light: np.ndarray, bounds) -> list[tuple[np.ndarray, np.ndarray]]:
+        """`sun_cascade_matrices` of the current draw's shadow view, clip range and map size, kept for the last
+        `CASCADE_FITS_KEPT` (sun, box, view) it was asked for: a held view's draws fit the same cascades frame
+        after frame (1.7 ms each on llvmpipe's machine), and the kept depths are told by the same matrices."""
+        low, high = (np.asarray(bound, np.float64) for bound in bounds)
+        key = (
+            np.asarray(R_world_from_light, np.float64).tobytes(),
+            low.tobytes(),
+            high.tobytes(),
+            self.shadow_view.key(),
+            tuple(float(value) for value in self.shadow_clip_m),
+            self.shadow_map_texels,
+        )
+        kept = self._cascade_fits.get(key)
+        if kept is None:
+            kept = sun_cascade_matrices(
+                R_world_from_light, (low, high), self.shadow_view, *self.shadow_clip_m, self.shadow_map_texels
+            )
+            for V, P in kept:
+                V.setflags(write=False)  # shared by the draws that ask again
+                P.setflags(write=False)
+            self._cascade_fits[key] = kept
+            while len(self._cascade_fits) > CASCADE_FITS_KEPT:
+                self._cascade_fits.popitem(last=False)
+        else:
+            self._cascade_fits.move_to_end(key)
+        return kept
+
+    def _shadow_mapping_pass(self, scene, light_node, flags, plan: _SunPassPlan | None = None):
         """pyrender's draw of one shadow map, over the nodes that reach it (`_sorted_mesh_nodes`); a sun's
-        cascade starts from the kept depths of the casters that held still (`_sun_shadow_pass`)."""
+        cascade starts from the kept depths of the casters that held still (`_sun_shadow_pass`, as `plan`ned)."""
         self._shadow_pass = (light_node, flags)
         try:
             if self._sun_layer is None:
                 super()._shadow_mapping_pass(scene, light_node, flags)
             else:
-                self._sun_shadow_pass(scene, light_node, flags)
+                self._sun_shadow_pass(scene, light_node, flags, plan)
         finally:
             self._shadow_pass = None
 
-    def _sun_shadow_pass(self, scene, light_node, flags) -> None:
+    def _sun_shadow_plan(self, scene, light_node, flags) -> _SunPassPlan:
+        """What `_sun_shadow_pass` draws for the cascade `_sun_layer` of a sun, the kept depths of a hit copied into
+        the layer already (all of them, or what the last pass drew over them)."""
+        self._shadow_pass = (light_node, flags)
+        try:
+            array, layer, size = self._sun_layer
+            V, P = self._get_light_cam_matrices(scene, light_node, flags)
+            nodes = [node for node in self._sorted_mesh_nodes(scene) if node.mesh.is_visible]
+        finally:
+            self._shadow_pass = None
+        mode, kept, others = (
+            self._still_casters.plan(scene, light_node, layer, size, P @ V, nodes, self.caster_versions)
+            if self.keep_still_casters
+            else ("none", [], nodes)
+        )
+        entry = self._still_casters.kept_entry(light_node, layer)
+        drawn = self._drawn_over_kept.pop((array, layer), None)
+        kept_array = self._sun_cascade_array(light_node.light, still=True) if mode != "none" else None
+        if mode == "hit":
+            # Over a layer that holds this kept set and the last pass's others only, those are restored, not all.
+            restore = drawn[1] if drawn is not None and drawn[0] is entry else [(0, 0, size, size)]
+            for x0, y0, x1, y1 in restore:
+                GL.glCopyImageSubData(
+                    kept_array, GL.GL_TEXTURE_2D_ARRAY, 0, x0, y0, layer,
+                    array, GL.GL_TEXTURE_2D_ARRAY, 0, x0, y0, layer, x1 - x0, y1 - y0, 1,
+                )  # fmt: skip
+        return _SunPassPlan(mode, kept, others, entry, kept_array, V, P)
+
+    def _sun_shadow_pass(self, scene, light_node, flags, plan: _SunPassPlan | None = None) -> None:
         """One cascade of a sun (`_sun_layer`), drawn as pyrender draws a shadow map, except that the depths
         of the casters that held still are copied from the last draw of the same cascade (same light, size
         and matrices; `_StillCasters` decides) and only the others are drawn over them.
@@ -613,29 +703,29 @@ class _PassRenderer(pyrender.Renderer):
         the still casters, then the others drawn over it, is the least over all (and a copy moves the bits
         unchanged). In a held view the parked vehicles, buildings and ground are not drawn again: the
         parking lot's held sim step drew its three cascades in 67 ms of CPU, of which its five parked
-        vehicles took 31 ms (llvmpipe, 2048² maps)."""
+        vehicles took 31 ms (llvmpipe, 2048² maps).
+
+        A hit restores only what the last pass drew over the kept depths of the same kept set
+        (`_drawn_over_kept`: the texels each of its other casters' boxes reaches, `_texel_rects`) instead of
+        copying the whole kept layer: everywhere else the layer holds the kept depths already (no other pass
+        wrote it since; one that did, or one that drew every caster, leaves no record, and the next hit copies
+        the whole layer). A 2048² layer is 16 MB; ptz_follow's held step restores up to 0.1 M texels of its
+        4.2 M. `plan`: `_sun_shadow_plan`'s, made (and a hit's copies done) before the draws of the sun's
+        cascades; None makes it here."""
         array, layer, size = self._sun_layer
-        self._configure_shadow_mapping_viewport(light_node.light, flags)
-        V, P = self._get_light_cam_matrices(scene, light_node, flags)
-        nodes = [node for node in self._sorted_mesh_nodes(scene) if node.mesh.is_visible]
-        plan, kept, others = (
-            self._still_casters.plan(scene, light_node, layer, size, P @ V, nodes, self.caster_versions)
-            if self.keep_still_casters
-            else ("none", [], nodes)
-        )
-        kept_array = self._sun_cascade_array(light_node.light, still=True) if plan != "none" else None
-        if plan == "hit":
-            GL.glCopyImageSubData(
-                kept_array, GL.GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer,
-                array, GL.GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, size, size, 1,
-            )  # fmt: skip
-        elif plan == "keep":
+        plan = self._sun_shadow_plan(scene, light_node, flags) if plan is None else plan
+        V, P, kept, others = plan.V, plan.P, plan.kept, plan.others
+        # A hit's layer holds the kept depths already (`_sun_shadow_plan`); the others' passes start from a clear.
+        self._configure_shadow_mapping_viewport(light_node.light, flags, clear=plan.mode != "hit")
+        if plan.mode == "keep":
             self._depth_only(scene, kept, V, P)
             GL.glCopyImageSubData(
                 array, GL.GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer,
-                kept_array, GL.GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, size, size, 1,
+                plan.kept_array, GL.GL_TEXTURE_2D_ARRAY, 0, 0, 0, layer, size, size, 1,
             )  # fmt: skip
         self._depth_only(scene, others, V, P)
+        if plan.mode != "none":  # the layer is the kept layer but where `others` were drawn
+            self._drawn_over_kept[(array, layer)] = (plan.entry, _texel_rects(scene, others, P @ V, size))
         GL.glFlush()
 
     def _depth_only(self, scene, nodes, V, P) -> None:
@@ -670,9 +760,10 @@ class _PassRenderer(pyrender.Renderer):
         reaching = meshes_reach_clip_volume([node.mesh for node in nodes], poses, P @ V)
         return [node for node, reaches in zip(nodes, reaching, strict=True) if reaches]
 
-    def _configure_shadow_mapping_viewport(self, light, flags):
+    def _configure_shadow_mapping_viewport(self, light, flags, *, clear: bool = True):
         """pyrender's set-up of a shadow pass, over the map's own size (pyrender's: `SHADOW_TEX_SZ`); a sun's
-        cascade is drawn into its layer of the sun's array (`_sun_cascade_array`) instead of pyrender's map."""
+        cascade is drawn into its layer of the sun's array (`_sun_cascade_array`) instead of pyrender's map,
+        cleared unless `clear` is False (the pass restores what it needs of the layer, `_sun_shadow_pass`)."""
         if self._sun_layer is None:
             super()._configure_shadow_mapping_viewport(light, flags)
             GL.glViewport(0, 0, light.shadow_texture.width, light.shadow_texture.height)
@@ -684,7 +775,8 @@ class _PassRenderer(pyrender.Renderer):
         GL.glActiveTexture(GL.GL_TEXTURE0)
         GL.glDrawBuffer(GL.GL_NONE)
         GL.glReadBuffer(GL.GL_NONE)
-        GL.glClear(GL.GL_DEPTH_BUFFER_BIT)
+        if clear:
+            GL.glClear(GL.GL_DEPTH_BUFFER_BIT)
         GL.glViewport(0, 0, size, size)
         GL.glEnable(GL.GL_DEPTH_TEST)
         GL.glDepthMask(GL.GL_TRUE)
@@ -705,6 +797,7 @@ class _PassRenderer(pyrender.Renderer):
             if ref() is None:
                 GL.glDeleteTextures(list(by_size.values()))
                 del self._sun_arrays[key]
+                self._drawn_over_kept.clear()  # a name may come back for another texture
         cached = self._sun_arrays.get(id(light))
         if cached is None or cached[0]() is not light:
             cached = self._sun_arrays[id(light)] = (weakref.ref(light), {})
@@ -731,6 +824,7 @@ class _PassRenderer(pyrender.Renderer):
         for _, by_size in self._sun_arrays.values():
             GL.glDeleteTextures(list(by_size.values()))
         self._sun_arrays.clear()
+        self._drawn_over_kept.clear()
         super().delete()
 
     def _bind_lighting(self, scene, program, node, flags):
@@ -870,6 +964,16 @@ def meshes_reach_clip_volume(meshes: list, poses: np.ndarray, P_V: np.ndarray) -
     perspective (a spot light's). A texel's centre lies half a texel inside the map's edge, far more than
     float rounding. Meshes with instanced primitives say True: pyrender's bounds of instances take their
     translations only."""
+    clip, instanced = _clip_corners(meshes, poses, P_V)
+    w = clip[..., 3:]
+    beyond = np.all(clip[..., :3] > w, axis=1) | np.all(clip[..., :3] < -w, axis=1)  # (N, 3)
+    return instanced | ~np.any(beyond, axis=1)
+
+
+def _clip_corners(meshes: list, poses: np.ndarray, P_V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(N, 8, 4) clip coordinates under `P_V` of the corners of each mesh's box placed at its pose (`poses`
+    (N, 4, 4)), and (N,) whether the mesh has instanced primitives (its corners then mean nothing: pyrender's
+    bounds of instances take their translations only)."""
     boxes = np.zeros((len(meshes), 2, 3))
     instanced = np.zeros(len(meshes), dtype=bool)
     for k, mesh in enumerate(meshes):
@@ -880,10 +984,31 @@ def meshes_reach_clip_volume(meshes: list, poses: np.ndarray, P_V: np.ndarray) -
     corner = (np.arange(8)[:, None] >> np.arange(3)) & 1  # (8, 3): which end of each axis
     local = np.where(corner, boxes[:, 1:2], boxes[:, 0:1])  # (N, 8, 3)
     world = local @ np.transpose(poses[:, :3, :3], (0, 2, 1)) + poses[:, None, :3, 3]
-    clip = world @ P_V[:, :3].T + P_V[:, 3]  # (N, 8, 4)
-    w = clip[..., 3:]
-    beyond = np.all(clip[..., :3] > w, axis=1) | np.all(clip[..., :3] < -w, axis=1)  # (N, 3)
-    return instanced | ~np.any(beyond, axis=1)
+    return world @ P_V[:, :3].T + P_V[:, 3], instanced
+
+
+SHADOW_RECT_PAD_TEXELS = 1
+"""Texels `_texel_rects` grows a projected box by: a triangle writes the texels whose centres it covers, half a
+texel inside its projection's extent, far more than the rounding of OpenGL's float32 transform."""
+
+
+def _texel_rects(scene, nodes: list, light_matrix: np.ndarray, size: int) -> list[tuple[int, int, int, int]]:
+    """Rectangles (x0, y0, x1, y1) of texels (x1, y1 exclusive) of a `size`² sun cascade drawn with the
+    orthographic `light_matrix` (P·V), one per node of `nodes` that reaches the map, outside which a depth-only
+    draw of `nodes` writes nothing: the corners of each node's box projected, grown by `SHADOW_RECT_PAD_TEXELS`;
+    the whole map where a bound is not known (an instanced mesh, a projection that is not orthographic)."""
+    if not nodes:
+        return []
+    poses = np.array([scene.get_pose(node) for node in nodes]).reshape(-1, 4, 4)
+    clip, instanced = _clip_corners([node.mesh for node in nodes], poses, light_matrix)
+    if instanced.any() or not np.all(clip[..., 3] == 1.0) or not np.all(np.isfinite(clip)):
+        return [(0, 0, size, size)]
+    texels = (clip[..., :2] + 1.0) * (size / 2.0)  # (N, 8, 2), the viewport: NDC −1…1 over 0…size
+    low = np.clip(np.floor(texels.min(axis=1)) - SHADOW_RECT_PAD_TEXELS, 0, size).astype(int)
+    high = np.clip(np.ceil(texels.max(axis=1)) + SHADOW_RECT_PAD_TEXELS, 0, size).astype(int)
+    return [
+        (x0, y0, x1, y1) for (x0, y0), (x1, y1) in zip(low.tolist(), high.tolist(), strict=True) if x1 > x0 and y1 > y0
+    ]
 
 
 CROP_CULL_PAD_PX = 2
