@@ -358,13 +358,13 @@ class _Framebuffer:
         for name in self.passes:
             GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT0 + PASSES.index(name))
             if name == "radiance":
-                data = GL.glReadPixels(x, y, w, h, GL.GL_RGBA, GL.GL_FLOAT)
-                rgba = np.frombuffer(data, np.float32).reshape(h, w, 4)
-                # OpenCV's channel copies: the same values as numpy's strided copy of rgba[..., :3], in 0.4 of
-                # its time (a 2440 × 1306 crop: 8.3 ms instead of 20 ms; a 4K frame's motion blur reads
-                # hundreds of crops).
-                out.radiance = cv2.cvtColor(rgba, cv2.COLOR_RGBA2RGB)
-                self.coverage = cv2.extractChannel(rgba, 3)
+                # Colour and alpha read apart, each straight into its own array: OpenGL's conversion gives the same
+                # values as reading RGBA and splitting it with OpenCV (which beat numpy's strided copy), in less
+                # time (a 2816 × 1624 read, 25 → 16 ms; llvmpipe, load 6).
+                out.radiance = np.empty((h, w, 3), np.float32)
+                GL.glReadPixels(x, y, w, h, GL.GL_RGB, GL.GL_FLOAT, out.radiance)
+                self.coverage = np.empty((h, w), np.float32)
+                GL.glReadPixels(x, y, w, h, GL.GL_ALPHA, GL.GL_FLOAT, self.coverage)
             elif name == "depth_m":
                 data = GL.glReadPixels(x, y, w, h, GL.GL_RED, GL.GL_FLOAT)
                 depth = np.frombuffer(data, np.float32).reshape(h, w).copy()
