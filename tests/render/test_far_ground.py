@@ -176,3 +176,35 @@ def test_a_crop_on_the_sky_grid_gets_the_far_ground_of_the_whole_view_bit_for_bi
         assert below.any()
         part = far_ground_radiance(graph, crop, below)
         np.testing.assert_array_equal(part[below], whole[y0:y1, x0:x1][below], err_msg=str((x0, y0, x1, y1)))
+
+
+def test_the_grid_evaluates_the_rows_that_pixels_read_and_gives_the_whole_grids_values():
+    """A far ground's grid evaluates its rows as pixels ask for them (`_FarGroundNodes`): a band of rows under the
+    horizon, then a few scattered pixels, evaluate part of the grid, and give, bit for bit, what the same grid with
+    every row evaluated gives there (under a low sun ahead, so that some nodes stray from the coarse grid's
+    interpolation and their pixels are evaluated exactly)."""
+    from camgen.render.renderer import _FarGroundNodes, far_ground_depth_m
+
+    graph = far_ground_graph(roughness=0.9, sun_elevation_deg=4.0, sun_azimuth_deg=0.0)
+    view = View(
+        camera_matrix(1000.0, 1000.0, 319.5, 20.0),
+        look_at((0, 0, CAMERA_HEIGHT_M), (1, 0, CAMERA_HEIGHT_M)),
+        640,
+        360,
+    )
+    below = np.isfinite(far_ground_depth_m(graph.far_ground, view))
+    every = _FarGroundNodes(graph, view)
+    every._evaluate_rows(graph, view, np.arange(view.height_px))
+    assert every._done.all() and every.far_off.any()
+    asked = _FarGroundNodes(graph, view)
+    region = (37, 20, 601, 75)
+    x0, y0, x1, y1 = region
+    part = asked.region(graph, view, below[y0:y1, x0:x1], region)
+    assert 0 < asked._done.sum() < len(asked._done) / 4  # the band's rows, and the rows each pixel's cell reads
+    np.testing.assert_array_equal(
+        part[below[y0:y1, x0:x1]], every.region(graph, view, below[y0:y1, x0:x1], region)[below[y0:y1, x0:x1]]
+    )
+    rng = np.random.default_rng(2)
+    rows, cols = rng.integers(200, 230, 50), rng.integers(0, 640, 50)  # behind a window, say
+    np.testing.assert_array_equal(asked.points(graph, view, rows, cols), every.points(graph, view, rows, cols))
+    assert asked._done.sum() < len(asked._done) / 2

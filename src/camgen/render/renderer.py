@@ -1464,26 +1464,75 @@ def far_ground_radiance(
     return _far_ground_nodes(graph, view).region(graph, view, below, region)
 
 
-@dataclass(frozen=True)
 class _FarGroundNodes:
     """The far ground's grid for one view and lighting (`far_ground_radiance`): the fine nodes' columns `us`,
     rows `vs` and radiance `values` (float32), and `far_off`, the nodes where the coarse grid's interpolation
     strays; `values` None for a ground smooth enough to be evaluated at every pixel (`far_ground_step_px` ≤ 2).
-    Small (a node every 4 or 8 pixels): kept per view (`BackgroundCache`), the pixels interpolated as asked."""
+    Small (a node every 4 or 8 pixels): kept per view (`BackgroundCache`), the pixels interpolated as asked.
 
-    us: np.ndarray | None
-    vs: np.ndarray | None
-    values: np.ndarray | None
-    far_off: np.ndarray | None
+    A row of nodes is evaluated when a pixel first asks for it (`_evaluate_rows`: the rows its interpolation reads,
+    and the coarse rows theirs read), each node exactly as the whole grid evaluates it (`far_ground_brdf_radiance`
+    and the remap are per node and per pixel); the rows left unevaluated hold 0 and are read by no pixel but with
+    weight 0. The far ground shows in a band under the horizon (and behind glass), where a turning head's new
+    view each step evaluated the nodes of the whole view: a 2816 × 1624 draw of ptz_follow's dome evaluates 358 000
+    nodes, of which its band needs a tenth."""
+
+    def __init__(self, graph, view: View):
+        coarse_px = far_ground_step_px(graph.far_ground, view)
+        self.us = self.vs = self.values = self.far_off = None
+        if coarse_px <= 2:
+            return
+        self._coarse = _grid_rays(view, coarse_px)
+        self.us, self.vs, self._rays = _grid_rays(view, coarse_px // 2)
+        self._coarse_values = np.zeros(self._coarse[2].shape)
+        self._coarse_done = np.zeros(len(self._coarse[1]), bool)
+        self.values = np.zeros((len(self.vs), len(self.us), 3), np.float32)
+        self.far_off = np.zeros((len(self.vs), len(self.us)), bool)
+        self._done = np.zeros(len(self.vs), bool)
+
+    @property
+    def nbytes(self) -> int:
+        """What it holds, bytes (`BackgroundCache`), evaluated or not."""
+        if self.values is None:
+            return 0
+        arrays = (*self._coarse, self._coarse_values, self.us, self.vs, self._rays, self.values, self.far_off)
+        return sum(array.nbytes for array in arrays)
+
+    def _evaluate_rows(self, graph, view: View, pixel_rows: np.ndarray) -> None:
+        """Evaluate the fine rows that interpolation at the pixel rows `pixel_rows` reads (each pixel's row at or
+        before it and the next: `cv2.remap` reads no other with a weight above 0), and the far-off test there:
+        the coarse grid's interpolation at those fine nodes, from the coarse rows it reads, evaluated too."""
+        needed = _rows_read(self.vs, pixel_rows)
+        needed = needed[~self._done[needed]]
+        if not len(needed):
+            return
+        us_c, vs_c, rays_c = self._coarse
+        coarse_rows = _rows_read(vs_c, self.vs[needed])
+        coarse_rows = coarse_rows[~self._coarse_done[coarse_rows]]
+        if len(coarse_rows):
+            evaluated = far_ground_brdf_radiance(graph, rays_c[coarse_rows].reshape(-1, 3))
+            self._coarse_values[coarse_rows] = evaluated.reshape(len(coarse_rows), len(us_c), 3)
+            self._coarse_done[coarse_rows] = True
+        nodes_f = far_ground_brdf_radiance(graph, self._rays[needed].reshape(-1, 3)).reshape(
+            len(needed), len(self.us), 3
+        )
+        # The coarse grid's interpolation at the fine nodes (each a pixel).
+        from_coarse = _grid_interpolated(self._coarse_values, us_c, vs_c, view, at=(self.us, self.vs[needed]))
+        scale = np.maximum(nodes_f.max(axis=-1), 1e-30)
+        self.far_off[needed] = np.abs(from_coarse - nodes_f).max(axis=-1) / scale > FAR_GROUND_TOLERANCE
+        self.values[needed] = nodes_f.astype(np.float32)
+        self._done[needed] = True
 
     def region(self, graph, view: View, below: np.ndarray, region: tuple[int, int, int, int] | None) -> np.ndarray:
-        """(h, w, 3) float32 radiance at the pixels `below` (h, w bool) of `region` (None: the view)."""
+        """(h, w, 3) float32 radiance at the pixels `below` (h, w bool) of `region` (None: the view); the others
+        undefined (the rows of the region without a pixel below are not interpolated from evaluated nodes)."""
         x0, y0, x1, y1 = region or (0, 0, view.width_px, view.height_px)
         if self.values is None:
             out = np.zeros((y1 - y0, x1 - x0, 3), np.float32)
             rows, cols = np.nonzero(below)
             out[rows, cols] = _far_ground_exact(graph, view, rows + y0, cols + x0)
             return out
+        self._evaluate_rows(graph, view, np.flatnonzero(below.any(axis=1)) + y0)
         out = _grid_interpolated(self.values, self.us, self.vs, view, at=_region_axes(view, region))
         if self.far_off.any():
             # A pixel is evaluated where a node its interpolation reads is far off: the nodes at or before and
@@ -1502,6 +1551,7 @@ class _FarGroundNodes:
         """(N, 3) float32 radiance at the pixels (`rows`, `cols`), each as `region` gives it."""
         if self.values is None:
             return _far_ground_exact(graph, view, rows, cols)
+        self._evaluate_rows(graph, view, np.unique(rows))
         out = _grid_points(self.values, self.us, self.vs, rows, cols)
         if self.far_off.any() and len(rows):
             exact = np.zeros(len(rows), bool)
@@ -1512,6 +1562,19 @@ class _FarGroundNodes:
         return out
 
 
+def _rows_read(nodes: np.ndarray, pixels: np.ndarray) -> np.ndarray:
+    """The grid rows (or columns) that the interpolation at `pixels` reads, sorted: the two that `cv2.remap` reads
+    at each pixel's position on the grid as `_grid_interpolated` maps it (the one at or before and the next,
+    which has weight 0 on a node), and the nodes at or before and at or after it (`_cell_nodes`, the far-off test)."""
+    if not len(pixels):
+        return np.zeros(0, np.int64)
+    last = len(nodes) - 1
+    position = np.floor(np.interp(pixels, nodes, np.arange(len(nodes))).astype(np.float32)).astype(np.int64)
+    before, after = _cell_nodes(nodes, pixels)
+    rows = np.concatenate([position, position + 1, before, after])
+    return np.unique(np.clip(rows, 0, last))
+
+
 def _cell_nodes(nodes: np.ndarray, pixels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The grid nodes at or before and at or after each pixel on one axis (`far_ground_radiance`)."""
     return np.searchsorted(nodes, pixels, side="right") - 1, np.searchsorted(nodes, pixels, side="left")
@@ -1519,19 +1582,7 @@ def _cell_nodes(nodes: np.ndarray, pixels: np.ndarray) -> tuple[np.ndarray, np.n
 
 def _far_ground_nodes(graph, view: View) -> _FarGroundNodes:
     """The far ground's grid for `view` under the graph's lights now (`_FarGroundNodes`)."""
-    coarse_px = far_ground_step_px(graph.far_ground, view)
-    if coarse_px <= 2:
-        return _FarGroundNodes(None, None, None, None)
-    fine_px = coarse_px // 2
-    us_c, vs_c, rays_c = _grid_rays(view, coarse_px)
-    us_f, vs_f, rays_f = _grid_rays(view, fine_px)
-    nodes_c = far_ground_brdf_radiance(graph, rays_c.reshape(-1, 3)).reshape(len(vs_c), len(us_c), 3)
-    nodes_f = far_ground_brdf_radiance(graph, rays_f.reshape(-1, 3)).reshape(len(vs_f), len(us_f), 3)
-    # The coarse grid's interpolation at the fine nodes (each a pixel).
-    from_coarse = _grid_interpolated(nodes_c, us_c, vs_c, view, at=(us_f, vs_f))
-    scale = np.maximum(nodes_f.max(axis=-1), 1e-30)
-    far_off = np.abs(from_coarse - nodes_f).max(axis=-1) / scale > FAR_GROUND_TOLERANCE
-    return _FarGroundNodes(us_f, vs_f, np.ascontiguousarray(nodes_f.astype(np.float32)), far_off)
+    return _FarGroundNodes(graph, view)
 
 
 def _far_ground_exact(graph, view: View, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
@@ -1721,7 +1772,10 @@ class BackgroundCache:
 
 def _frozen_bytes(value) -> int:
     """The bytes of the arrays in `value` (an array, a tuple of them or a dataclass holding them), each made
-    read-only: what `BackgroundCache` keeps is shared by every caller."""
+    read-only: what `BackgroundCache` keeps is shared by every caller. A far ground's grid (`_FarGroundNodes`)
+    fills its rows as they are asked for: its own bytes, left writable."""
+    if isinstance(value, _FarGroundNodes):
+        return value.nbytes
     if isinstance(value, np.ndarray):
         value.setflags(write=False)
         return value.nbytes
@@ -1779,25 +1833,31 @@ def composite_background(
     if region is not None:
         x0, y0, x1, y1 = region
         opened, open_sky = radiance[y0:y1, x0:x1], open_sky[y0:y1, x0:x1]
+    far_ground = getattr(graph, "far_ground", None) is not None and any_background
+    below = None
+    if far_ground and region is not None:
+        ground_depth_m = cache.ground_depth_m(graph, view, region).copy()
+        ground_depth_m[~open_sky] = np.inf
+        below = np.isfinite(ground_depth_m)
     if getattr(graph, "sky", "uniform") != "uniform" and any_background:
-        if region is not None:
-            sky = cache.sky(graph, view, region)
-            opened[open_sky] = sky[open_sky]
+        if region is not None:  # where the far ground does not lie over it
+            skyward = open_sky if below is None else open_sky & ~below
+            _fill_part(opened, skyward, lambda rect: cache.sky(graph, view, _moved_rect(rect, x0, y0)))
         behind = cache.sky_points(graph, view, rows, cols)
     else:
         behind = np.full((len(rows), 3), clear, np.float32)
     behind_depth_m = np.full(len(rows), np.inf, np.float32)
     open_depth_m = None
-    if getattr(graph, "far_ground", None) is not None and any_background:
+    if far_ground:
         behind_depth_m = _far_ground_depth_at(graph.far_ground, view, rows.astype(np.float64), cols.astype(np.float64))
         open_depth_m = np.full(coverage.shape, np.inf, np.float32)
         if region is not None:
-            ground_depth_m = cache.ground_depth_m(graph, view, region).copy()
-            ground_depth_m[~open_sky] = np.inf
-            below = np.isfinite(ground_depth_m)
-            if below.any():
-                ground = cache.ground_radiance(graph, view, below, region)
-                np.copyto(opened, ground, where=below[..., None])
+
+            def ground(rect: tuple[int, int, int, int]) -> np.ndarray:
+                a, b, c, d = rect
+                return cache.ground_radiance(graph, view, below[b:d, a:c], _moved_rect(rect, x0, y0))
+
+            _fill_part(opened, below, ground)
             open_depth_m[y0:y1, x0:x1] = ground_depth_m
         under = np.isfinite(behind_depth_m)
         if under.any():
@@ -1805,6 +1865,26 @@ def composite_background(
     transmittance = 1.0 - coverage[rows, cols]
     radiance[rows, cols] += transmittance[:, None] * (behind - clear)
     return Behind(open_depth_m, rows, cols, transmittance, behind, behind_depth_m)
+
+
+def _fill_part(image: np.ndarray, mask: np.ndarray, make) -> None:
+    """`image`'s pixels where `mask` holds, from `make(rect)`: the values over `mask`'s bounding rectangle (x0, y0,
+    x1, y1) of `image`, made for those pixels only (the sky's or the far ground's: each pixel's value is the whole
+    view's whatever the rectangle, `BackgroundCache`). The open pixels' rectangle of a view spans the sky above
+    the horizon and the ground under it, and each was made over all of it; now each over its own part (a turning
+    2816 × 1624 draw of ptz_follow: a rectangle of 2816 × 679, the sky's part 2816 × 258, the ground's 2816 × 421)."""
+    rect = _bounding_rect(mask)
+    if rect is None:
+        return
+    x0, y0, x1, y1 = rect
+    part, where = image[y0:y1, x0:x1], mask[y0:y1, x0:x1]
+    np.copyto(part, make(rect), where=where[..., None])
+
+
+def _moved_rect(rect: tuple[int, int, int, int], dx: int, dy: int) -> tuple[int, int, int, int]:
+    """`rect` (x0, y0, x1, y1) moved by (dx, dy)."""
+    x0, y0, x1, y1 = rect
+    return x0 + dx, y0 + dy, x1 + dx, y1 + dy
 
 
 def _bounding_rect(mask: np.ndarray) -> tuple[int, int, int, int] | None:
