@@ -29,7 +29,9 @@ SCENES_WITH_VEHICLES = (
 
 def _world_box(graph, node) -> tuple[np.ndarray, np.ndarray]:
     low, high = node.mesh.bounds
-    corners = np.array([[x, y, z, 1.0] for x in (low[0], high[0]) for y in (low[1], high[1]) for z in (low[2], high[2])])
+    corners = np.array(
+        [[x, y, z, 1.0] for x in (low[0], high[0]) for y in (low[1], high[1]) for z in (low[2], high[2])]
+    )
     world = corners @ graph.scene.get_pose(node).T
     return world[:, :3].min(axis=0), world[:, :3].max(axis=0)
 

@@ -42,7 +42,9 @@ def test_water_reflectance_matches_fresnels_sine_and_tangent_laws():
     assert water_fresnel(0.0) == pytest.approx(1.0)
     brewster = np.arctan(n)  # p-polarised light is not reflected: F = r_s²/2 there
     theta_t = np.arcsin(np.sin(brewster) / n)
-    assert water_fresnel(np.cos(brewster)) == pytest.approx(np.sin(brewster - theta_t) ** 2 / np.sin(brewster + theta_t) ** 2 / 2)
+    assert water_fresnel(np.cos(brewster)) == pytest.approx(
+        np.sin(brewster - theta_t) ** 2 / np.sin(brewster + theta_t) ** 2 / 2
+    )
 
 
 def test_the_mirrored_view_sees_at_each_pixel_what_the_ground_there_reflects():
@@ -62,7 +64,9 @@ def test_the_mirrored_view_sees_at_each_pixel_what_the_ground_there_reflects():
     np.testing.assert_allclose(seen_px, bounce_px, atol=1e-9)
     # and its distance to the point is the reflected path's length (what fog must see)
     _, depth_m = _project(mirror, points_m)
-    ray_len = np.linalg.norm(np.column_stack([(seen_px - view.K_px[:2, 2]) / np.diag(view.K_px)[:2], np.ones(50)]), axis=1)
+    ray_len = np.linalg.norm(
+        np.column_stack([(seen_px - view.K_px[:2, 2]) / np.diag(view.K_px)[:2], np.ones(50)]), axis=1
+    )
     path_m = np.linalg.norm(bounces_m - camera_m, axis=1) + np.linalg.norm(points_m - bounces_m, axis=1)
     np.testing.assert_allclose(depth_m * ray_len, path_m, rtol=1e-9)
 
@@ -74,7 +78,9 @@ def test_a_coarse_view_samples_the_middle_of_each_block_of_pixels():
     for step_x, step_y in ((1, 1), (2, 5), (3, 8)):
         coarse = coarse_view(view, step_x, step_y)
         coarse_px, _ = _project(coarse, points_m)
-        np.testing.assert_allclose(coarse_px * [step_x, step_y] + [(step_x - 1) / 2, (step_y - 1) / 2], full_px, atol=1e-9)
+        np.testing.assert_allclose(
+            coarse_px * [step_x, step_y] + [(step_x - 1) / 2, (step_y - 1) / 2], full_px, atol=1e-9
+        )
         assert coarse.width_px * step_x >= 640 and coarse.height_px * step_y >= 360
         assert (coarse.width_px - 1) * step_x < 640 and (coarse.height_px - 1) * step_y < 360
 
@@ -101,8 +107,11 @@ def test_wet_pixels_are_the_grounds_and_not_what_stands_on_it():
     assert not wet_pixels(view, open_depth, height_m, far_ground_m=None)[61:].any()
 
 
-WET_SCENE = SCENE.replace("      size_m: [20, 20]", "      size_m: [40, 40]\n  wet: true\n  sky_luminance_cd_m2: 800").replace(
-    "actors:\n  - name: walker\n    class: person\n    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n      speed_m_s: 1.4\n",
+WET_SCENE = SCENE.replace(
+    "      size_m: [20, 20]", "      size_m: [40, 40]\n  wet: true\n  sky_luminance_cd_m2: 800"
+).replace(
+    "actors:\n  - name: walker\n    class: person\n    path:\n      waypoints_m: [[-3, 5], [3, 5]]\n"
+    "      speed_m_s: 1.4\n",
     "actors: []\n",
 )
 
@@ -114,7 +123,7 @@ def _wet_camera(workspace, text):
 
 
 def test_the_plan_draws_depth_for_a_wet_ground_and_says_why(workspace):
-    job, camera = _wet_camera(workspace, WET_SCENE)
+    _, camera = _wet_camera(workspace, WET_SCENE)
     assert "depth_m" in camera.render.passes
     decision = next(d for d in camera.decisions if d.stage == "render.wet_reflections")
     assert decision.included and "Fresnel" in decision.reason

@@ -1206,4 +1206,3 @@ def compile_scene(loaded: LoadedScene, settings: PlanSettings | None = None) -> 
             Problem(p.path, p.message, loaded.locate(p.path)) if p.path and not p.location else p for p in exc.problems
         ]
         raise ConfigError(located) from None
-

@@ -803,7 +803,8 @@ class CameraRenderer:
 
         if depth_m is None:
             raise ValueError(
-                f"camera {self.camera.name!r}: the wet ground's reflections need the depth pass, which the plan did not draw"
+                f"camera {self.camera.name!r}: the wet ground's reflections need the depth pass, which the plan "
+                "did not draw"
             )
         height_m, graph = self._wet_ground_m, self.graph
         far_ground_m = graph.far_ground.height_m if graph.far_ground is not None else None
@@ -821,7 +822,11 @@ class CameraRenderer:
         nodes = [n for n in graph.environment_nodes + graph.actor_nodes if id(n) not in self._flat_node_ids]
         graph.place_actors(state.time_s)
         drawn = self.renderer.draw(
-            graph, mirror, ("radiance",), nodes=nodes, clip_range_m=self.clip_range_m(mirror),
+            graph,
+            mirror,
+            ("radiance",),
+            nodes=nodes,
+            clip_range_m=self.clip_range_m(mirror),
             shadow_fit=self.shadow_fit(view),
         )
         spread = film_blur(drawn.radiance, steps_px, sigmas_px, (view.width_px, view.height_px))

@@ -94,7 +94,10 @@ def view_geometry(view: View) -> WetViewGeometry:
     z = R[2, 0] * u + (R[2, 1] * v + R[2, 2])
     cos_incidence = np.abs(z) / np.sqrt(x * x + y * y + z * z)
     return WetViewGeometry(
-        view.key(), z.astype(np.float32), water_fresnel(cos_incidence).astype(np.float32), cos_incidence.astype(np.float32)
+        view.key(),
+        z.astype(np.float32),
+        water_fresnel(cos_incidence).astype(np.float32),
+        cos_incidence.astype(np.float32),
     )
 
 
@@ -143,7 +146,9 @@ def coarse_view(view: View, step_x_px: int, step_y_px: int) -> View:
     return View(K, view.T_world_from_cam, width, height)
 
 
-def film_blur(coarse: np.ndarray, steps_px: tuple[int, int], sigmas_px: tuple[float, float], size: tuple[int, int]) -> np.ndarray:
+def film_blur(
+    coarse: np.ndarray, steps_px: tuple[int, int], sigmas_px: tuple[float, float], size: tuple[int, int]
+) -> np.ndarray:
     """The coarse mirror (h, w, 3; a sample every `steps_px` (x, y) pixels of the frame) spread by the film's
     Gaussian of `sigmas_px` (across, up and down; frame pixels) and brought to the frame's `size` (W, H)
     by bilinear interpolation between the samples' centres (edges held)."""
@@ -152,7 +157,10 @@ def film_blur(coarse: np.ndarray, steps_px: tuple[int, int], sigmas_px: tuple[fl
     blurred = coarse
     if sigma_x > 0.05 or sigma_y > 0.05:
         blurred = cv2.GaussianBlur(
-            np.ascontiguousarray(coarse, np.float32), (0, 0), sigmaX=max(sigma_x, 0.05), sigmaY=max(sigma_y, 0.05),
+            np.ascontiguousarray(coarse, np.float32),
+            (0, 0),
+            sigmaX=max(sigma_x, 0.05),
+            sigmaY=max(sigma_y, 0.05),
             borderType=cv2.BORDER_REPLICATE,
         )
     width, height = size
@@ -161,7 +169,9 @@ def film_blur(coarse: np.ndarray, steps_px: tuple[int, int], sigmas_px: tuple[fl
     # frame pixel u lies at sample coordinate (u − (step − 1)/2) / step (`coarse_view`)
     map_x = ((np.arange(width, dtype=np.float32) - (step_x - 1) / 2.0) / step_x)[None, :].repeat(height, 0)
     map_y = ((np.arange(height, dtype=np.float32) - (step_y - 1) / 2.0) / step_y)[:, None].repeat(width, 1)
-    return cv2.remap(np.ascontiguousarray(blurred, np.float32), map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    return cv2.remap(
+        np.ascontiguousarray(blurred, np.float32), map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
+    )
 
 
 def flat_nodes(graph, height_m: float) -> set[int]:
