@@ -122,7 +122,7 @@ def test_paint_receives_shadows_and_casts_none(renderer):
 
 
 def test_the_night_graph_takes_the_paints_nir_reflectance():
-    """The IR pass sees white paint at 0.80 and yellow at 0.70 (± the dirt), grey, over the ground's."""
+    """The IR pass sees white paint at 0.50 and yellow at 0.45 (± the dirt), grey, over the ground's."""
     from camgen.render.nir import build_nir_graph
 
     profile = yaml.safe_load(FIXED_PROFILE)

@@ -49,16 +49,18 @@ luminance coefficients under diffuse light Qd = 1000·ρ/π are 159 and 99 mcd m
 classes Q3 (white on asphalt, ≥ 130) and Q1 (yellow, ≥ 80). Retroreflection (RL: R2 ≥ 100 … R5 ≥ 300
 mcd m⁻² lx⁻¹ for white) is not modelled: the paint is diffuse."""
 
-PAINT_NIR_REFLECTANCE = {"white": 0.80, "yellow": 0.70}
-"""Reflectance at 850 nm (the IR night mode, `camgen.render.nir`). Estimates: no measured 850 nm reflectance
-of road-marking paint was found. Chosen from the pigments: rutile TiO₂, the white of road paint, scatters
-strongly through the near infrared and absorbs almost nothing there (Levinson, Berdahl & Akbari 2005, "Solar
-spectral optical properties of pigments — Part II: survey of common colorants", Sol. Energy Mater. Sol.
-Cells 89: 351–389), so clean white paint is taken to reflect about as much at 850 nm as in the visible
-(0.8–0.9); a yellow absorbs the blue and, without carbon or iron oxide in it, little beyond, so a little
-less. These are clean paint's values: `PAINT_RGB`'s white 0.50 is a marking in service, and the dirt and
-tyre rubber that darken it absorb the near infrared too, so a worn marking may reflect nearer 0.5–0.6 at
-850 nm (`camgen.world.night.default_nir_reflectance`, a colour's red reflectance, gives 0.50 and 0.45)."""
+PAINT_NIR_REFLECTANCE = {"white": 0.50, "yellow": 0.45}
+"""Reflectance at 850 nm (the IR night mode, `camgen.render.nir`) of a marking in service, as `PAINT_RGB` is.
+Estimates: no measured 850 nm reflectance of road-marking paint was found. Rutile TiO₂, the white of road
+paint, scatters strongly through the near infrared and absorbs almost nothing there (Levinson, Berdahl &
+Akbari 2005, "Solar spectral optical properties of pigments — Part II: survey of common colorants", Sol.
+Energy Mater. Sol. Cells 89: 351–389), so white paint reflects about as much at 850 nm as in the visible;
+a yellow pigment absorbs the blue and reflects the red and the near infrared alike. The dirt and tyre
+rubber that take a marking in service from clean paint's 0.8–0.9 down to `PAINT_RGB`'s 0.50 are carbon,
+which absorbs the near infrared as much as the visible. So a marking in service reflects at 850 nm what it
+reflects in its red channel (`camgen.world.night.default_nir_reflectance`'s rule): 0.50 white, 0.45
+yellow. (Clean paint's 0.80 / 0.70 beside a worn marking's visible 0.50 had the IR image show markings
+brighter against the road than the day image, with nothing to support it.)"""
 
 PAINT_ROUGHNESS = 0.7
 """glTF roughness of road paint: a matte binder with glass beads pressed in."""
