@@ -11,6 +11,8 @@ from camgen.plan import PlanSettings, compile_scene
 from camgen.render.renderer import View
 from camgen.render.wet import (
     WET_SURFACE_TOLERANCE_M,
+    block_means,
+    block_view,
     coarse_view,
     flat_nodes,
     mirrored_view,
@@ -83,6 +85,26 @@ def test_a_coarse_view_samples_the_middle_of_each_block_of_pixels():
         )
         assert coarse.width_px * step_x >= 640 and coarse.height_px * step_y >= 360
         assert (coarse.width_px - 1) * step_x < 640 and (coarse.height_px - 1) * step_y < 360
+
+
+def test_each_sample_of_the_mirror_is_the_mean_of_the_block_of_pixels_around_it():
+    view = View(camera_matrix(700.0, 710.0, 320.5, 180.0), look_at((0, 0, 3), (0, 10, 0)), 641, 361)
+    rng = np.random.default_rng(5)
+    for step_x, step_y in ((1, 1), (2, 5), (3, 7)):
+        grown, coarse = block_view(view, step_x, step_y), coarse_view(view, step_x, step_y)
+        assert (grown.width_px, grown.height_px) == (coarse.width_px * step_x, coarse.height_px * step_y)
+        np.testing.assert_array_equal(grown.K_px, view.K_px)  # the frame's own pixels, more at two edges
+        np.testing.assert_array_equal(grown.T_world_from_cam, view.T_world_from_cam)
+        image = rng.random((grown.height_px, grown.width_px, 3)).astype(np.float32)
+        blocks = image.reshape(coarse.height_px, step_y, coarse.width_px, step_x, 3)
+        np.testing.assert_allclose(block_means(image, step_x, step_y), blocks.mean(axis=(1, 3)), rtol=1e-5)
+        # the pixel a point lands on lies in the block of the sample nearest to where it lands in the coarse view
+        points_m = np.column_stack([rng.uniform(-3, 3, 200), rng.uniform(4, 20, 200), rng.uniform(0, 2, 200)])
+        frame_px, _ = _project(view, points_m)
+        coarse_px, _ = _project(coarse, points_m)
+        inside = np.all((frame_px > -0.5) & (frame_px < [640.5, 360.5]), axis=1)
+        pixel = np.round(frame_px[inside]).astype(int)
+        np.testing.assert_array_equal(pixel // [step_x, step_y], np.round(coarse_px[inside]).astype(int))
 
 
 def test_wet_pixels_are_the_grounds_and_not_what_stands_on_it():
@@ -191,3 +213,56 @@ def test_a_box_on_the_wet_ground_is_mirrored_under_itself_with_its_front_faces(w
     # The same pixel in the camera's own view shows the ground in front of the crate (the bounce point).
     seen = renderer.draw(graph, view, ("depth_m", "instance_id"))
     assert seen.instance_id[v, u] != crate and seen.instance_id[v, u] != 0
+
+
+SMALL_BRIGHT_CUBE_SCENE = """\
+duration_s: 1
+fps: 10
+seed: 1
+environment:
+  meshes:
+    - {type: plane, name: ground, size_m: [60, 60], material: {color_rgb: [0.05, 0.05, 0.05]}}
+    - {type: box, name: cube, size_m: [0.06, 0.06, 0.06], position_m: [0, 12, HEIGHT], material: {color_rgb: [1, 1, 1]}}
+  wet: true
+  sky_luminance_cd_m2: 50
+lights:
+  - {type: ambient, illuminance_lux: 5000}
+actors: []
+cameras:
+  - name: cam
+    profile: fixed
+    mount: {position_m: [0, -5, 3], yaw_deg: 90, pitch_deg: -10}
+"""
+
+
+@pytest.mark.opengl
+def test_a_small_bright_things_reflection_is_its_whole_light_wherever_it_falls_between_samples(
+    workspace, renderer, monkeypatch
+):
+    # A 6 cm white cube 17 m away covers a few pixels; the mirror's samples lie 2 × 7 pixels apart there. Its
+    # reflection (the frame with the cube less the frame without) must hold the light of the reflection spread
+    # at every pixel, the cube a little higher or lower: point samples caught it whole (1.4-1.8 times too
+    # bright, by where it fell between them) or would have missed it.
+    from camgen.render.scene_graph import build_scene_graph
+    from camgen.render.sequence import CameraRenderer
+
+    def wet_frame(text: str) -> np.ndarray:
+        job, camera = _wet_camera(workspace, text)
+        return CameraRenderer(renderer, build_scene_graph(job.scene), camera).frame(0).passes.radiance.astype(float)
+
+    without = SMALL_BRIGHT_CUBE_SCENE.replace(
+        "    - {type: box, name: cube, size_m: [0.06, 0.06, 0.06], position_m: [0, 12, HEIGHT], "
+        "material: {color_rgb: [1, 1, 1]}}\n",
+        "",
+    )
+    assert "cube" not in without
+    for height in ("1.0", "1.02", "1.04"):
+        text = SMALL_BRIGHT_CUBE_SCENE.replace("HEIGHT", height)
+        sampled = wet_frame(text) - wet_frame(without)
+        with monkeypatch.context() as patch:
+            patch.setattr("camgen.render.wet.mirror_step_px", lambda sigma_px: 1)
+            every_pixel = wet_frame(text) - wet_frame(without)
+        under = (slice(250, None), slice(None))  # the cube's image ends above; its reflection lies below
+        assert every_pixel[under].sum() > 0.05 * every_pixel.sum()  # a reflection to compare
+        assert sampled[under].sum() == pytest.approx(every_pixel[under].sum(), rel=0.03)
+        assert sampled[under].max() == pytest.approx(every_pixel[under].max(), rel=0.03)

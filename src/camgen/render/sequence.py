@@ -787,10 +787,11 @@ class CameraRenderer:
 
     def _wet(self, view: View, state: CameraState, radiance: np.ndarray, depth_m: np.ndarray | None) -> np.ndarray:
         """The frame's radiance with the wet ground's mirror image in its water film (`camgen.render.wet`): the
-        scene reflected in the ground drawn coarsely at the frame time, spread by the film and added at the
+        scene reflected in the ground drawn at the frame time, spread by the film on a coarse grid and added at the
         pixels that show the wet ground by the water's Fresnel reflectance (the plan draws depth for it)."""
         from camgen.render.wet import (
-            coarse_view,
+            block_means,
+            block_view,
             film_blur,
             film_spread_px,
             flat_nodes,
@@ -816,7 +817,7 @@ class CameraRenderer:
             return radiance
         sigmas_px = film_spread_px(view, float(np.median(geometry.cos_incidence[wet])))
         steps_px = (mirror_step_px(sigmas_px[0]), mirror_step_px(sigmas_px[1]))
-        mirror = coarse_view(mirrored_view(view, height_m), *steps_px)
+        mirror = block_view(mirrored_view(view, height_m), *steps_px)
         if self._flat_node_ids is None:
             self._flat_node_ids = flat_nodes(graph, height_m)
         nodes = [n for n in graph.environment_nodes + graph.actor_nodes if id(n) not in self._flat_node_ids]
@@ -829,7 +830,8 @@ class CameraRenderer:
             clip_range_m=self.clip_range_m(mirror),
             shadow_fit=self.shadow_fit(view),
         )
-        spread = film_blur(drawn.radiance, steps_px, sigmas_px, (view.width_px, view.height_px))
+        coarse = block_means(drawn.radiance, *steps_px)
+        spread = film_blur(coarse, steps_px, sigmas_px, (view.width_px, view.height_px))
         return reflected_radiance(radiance, spread, wet, geometry.fresnel)
 
     def _rain(self, view: View, state: CameraState, radiance: np.ndarray, depth_m: np.ndarray | None) -> np.ndarray:

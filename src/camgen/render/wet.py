@@ -13,9 +13,13 @@ ripples (`film_blur`), F the water's Fresnel reflectance at the pixel's angle of
 search: the reflected ray through pixel u of the mirrored view is the camera's ray through u after the
 bounce, so R at u is what u reflects.
 
-The mirror is drawn coarser than the frame, `mirror_step_px` pixels a sample each way (a fraction of the
-film's spread, which blurs finer detail away), at the frame time (no motion blur of its own: the spread
-is wider than a sub-frame's smear), with the frame's shadow maps (`ShadowFit` of the frame's view).
+The film's spread is applied on a grid coarser than the frame, a sample every `mirror_step_px` pixels each way
+(a fraction of the spread, which blurs finer detail away); each sample is the mean of the mirror drawn at
+the frame's pixels over its block (`block_view`, `block_means`), not the mirror seen through the block's
+middle alone, which would catch a small bright object (a lamp, a headlight, a lit window) whole or miss it:
+its reflection came out up to 1.8 times too bright, or not at all, and flickered as it moved. The mirror is
+drawn at the frame time (no motion blur of its own: the spread is wider than a sub-frame's smear), with the
+frame's shadow maps (`ShadowFit` of the frame's view).
 Not modelled: the IR illuminator's light in the mirror (night mode), puddles (the film covers the ground
 evenly), reflections in wet walls, cars or glass.
 """
@@ -38,9 +42,9 @@ WET_SURFACE_TOLERANCE_M = 0.03
 few mm over the ground (an intersection's roads at 10 and 11 mm), paint on them, and the lowest 3 cm of a
 tyre, whose mirror image is its own continuation."""
 MIRROR_SAMPLES_PER_SIGMA = 3.0
-"""The mirror is drawn with this many samples per standard deviation of the film's spread (each way; at
-least one a pixel): its Gaussian then varies little between samples (< 6 % of its peak), so the spread
-mirror is the same as one drawn at every pixel to within that."""
+"""The film's spread is applied on a grid of this many samples per standard deviation of it (each way; at
+least one a pixel), each sample its block's mean (`block_means`): the Gaussian then varies little between
+samples (< 6 % of its peak), so the spread mirror is the same as one spread at every pixel to within that."""
 
 
 def wet_ground_height_m(scene) -> float | None:
@@ -146,11 +150,29 @@ def coarse_view(view: View, step_x_px: int, step_y_px: int) -> View:
     return View(K, view.T_world_from_cam, width, height)
 
 
+def block_view(view: View, step_x_px: int, step_y_px: int) -> View:
+    """`view` grown at its right and bottom edges to whole blocks of `step_x_px` × `step_y_px` pixels (its own
+    pixels where they were): block (i, j) holds the pixels whose middle `coarse_view`'s sample (i, j) sees."""
+    coarse = coarse_view(view, step_x_px, step_y_px)
+    return View(view.K_px, view.T_world_from_cam, coarse.width_px * step_x_px, coarse.height_px * step_y_px)
+
+
+def block_means(image: np.ndarray, step_x_px: int, step_y_px: int) -> np.ndarray:
+    """(h, w, 3) float32: the mean of each `step_x_px` × `step_y_px` block of `image` ((h·step_y, w·step_x, 3),
+    `block_view`'s draw): the light over each sample's block of pixels, whose middle is the sample's
+    (`coarse_view`)."""
+    height, width = image.shape[0] // step_y_px, image.shape[1] // step_x_px
+    if (step_x_px, step_y_px) == (1, 1):
+        return np.ascontiguousarray(image, np.float32)
+    # OpenCV's area resampling by whole factors: each output the mean of its block.
+    return cv2.resize(np.ascontiguousarray(image, np.float32), (width, height), interpolation=cv2.INTER_AREA)
+
+
 def film_blur(
     coarse: np.ndarray, steps_px: tuple[int, int], sigmas_px: tuple[float, float], size: tuple[int, int]
 ) -> np.ndarray:
-    """The coarse mirror (h, w, 3; a sample every `steps_px` (x, y) pixels of the frame) spread by the film's
-    Gaussian of `sigmas_px` (across, up and down; frame pixels) and brought to the frame's `size` (W, H)
+    """The coarse mirror (h, w, 3; a sample every `steps_px` (x, y) pixels of the frame, `block_means`) spread by
+    the film's Gaussian of `sigmas_px` (across, up and down; frame pixels) and brought to the frame's `size` (W, H)
     by bilinear interpolation between the samples' centres (edges held)."""
     step_x, step_y = steps_px
     sigma_x, sigma_y = sigmas_px[0] / step_x, sigmas_px[1] / step_y
