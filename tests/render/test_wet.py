@@ -154,6 +154,38 @@ def test_the_plan_draws_depth_for_a_wet_ground_and_says_why(workspace):
     assert not any(d.stage == "render.wet_reflections" for d in dry.decisions)
 
 
+def test_the_wet_ground_is_the_largest_level_plane_facing_up():
+    from camgen.world.rain import wet_ground_height_m
+
+    def environment(*meshes, wet=True):
+        lights = [{"type": "ambient", "illuminance_lux": 1000}]
+        return scene_from(environment={"meshes": list(meshes), "wet": wet}, lights=lights).environment
+
+    road = {"type": "plane", "name": "road", "size_m": [8, 100], "position_m": [0, 0, 0.01]}
+    square = {"type": "plane", "name": "square", "size_m": [20, 20], "position_m": [0, 0, 0.02]}
+    assert wet_ground_height_m(environment(road, square)) == pytest.approx(0.01)  # 800 m² over 400
+    assert wet_ground_height_m(environment(road, square, wet=False)) is None
+    facing_down = {**road, "rotation_deg": [180, 0, 0]}
+    tilted = {**road, "rotation_deg": [0, 5, 30]}
+    assert wet_ground_height_m(environment(facing_down, square)) == pytest.approx(0.02)
+    assert wet_ground_height_m(environment(tilted, {**square, "rotation_deg": [360, 0, 45]})) == pytest.approx(0.02)
+    slab = {"type": "box", "name": "slab", "size_m": [40, 40, 0.2], "position_m": [0, 0, -0.1]}
+    assert wet_ground_height_m(environment(slab, tilted)) is None
+
+
+def test_a_wet_scene_without_a_level_plane_draws_nothing_for_reflections_and_says_why(workspace):
+    # The ground a box: nothing for the film to lie on, so no mirror and no depth pass drawn for one.
+    text = WET_SCENE.replace(
+        "    - type: plane\n      name: ground\n      size_m: [40, 40]\n",
+        "    - {type: box, name: ground, size_m: [40, 40, 0.2], position_m: [0, 0, -0.1]}\n",
+    )
+    assert "plane" not in text
+    _, camera = _wet_camera(workspace, text)
+    assert "depth_m" not in camera.render.passes
+    decision = next(d for d in camera.decisions if d.stage == "render.wet_reflections")
+    assert not decision.included and "no level plane" in decision.reason
+
+
 @pytest.mark.opengl
 def test_a_wet_ground_under_a_uniform_sky_mirrors_it_by_waters_reflectance(workspace, renderer):
     # Nothing stands on the ground, so the mirror holds the sky alone (800 cd/m² everywhere): at each wet pixel

@@ -49,7 +49,7 @@ from camgen.plan.visibility import Bounds, box_corners, local_bounds, placement,
 from camgen.props import prop_box_corners
 from camgen.props.sway import swaying_props
 from camgen.sensor.capture import NOISE_TERM_OFF, NOISE_TERMS, noise_term_is_on
-from camgen.world.rain import STREAK_RANGE_M, ground_is_wet
+from camgen.world.rain import STREAK_RANGE_M, ground_is_wet, wet_ground_height_m
 
 WAVELENGTH_UM = 0.55  # mid-visible, for the diffraction estimate
 MOTION_SAMPLE_STEP_PX = 1.0
@@ -697,7 +697,7 @@ def _compile_camera(
             ("depth output", outputs.depth is not None),
             (" and ".join(motion_outputs) + " output", bool(motion_outputs)),
             ("rain's depth test", scene.environment.rain is not None and needs_image),
-            ("the wet ground's reflections", ground_is_wet(scene.environment) and needs_image),
+            ("the wet ground's reflections", wet_ground_height_m(scene.environment) is not None and needs_image),
         )
         if use
     ]
@@ -734,12 +734,16 @@ def _compile_camera(
             )
         )
     if ground_is_wet(scene.environment) and needs_image:
+        mirrors = wet_ground_height_m(scene.environment) is not None
         decisions.append(
             Decision(
                 stage="render.wet_reflections",
-                included=True,
-                reason="wet ground: the scene mirrored in its water film, drawn coarsely at each frame time, spread "
-                "by the film's ripples and added by water's Fresnel reflectance (camgen.render.wet)",
+                included=mirrors,
+                reason="wet ground: the scene mirrored in its water film, drawn at each frame time, spread by the "
+                "film's ripples and added by water's Fresnel reflectance (camgen.render.wet)"
+                if mirrors
+                else "wet ground, but no level plane facing up among environment.meshes for its water film to lie "
+                "on (camgen.world.rain.wet_ground_height_m): nothing is mirrored",
             )
         )
     wind = scene.environment.wind

@@ -95,7 +95,7 @@ from camgen.render.renderer import (
     sun_cascade_matrices,
 )
 from camgen.render.scene_graph import SceneGraph, build_scene_graph
-from camgen.render.wet import wet_ground_height_m
+from camgen.world.rain import wet_ground_height_m
 
 
 def render_view(state: CameraState, spec: RenderSpec) -> View:
@@ -268,7 +268,7 @@ class CameraRenderer:
         self._motion = motion[0] if motion else None
         self._nir: SceneGraph | None = None
         """The NIR graph of a night-mode camera (`camgen.render.nir`), built at its first night frame."""
-        self._wet_ground_m = wet_ground_height_m(graph.source[0]) if graph.source is not None else None
+        self._wet_ground_m = wet_ground_height_m(graph.source[0].environment) if graph.source is not None else None
         """The height of a wet ground that mirrors the scene (`camgen.render.wet`), m; None when dry."""
         self._wet_view = None
         """The last view's `camgen.render.wet.view_geometry` (a held camera's frames share it)."""

@@ -26,16 +26,14 @@ evenly), reflections in wet walls, cars or glass.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
 from camgen.config.placement import box_corners
-from camgen.config.scene import PlaneMesh
 from camgen.render.renderer import View
-from camgen.world.rain import WATER_FILM_SLOPE_RAD, ground_is_wet, water_fresnel
+from camgen.world.rain import WATER_FILM_SLOPE_RAD, water_fresnel
 
 WET_SURFACE_TOLERANCE_M = 0.03
 """A pixel whose point lies within this height of the wet ground takes its reflection: the road planes a
@@ -45,23 +43,6 @@ MIRROR_SAMPLES_PER_SIGMA = 3.0
 """The film's spread is applied on a grid of this many samples per standard deviation of it (each way; at
 least one a pixel), each sample its block's mean (`block_means`): the Gaussian then varies little between
 samples (< 6 % of its peak), so the spread mirror is the same as one spread at every pixel to within that."""
-
-
-def wet_ground_height_m(scene) -> float | None:
-    """The height of the wet ground that mirrors: the largest level plane facing up of a wet scene
-    (`camgen.world.rain.ground_is_wet`), m; None for a dry scene or one without such a plane."""
-    if not ground_is_wet(scene.environment):
-        return None
-    level = []
-    for mesh in scene.environment.meshes:
-        if not isinstance(mesh, PlaneMesh):
-            continue
-        rx, ry, _ = (math.remainder(angle, 360.0) for angle in mesh.rotation_deg)
-        if abs(rx) < 1e-6 and abs(ry) < 1e-6:
-            level.append(mesh)
-    if not level:
-        return None
-    return float(max(level, key=lambda mesh: mesh.size_m[0] * mesh.size_m[1]).position_m[2])
 
 
 def mirrored_view(view: View, height_m: float) -> View:

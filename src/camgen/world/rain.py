@@ -76,6 +76,8 @@ import math
 
 import numpy as np
 
+from camgen.config.scene import PlaneMesh
+
 MARSHALL_PALMER_N0_PER_M3_MM = 8000.0
 """N0 of Marshall & Palmer (1948), m⁻³ mm⁻¹."""
 
@@ -130,6 +132,24 @@ disc 150 px across."""
 def ground_is_wet(environment) -> bool:
     """Whether a scene's ground is wet: its `environment.wet`, or while it rains when that is left out."""
     return environment.rain is not None if environment.wet is None else bool(environment.wet)
+
+
+def wet_ground_height_m(environment) -> float | None:
+    """The height of the wet ground whose water film mirrors the scene (`camgen.render.wet`), m: the largest level
+    plane facing up among `environment.meshes` when the ground is wet (`ground_is_wet`); None for a dry ground
+    or one without such a plane (nothing is mirrored then, and the plan draws nothing for it)."""
+    if not ground_is_wet(environment):
+        return None
+    level = []
+    for mesh in environment.meshes:
+        if not isinstance(mesh, PlaneMesh):
+            continue
+        rx, ry, _ = (math.remainder(angle, 360.0) for angle in mesh.rotation_deg)
+        if abs(rx) < 1e-6 and abs(ry) < 1e-6:
+            level.append(mesh)
+    if not level:
+        return None
+    return float(max(level, key=lambda mesh: mesh.size_m[0] * mesh.size_m[1]).position_m[2])
 
 
 def water_fresnel(cos_incidence: np.ndarray, n: float = WATER_REFRACTIVE_INDEX) -> np.ndarray:
