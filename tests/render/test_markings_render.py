@@ -142,3 +142,31 @@ def test_the_night_graph_takes_the_paints_nir_reflectance():
         assert np.allclose(grey[:, 0], grey[:, 1]) and np.allclose(grey[:, 0], grey[:, 2])
         assert abs(float(grey[:, 0].mean()) - PAINT_NIR_REFLECTANCE[marking.colour]) < 0.03
         assert tuple(primitive.material.baseColorFactor[:3]) == (1.0, 1.0, 1.0)
+
+
+def test_paint_casts_no_shadow_under_a_spot_light(renderer):
+    """A spot lamp 3 m up at x = 2 (a spot's shadow map is pyrender's pass, not the sun's cascades). A bar of
+    paint floated 1 m over the ground (x −0.2…0.6, y 0.35…0.65) would shade the ground at x −1.3…−0.1,
+    y 0.5…1.0 if it cast shadows: that ground is as lit as in the same scene without the bar. A box plate of
+    the same size at y −0.5 does shade the ground at y −1.0…−0.5 (shadows are on)."""
+    view = _overhead()
+    floating = {"type": "line", "along_m": [[-0.2, 0.5], [0.6, 0.5]], "width_m": 0.3, "surface_height_m": 1.0}
+    plate = {"type": "box", "name": "plate", "size_m": [0.8, 0.3, 0.02], "position_m": [0.2, -0.5, 1.0]}
+    spot = {"type": "spot", "position_m": [2.0, 0.0, 3.0], "target_m": [-0.5, 0.0, 0.0], "intensity_cd": 5000}
+
+    def luminance(markings):
+        ground = {"type": "plane", "name": "ground", "size_m": [20, 20], "material": {"color_rgb": [GROUND_RHO] * 3}}
+        scene = scene_from(
+            environment={"meshes": [ground, plate], "markings": markings},
+            lights=[{"type": "ambient", "illuminance_lux": 100}, spot],
+        )
+        return _luminance(renderer.draw(build_scene_graph(scene), view, ("radiance",)).radiance)
+
+    with_bar, without = luminance([floating]), luminance([])
+
+    def at(image, x0, x1, y0, y1):
+        (u0, v0), (u1, v1) = np.sort(np.rint(_pixel_of(view, [[x0, y0], [x1, y1]])).astype(int), axis=0)
+        return image[v0:v1, u0:u1]
+
+    np.testing.assert_allclose(at(with_bar, -0.9, -0.4, 0.6, 0.9), at(without, -0.9, -0.4, 0.6, 0.9), rtol=1e-4)
+    assert np.median(at(without, -0.9, -0.4, -0.9, -0.6)) < 0.5 * np.median(at(without, -0.9, -0.4, 0.6, 0.9))
