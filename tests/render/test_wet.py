@@ -213,6 +213,28 @@ def test_a_wet_ground_under_a_uniform_sky_mirrors_it_by_waters_reflectance(works
 
 
 @pytest.mark.opengl
+def test_a_static_cameras_mirror_over_its_kept_still_part_equals_the_whole_mirror(workspace, renderer):
+    # A held camera over a still background draws the mirror's still part once and the walker over it each frame
+    # (as its frame's own draw does): the wet frames are those of the mirror drawn whole, bit for bit.
+    from camgen.render.scene_graph import build_scene_graph
+    from camgen.render.sequence import CameraRenderer
+
+    text = SCENE.replace("      size_m: [20, 20]", "      size_m: [40, 40]\n  wet: true\n  sky_luminance_cd_m2: 800")
+    job, camera = _wet_camera(workspace, text.replace("pitch_deg: -20", "pitch_deg: -8"))
+    assert camera.render.static_background and job.scene.actors
+    whole = camera.model_copy(update={"render": camera.render.model_copy(update={"static_background": False})})
+    graph = build_scene_graph(job.scene)
+    kept_frames = CameraRenderer(renderer, graph, camera)
+    whole_frames = CameraRenderer(renderer, graph, whole)
+    for index in (0, 3, 6):
+        np.testing.assert_array_equal(
+            kept_frames.frame(index).passes.radiance, whole_frames.frame(index).passes.radiance
+        )
+    assert "cam:wet mirror" in kept_frames._kept_views and "cam:wet mirror" not in whole_frames._kept_views
+    kept_frames.close()
+
+
+@pytest.mark.opengl
 def test_a_box_on_the_wet_ground_is_mirrored_under_itself_with_its_front_faces(workspace, renderer):
     # The mirror is drawn with the winding reversed: were the box drawn with its back faces, the mirror would
     # show its far side, and its depth along the reflected ray would be the far side's.

@@ -820,16 +820,18 @@ class CameraRenderer:
         mirror = block_view(mirrored_view(view, height_m), *steps_px)
         if self._flat_node_ids is None:
             self._flat_node_ids = flat_nodes(graph, height_m)
-        nodes = [n for n in graph.environment_nodes + graph.actor_nodes if id(n) not in self._flat_node_ids]
+        still = [n for n in graph.still_nodes if id(n) not in self._flat_node_ids]
+        moving = [n for n in graph.moving_nodes if id(n) not in self._flat_node_ids]
         graph.place_actors(state.time_s)
-        drawn = self.renderer.draw(
-            graph,
-            mirror,
-            ("radiance",),
-            nodes=nodes,
-            clip_range_m=self.clip_range_m(mirror),
-            shadow_fit=self.shadow_fit(view),
-        )
+        shared = {"clip_range_m": self.clip_range_m(mirror), "shadow_fit": self.shadow_fit(view)}
+        if self.spec.static_background:  # the still part of the mirror drawn once per view, as the frame's (`_draw`)
+            kept = f"{self.camera.name}:wet mirror"
+            if kept not in self._kept_views or not _same_view(self._kept_views[kept], mirror):
+                self.renderer.draw(graph, mirror, ("radiance",), nodes=still, keep_as=kept, read=False, **shared)
+                self._kept_views[kept] = mirror
+            drawn = self.renderer.draw(graph, mirror, ("radiance",), nodes=moving, background=kept, **shared)
+        else:
+            drawn = self.renderer.draw(graph, mirror, ("radiance",), nodes=still + moving, **shared)
         coarse = block_means(drawn.radiance, *steps_px)
         spread = film_blur(coarse, steps_px, sigmas_px, (view.width_px, view.height_px))
         return reflected_radiance(radiance, spread, wet, geometry.fresnel)
