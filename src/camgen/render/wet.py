@@ -2,13 +2,15 @@
 
 A wet scene's ground (`camgen.world.rain.ground_is_wet`: rain, or `environment.wet`) lies under a film of water that
 mirrors what stands on it. The mirror image is drawn, not guessed from the frame: the scene seen by the
-camera reflected in the ground's plane (`mirrored_view`: the pose times the reflection z → 2h − z, an
-improper pose, which the renderer draws with its triangles' winding reversed), leaving out what lies flat
+camera reflected in the ground's plane (its height h: `camgen.world.rain.wet_ground_height_m`, the largest level
+plane facing up; `mirrored_view`: the pose times the reflection z → 2h − z, an improper pose, which the
+renderer draws with its triangles' winding reversed), leaving out what lies flat
 on the ground (the road and its markings, which would hide everything under the mirror), with the sky and
 the fog of the reflected rays. A pixel of the frame that shows the wet ground (`wet_pixels`: its point
 within `WET_SURFACE_TOLERANCE_M` of the ground's height, or the ground continued to the horizon) then
 takes (1 − F)·L + F·R: L what the draw shaded there, R the mirror image at that pixel spread by the film's
-ripples (`film_blur`), F the water's Fresnel reflectance at the pixel's angle of incidence
+ripples (`film_blur`: one Gaussian over the frame, its width across taken at the wet pixels' median angle of
+incidence), F the water's Fresnel reflectance at the pixel's angle of incidence
 (`camgen.world.rain.water_fresnel`). A planar mirror seen through the camera's own pixels needs no
 search: the reflected ray through pixel u of the mirrored view is the camera's ray through u after the
 bounce, so R at u is what u reflects.
@@ -18,8 +20,9 @@ The film's spread is applied on a grid coarser than the frame, a sample every `m
 the frame's pixels over its block (`block_view`, `block_means`), not the mirror seen through the block's
 middle alone, which would catch a small bright object (a lamp, a headlight, a lit window) whole or miss it:
 its reflection came out up to 1.8 times too bright, or not at all, and flickered as it moved. The mirror is
-drawn at the frame time (no motion blur of its own: the spread is wider than a sub-frame's smear), with the
-frame's shadow maps (`ShadowFit` of the frame's view).
+drawn at the frame time (no motion blur of its own: the spread is wider than a sub-frame's smear), with shadow
+maps fitted to the frame's view (`ShadowFit`; the same cascades as the frame's where the mirrored camera's far
+plane is the frame's, as in the examples, where the farthest point the scene reaches lies on the ground).
 Not modelled: the IR illuminator's light in the mirror (night mode), puddles (the film covers the ground
 evenly), reflections in wet walls, cars or glass.
 """
