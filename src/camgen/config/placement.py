@@ -12,6 +12,7 @@ camera placed in a wall by mistake or a room modelled as a box, so it is a warni
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Mapping
 
@@ -56,6 +57,21 @@ def local_bounds(shape, file_bounds: Mapping[str, Bounds] | None = None) -> Boun
 def placement(shape) -> np.ndarray:
     """T_world_from_mesh of a placed shape (rotation about X, Y, Z, then the offset)."""
     return T_world_from_cam(shape.position_m, rotation_xyz_deg(shape.rotation_deg))
+
+
+def is_level_plane(mesh) -> bool:
+    """Whether `mesh` is a plane lying level and facing up: its rotation keeps local +Z on world +Z (a turn about
+    Z only)."""
+    if not isinstance(mesh, PlaneMesh):
+        return False
+    rx, ry, _ = (math.remainder(angle, 360.0) for angle in mesh.rotation_deg)
+    return abs(rx) < 1e-6 and abs(ry) < 1e-6
+
+
+def largest_level_plane(meshes, min_area_m2: float = 0.0) -> PlaneMesh | None:
+    """The largest of `meshes` that `is_level_plane` and covers at least `min_area_m2`, or None."""
+    level = [m for m in meshes if is_level_plane(m) and m.size_m[0] * m.size_m[1] >= min_area_m2]
+    return max(level, key=lambda mesh: mesh.size_m[0] * mesh.size_m[1], default=None)
 
 
 def box_corners(low: np.ndarray, high: np.ndarray, T_world_from_local: np.ndarray) -> np.ndarray:

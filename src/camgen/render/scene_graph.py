@@ -34,7 +34,7 @@ import trimesh
 from camgen.actors import Crowd, PersonRig, person_rig, rider_rig
 from camgen.actors.character import CharacterRig, character_rig
 from camgen.config.markings import marking_names
-from camgen.config.placement import placement
+from camgen.config.placement import is_level_plane, largest_level_plane, placement
 from camgen.config.scene import (
     Actor,
     AmbientLight,
@@ -160,16 +160,9 @@ def far_ground(scene: Scene) -> FarGround | None:
     is off."""
     if not scene.environment.ground_to_horizon:
         return None
-    level = []
-    for mesh in scene.environment.meshes:
-        if not isinstance(mesh, PlaneMesh) or mesh.size_m[0] * mesh.size_m[1] < FAR_GROUND_MIN_AREA_M2:
-            continue
-        rx, ry, _ = (math.remainder(angle, 360.0) for angle in mesh.rotation_deg)
-        if abs(rx) < 1e-6 and abs(ry) < 1e-6:  # local +Z stays world +Z: level and facing up
-            level.append(mesh)
-    if not level:
+    ground = largest_level_plane(scene.environment.meshes, FAR_GROUND_MIN_AREA_M2)
+    if ground is None:
         return None
-    ground = max(level, key=lambda mesh: mesh.size_m[0] * mesh.size_m[1])
     material = ground.material
     textured = material.texture is not None and "color_rgb" not in material.model_fields_set
     rgb = TYPICAL_ALBEDO_RGB[material.texture.type] if textured else material.color_rgb
@@ -178,7 +171,7 @@ def far_ground(scene: Scene) -> FarGround | None:
         texture = material.texture
         maps = surface_maps(texture.type, texture.seed, texture.tile_m)
         roughness, metallic = float(np.mean(maps.roughness)), float(np.mean(maps.metallic))
-    if is_wet(scene):
+    if ground_is_wet(scene.environment):
         rgb = tuple(WET_ALBEDO_FACTOR * c for c in rgb)
         roughness *= WET_ROUGHNESS_FACTOR
     return FarGround(float(ground.position_m[2]), tuple(float(c) for c in rgb), roughness, metallic)
@@ -976,20 +969,11 @@ def _character_rig(actor: Actor, route: Route, characters: dict[str, Character],
     )
 
 
-def is_wet(scene: Scene) -> bool:
-    """Whether the scene's ground is wet: `environment.wet`, or while it rains when that is left out
-    (`camgen.world.rain.ground_is_wet`)."""
-    return ground_is_wet(scene.environment)
-
-
 def wet_ground(mesh, node_mesh: pyrender.Mesh) -> None:
     """Wet a level plane facing up (`camgen.world.rain`): its base colour × WET_ALBEDO_FACTOR and its
     roughness × WET_ROUGHNESS_FACTOR (a texture's maps are scaled by the material's factors); other meshes
     stay dry (walls shed water, and the renderer knows no puddles)."""
-    if not isinstance(mesh, PlaneMesh):
-        return
-    rx, ry, _ = (math.remainder(angle, 360.0) for angle in mesh.rotation_deg)
-    if abs(rx) > 1e-6 or abs(ry) > 1e-6:
+    if not is_level_plane(mesh):
         return
     for primitive in node_mesh.primitives:
         material = primitive.material
@@ -1042,7 +1026,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         local_poses.append(placement(shape))
         people.append(None)
         vehicles.append(None)
-    wet = is_wet(scene)
+    wet = ground_is_wet(scene.environment)
     for mesh in scene.environment.meshes:
         pyrender_mesh = build_mesh(mesh, resolve_path)
         if wet:

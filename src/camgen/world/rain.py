@@ -76,7 +76,7 @@ import math
 
 import numpy as np
 
-from camgen.config.scene import PlaneMesh
+from camgen.config.placement import largest_level_plane
 
 MARSHALL_PALMER_N0_PER_M3_MM = 8000.0
 """N0 of Marshall & Palmer (1948), m⁻³ mm⁻¹."""
@@ -140,16 +140,8 @@ def wet_ground_height_m(environment) -> float | None:
     or one without such a plane (nothing is mirrored then, and the plan draws nothing for it)."""
     if not ground_is_wet(environment):
         return None
-    level = []
-    for mesh in environment.meshes:
-        if not isinstance(mesh, PlaneMesh):
-            continue
-        rx, ry, _ = (math.remainder(angle, 360.0) for angle in mesh.rotation_deg)
-        if abs(rx) < 1e-6 and abs(ry) < 1e-6:
-            level.append(mesh)
-    if not level:
-        return None
-    return float(max(level, key=lambda mesh: mesh.size_m[0] * mesh.size_m[1]).position_m[2])
+    ground = largest_level_plane(environment.meshes)
+    return None if ground is None else float(ground.position_m[2])
 
 
 def water_fresnel(cos_incidence: np.ndarray, n: float = WATER_REFRACTIVE_INDEX) -> np.ndarray:
