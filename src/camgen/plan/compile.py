@@ -690,6 +690,7 @@ def _compile_camera(
         )
     else:
         decisions.append(Decision(stage="pass.radiance", included=False, reason="no image output requested"))
+    mirrors = wet_ground_height_m(scene.environment) is not None  # the wet ground's water film (camgen.render.wet)
     depth_consumers = [
         name
         for name, use in (
@@ -697,7 +698,7 @@ def _compile_camera(
             ("depth output", outputs.depth is not None),
             (" and ".join(motion_outputs) + " output", bool(motion_outputs)),
             ("rain's depth test", scene.environment.rain is not None and needs_image),
-            ("the wet ground's reflections", wet_ground_height_m(scene.environment) is not None and needs_image),
+            ("the wet ground's reflections", mirrors and needs_image),
         )
         if use
     ]
@@ -734,7 +735,6 @@ def _compile_camera(
             )
         )
     if ground_is_wet(scene.environment) and needs_image:
-        mirrors = wet_ground_height_m(scene.environment) is not None
         decisions.append(
             Decision(
                 stage="render.wet_reflections",

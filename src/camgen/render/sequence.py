@@ -272,7 +272,7 @@ class CameraRenderer:
         """The height of a wet ground that mirrors the scene (`camgen.render.wet`), m; None when dry."""
         self._wet_view = None
         """The last view's `camgen.render.wet.view_geometry` (a held camera's frames share it)."""
-        self._flat_node_ids: set[int] | None = None
+        self._flat_node_ids: frozenset[int] | None = None
         """id() of the environment nodes lying flat on the wet ground, left out of its mirror (found once)."""
         self._kept_base: _KeptBase | None = None
         """The last still frame's radiance (`_base_radiance`)."""
@@ -314,20 +314,26 @@ class CameraRenderer:
         fit: ShadowFit | None = None,
         lod_bias: float = 0.0,
         maps_kept: bool = False,
+        leave_out: frozenset[int] = frozenset(),
     ) -> Passes:
         """One draw of `view`, over the kept background `key` when the plan keeps one; `maps_kept`: the last
-        draw's shadow maps stand (`Renderer.draw`'s `shadow_maps_kept`)."""
+        draw's shadow maps stand (`Renderer.draw`'s `shadow_maps_kept`); `leave_out`: id() of nodes not drawn
+        (the wet ground's mirror leaves out what lies flat on the ground)."""
         graph, renderer = self.graph, self.renderer
         fit = self.shadow_fit(view) if fit is None else fit
         # Every draw of this view shares the depth mapping, the shadow fit and the texture detail.
         shared = {"clip_range_m": self.clip_range_m(view), "shadow_fit": fit, "texture_lod_bias": lod_bias}
         if not self.spec.static_background:
-            return renderer.draw(graph, view, passes, shadow_maps_kept=maps_kept, **shared)
+            every = graph.environment_nodes + graph.actor_nodes
+            nodes = [n for n in every if id(n) not in leave_out] if leave_out else None
+            return renderer.draw(graph, view, passes, nodes=nodes, shadow_maps_kept=maps_kept, **shared)
+        still = [n for n in graph.still_nodes if id(n) not in leave_out]
+        moving = [n for n in graph.moving_nodes if id(n) not in leave_out]
         kept = f"{self.camera.name}:{key}"
         if kept not in self._kept_views or not _same_view(self._kept_views[kept], view):
-            renderer.draw(graph, view, passes, nodes=graph.still_nodes, keep_as=kept, read=False, **shared)
+            renderer.draw(graph, view, passes, nodes=still, keep_as=kept, read=False, **shared)
             self._kept_views[kept] = view
-        return renderer.draw(graph, view, passes, nodes=graph.moving_nodes, background=kept, **shared)
+        return renderer.draw(graph, view, passes, nodes=moving, background=kept, **shared)
 
     def motion_samples(self, state: CameraState) -> int:
         """Sub-frames for this frame's exposure (the most that any part of it needs). Through a head that
@@ -819,19 +825,12 @@ class CameraRenderer:
         steps_px = (mirror_step_px(sigmas_px[0]), mirror_step_px(sigmas_px[1]))
         mirror = block_view(mirrored_view(view, height_m), *steps_px)
         if self._flat_node_ids is None:
-            self._flat_node_ids = flat_nodes(graph, height_m)
-        still = [n for n in graph.still_nodes if id(n) not in self._flat_node_ids]
-        moving = [n for n in graph.moving_nodes if id(n) not in self._flat_node_ids]
+            self._flat_node_ids = frozenset(flat_nodes(graph, height_m))
         graph.place_actors(state.time_s)
-        shared = {"clip_range_m": self.clip_range_m(mirror), "shadow_fit": self.shadow_fit(view)}
-        if self.spec.static_background:  # the still part of the mirror drawn once per view, as the frame's (`_draw`)
-            kept = f"{self.camera.name}:wet mirror"
-            if kept not in self._kept_views or not _same_view(self._kept_views[kept], mirror):
-                self.renderer.draw(graph, mirror, ("radiance",), nodes=still, keep_as=kept, read=False, **shared)
-                self._kept_views[kept] = mirror
-            drawn = self.renderer.draw(graph, mirror, ("radiance",), nodes=moving, background=kept, **shared)
-        else:
-            drawn = self.renderer.draw(graph, mirror, ("radiance",), nodes=still + moving, **shared)
+        # The still part of the mirror drawn once per view where the plan keeps a background, as the frame's.
+        drawn = self._draw(
+            mirror, ("radiance",), "wet mirror", fit=self.shadow_fit(view), leave_out=self._flat_node_ids
+        )
         coarse = block_means(drawn.radiance, *steps_px)
         spread = film_blur(coarse, steps_px, sigmas_px, (view.width_px, view.height_px))
         return reflected_radiance(radiance, spread, wet, geometry.fresnel)
