@@ -124,6 +124,17 @@ def far_ground_graph(*, roughness: float, sun_elevation_deg: float, sun_azimuth_
     return build_scene_graph(scene)
 
 
+def horizon_view() -> View:
+    """640 × 360 at f = 1000 px, looking level along +X from `CAMERA_HEIGHT_M`, the horizon on row 20: the far
+    ground fills most of the frame, its grazing rows near the top."""
+    return View(
+        camera_matrix(1000.0, 1000.0, 319.5, 20.0),
+        look_at((0, 0, CAMERA_HEIGHT_M), (1, 0, CAMERA_HEIGHT_M)),
+        640,
+        360,
+    )
+
+
 @pytest.mark.parametrize(
     ("roughness", "sun_elevation_deg", "sun_azimuth_deg"),
     [(0.9, 4.0, 0.0), (0.9, 30.0, 90.0), (0.5, 10.0, 10.0), (0.1, 8.0, 0.0)],
@@ -135,13 +146,7 @@ def test_the_far_ground_from_its_grid_matches_every_pixel_evaluated(roughness, s
     from camgen.render.renderer import far_ground_brdf_radiance, far_ground_depth_m, far_ground_radiance
 
     graph = far_ground_graph(roughness=roughness, sun_elevation_deg=sun_elevation_deg, sun_azimuth_deg=sun_azimuth_deg)
-    width_px, height_px = 640, 360
-    view = View(
-        camera_matrix(1000.0, 1000.0, (width_px - 1) / 2, 20.0),
-        look_at((0, 0, CAMERA_HEIGHT_M), (1, 0, CAMERA_HEIGHT_M)),
-        width_px,
-        height_px,
-    )
+    view = horizon_view()
     below = np.isfinite(far_ground_depth_m(graph.far_ground, view))
     assert below.mean() > 0.9
     fast = far_ground_radiance(graph, view, below)[below]
@@ -158,12 +163,7 @@ def test_a_crop_on_the_sky_grid_gets_the_far_ground_of_the_whole_view_bit_for_bi
     from camgen.render.sequence import aligned_rect_px
 
     graph = far_ground_graph(roughness=0.9, sun_elevation_deg=4.0, sun_azimuth_deg=0.0)
-    view = View(
-        camera_matrix(1000.0, 1000.0, 319.5, 20.0),
-        look_at((0, 0, CAMERA_HEIGHT_M), (1, 0, CAMERA_HEIGHT_M)),
-        640,
-        360,
-    )
+    view = horizon_view()
     whole = far_ground_radiance(graph, view, np.isfinite(far_ground_depth_m(graph.far_ground, view)))
     # Crops whose last column or row lies on a grid line where the whole view evaluates the cell beyond it
     # pixel by pixel (the horizon's rows; 70 of 75 such 40 x 40 crops differed there, by up to 1e-4 of the
@@ -186,12 +186,7 @@ def test_the_grid_evaluates_the_rows_that_pixels_read_and_gives_the_whole_grids_
     from camgen.render.renderer import _FarGroundNodes, far_ground_depth_m
 
     graph = far_ground_graph(roughness=0.9, sun_elevation_deg=4.0, sun_azimuth_deg=0.0)
-    view = View(
-        camera_matrix(1000.0, 1000.0, 319.5, 20.0),
-        look_at((0, 0, CAMERA_HEIGHT_M), (1, 0, CAMERA_HEIGHT_M)),
-        640,
-        360,
-    )
+    view = horizon_view()
     below = np.isfinite(far_ground_depth_m(graph.far_ground, view))
     every = _FarGroundNodes(graph, view)
     every._evaluate_rows(graph, view, np.arange(view.height_px))
