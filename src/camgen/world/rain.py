@@ -74,6 +74,7 @@ from __future__ import annotations
 
 import math
 
+import cv2
 import numpy as np
 
 from camgen.config.placement import largest_level_plane
@@ -206,29 +207,53 @@ def drops_in_box(
 
     Returns positions_m (N, 3) in the world, diameters_mm (N,) and speeds_m_s (N,). Deterministic in
     (seed, time_s, box); a drop found at t is found at t + Δt lowered by v·Δt (module docstring)."""
-    low_m, high_m = np.asarray(low_m, np.float64), np.asarray(high_m, np.float64)
     diameters, densities = diameter_classes(rate_mm_h)
     speeds = terminal_speed_m_s(diameters)
-    cells_xy = [range(math.floor(low_m[i] / CELL_M), math.floor(high_m[i] / CELL_M) + 1) for i in range(2)]
+    positions, classes = particles_in_box(low_m, high_m, time_s, densities, speeds, (seed,))
+    return positions, diameters[classes], speeds[classes]
+
+
+def particles_in_box(
+    low_m,
+    high_m,
+    time_s: float,
+    densities_per_m3: np.ndarray,
+    speeds_m_s: np.ndarray,
+    key: tuple[int, ...],
+    drift_m_s: tuple[float, float] = (0.0, 0.0),
+) -> tuple[np.ndarray, np.ndarray]:
+    """Every particle inside the world box [low_m, high_m] (3,) at `time_s` of a seeded population of
+    classes (`densities_per_m3` (C,) particles per m³ falling at `speeds_m_s` (C,)), all drifting
+    horizontally at `drift_m_s` (x, y): rain's drops and snow's flakes (`camgen.world.snow`) alike.
+
+    A particle of class c lives at a fixed point of the frame moving with its class, (x − u t, y − w t,
+    z + v t), cut into cubic cells CELL_M on a side; each (class, cell) draws its Poisson count and uniform
+    positions from a generator seeded by (*key, class, cell), so any region at any time is reproduced
+    exactly and no particle is stored (module docstring, "Population"). Returns positions_m (N, 3) in the
+    world and each particle's class index (N,) int8."""
+    low_m, high_m = np.asarray(low_m, np.float64), np.asarray(high_m, np.float64)
+    u_m_s, w_m_s = float(drift_m_s[0]), float(drift_m_s[1])
     positions, classes = [], []
-    for c, (density, speed) in enumerate(zip(densities, speeds, strict=True)):
-        s_lo, s_hi = low_m[2] + speed * time_s, high_m[2] + speed * time_s
+    for c, (density, speed) in enumerate(zip(densities_per_m3, speeds_m_s, strict=True)):
+        shift = np.array([-u_m_s * time_s, -w_m_s * time_s, speed * time_s])  # world → the class's frame
+        lo, hi = low_m + shift, high_m + shift
+        cells = [range(math.floor(lo[i] / CELL_M), math.floor(hi[i] / CELL_M) + 1) for i in range(3)]
         mean_count = density * CELL_M**3
-        for i in cells_xy[0]:
-            for j in cells_xy[1]:
-                for k in range(math.floor(s_lo / CELL_M), math.floor(s_hi / CELL_M) + 1):
-                    rng = np.random.default_rng((seed, c, i + _CELL_OFFSET, j + _CELL_OFFSET, k + _CELL_OFFSET))
+        for i in cells[0]:
+            for j in cells[1]:
+                for k in cells[2]:
+                    rng = np.random.default_rng((*key, c, i + _CELL_OFFSET, j + _CELL_OFFSET, k + _CELL_OFFSET))
                     cell = rng.random((rng.poisson(mean_count), 3))
                     cell += (i, j, k)
                     cell *= CELL_M
-                    cell[:, 2] -= speed * time_s
+                    cell -= shift
                     positions.append(cell)
                     classes.append(np.full(len(cell), c, np.int8))
     if not positions:
-        return np.zeros((0, 3)), np.zeros(0), np.zeros(0)
+        return np.zeros((0, 3)), np.zeros(0, np.int8)
     p, c = np.concatenate(positions), np.concatenate(classes)
     inside = np.all((p >= low_m) & (p <= high_m), axis=1)
-    return p[inside], diameters[c[inside]], speeds[c[inside]]
+    return p[inside], c[inside]
 
 
 def streak_coverage(
@@ -245,28 +270,144 @@ def streak_coverage(
     depth_m (H, W): camera z of the nearest surface (+inf for the sky) — a drop behind it is hidden.
     Each streak is sampled at n points evenly along it, every sample carrying 1/n of the drop's image
     area π/4 (D f / z)² and splatted bilinearly: n is about its length in pixels, or fewer when each
-    sample would carry less than SAMPLE_ALPHA_MAX; the sum is clipped to 1."""
+    sample would carry less than SAMPLE_ALPHA_MAX; the sum is clipped to 1. Drops imaged wider than
+    DROP_IMAGE_MAX_PX are left out (`streak_layers`)."""
+    return streak_layers(positions_cam_m, diameters_mm, fall_cam_m, K_px, depth_m)[0]
+
+
+SPREAD_SHARP_PX = 0.5
+"""A particle whose footprint σ (`streak_layers`' spread_px) is under this is splatted bilinearly, as a point."""
+SPREAD_STEP = math.sqrt(2.0)
+"""Ratio between the σ of successive blurred layers of `streak_layers` (a footprint takes its layer's σ:
+at most 19 % wider or narrower)."""
+
+
+def streak_layers(
+    positions_cam_m: np.ndarray,
+    diameters_mm: np.ndarray,
+    fall_cam_m: np.ndarray,
+    K_px: np.ndarray,
+    depth_m: np.ndarray,
+    *,
+    image_max_px: float = DROP_IMAGE_MAX_PX,
+    spread_px: np.ndarray | None = None,
+    values: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """(α, Σ α·value): `streak_coverage` for any falling particles (rain's drops, snow's flakes), with two
+    options it leaves off.
+
+    `spread_px` (N,): σ of each particle's footprint in pixels (its image, its defocus): the samples of a
+    particle with σ ≥ SPREAD_SHARP_PX are splatted into a layer of their σ (in steps of SPREAD_STEP) that
+    is then blurred by a Gaussian of that σ, which spreads each one's coverage without changing its sum;
+    the depth test is at the sample's own pixel. Such a streak is sampled every σ pixels rather than every
+    pixel. None: every sample is a point, as rain's.
+    `values` (N,): a quantity per particle (its own radiance); the second array (H, W) is Σ α_i·value_i
+    over the particles covering each pixel, scaled down with α where α is clipped to 1. None: None.
+    `image_max_px`: particles imaged wider than this (their diameter at their depth) are left out."""
     height_px, width_px = depth_m.shape
     f_px = math.sqrt(abs(K_px[0, 0] * K_px[1, 1]))
     start, end = positions_cam_m - fall_cam_m / 2, positions_cam_m + fall_cam_m / 2
     keep = (start[:, 2] > NEAR_M) & (end[:, 2] > NEAR_M)
-    keep &= diameters_mm * 1e-3 * f_px / positions_cam_m[:, 2].clip(NEAR_M) <= DROP_IMAGE_MAX_PX
+    keep &= diameters_mm * 1e-3 * f_px / positions_cam_m[:, 2].clip(NEAR_M) <= image_max_px
     start, end, diameters_mm = start[keep], end[keep], diameters_mm[keep]
-    coverage = np.zeros(height_px * width_px, np.float64)
-    if len(start) == 0:
-        return coverage.reshape(height_px, width_px).astype(np.float32)
-    x0, y0 = _project(start, K_px)
-    x1, y1 = _project(end, K_px)
-    # Streaks wholly outside the image (their bounding box misses it) are not sampled.
-    seen = (np.maximum(x0, x1) > -1) & (np.minimum(x0, x1) < width_px) & (np.maximum(y0, y1) > -1)
-    seen &= np.minimum(y0, y1) < height_px
-    start, end, diameters_mm = start[seen], end[seen], diameters_mm[seen]
-    length_px = np.hypot(x1 - x0, y1 - y0)[seen]
-    # Samples along each streak: one per pixel of its length, or fewer where each then still carries at
-    # most SAMPLE_ALPHA_MAX of a pixel (a faint streak's light is spread no less evenly than it shows).
+    spread = None if spread_px is None else np.asarray(spread_px, np.float64)[keep]
+    value = None if values is None else np.asarray(values, np.float64)[keep]
+    coverage = np.zeros((height_px, width_px), np.float64)
+    valued = None if values is None else np.zeros((height_px, width_px), np.float64)
+    if len(start):
+        x0, y0 = _project(start, K_px)
+        x1, y1 = _project(end, K_px)
+        # Streaks wholly outside the image (their bounding box, widened by 3σ, misses it) are not sampled.
+        margin = 1.0 if spread is None else 1.0 + 3 * spread
+        seen = (np.maximum(x0, x1) > -margin) & (np.minimum(x0, x1) < width_px - 1 + margin)
+        seen &= (np.maximum(y0, y1) > -margin) & (np.minimum(y0, y1) < height_px - 1 + margin)
+        length_px = np.hypot(x1 - x0, y1 - y0)[seen]
+        start, end, diameters_mm = start[seen], end[seen], diameters_mm[seen]
+        spread = None if spread is None else spread[seen]
+        value = None if value is None else value[seen]
+        if spread is None:
+            layers = np.zeros(len(start), np.int64)
+        else:  # 0 sharp; b ≥ 1 blurred by SPREAD_SHARP_PX·SPREAD_STEP^(b−1)
+            steps = np.log(np.maximum(spread, SPREAD_SHARP_PX) / SPREAD_SHARP_PX) / math.log(SPREAD_STEP)
+            layers = np.where(spread < SPREAD_SHARP_PX, 0, np.floor(steps + 0.5).astype(np.int64) + 1)
+        unique = np.unique(layers)
+        for b in unique:
+            chosen = slice(None) if len(unique) == 1 else layers == b
+            sigma_px = 0.0 if b == 0 else SPREAD_SHARP_PX * SPREAD_STEP ** (b - 1)
+            parts = _splat_streaks(
+                start[chosen],
+                end[chosen],
+                diameters_mm[chosen],
+                length_px[chosen],
+                None if value is None else value[chosen],
+                sigma_px,
+                K_px,
+                depth_m,
+                f_px,
+            )
+            for total, image in zip((coverage, valued), parts, strict=True):
+                if image is None:
+                    continue
+                if sigma_px > 0:
+                    _add_blurred(total, image, sigma_px)
+                else:
+                    total += image
+    clipped = np.minimum(coverage, 1.0)
+    if valued is not None:
+        valued *= np.divide(clipped, coverage, out=np.ones_like(coverage), where=coverage > 1.0)
+        valued = valued.astype(np.float32)
+    return clipped.astype(np.float32), valued
+
+
+BLUR_TILE_PX = 256
+"""`_add_blurred` blurs a layer tile by tile, only the tiles its splats reached."""
+
+
+def _add_blurred(total: np.ndarray, image: np.ndarray, sigma_px: float) -> None:
+    """total += `image` blurred by a Gaussian of σ `sigma_px` (zero beyond the frame), computed over the
+    BLUR_TILE_PX tiles of `image` that hold anything, each with a margin wider than OpenCV's kernel (its
+    radius is 4σ): a sparse layer (a few flakes near the lens) costs its tiles, not the frame."""
+    height_px, width_px = image.shape
+    margin = math.ceil(4 * sigma_px) + 1
+    for top in range(0, height_px, BLUR_TILE_PX):
+        for left in range(0, width_px, BLUR_TILE_PX):
+            tile = image[top : top + BLUR_TILE_PX, left : left + BLUR_TILE_PX]
+            if not tile.any():
+                continue
+            y0, x0 = max(top - margin, 0), max(left - margin, 0)
+            y1, x1 = min(top + tile.shape[0] + margin, height_px), min(left + tile.shape[1] + margin, width_px)
+            window = np.zeros((y1 - y0, x1 - x0))
+            window[top - y0 : top - y0 + tile.shape[0], left - x0 : left - x0 + tile.shape[1]] = tile
+            total[y0:y1, x0:x1] += cv2.GaussianBlur(window, (0, 0), sigma_px, borderType=cv2.BORDER_CONSTANT)
+
+
+def _splat_streaks(
+    start: np.ndarray,
+    end: np.ndarray,
+    diameters_mm: np.ndarray,
+    length_px: np.ndarray,
+    value: np.ndarray | None,
+    sigma_px: float,
+    K_px: np.ndarray,
+    depth_m: np.ndarray,
+    f_px: float,
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """The (H, W) float64 sums of α (and of α·value) of the samples of streaks from `start` to `end` (N, 3)
+    splatted bilinearly as points and depth-tested at the pixels they reach (`streak_layers`), unclipped;
+    footprints of σ = `sigma_px` (0: points) set how densely each streak is sampled."""
+    height_px, width_px = depth_m.shape
+    # Samples along each streak: one per pixel of its length (per σ of a spread one), or fewer where each
+    # then still carries at most SAMPLE_ALPHA_MAX of a pixel (a faint streak's light is spread no less
+    # evenly than it shows; a spread sample's light is shared by about 2πσ² pixels).
     middle_z = (start[:, 2] + end[:, 2]) / 2
     area_px2 = math.pi / 4 * (diameters_mm * 1e-3 * f_px / middle_z) ** 2
-    n = np.minimum(np.ceil(length_px) + 1, np.ceil(area_px2 / SAMPLE_ALPHA_MAX))
+    if sigma_px == 0:
+        n = np.minimum(np.ceil(length_px) + 1, np.ceil(area_px2 / SAMPLE_ALPHA_MAX))
+    else:
+        footprint_px2 = max(1.0, 2 * math.pi * sigma_px**2)
+        n = np.minimum(
+            np.ceil(length_px / max(sigma_px, 1.0)) + 1, np.ceil(area_px2 / footprint_px2 / SAMPLE_ALPHA_MAX)
+        )
     n = np.clip(n, 1, SAMPLES_MAX).astype(np.int64)
     drop = np.repeat(np.arange(len(n)), n)
     first = np.cumsum(n) - n
@@ -282,7 +423,7 @@ def streak_coverage(
     scale = (diameters_mm * 1e-3 * f_px) ** 2 * (math.pi / 4) / n
     weight = scale.astype(np.float32)[drop] * inverse_z * inverse_z
     inside = (x > -1.0) & (x < width_px) & (y > -1.0) & (y < height_px)
-    x, y, z, weight = x[inside], y[inside], points[inside, 2], weight[inside]
+    x, y, z, weight, drop = x[inside], y[inside], points[inside, 2], weight[inside], drop[inside]
     x0, y0 = np.floor(x), np.floor(y)
     fx, fy = x - x0, y - y0
     x0, y0 = x0.astype(np.int64), y0.astype(np.int64)
@@ -295,9 +436,12 @@ def streak_coverage(
     padded_depth = np.full((height_px + 2, padded_w), -np.inf, np.float32)  # the border hides every splat
     padded_depth[1:-1, 1:-1] = depth_m
     front = np.tile(z, 4) < padded_depth.reshape(-1)[indices]
-    splats = np.bincount(indices[front], weights=weights[front], minlength=padded_depth.size)
-    coverage = splats.reshape(height_px + 2, padded_w)[1:-1, 1:-1]
-    return np.minimum(coverage, 1.0).astype(np.float32)
+    indices, weights = indices[front], weights[front]
+    sums = [np.bincount(indices, weights=weights, minlength=padded_depth.size)]
+    if value is not None:
+        sums.append(np.bincount(indices, weights=weights * np.tile(value[drop], 4)[front], minlength=padded_depth.size))
+    images = [flat.reshape(height_px + 2, padded_w)[1:-1, 1:-1] for flat in sums]
+    return images[0], images[1] if value is not None else None
 
 
 def _project(points_cam_m: np.ndarray, K_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
