@@ -354,6 +354,31 @@ class Rain(Model):
     """Draws the drops; the same seed gives the same rain."""
 
 
+class Snow(Model):
+    """Snow over the whole scene (`camgen.world.snow`): Gunn–Marshall aggregate flakes falling at their
+    Locatelli–Hobbs speed and drifting with `wind`, drawn as short soft streaks in each frame's exposure near
+    the camera and as haze beyond (the visibility of Rasmussen et al. 1999, unless `fog` sets one)."""
+
+    rate_mm_h: Annotated[
+        float,
+        Field(gt=0, le=25),
+        Why(
+            "snowfall rates run, as melted water, from a flurry's 0.1 mm/h to about 10 mm/h in the heaviest "
+            "snowstorms (heavy snow: visibility under 0.5 km, Rasmussen et al. 1999); 0–25 mm/h"
+        ),
+    ]
+    """Snowfall rate as liquid-water equivalent (the water a gauge melts it into), mm/h. The US NWS names
+    snow light at a visibility of 1 km or more, moderate at 0.5–1 km, heavy under 0.5 km; through Rasmussen et
+    al.'s relation (`camgen.world.snow`) dry snow is light under 0.8 mm/h, heavy over 1.6. 1 mm/h of water is
+    about 1 cm/h of fresh snow on the ground (the rule of thumb of 10:1)."""
+    seed: Annotated[int, Field(ge=0)] = 0
+    """Draws the flakes; the same seed gives the same snow."""
+    kind: Literal["dry", "wet"] = "dry"
+    """dry: cold snow of light dendrite aggregates (bulk density 0.017 g cm⁻² / D, falling about 1 m/s);
+    wet: near-melting or rimed snow, denser (0.072 g cm⁻² / D) and falling about 2 m/s, so a third as large
+    for the same water and about 8 times clearer (Rasmussen et al. 1999)."""
+
+
 class Wind(Model):
     """Wind over the whole scene: trees and bushes sway in it and their leaves flutter
     (`camgen.props.sway`); its gusts are drawn from the scene's seed (or `seed`). Calm (no wind, or
@@ -398,6 +423,8 @@ class Environment(Model):
     """Fog or haze by meteorological visibility; null: clear air."""
     rain: Rain | None = None
     """Rain by its rate (`camgen.world.rain`); null: dry."""
+    snow: Snow | None = None
+    """Snow by its melted rate (`camgen.world.snow`); null: none. Not with `rain` (sleet is not modelled)."""
     wind: Wind | None = None
     """Wind by its speed, direction and gustiness: trees and bushes sway and their leaves flutter
     (`camgen.props.sway`); null: calm, every prop still."""
@@ -436,6 +463,16 @@ class Environment(Model):
     shadows: bool = True
     """Sun and spot lights cast shadows (shadow maps); point lights never do. Shadows of moving actors
     fall on the environment, so a static camera then renders every frame in full."""
+
+    @model_validator(mode="after")
+    def _check_precipitation(self) -> Environment:
+        if self.rain is not None and self.snow is not None:
+            raise invalid(
+                "snow",
+                "is set together with rain, but mixed rain and snow (sleet) is not modelled; keep one of "
+                "environment.rain and environment.snow",
+            )
+        return self
 
     @model_validator(mode="after")
     def _check_marking_names(self) -> Environment:
