@@ -50,6 +50,7 @@ from camgen.props import prop_box_corners
 from camgen.props.sway import swaying_props
 from camgen.sensor.capture import NOISE_TERM_OFF, NOISE_TERMS, noise_term_is_on
 from camgen.world.rain import STREAK_RANGE_M, ground_is_wet, wet_ground_height_m
+from camgen.world.snow import snow_visibility_m
 
 WAVELENGTH_UM = 0.55  # mid-visible, for the diffraction estimate
 MOTION_SAMPLE_STEP_PX = 1.0
@@ -698,6 +699,7 @@ def _compile_camera(
             ("depth output", outputs.depth is not None),
             (" and ".join(motion_outputs) + " output", bool(motion_outputs)),
             ("rain's depth test", scene.environment.rain is not None and needs_image),
+            ("snow's depth test", scene.environment.snow is not None and needs_image),
             ("the wet ground's reflections", mirrors and needs_image),
         )
         if use
@@ -732,6 +734,23 @@ def _compile_camera(
                 included=True,
                 reason=f"{rain.rate_mm_h:g} mm/h: drop streaks over each frame's exposure within "
                 f"{STREAK_RANGE_M:g} m, depth-tested, and haze beyond (camgen.world.rain)",
+            )
+        )
+    snow = scene.environment.snow
+    if snow is not None and needs_image:
+        visibility = (
+            f"haze of {snow_visibility_m(snow.rate_mm_h, snow.kind):.0f} m visibility beyond (Rasmussen et al. 1999)"
+            if scene.environment.fog is None
+            else f"no haze of its own beyond (environment.fog's {scene.environment.fog.visibility_m:g} m is the "
+            "visibility in the snow)"
+        )
+        decisions.append(
+            Decision(
+                stage="render.snow",
+                included=True,
+                reason=f"{snow.rate_mm_h:g} mm/h of {snow.kind} snow: flake streaks over each frame's exposure within "
+                f"{STREAK_RANGE_M:g} m (the smallest flakes nearer: camgen.render.snow.flake_ranges_m), depth-tested "
+                f"and defocused, and a {visibility} (camgen.world.snow)",
             )
         )
     if ground_is_wet(scene.environment) and needs_image:

@@ -270,6 +270,8 @@ class CameraRenderer:
         """The NIR graph of a night-mode camera (`camgen.render.nir`), built at its first night frame."""
         self._wet_ground_m = wet_ground_height_m(graph.source[0].environment) if graph.source is not None else None
         """The height of a wet ground that mirrors the scene (`camgen.render.wet`), m; None when dry."""
+        self._snow = graph.source[0].environment.snow if graph.source is not None else None
+        """The scene's snow (`camgen.render.snow`); None without."""
         self._wet_view = None
         """The last view's `camgen.render.wet.view_geometry` (a held camera's frames share it)."""
         self._flat_node_ids: frozenset[int] | None = None
@@ -348,9 +350,10 @@ class CameraRenderer:
     def redraws_settled(self, metered: CameraState, settled: CameraState) -> bool:
         """Whether a frame drawn sharp to meter the view (`frame(sharp=True)` at `metered`, the profile's
         guessed exposure) is drawn again at the exposure auto-exposure settled on: where that blurs, or where
-        rain's streaks span another exposure."""
+        rain's or snow's streaks span another exposure."""
         changed = settled.exposure_time_s != metered.exposure_time_s
-        return self.motion_samples(settled) > 1 or (self.graph.rain_rate_mm_h is not None and changed)
+        falling = self.graph.rain_rate_mm_h is not None or self._snow is not None
+        return self.motion_samples(settled) > 1 or (falling and changed)
 
     def _plan_samples(self, state: CameraState) -> int:
         """Sub-frames for this frame's exposure by the plan's bound on the image motion (`motion_samples`)."""
@@ -405,7 +408,7 @@ class CameraRenderer:
     ) -> Frame:
         """The frame from its drawn daylight radiance (None without a radiance pass): the IR illuminator's
         light added in night mode, the geometric passes drawn at the frame time (or taken from `geometry`,
-        drawn with the radiance), and the rain."""
+        drawn with the radiance), and the rain or snow."""
         passes, result = self.spec.passes, Passes()
         result.radiance = radiance
         if "radiance" in passes and state.night_mode:
@@ -421,6 +424,12 @@ class CameraRenderer:
             result.radiance = self._wet(view, state, result.radiance, result.depth_m)
         if "radiance" in passes and self.graph.rain_rate_mm_h is not None:
             result.radiance = self._rain(view, state, result.radiance, result.depth_m)
+        if "radiance" in passes and self._snow is not None:
+            from camgen.render.snow import snowy_radiance
+
+            result.radiance = snowy_radiance(
+                self.graph, view, result.radiance, result.depth_m, state, self.camera.profile
+            )
         return Frame(index, state.time_s, result)
 
     def _still_radiance(self, state: CameraState, view: View, groups: dict[int, set[int]]) -> np.ndarray | None:

@@ -1,0 +1,176 @@
+"""Snow over a rendered frame (`camgen.world.snow`): the haze of the far flakes, then the short streaks of
+the near ones in the frame's exposure, depth-tested against the surfaces, lit by the sky, the ground, the
+sun and, in night mode, the camera's own IR illuminator.
+
+The drawing is rain's (`camgen.world.rain.streak_layers`, the frame's exposure as `camgen.render.rain`
+spans it) with two of its options: a flake's footprint is spread by its own image and by the lens's defocus
+(flakes near the lens are large, soft discs, as a drop imaged that wide would be, which rain leaves out),
+and each flake carries its own radiance in the illuminator's beam (I/z²: the near flakes glow).
+
+The haze is the snow's visual range (Rasmussen et al. 1999) over each pixel's distance beyond
+`STREAK_RANGE_M`, by Koschmieder's law (`camgen.world.fog`), the far ground's distance where no mesh is hit.
+A scene that sets `environment.fog` gives the visibility it sees in the snow: no snow haze is added to it
+(a reported visibility in snowfall is the snow's and the air's together).
+
+Defocus: a point z metres away, focused at s, is blurred over a circle of A·f·|1/z − 1/s| pixels (A = f/N
+the aperture's diameter); a flake's footprint is a Gaussian of σ = √(image² + circle²)/4 (a disc of
+diameter D has σ = D/4 along each axis). The optics' depth of field, when planned, then blurs the frame by
+each pixel's surface depth, not the flake's (a flake near the lens is blurred by this module only).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from camgen.render.gl import pyrender
+from camgen.render.renderer import View, far_ground_depth_m, frustum_corners_m, horizon_airlight, ray_lengths
+from camgen.world.fog import apply_fog
+from camgen.world.night import SPOT_FULL_INTENSITY_FRACTION, nir_equivalent_intensity_cd
+from camgen.world.rain import NEAR_M, STREAK_RANGE_M, streak_layers
+from camgen.world.snow import (
+    flake_classes,
+    flake_radiance,
+    flakes_in_box,
+    illuminated_flake_radiance,
+    snow_visibility_m,
+    wind_drift_m_s,
+)
+
+FLAKE_AREA_MIN_PX2 = 0.02
+"""A class of flakes is drawn out to where its flakes image at this many px² (at full contrast 5 steps of 8
+bits in one pixel, spread over a streak of a few), at most STREAK_RANGE_M; beyond, its flakes are left to
+the haze beyond STREAK_RANGE_M. The dimming of the light by the flakes left out within STREAK_RANGE_M is
+lost: under 1 % in a snowfall of 1.5 mm/h (the smallest two classes carry a quarter of its extinction, and
+are left out beyond 7–13 m at f = 1034 px)."""
+
+
+def flake_ranges_m(snow, f_px: float) -> np.ndarray:
+    """(C,) the distance out to which each class of `flake_classes` is drawn, m: where a flake of the class's
+    diameter D images at FLAKE_AREA_MIN_PX2, π/4 (D f / r)² = A, at most STREAK_RANGE_M."""
+    diameters_mm = flake_classes(snow.rate_mm_h, snow.kind)[0]
+    return np.minimum(diameters_mm * 1e-3 * f_px * math.sqrt(math.pi / 4 / FLAKE_AREA_MIN_PX2), STREAK_RANGE_M)
+
+
+FLAKE_IMAGE_MAX_PX = 256.0
+"""Flakes are drawn however wide they image (within NEAR_M of the lens they are left out, as drops are)."""
+
+
+def snow_layers(
+    view: View,
+    depth_m: np.ndarray,
+    state,
+    snow,
+    wind=None,
+    ground_m: float = -np.inf,
+    illuminator_cd: float | None = None,
+    illuminator_half_angle_rad: float = math.radians(40.0),
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """(α, Σ α·L_IR): the flakes' coverage (H, W) within each class's range of the view's camera
+    (`flake_ranges_m`, at most STREAK_RANGE_M) at the state's time, each falling over its exposure and drifting in `wind`, and, with an IR illuminator of
+    `illuminator_cd` (the renderer's candela for its 850 nm light) at the lens, the flakes' radiance in its
+    beam summed by coverage (None without). `state`: a `CameraState` (time_s, exposure_time_s,
+    focal_length_mm, f_number, focus_distance_m); `snow`: a `camgen.config.scene.Snow`."""
+    drift = wind_drift_m_s(wind)
+    K = view.K_px
+    f_px = math.sqrt(abs(K[0, 0] * K[1, 1]))
+    ranges_m = flake_ranges_m(snow, f_px)
+    found = []
+    for c, range_m in enumerate(ranges_m):
+        if range_m <= NEAR_M:
+            continue
+        corners = frustum_corners_m(view, NEAR_M, range_m)
+        low_m, high_m = corners.min(axis=0), corners.max(axis=0)
+        low_m[2] = max(low_m[2], ground_m)
+        if low_m[2] < high_m[2]:
+            flakes = flakes_in_box(low_m, high_m, state.time_s, snow.rate_mm_h, snow.seed, snow.kind, drift, [c])
+            found.append((*flakes, np.full(len(flakes[0]), range_m)))
+    if not found:
+        return np.zeros(depth_m.shape, np.float32), None
+    positions, diameters_mm, speeds_m_s, range_m = (np.concatenate(parts) for parts in zip(*found, strict=True))
+    T = view.T_world_from_cam
+    R, offset = T[:3, :3], positions - T[:3, 3]
+    # p_cam = Rᵀ (p − c), column by column (as `camgen.render.rain`), the frustum's flakes kept first: the box
+    # around the frustum holds about four times as many.
+    x, y, z = (offset[:, 0] * R[0, i] + offset[:, 1] * R[1, i] + offset[:, 2] * R[2, i] for i in range(3))
+    tan_x = max(abs(-0.5 - K[0, 2]), abs(view.width_px - 0.5 - K[0, 2])) / K[0, 0]
+    tan_y = max(abs(-0.5 - K[1, 2]), abs(view.height_px - 0.5 - K[1, 2])) / K[1, 1]
+    aperture_m = state.focal_length_mm * 1e-3 / state.f_number
+    # How far past the frame's edge a flake's half streak and its footprint's 3σ reach, at most, m.
+    reach_m = state.exposure_time_s / 2 * math.hypot(*drift, float(speeds_m_s.max(initial=0.0)))
+    reach_m += 0.75 * (
+        float(diameters_mm.max(initial=0.0)) * 1e-3 + aperture_m * max(1.0, STREAK_RANGE_M / state.focus_distance_m)
+    )
+    keep = (z > NEAR_M) & (x * x + y * y + z * z <= range_m * range_m)
+    keep &= (np.abs(x) <= z * tan_x + reach_m) & (np.abs(y) <= z * tan_y + reach_m)
+    positions_cam = np.column_stack([x[keep], y[keep], z[keep]])
+    diameters_mm, speeds_m_s = diameters_mm[keep], speeds_m_s[keep]
+    # Each flake's displacement over the exposure, (u, w, −v)·T in the world, in the camera frame.
+    T_s = state.exposure_time_s
+    fall_cam = np.outer(-speeds_m_s * T_s, R[2]) + (drift[0] * R[0] + drift[1] * R[1]) * T_s
+    z = positions_cam[:, 2]
+    circle_px = aperture_m * f_px * np.abs(1.0 / z - 1.0 / state.focus_distance_m)
+    spread_px = np.hypot(diameters_mm * 1e-3 * f_px / z, circle_px) / 4
+    values = None
+    if illuminator_cd is not None:
+        distance_m = np.sqrt(np.einsum("ij,ij->i", positions_cam, positions_cam))
+        cos_angle = positions_cam[:, 2] / np.maximum(distance_m, 1e-9)
+        outer = math.cos(illuminator_half_angle_rad)
+        inner = math.cos(SPOT_FULL_INTENSITY_FRACTION * illuminator_half_angle_rad)
+        beam = np.clip((cos_angle - outer) / (inner - outer), 0.0, 1.0) ** 2  # pyrender's spot falloff
+        values = illuminated_flake_radiance(illuminator_cd * beam / np.maximum(distance_m, NEAR_M) ** 2)
+    return streak_layers(
+        positions_cam,
+        diameters_mm,
+        fall_cam,
+        view.K_px,
+        depth_m,
+        image_max_px=FLAKE_IMAGE_MAX_PX,
+        spread_px=spread_px,
+        values=values,
+    )
+
+
+def environment_flake_radiance(graph, radiance: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
+    """(3,) a flake's radiance in the graph's daylight (`camgen.world.snow.flake_radiance`): the sky's is the
+    ambient light's (E/π, what lights every diffuse surface), the ground's the mean of the frame's surfaces
+    (every 4th pixel each way; the sky's where the frame shows none), the sun's each directional light's
+    illuminance."""
+    sky = np.asarray(graph.scene.ambient_light, np.float64)
+    surfaces = np.isfinite(depth_m[::4, ::4])
+    ground = radiance[::4, ::4][surfaces].mean(axis=0, dtype=np.float64) if surfaces.any() else sky
+    sun = np.zeros(3)
+    for node in graph.scene.light_nodes:
+        if isinstance(node.light, pyrender.DirectionalLight):
+            sun += node.light.intensity * np.asarray(node.light.color, np.float64)
+    return flake_radiance(sky, ground, sun)
+
+
+def snowy_radiance(graph, view: View, radiance: np.ndarray, depth_m: np.ndarray, state, profile=None) -> np.ndarray:
+    """`radiance` (H, W, 3) of `view` in the snow of the graph's scene (`graph.source`): Koschmieder haze of
+    the snow's visual range beyond STREAK_RANGE_M unless the scene sets its own fog, then the near flakes,
+    (1 − α) L + α L_flake + Σ α_i L_IR,i (the last in night mode with the `profile`'s IR illuminator)."""
+    if depth_m is None:
+        raise ValueError("snow needs the depth pass, which the plan did not draw")
+    environment = graph.source[0].environment
+    snow = environment.snow
+    if getattr(graph, "far_ground", None) is not None:  # the ground beyond the meshes is at a finite distance
+        depth_m = np.where(np.isinf(depth_m), far_ground_depth_m(graph.far_ground, view), depth_m)
+    airlight = horizon_airlight(graph, view)
+    if environment.fog is None:
+        beyond_m = np.maximum(depth_m * ray_lengths(view) - np.float32(STREAK_RANGE_M), 0.0)
+        radiance = apply_fog(radiance, beyond_m, airlight, snow_visibility_m(snow.rate_mm_h, snow.kind))
+    illuminator_cd, half_angle_rad = None, math.radians(40.0)
+    night = None if profile is None else profile.night_mode
+    if state.night_mode and night is not None and night.ir_illuminator is not None:
+        illuminator = night.ir_illuminator
+        illuminator_cd = nir_equivalent_intensity_cd(illuminator.radiant_intensity_mw_sr, profile.sensor.qe_850nm_rel)
+        half_angle_rad = math.radians(illuminator.half_angle_deg)
+    ground_m = float(graph.scene.bounds[0][2]) if graph.scene.mesh_nodes else -np.inf
+    coverage, lit = snow_layers(view, depth_m, state, snow, environment.wind, ground_m, illuminator_cd, half_angle_rad)
+    flake = environment_flake_radiance(graph, radiance, depth_m)
+    out = radiance + coverage[..., None] * (flake - radiance)
+    if lit is not None:
+        out += lit[..., None]
+    return out.astype(np.float32)
