@@ -44,7 +44,8 @@ def test_no_annotations_plans_no_instance_pass(workspace):
 
 
 def test_zero_distortion_plans_no_remap_and_no_margin(workspace):
-    # No blur stage either: a fast lens (Airy disc < 0.5 px) and a short manual exposure (no motion blur).
+    # No blur stage either: a fast lens (f/1.0 on 3 µm: its diffraction kernel is the identity, σ = 0.084 px)
+    # and a short manual exposure (no motion blur).
     camera = plan(
         workspace,
         SCENE,

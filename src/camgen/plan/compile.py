@@ -29,7 +29,13 @@ from camgen.job import CameraJob, CameraState, Decision, Job, PlanSettings, Rend
 from camgen.motion.pose import T_world_from_cam, rot_z
 from camgen.motion.ptz import HeadTrack
 from camgen.motion.trajectory import Route, actor_routes
-from camgen.optics.diffraction import CHANNEL_WAVELENGTHS_UM
+from camgen.optics.diffraction import (
+    CHANNEL_WAVELENGTHS_UM,
+    FLOAT32_RESOLUTION,
+    MONO_WAVELENGTH_UM,
+    channel_sigmas_px,
+    diffraction_effect_rel,
+)
 from camgen.optics.distortion import max_displacement_px, undistort_normalized
 from camgen.optics.intrinsics import (
     airy_sigma_um,
@@ -52,7 +58,6 @@ from camgen.sensor.capture import NOISE_TERM_OFF, NOISE_TERMS, noise_term_is_on
 from camgen.world.rain import STREAK_RANGE_M, ground_is_wet, wet_ground_height_m
 from camgen.world.snow import snow_visibility_m
 
-WAVELENGTH_UM = 0.55  # mid-visible, for the diffraction estimate
 MOTION_SAMPLE_STEP_PX = 1.0
 """Largest image motion between the sub-frames that integrate one exposure, px."""
 MOTION_SAMPLES_MAX = 32
@@ -591,17 +596,28 @@ def _compile_camera(
     )
     f_number_max = max(ls.f_number for ls in states_lens)
     f_number_min = min(ls.f_number for ls in states_lens)
-    airy_px = 2.44 * (WAVELENGTH_UM if mono else max(CHANNEL_WAVELENGTHS_UM)) * f_number_max / sensor.pixel_pitch_um
+    # Decided on the taps applied (`camgen.optics.diffraction`): on the sensor's pixel grid a narrow
+    # Gaussian is the identity however wide the Airy disc's first dark ring (σ = 0.42·λ·N is a sixth of
+    # its diameter 2.44·λ·N). The widest kernel is the slowest aperture's at the longest wavelength.
+    diffraction_sigmas_px = channel_sigmas_px(f_number_max, sensor.pixel_pitch_um, mono)
+    diffraction_rel = diffraction_effect_rel(f_number_max, sensor.pixel_pitch_um, mono)
     decisions.append(
         _decision(
             "optics.diffraction",
-            airy_px > blur_max and needs_image,
+            diffraction_rel > FLOAT32_RESOLUTION and needs_image,
             force and needs_image,
-            f"Airy disc diameter 2.44·λ·N = {airy_px:.3g} px at N = {f_number_max:.3g}, "
-            f"λ = {WAVELENGTH_UM if mono else max(CHANNEL_WAVELENGTHS_UM)} µm",
-            effect=airy_px,
-            threshold=blur_max,
-            unit="px",
+            f"Airy Gaussian σ = 0.42·λ·N = {max(diffraction_sigmas_px):.3g} px at N = {f_number_max:.3g}, "
+            f"λ = {MONO_WAVELENGTH_UM if mono else max(CHANNEL_WAVELENGTHS_UM)} µm: its sampled kernel's "
+            f"off-centre taps weigh {diffraction_rel:.3g} of its centre"
+            + (
+                ""
+                if diffraction_rel > FLOAT32_RESOLUTION
+                else " (float32's resolution or less: the identity, whatever the Airy disc's diameter "
+                f"{2.44 / 0.42 * max(diffraction_sigmas_px):.3g} px)"
+            ),
+            effect=diffraction_rel,
+            threshold=FLOAT32_RESOLUTION,
+            unit="relative",
         )
     )
     axial_shifts_um = (0.0,) if mono else (ca.axial_focus_shift_r_um, 0.0, ca.axial_focus_shift_b_um)
@@ -850,7 +866,10 @@ def _compile_camera(
             },
         ),
         ("optics.axial_ca", {"focus_shift_um": list(axial_shifts_um)}),
-        ("optics.diffraction", {"airy_diameter_px": airy_px}),
+        (
+            "optics.diffraction",
+            {"sigma_max_px": max(diffraction_sigmas_px), "off_centre_weight_rel": diffraction_rel},
+        ),
     )
     for name, params in blur_stages:
         if include[name]:
