@@ -221,3 +221,22 @@ def test_a_compiled_camera_sees_the_snow_by_day_and_in_its_illuminator_at_night(
 
         one_metre = float(illuminated_flake_radiance(nir_equivalent_intensity_cd(2000, 0.35)))
         assert snowy.max() > 10 * dry.max() and snowy.max() < one_metre / 0.3**2
+
+
+def test_cells_left_out_of_the_frustum_change_no_flake(monkeypatch):
+    """`snow_layers` asks only for the cells that reach into the view's frustum (`particles_in_box`' planes):
+    the frame's flakes are exactly those found looking through every cell of each class's box."""
+    import camgen.render.snow as snow_module
+    import camgen.world.snow as world_snow
+
+    view, state = _view(), _state()
+    depth = np.full((HEIGHT, WIDTH), np.inf, np.float32)
+    planned, _ = snow_module.snow_layers(view, depth, state, SNOW, WIND, 0.0)
+    everywhere = world_snow.particles_in_box
+
+    def every_cell(*args):
+        return everywhere(*args[:7])
+
+    monkeypatch.setattr(world_snow, "particles_in_box", every_cell)
+    whole, _ = snow_module.snow_layers(view, depth, state, SNOW, WIND, 0.0)
+    assert planned.sum() > 1.0 and np.array_equal(planned, whole)

@@ -217,3 +217,24 @@ def test_values_are_summed_by_coverage():
     area_px2 = math.pi / 4 * (5e-3 * 600 / 2.0) ** 2
     assert valued.sum() == pytest.approx(4 * area_px2, rel=0.05)
     assert np.all(valued <= 3 * coverage + 1e-6) and np.all(valued >= coverage - 1e-6)
+
+
+def test_blurring_tile_by_tile_is_blurring_the_frame():
+    """A sparse layer blurred over the tiles holding its splats (found by scanning, or named by the caller)
+    equals OpenCV's blur of the whole frame with zeros beyond it, at narrow and wide σ and at the edges."""
+    import cv2
+
+    from camgen.world.rain import BLUR_TILE_PX, _add_blurred
+
+    rng = np.random.default_rng(1)
+    image = np.zeros((600, 900))
+    rows, columns = rng.integers(0, 600, 40), rng.integers(0, 900, 40)
+    rows[:2], columns[:2] = (0, 599), (899, 0)  # corners
+    image[rows, columns] = rng.random(40)
+    tiles = np.unique(np.column_stack([rows, columns]) // BLUR_TILE_PX * BLUR_TILE_PX, axis=0)
+    for sigma_px in (0.5, 2.0, 11.3):
+        expected = cv2.GaussianBlur(image, (0, 0), sigma_px, borderType=cv2.BORDER_CONSTANT)
+        for named in (None, tiles):
+            total = np.zeros_like(image)
+            _add_blurred(total, image, sigma_px, named)
+            np.testing.assert_allclose(total, expected, atol=1e-15)

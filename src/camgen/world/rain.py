@@ -198,6 +198,7 @@ def diameter_classes(rate_mm_h: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 _CELL_OFFSET = 1 << 30
+_CUBE_CORNERS = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], np.float64)
 
 
 def drops_in_box(
@@ -221,6 +222,7 @@ def particles_in_box(
     speeds_m_s: np.ndarray,
     key: tuple[int, ...],
     drift_m_s: tuple[float, float] = (0.0, 0.0),
+    planes: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Every particle inside the world box [low_m, high_m] (3,) at `time_s` of a seeded population of
     classes (`densities_per_m3` (C,) particles per m³ falling at `speeds_m_s` (C,)), all drifting
@@ -229,8 +231,10 @@ def particles_in_box(
     A particle of class c lives at a fixed point of the frame moving with its class, (x − u t, y − w t,
     z + v t), cut into cubic cells CELL_M on a side; each (class, cell) draws its Poisson count and uniform
     positions from a generator seeded by (*key, class, cell), so any region at any time is reproduced
-    exactly and no particle is stored (module docstring, "Population"). Returns positions_m (N, 3) in the
-    world and each particle's class index (N,) int8."""
+    exactly and no particle is stored (module docstring, "Population"). `planes` (P, 4): (n, d) of half-spaces
+    n·x + d ≥ 0 in the world (a view's frustum); a cell wholly outside one of them is not drawn, so that a
+    caller who keeps only the particles inside them pays for the box's cells that reach in, and gets the same
+    particles. Returns positions_m (N, 3) in the world and each particle's class index (N,) int8."""
     low_m, high_m = np.asarray(low_m, np.float64), np.asarray(high_m, np.float64)
     u_m_s, w_m_s = float(drift_m_s[0]), float(drift_m_s[1])
     positions, classes = [], []
@@ -239,16 +243,19 @@ def particles_in_box(
         lo, hi = low_m + shift, high_m + shift
         cells = [range(math.floor(lo[i] / CELL_M), math.floor(hi[i] / CELL_M) + 1) for i in range(3)]
         mean_count = density * CELL_M**3
-        for i in cells[0]:
-            for j in cells[1]:
-                for k in cells[2]:
-                    rng = np.random.default_rng((*key, c, i + _CELL_OFFSET, j + _CELL_OFFSET, k + _CELL_OFFSET))
-                    cell = rng.random((rng.poisson(mean_count), 3))
-                    cell += (i, j, k)
-                    cell *= CELL_M
-                    cell -= shift
-                    positions.append(cell)
-                    classes.append(np.full(len(cell), c, np.int8))
+        ijk = np.stack(np.meshgrid(*cells, indexing="ij"), axis=-1).reshape(-1, 3)
+        if planes is not None:  # a cell is left out when its 8 corners all lie outside one plane
+            corners = (ijk[:, None, :] + _CUBE_CORNERS) * CELL_M - shift  # (cells, 8, 3) in the world
+            outside = corners @ planes[:, :3].T + planes[:, 3] < 0  # (cells, 8, planes)
+            ijk = ijk[~np.any(np.all(outside, axis=1), axis=1)]
+        for i, j, k in ijk.tolist():
+            rng = np.random.default_rng((*key, c, i + _CELL_OFFSET, j + _CELL_OFFSET, k + _CELL_OFFSET))
+            cell = rng.random((rng.poisson(mean_count), 3))
+            cell += (i, j, k)
+            cell *= CELL_M
+            cell -= shift
+            positions.append(cell)
+            classes.append(np.full(len(cell), c, np.int8))
     if not positions:
         return np.zeros((0, 3)), np.zeros(0, np.int8)
     p, c = np.concatenate(positions), np.concatenate(classes)
@@ -315,6 +322,8 @@ def streak_layers(
     coverage = np.zeros((height_px, width_px), np.float64)
     valued = None if values is None else np.zeros((height_px, width_px), np.float64)
     if len(start):
+        padded_depth = np.full((height_px + 2, width_px + 2), -np.inf, np.float32)  # the border hides every splat
+        padded_depth[1:-1, 1:-1] = depth_m
         x0, y0 = _project(start, K_px)
         x1, y1 = _project(end, K_px)
         # Streaks wholly outside the image (their bounding box, widened by 3σ, misses it) are not sampled.
@@ -342,14 +351,14 @@ def streak_layers(
                 None if value is None else value[chosen],
                 sigma_px,
                 K_px,
-                depth_m,
+                padded_depth,
                 f_px,
             )
-            for total, image in zip((coverage, valued), parts, strict=True):
+            for total, image in zip((coverage, valued), parts[:2], strict=True):
                 if image is None:
                     continue
                 if sigma_px > 0:
-                    _add_blurred(total, image, sigma_px)
+                    _add_blurred(total, image, sigma_px, parts[2])
                 else:
                     total += image
     clipped = np.minimum(coverage, 1.0)
@@ -363,22 +372,28 @@ BLUR_TILE_PX = 256
 """`_add_blurred` blurs a layer tile by tile, only the tiles its splats reached."""
 
 
-def _add_blurred(total: np.ndarray, image: np.ndarray, sigma_px: float) -> None:
+def _add_blurred(total: np.ndarray, image: np.ndarray, sigma_px: float, tiles: np.ndarray | None = None) -> None:
     """total += `image` blurred by a Gaussian of σ `sigma_px` (zero beyond the frame), computed over the
-    BLUR_TILE_PX tiles of `image` that hold anything, each with a margin wider than OpenCV's kernel (its
-    radius is 4σ): a sparse layer (a few flakes near the lens) costs its tiles, not the frame."""
+    BLUR_TILE_PX tiles of `image` that hold anything (`tiles` (T, 2), the (top, left) of each, when the
+    caller knows them), each with a margin wider than OpenCV's kernel (its radius is 4σ): a sparse layer
+    (a few flakes near the lens) costs its tiles, not the frame."""
     height_px, width_px = image.shape
     margin = math.ceil(4 * sigma_px) + 1
-    for top in range(0, height_px, BLUR_TILE_PX):
-        for left in range(0, width_px, BLUR_TILE_PX):
-            tile = image[top : top + BLUR_TILE_PX, left : left + BLUR_TILE_PX]
-            if not tile.any():
-                continue
-            y0, x0 = max(top - margin, 0), max(left - margin, 0)
-            y1, x1 = min(top + tile.shape[0] + margin, height_px), min(left + tile.shape[1] + margin, width_px)
-            window = np.zeros((y1 - y0, x1 - x0))
-            window[top - y0 : top - y0 + tile.shape[0], left - x0 : left - x0 + tile.shape[1]] = tile
-            total[y0:y1, x0:x1] += cv2.GaussianBlur(window, (0, 0), sigma_px, borderType=cv2.BORDER_CONSTANT)
+    if tiles is None:
+        corners = [
+            (top, left) for top in range(0, height_px, BLUR_TILE_PX) for left in range(0, width_px, BLUR_TILE_PX)
+        ]
+    else:
+        corners = tiles.tolist()
+    for top, left in corners:
+        tile = image[top : top + BLUR_TILE_PX, left : left + BLUR_TILE_PX]
+        if tiles is None and not tile.any():
+            continue
+        y0, x0 = max(top - margin, 0), max(left - margin, 0)
+        y1, x1 = min(top + tile.shape[0] + margin, height_px), min(left + tile.shape[1] + margin, width_px)
+        window = np.zeros((y1 - y0, x1 - x0))
+        window[top - y0 : top - y0 + tile.shape[0], left - x0 : left - x0 + tile.shape[1]] = tile
+        total[y0:y1, x0:x1] += cv2.GaussianBlur(window, (0, 0), sigma_px, borderType=cv2.BORDER_CONSTANT)
 
 
 def _splat_streaks(
@@ -389,13 +404,15 @@ def _splat_streaks(
     value: np.ndarray | None,
     sigma_px: float,
     K_px: np.ndarray,
-    depth_m: np.ndarray,
+    padded_depth: np.ndarray,
     f_px: float,
 ) -> tuple[np.ndarray, np.ndarray | None]:
-    """The (H, W) float64 sums of α (and of α·value) of the samples of streaks from `start` to `end` (N, 3)
-    splatted bilinearly as points and depth-tested at the pixels they reach (`streak_layers`), unclipped;
-    footprints of σ = `sigma_px` (0: points) set how densely each streak is sampled."""
-    height_px, width_px = depth_m.shape
+    """The (H, W) float64 sums of α (and of α·value, or None) of the samples of streaks from `start` to `end`
+    (N, 3) splatted bilinearly as points and depth-tested at the pixels they reach (`streak_layers`), unclipped,
+    and with footprints (σ > 0) the (top, left) of the BLUR_TILE_PX tiles they reached (else None);
+    footprints of σ = `sigma_px` (0: points) set how densely each streak is sampled. `padded_depth`: the
+    depth map with a border of −inf a pixel wide (which hides the splats that fall off the frame)."""
+    height_px, width_px = padded_depth.shape[0] - 2, padded_depth.shape[1] - 2
     # Samples along each streak: one per pixel of its length (per σ of a spread one), or fewer where each
     # then still carries at most SAMPLE_ALPHA_MAX of a pixel (a faint streak's light is spread no less
     # evenly than it shows; a spread sample's light is shared by about 2πσ² pixels).
@@ -433,15 +450,18 @@ def _splat_streaks(
     indices = np.concatenate([corner, corner + 1, corner + padded_w, corner + padded_w + 1])
     weights = np.concatenate([(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy]) * np.tile(weight, 4)
     # The depth test, at each pixel a sample reaches: a drop behind that pixel's surface is hidden.
-    padded_depth = np.full((height_px + 2, padded_w), -np.inf, np.float32)  # the border hides every splat
-    padded_depth[1:-1, 1:-1] = depth_m
     front = np.tile(z, 4) < padded_depth.reshape(-1)[indices]
     indices, weights = indices[front], weights[front]
     sums = [np.bincount(indices, weights=weights, minlength=padded_depth.size)]
     if value is not None:
         sums.append(np.bincount(indices, weights=weights * np.tile(value[drop], 4)[front], minlength=padded_depth.size))
     images = [flat.reshape(height_px + 2, padded_w)[1:-1, 1:-1] for flat in sums]
-    return images[0], images[1] if value is not None else None
+    tiles = None
+    if sigma_px > 0:  # the BLUR_TILE_PX tiles the splats reached (a splat past the border failed the depth test)
+        row, column = np.divmod(indices, padded_w)
+        tiles = np.unique((row - 1) // BLUR_TILE_PX * padded_w + (column - 1) // BLUR_TILE_PX)
+        tiles = np.column_stack(np.divmod(tiles, padded_w)) * BLUR_TILE_PX  # (top, left) of each
+    return images[0], images[1] if value is not None else None, tiles
 
 
 def _project(points_cam_m: np.ndarray, K_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -203,10 +203,12 @@ def flakes_in_box(
     kind: SnowKind = "dry",
     drift_m_s: tuple[float, float] = (0.0, 0.0),
     classes=None,
+    planes: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every flake inside the world box [low_m, high_m] (3,) at `time_s`, from the seeded population,
     drifting at `drift_m_s` (the wind's (x, y), m/s); of the class indices `classes` of `flake_classes`
-    only (default all: each class is its own population, so a caller may look for each in its own box).
+    only (default all: each class is its own population, so a caller may look for each in its own box);
+    `planes`: half-spaces whose outside the caller does not need (`camgen.world.rain.particles_in_box`).
 
     Returns positions_m (N, 3), flake diameters_mm (N,) and speeds_m_s (N,). A flake found at t is found at
     t + Δt moved by (u Δt, w Δt, −v Δt) (`camgen.world.rain.particles_in_box`)."""
@@ -214,7 +216,7 @@ def flakes_in_box(
     found = []
     for c in range(len(diameters)) if classes is None else classes:
         positions, _ = particles_in_box(
-            low_m, high_m, time_s, densities[c : c + 1], speeds[c : c + 1], (seed, SNOW_KEY, c), drift_m_s
+            low_m, high_m, time_s, densities[c : c + 1], speeds[c : c + 1], (seed, SNOW_KEY, c), drift_m_s, planes
         )
         found.append((positions, np.full(len(positions), diameters[c]), np.full(len(positions), speeds[c])))
     if not found:
