@@ -375,7 +375,7 @@ class Snow(Model):
     """Draws the flakes; the same seed gives the same snow."""
     kind: Literal["dry", "wet"] = "dry"
     """dry: cold snow of light dendrite aggregates (bulk density 0.017 g cm⁻² / D, falling about 1 m/s);
-    wet: near-melting or rimed snow, denser (0.072 g cm⁻² / D) and falling about 2 m/s, so a third as large
+    wet: near-melting or rimed snow, denser (0.072 g cm⁻² / D) and falling about 2 m/s, so half as large
     for the same water and about 8 times clearer (Rasmussen et al. 1999)."""
 
 

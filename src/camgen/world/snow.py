@@ -103,9 +103,10 @@ MELTED_STEP_MM = 0.25
 """Width of a melted-diameter class; its flakes share one flake diameter and one speed."""
 
 FLAKE_ALBEDO = 0.9
-"""ω, the share of intercepted light a flake scatters: fresh snow reflects 0.8–0.9 or more of visible light
-and of 850 nm (Warren 1982, "Optical properties of snow", Rev. Geophys. 20, 67–89: ice absorbs little below
-1 µm)."""
+"""ω, the share of the light falling on a flake's disc π/4 D² that it scatters (an estimate): ice absorbs little
+light below 0.9 µm, visible or the illuminator's 850 nm (pure snow's visible albedo is 0.96–0.99, Warren &
+Wiscombe 1980, J. Atmos. Sci. 37, 2734–2745, whose abstract was read; Warren 1982, Rev. Geophys. 20, 67–89),
+so a flake loses mostly what passes between its branches; 0.9, fresh snow's albedo, is taken for both."""
 LAMBERT_SPHERE_GEOMETRIC_ALBEDO = 2.0 / 3.0
 """A Lambertian sphere's radiance at zero phase angle over a flat Lambertian disc's (its geometric albedo over
 its reflectance)."""
