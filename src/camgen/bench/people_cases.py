@@ -170,10 +170,10 @@ def overall_scores(scores: list[DetectionScore]) -> str:
     parts = []
     for detector in dict.fromkeys(s.detector for s in scores):
         everything = total(scores, detector)
-        parts.append(
-            f"{detector}: recall **{everything.recall:.2f}** ({everything.hits} of {everything.people}), "
-            f"precision {everything.precision:.2f}"
-        )
+        counted = everything.hits + everything.false_alarms
+        precision = f"{everything.precision:.2f}" if counted else "— (no detection)"
+        recall = f"**{everything.recall:.2f}**" if everything.people else "—"
+        parts.append(f"{detector}: recall {recall} ({everything.hits} of {everything.people}), precision {precision}")
     return "; ".join(parts)
 
 

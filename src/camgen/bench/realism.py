@@ -240,6 +240,40 @@ def detection_scorers_missing() -> str | None:
     return "; ".join(missing) or None
 
 
+CONDITIONS = ("by day in clear air", "at night (IR night mode)", "in fog, rain or snow")
+"""The conditions issue 20 asks recall for, in the order the sections report them (`scene_conditions`)."""
+
+
+def scene_condition(scene) -> str:
+    """Which of `CONDITIONS` an example scene films in: at night where it has a night sky (its cameras
+    switch to IR night mode below their profiles' switch level), else in weather where it has fog, rain or
+    snow, else by day in clear air. A night in rain counts as night."""
+    environment = scene.environment
+    if environment.night_sky is not None:
+        return CONDITIONS[1]
+    weather = (getattr(environment, name, None) for name in ("fog", "rain", "snow"))
+    return CONDITIONS[2] if any(w is not None for w in weather) else CONDITIONS[0]
+
+
+def scene_conditions(repo: Path) -> dict[str, str]:
+    """`scene_condition` of each example scene under `repo`/scenes, by its file's stem."""
+    from camgen.config import load_scene
+
+    return {path.stem: scene_condition(load_scene(path).scene) for path in sorted((repo / "scenes").glob("*.yaml"))}
+
+
+def scores_by_condition(scores: list[DetectionScore], conditions: dict[str, str], overall: Callable) -> str:
+    """One sentence per condition that has scores: its scenes and `overall` (each detector's recall and
+    precision) over them, e.g. "At night (IR night mode) (night_street): HOG: recall 0.50 (2 of 4), …"."""
+    sentences = []
+    for condition in CONDITIONS:
+        mine = [score for score in scores if conditions.get(score.scene) == condition]
+        if mine:
+            scenes = ", ".join(sorted({score.scene for score in mine}))
+            sentences.append(f"{condition[0].upper()}{condition[1:]} ({scenes}): {overall(mine)}.")
+    return " ".join(sentences)
+
+
 def person_detection_scores(
     repo: Path,
     frames_per_camera: int = FRAMES_PER_CAMERA,

@@ -529,6 +529,8 @@ def _people(repo: Path) -> Section:
         MIN_HEIGHT_PX,
         MIN_VISIBILITY,
         detection_scorers_missing,
+        scene_conditions,
+        scores_by_condition,
     )
     from camgen.bench.vehicle_cases import WIDE_INPUT_WIDTH_PX
 
@@ -573,6 +575,7 @@ def _people(repo: Path) -> Section:
                 "Over every scene: " + overall_scores(scores) + ". Before camgen drew people (a white cylinder), "
                 "no real-photo detector found any."
             )
+            text.append(scores_by_condition(scores, scene_conditions(repo), overall_scores))
             if missing is not None:
                 text.append(f"Not run: {missing}")
             text.append(detection_table(scores))

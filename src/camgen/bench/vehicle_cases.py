@@ -85,16 +85,12 @@ def vehicle_detection_scores(
 
 
 def weather_scenes(repo: Path) -> set[str]:
-    """Stems of the example scenes (`vehicle_detection_scores`' scenes) with fog or rain in their
-    environment: their vehicles are scored too, but issue 20's goal is read as clear air by day."""
-    from camgen.config import load_scene
+    """Stems of the example scenes (`vehicle_detection_scores`' scenes) with fog, rain or snow in their
+    environment (`camgen.bench.realism.scene_condition`): their vehicles are scored too, but issue 20's goal
+    is read as clear air by day."""
+    from camgen.bench.realism import CONDITIONS, scene_conditions
 
-    stems = set()
-    for path in sorted((repo / "scenes").glob("*.yaml")):
-        environment = load_scene(path).scene.environment
-        if environment.fog is not None or environment.rain is not None:
-            stems.add(path.stem)
-    return stems
+    return {stem for stem, condition in scene_conditions(repo).items() if condition == CONDITIONS[2]}
 
 
 def vehicle_cases(repo: Path, scores: list[DetectionScore], samples: dict | None = None) -> list[Case]:
