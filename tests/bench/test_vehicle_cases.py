@@ -1,4 +1,5 @@
-"""The realism sections' split of the example scenes by condition (day, night, weather; `camgen.bench.realism`, `camgen.bench.vehicle_cases`) and their sentences."""
+"""The realism sections' split of the example scenes by condition (day, night, weather;
+`camgen.bench.realism`, `camgen.bench.vehicle_cases`) and their sentences."""
 
 from __future__ import annotations
 
