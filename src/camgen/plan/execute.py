@@ -128,6 +128,7 @@ IMPLEMENTED_STAGES = frozenset(
         "isp.demosaic",
         "isp.white_balance",
         "isp.ccm",
+        "isp.false_colour",
         "isp.denoise",
         "isp.contrast_stretch",
         "isp.tone",
