@@ -11,7 +11,7 @@ REPO = Path(__file__).resolve().parents[2]
 
 
 def test_weather_scenes_are_those_with_fog_or_rain(tmp_path):
-    assert weather_scenes(REPO) == {"misty_street", "rainy_street"}
+    assert weather_scenes(REPO) == {"misty_street", "rainy_street", "snowy_street"}
     (tmp_path / "scenes").mkdir()
     for name in ("misty_street", "parking_lot"):
         (tmp_path / "scenes" / f"{name}.yaml").write_text((REPO / "scenes" / f"{name}.yaml").read_text())
@@ -28,7 +28,7 @@ def test_each_example_scene_has_the_condition_its_environment_says():
 
     conditions = scene_conditions(REPO)
     assert conditions["night_street"] == CONDITIONS[1]
-    assert conditions["misty_street"] == conditions["rainy_street"] == CONDITIONS[2]
+    assert conditions["misty_street"] == conditions["rainy_street"] == conditions["snowy_street"] == CONDITIONS[2]
     assert conditions["parking_lot"] == conditions["plaza"] == CONDITIONS[0]
 
 
