@@ -268,3 +268,92 @@ def test_the_flakes_left_out_are_their_mean_coverage_and_glow(monkeypatch):
     middle = (slice(20, -20), slice(20, -20))
     assert (every - drawn)[middle].mean() == pytest.approx((1 - transmittance)[middle].mean(), rel=0.05)
     assert (every_lit - lit)[middle].mean() == pytest.approx(glow[middle].mean(), rel=0.1)
+    # A lamp 4 m ahead and 3 m up (its light on a flake 1/(1 + d²) in each channel): the veil's lamp light, summed
+    # along coarse rays, against what drawing every class adds.
+    lamp = np.array([0.0, 4.0, 4.5])
+
+    def lamps(points_m):
+        return np.repeat(1.0 / (1.0 + np.sum((points_m - lamp) ** 2, axis=1)), 3).reshape(-1, 3) * [1.0, 0.5, 0.25]
+
+    every_lamp = snow_module.snow_layers(view, depth, state, SNOW, None, -np.inf, lamps=lamps)[1]
+    monkeypatch.setattr(snow_module, "FLAKE_AREA_MIN_PX2", 0.04)
+    drawn_lamp = snow_module.snow_layers(view, depth, state, SNOW, None, -np.inf, lamps=lamps)[1]
+    veil_lamp = snow_module.left_out_flakes(view, distance, SNOW, lamps=lamps)[1]
+    assert veil_lamp.shape == (HEIGHT, WIDTH, 3)
+    np.testing.assert_allclose(
+        (every_lamp - drawn_lamp)[middle].mean(axis=(0, 1)), veil_lamp[middle].mean(axis=(0, 1)), rtol=0.1
+    )
+
+
+@pytest.mark.opengl
+@pytest.mark.parametrize(
+    "lamp",
+    [
+        {
+            "type": "lamp",
+            "position_m": [1.0, 6.0, 5.0],
+            "target_m": [2.0, 7.0, 0.0],
+            "flux_lm": 6000.0,
+            "color_rgb": [1.0, 0.82, 0.62],
+        },
+        {"type": "lamp", "position_m": [0.0, 8.0, 5.0], "ies_file": "ies/street_lantern_synthetic.ies"},
+        {"type": "point", "position_m": [-1.0, 7.0, 3.0], "intensity_cd": 800.0},
+    ],
+    ids=["spot lamp", "IES lamp", "point"],
+)
+def test_lamps_light_a_flake_as_the_shader_lights_the_ground(renderer, lamp):
+    """The illuminance a flake gets from a lamp (`lamp_illuminance_lx`, normal to the lamp's direction) times
+    the cosine of the ground's incidence is what the renderer's own lit shader gives a white matte ground,
+    L·π/ρ, at every lit pixel (the rendered ground 0–5 % brighter: the glossy lobe of roughness 1, most at
+    grazing light), the same beam shape, IES table, colour and 1/d²."""
+    from pathlib import Path
+
+    from camgen.render.scene_graph import build_scene_graph
+    from camgen.render.snow import lamp_illuminance_lx
+
+    ground = {
+        "type": "plane",
+        "name": "ground",
+        "size_m": [60, 60],
+        "position_m": [0, 10, 0],
+        "material": {"color_rgb": [0.5, 0.5, 0.5], "roughness": 1.0},
+    }
+    scenes = Path(__file__).parents[2] / "scenes"
+    scene = scene_from(environment={"meshes": [ground], "shadows": False}, lights=[lamp])
+    graph = build_scene_graph(scene, lambda path: scenes / path)
+    view = View(
+        camera_matrix(F_PX, F_PX, (WIDTH - 1) / 2, (HEIGHT - 1) / 2), look_at((0, 0, 6), (0, 8, 0)), WIDTH, HEIGHT
+    )
+    drawn = renderer.draw(graph, view, ("radiance", "depth_m"))
+    v, u = np.mgrid[:HEIGHT, :WIDTH]
+    rays = np.stack([u, v, np.ones_like(u)], axis=-1) @ np.linalg.inv(view.K_px).T
+    points = (rays * drawn.depth_m[..., None]).reshape(-1, 3) @ view.T_world_from_cam[:3, :3].T
+    points += view.T_world_from_cam[:3, 3]
+    light = lamp["position_m"]
+    towards = np.asarray(light) - points
+    cosine = towards[:, 2] / np.linalg.norm(towards, axis=1)
+    expected = (lamp_illuminance_lx(graph, points) * cosine[:, None]).reshape(HEIGHT, WIDTH, 3)
+    rendered = drawn.radiance * math.pi / 0.5
+    lit = expected[..., 1] > 0.05 * expected[..., 1].max()
+    assert lit.mean() > 0.2
+    ratio = rendered[lit][:, 1] / expected[lit][:, 1]
+    assert 0.995 < np.median(ratio) < 1.03 and 0.99 < ratio.min() and ratio.max() < 1.06
+    np.testing.assert_allclose(
+        rendered[lit][:, 0] / rendered[lit][:, 1], expected[lit][:, 0] / expected[lit][:, 1], rtol=1e-5
+    )
+
+
+def test_a_flake_is_lit_by_the_sky_the_ground_and_the_sun_whichever_way_the_camera_looks():
+    """ω [(L_sky + L_ground)/2 + E_sun/(4π)] with L_sky the ambient light's E/π, L_ground the far ground's
+    reflectance under sky and sun, ρ (E_sky + E_sun sin h)/π: one value for two different frames."""
+    from camgen.render.snow import environment_flake_radiance
+
+    sun = {"type": "sun", "illuminance_lux": 40000.0, "azimuth_deg": 30.0, "elevation_deg": 30.0}
+    graph = _graph({"sky_luminance_cd_m2": 3000.0, "meshes": [ROAD]}, [*AMBIENT, sun])
+    depth = np.full((HEIGHT, WIDTH), 5.0, np.float32)
+    dark, bright = np.full((HEIGHT, WIDTH, 3), 10.0, np.float32), np.full((HEIGHT, WIDTH, 3), 900.0, np.float32)
+    flake = environment_flake_radiance(graph, dark, depth)
+    np.testing.assert_array_equal(flake, environment_flake_radiance(graph, bright, depth))
+    sky = 5000.0 / math.pi
+    ground = 0.08 * (5000.0 + 40000.0 * 0.5) / math.pi
+    np.testing.assert_allclose(flake, 0.9 * ((sky + ground) / 2 + 40000.0 / (4 * math.pi)), rtol=1e-5)

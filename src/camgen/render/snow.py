@@ -20,13 +20,16 @@ each pixel's surface depth, not the flake's (a flake near the lens is blurred by
 
 from __future__ import annotations
 
+import itertools
 import math
 
+import cv2
 import numpy as np
 
 from camgen.render.gl import pyrender
 from camgen.render.renderer import View, far_ground_depth_m, frustum_corners_m, horizon_airlight, ray_lengths
 from camgen.world.fog import apply_fog
+from camgen.world.ies import grid_intensity_cd
 from camgen.world.night import SPOT_FULL_INTENSITY_FRACTION, nir_equivalent_intensity_cd
 from camgen.world.rain import NEAR_M, STREAK_RANGE_M, streak_layers
 from camgen.world.snow import (
@@ -67,11 +70,14 @@ def snow_layers(
     ground_m: float = -np.inf,
     illuminator_cd: float | None = None,
     illuminator_half_angle_rad: float = math.radians(40.0),
+    lamps=None,
 ) -> tuple[np.ndarray, np.ndarray | None]:
-    """(α, Σ α·L_IR): the flakes' coverage (H, W) within each class's range of the view's camera
+    """(α, Σ α·L_own): the flakes' coverage (H, W) within each class's range of the view's camera
     (`flake_ranges_m`, at most STREAK_RANGE_M) at the state's time, each falling over its exposure and
     drifting in `wind`, and, with an IR illuminator of `illuminator_cd` (the renderer's candela for its
-    850 nm light) at the lens, the flakes' radiance in its beam summed by coverage (None without).
+    850 nm light) at the lens, the flakes' radiance in its beam summed by coverage, (H, W), and with `lamps`
+    (world points (N, 3) → a flake's radiance there in the scene's lamps (N, 3): `lamp_flake_radiance`) their
+    light too, (H, W, 3); None with neither.
     `state`: a `CameraState` (time_s, exposure_time_s, focal_length_mm, f_number, focus_distance_m);
     `snow`: a `camgen.config.scene.Snow`."""
     drift = wind_drift_m_s(wind)
@@ -109,7 +115,7 @@ def snow_layers(
     keep = (z > NEAR_M) & (x * x + y * y + z * z <= range_m * range_m)
     keep &= (np.abs(x) <= z * tan_x + reach_m) & (np.abs(y) <= z * tan_y + reach_m)
     positions_cam = np.column_stack([x[keep], y[keep], z[keep]])
-    diameters_mm, speeds_m_s = diameters_mm[keep], speeds_m_s[keep]
+    diameters_mm, speeds_m_s, positions = diameters_mm[keep], speeds_m_s[keep], positions[keep]
     # Each flake's displacement over the exposure, (u, w, −v)·T in the world, in the camera frame.
     T_s = state.exposure_time_s
     fall_cam = np.outer(-speeds_m_s * T_s, R[2]) + (drift[0] * R[0] + drift[1] * R[1]) * T_s
@@ -124,6 +130,9 @@ def snow_layers(
         inner = math.cos(SPOT_FULL_INTENSITY_FRACTION * illuminator_half_angle_rad)
         beam = np.clip((cos_angle - outer) / (inner - outer), 0.0, 1.0) ** 2  # pyrender's spot falloff
         values = illuminated_flake_radiance(illuminator_cd * beam / np.maximum(distance_m, NEAR_M) ** 2)
+    if lamps is not None:
+        lit = lamps(positions)
+        values = lit if values is None else lit + values[:, None]
     return streak_layers(
         positions_cam,
         diameters_mm,
@@ -142,14 +151,16 @@ def left_out_flakes(
     snow,
     illuminator_cd: float | None = None,
     illuminator_half_angle_rad: float = math.radians(40.0),
+    lamps=None,
 ) -> tuple[np.ndarray, np.ndarray | None]:
-    """(T, L_IR) (H, W): the flakes `snow_layers` leaves out (each class beyond its `flake_ranges_m`, out to
+    """(T, L_own): the flakes `snow_layers` leaves out (each class beyond its `flake_ranges_m`, out to
     STREAK_RANGE_M) as their mean over each pixel's ray, `distance_m` long (+inf for the sky): they cover
     1 − T of it, T = exp(−Σ_c n_c (π/4) D_c² ℓ_c) with ℓ_c the ray's length between the class's range and
     min(distance, STREAK_RANGE_M) (the coverage a drawn flake carries, per metre), so the frame's mean
     brightening by the snow does not depend on how many flakes are drawn; with an illuminator, the light they
     send back, Σ_c n_c (π/4) D_c² ∫ (2/3) ω I b(θ)/(π z²) dz along that stretch (thin: no dimming within it),
-    else None."""
+    (H, W); with `lamps` (as `snow_layers`') their light too, summed at LAMP_VEIL_SAMPLES points along the rays
+    of every LAMP_VEIL_STEP_PX-th pixel each way and interpolated, (H, W, 3); else None."""
     f_px = math.sqrt(abs(view.K_px[0, 0] * view.K_px[1, 1]))
     ranges_m = flake_ranges_m(snow, f_px)
     diameters_mm, densities, _ = flake_classes(snow.rate_mm_h, snow.kind)
@@ -170,7 +181,79 @@ def left_out_flakes(
         inner = math.cos(SPOT_FULL_INTENSITY_FRACTION * illuminator_half_angle_rad)
         beam = np.clip((cos_angle - outer) / (inner - outer), 0.0, 1.0) ** 2
         glow = (illuminated_flake_radiance(illuminator_cd * beam) * inverse).astype(np.float32)
+    if lamps is not None and np.any(ranges_m < STREAK_RANGE_M):
+        lit = _lamp_veil(view, reach_m, ranges_m, coverage_per_m, lamps)
+        glow = lit if glow is None else lit + glow[..., None]
     return np.exp(-depth), glow
+
+
+LAMP_VEIL_STEP_PX = 8
+LAMP_VEIL_SAMPLES = 8
+"""The lamps' light on the flakes left out (`left_out_flakes`) is summed at this many points along the rays of
+every LAMP_VEIL_STEP_PX-th pixel each way (a lamp's light varies over metres, not pixels)."""
+
+
+def _lamp_veil(view: View, reach_m: np.ndarray, ranges_m, coverage_per_m, lamps) -> np.ndarray:
+    """(H, W, 3) Σ_c n_c (π/4) D_c² ∫ L_lamps(z) dz from each class's range to the ray's end within
+    STREAK_RANGE_M (`reach_m`, (H, W)), by the midpoint rule on LAMP_VEIL_SAMPLES stretches, evaluated at
+    every LAMP_VEIL_STEP_PX-th pixel and interpolated between."""
+    height_px, width_px = reach_m.shape
+    step = LAMP_VEIL_STEP_PX
+    v, u = np.mgrid[step // 2 : height_px : step, step // 2 : width_px : step].astype(np.float64)
+    rays = np.stack([u, v, np.ones_like(u)], axis=-1) @ np.linalg.inv(view.K_px).T
+    rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
+    T = view.T_world_from_cam
+    directions = rays.reshape(-1, 3) @ T[:3, :3].T
+    reach = reach_m[step // 2 :: step, step // 2 :: step].reshape(-1)
+    edges = np.linspace(float(np.min(ranges_m)), STREAK_RANGE_M, LAMP_VEIL_SAMPLES + 1)
+    coarse = np.zeros((len(reach), 3))
+    for near_m, far_m in itertools.pairwise(edges):
+        middle_m = 0.5 * (near_m + far_m)
+        per_m = float(np.sum(np.asarray(coverage_per_m)[np.asarray(ranges_m) < middle_m]))
+        seen = reach >= middle_m
+        if per_m > 0 and seen.any():
+            coarse[seen] += per_m * (far_m - near_m) * lamps(T[:3, 3] + directions[seen] * middle_m)
+    coarse = coarse.reshape((*v.shape, 3)).astype(np.float32)
+    return cv2.resize(coarse, (width_px, height_px), interpolation=cv2.INTER_LINEAR)
+
+
+def lamp_illuminance_lx(graph, points_m: np.ndarray) -> np.ndarray:
+    """(N, 3) the illuminance the graph's point, spot and lamp lights give points (N, 3) in the world, from
+    each light's direction, lux per colour channel: I(θ)/d² times its colour, I as the lit shader takes it
+    (a spot's ((cos θ − cos θₒ)/(cos θᵢ − cos θₒ))², clipped to 0–1; an IES lamp's I(γ, C) table,
+    `camgen.world.ies`), no shadows. The sun is `environment_flake_radiance`'s."""
+    points_m = np.asarray(points_m, np.float64)
+    total = np.zeros((len(points_m), 3))
+    for node in graph.scene.light_nodes:
+        light = node.light
+        if not isinstance(light, pyrender.PointLight | pyrender.SpotLight):
+            continue
+        pose = graph.scene.get_pose(node)
+        offset = points_m - pose[:3, 3]
+        distance2 = np.maximum(np.einsum("ij,ij->i", offset, offset), NEAR_M**2)
+        factor = np.ones(len(points_m))
+        if isinstance(light, pyrender.SpotLight):
+            direction = offset / np.sqrt(distance2)[:, None]
+            profile = getattr(light, "intensity_profile", None)
+            if profile is not None:
+                local = direction @ profile.axes(pose).T
+                gamma_deg = np.degrees(np.arccos(np.clip(local[:, 2], -1.0, 1.0)))
+                c_deg = np.degrees(np.arctan2(local[:, 1], local[:, 0])) % 360.0
+                factor = grid_intensity_cd(profile.relative, gamma_deg, c_deg)
+            else:
+                cos_angle = np.clip(direction @ -pose[:3, 2], 0.0, 1.0)
+                outer, inner = math.cos(light.outerConeAngle), math.cos(light.innerConeAngle)
+                factor = np.clip((cos_angle - outer) / (inner - outer), 0.0, 1.0) ** 2
+        total += (light.intensity * factor / distance2)[:, None] * np.asarray(light.color, np.float64)
+    return total
+
+
+def lamp_flake_radiance(graph):
+    """world points (N, 3) → (N, 3) a flake's radiance there in the graph's lamps, ω E/(4π)
+    (`camgen.world.snow.flake_radiance`, `lamp_illuminance_lx`); None for a graph without such lights."""
+    if not any(isinstance(node.light, pyrender.PointLight | pyrender.SpotLight) for node in graph.scene.light_nodes):
+        return None
+    return lambda points_m: flake_radiance(0.0, 0.0, lamp_illuminance_lx(graph, points_m))
 
 
 def _frustum_planes(
@@ -194,17 +277,26 @@ def _frustum_planes(
 
 
 def environment_flake_radiance(graph, radiance: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
-    """(3,) a flake's radiance in the graph's daylight (`camgen.world.snow.flake_radiance`): the sky's is the
-    ambient light's (E/π, what lights every diffuse surface), the ground's the mean of the frame's surfaces
-    (every 4th pixel each way; the sky's where the frame shows none), the sun's each directional light's
-    illuminance."""
+    """(3,) a flake's radiance in the graph's daylight (`camgen.world.snow.flake_radiance`): the sky's radiance
+    is the ambient light's (E/π, what lights every diffuse surface); the ground's is the far ground's
+    reflectance (the scene's ground plane's mean, `camgen.render.scene_graph.FarGround`) under that sky and
+    the sun, ρ (π L_sky + E_sun sin(elevation))/π, the same whichever way the camera looks (lamps light the
+    flakes directly: `lamp_flake_radiance`; their pools on the ground are not counted); without a ground
+    plane, the mean of the frame's surfaces (every 4th pixel each way; the sky's where the frame shows none);
+    the sun's illuminance is each directional light's."""
     sky = np.asarray(graph.scene.ambient_light, np.float64)
-    surfaces = np.isfinite(depth_m[::4, ::4])
-    ground = radiance[::4, ::4][surfaces].mean(axis=0, dtype=np.float64) if surfaces.any() else sky
-    sun = np.zeros(3)
+    sun, on_ground = np.zeros(3), np.zeros(3)
     for node in graph.scene.light_nodes:
         if isinstance(node.light, pyrender.DirectionalLight):
-            sun += node.light.intensity * np.asarray(node.light.color, np.float64)
+            illuminance = node.light.intensity * np.asarray(node.light.color, np.float64)
+            sun += illuminance
+            on_ground += illuminance * max(float(graph.scene.get_pose(node)[2, 2]), 0.0)  # towards it: +z axis
+    far_ground = getattr(graph, "far_ground", None)
+    if far_ground is not None:
+        ground = np.asarray(far_ground.reflectance_rgb, np.float64) * (sky + on_ground / math.pi)
+    else:
+        surfaces = np.isfinite(depth_m[::4, ::4])
+        ground = radiance[::4, ::4][surfaces].mean(axis=0, dtype=np.float64) if surfaces.any() else sky
     return flake_radiance(sky, ground, sun)
 
 
@@ -231,9 +323,12 @@ def snowy_radiance(graph, view: View, radiance: np.ndarray, depth_m: np.ndarray,
         illuminator_cd = nir_equivalent_intensity_cd(illuminator.radiant_intensity_mw_sr, profile.sensor.qe_850nm_rel)
         half_angle_rad = math.radians(illuminator.half_angle_deg)
     flake = environment_flake_radiance(graph, radiance, depth_m)
-    transmittance, glow = left_out_flakes(view, distance_m, snow, illuminator_cd, half_angle_rad)
+    lamps = lamp_flake_radiance(graph)
+    transmittance, glow = left_out_flakes(view, distance_m, snow, illuminator_cd, half_angle_rad, lamps)
     ground_m = float(graph.scene.bounds[0][2]) if graph.scene.mesh_nodes else -np.inf
-    coverage, lit = snow_layers(view, depth_m, state, snow, environment.wind, ground_m, illuminator_cd, half_angle_rad)
+    coverage, lit = snow_layers(
+        view, depth_m, state, snow, environment.wind, ground_m, illuminator_cd, half_angle_rad, lamps
+    )
     # The veil, then the drawn flakes over it: F + (L − F)·T, then (1 − α)·that + α·F = F + (L − F)·T·(1 − α).
     seen = transmittance
     seen *= 1.0 - coverage
@@ -241,7 +336,8 @@ def snowy_radiance(graph, view: View, radiance: np.ndarray, depth_m: np.ndarray,
     out *= seen[..., None]
     out += flake
     if glow is not None:  # the veil's own light, behind the drawn flakes too
-        out += (glow * (1.0 - coverage))[..., None]
+        glow = glow * (1.0 - coverage if glow.ndim == 2 else (1.0 - coverage)[..., None])
+        out += glow if glow.ndim == 3 else glow[..., None]
     if lit is not None:
-        out += lit[..., None]
+        out += lit if lit.ndim == 3 else lit[..., None]
     return out

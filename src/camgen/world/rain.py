@@ -308,8 +308,9 @@ def streak_layers(
     is then blurred by a Gaussian of that σ, which spreads each one's coverage without changing its sum;
     the depth test is at the sample's own pixel. Such a streak is sampled every σ pixels rather than every
     pixel. None: every sample is a point, as rain's.
-    `values` (N,): a quantity per particle (its own radiance); the second array (H, W) is Σ α_i·value_i
-    over the particles covering each pixel, scaled down with α where α is clipped to 1. None: None.
+    `values` (N,) or (N, K): a quantity per particle (its own radiance, or K of them: its colour); the second
+    array, (H, W) or (H, W, K), is Σ α_i·value_i over the particles covering each pixel, scaled down with α
+    where α is clipped to 1. None: None.
     `image_max_px`: particles imaged wider than this (their diameter at their depth) are left out."""
     height_px, width_px = depth_m.shape
     f_px = math.sqrt(abs(K_px[0, 0] * K_px[1, 1]))
@@ -318,9 +319,9 @@ def streak_layers(
     keep &= diameters_mm * 1e-3 * f_px / positions_cam_m[:, 2].clip(NEAR_M) <= image_max_px
     start, end, diameters_mm = start[keep], end[keep], diameters_mm[keep]
     spread = None if spread_px is None else np.asarray(spread_px, np.float64)[keep]
-    value = None if values is None else np.asarray(values, np.float64)[keep]
+    value = None if values is None else np.asarray(values, np.float64).reshape(len(keep), -1)[keep]
     coverage = np.zeros((height_px, width_px), np.float64)
-    valued = None if values is None else np.zeros((height_px, width_px), np.float64)
+    valued = None if values is None else np.zeros((height_px, width_px, value.shape[1]), np.float64)
     if len(start):
         padded_depth = np.full((height_px + 2, width_px + 2), -np.inf, np.float32)  # the border hides every splat
         padded_depth[1:-1, 1:-1] = depth_m
@@ -354,17 +355,18 @@ def streak_layers(
                 padded_depth,
                 f_px,
             )
-            for total, image in zip((coverage, valued), parts[:2], strict=True):
-                if image is None:
-                    continue
+            totals = [coverage] + ([] if valued is None else [valued[..., k] for k in range(valued.shape[2])])
+            for total, image in zip(totals, [parts[0], *parts[1]], strict=True):
                 if sigma_px > 0:
                     _add_blurred(total, image, sigma_px, parts[2])
                 else:
                     total += image
     clipped = np.minimum(coverage, 1.0)
     if valued is not None:
-        valued *= np.divide(clipped, coverage, out=np.ones_like(coverage), where=coverage > 1.0)
+        valued *= np.divide(clipped, coverage, out=np.ones_like(coverage), where=coverage > 1.0)[..., None]
         valued = valued.astype(np.float32)
+        if np.ndim(values) == 1:
+            valued = valued[..., 0]
     return clipped.astype(np.float32), valued
 
 
@@ -406,12 +408,13 @@ def _splat_streaks(
     K_px: np.ndarray,
     padded_depth: np.ndarray,
     f_px: float,
-) -> tuple[np.ndarray, np.ndarray | None]:
-    """The (H, W) float64 sums of α (and of α·value, or None) of the samples of streaks from `start` to `end`
-    (N, 3) splatted bilinearly as points and depth-tested at the pixels they reach (`streak_layers`), unclipped,
-    and with footprints (σ > 0) the (top, left) of the BLUR_TILE_PX tiles they reached (else None);
-    footprints of σ = `sigma_px` (0: points) set how densely each streak is sampled. `padded_depth`: the
-    depth map with a border of −inf a pixel wide (which hides the splats that fall off the frame)."""
+) -> tuple[np.ndarray, list[np.ndarray], np.ndarray | None]:
+    """The (H, W) float64 sum of α of the samples of streaks from `start` to `end` (N, 3) splatted bilinearly
+    as points and depth-tested at the pixels they reach (`streak_layers`), unclipped; the sums of α·value,
+    one (H, W) per column of `value` (N, K) (none without); and with footprints (σ > 0) the (top, left) of
+    the BLUR_TILE_PX tiles they reached (else None). Footprints of σ = `sigma_px` (0: points) set how densely
+    each streak is sampled. `padded_depth`: the depth map with a border of −inf a pixel wide (which hides the
+    splats that fall off the frame)."""
     height_px, width_px = padded_depth.shape[0] - 2, padded_depth.shape[1] - 2
     # Samples along each streak: one per pixel of its length (per σ of a spread one), or fewer where each
     # then still carries at most SAMPLE_ALPHA_MAX of a pixel (a faint streak's light is spread no less
@@ -454,14 +457,16 @@ def _splat_streaks(
     indices, weights = indices[front], weights[front]
     sums = [np.bincount(indices, weights=weights, minlength=padded_depth.size)]
     if value is not None:
-        sums.append(np.bincount(indices, weights=weights * np.tile(value[drop], 4)[front], minlength=padded_depth.size))
+        for column in value.T:
+            weighted = weights * np.tile(column[drop], 4)[front]
+            sums.append(np.bincount(indices, weights=weighted, minlength=padded_depth.size))
     images = [flat.reshape(height_px + 2, padded_w)[1:-1, 1:-1] for flat in sums]
     tiles = None
     if sigma_px > 0:  # the BLUR_TILE_PX tiles the splats reached (a splat past the border failed the depth test)
         row, column = np.divmod(indices, padded_w)
         tiles = np.unique((row - 1) // BLUR_TILE_PX * padded_w + (column - 1) // BLUR_TILE_PX)
         tiles = np.column_stack(np.divmod(tiles, padded_w)) * BLUR_TILE_PX  # (top, left) of each
-    return images[0], images[1] if value is not None else None, tiles
+    return images[0], images[1:], tiles
 
 
 def _project(points_cam_m: np.ndarray, K_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

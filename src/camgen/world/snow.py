@@ -53,14 +53,18 @@ illuminance E_sun its radiance is
     L_flake = ω [ (L_sky + L_ground)/2 + E_sun / (4π) ]
 
 brighter than a grey road under an overcast sky, darker than that sky (flakes against the sky look grey in
-real footage). In the camera's own IR illuminator (night mode) a flake at z metres sees E = I(θ)/z² from
+real footage); a lamp adds ω E/(4π) with its own E = I(θ)/d² at the flake (the glittering cone of flakes
+under a street lamp). Real aggregates scatter forwards more than backwards, so a flake between the camera
+and a lamp or the sun is brighter than this, one lit from behind the camera darker. In the camera's own IR
+illuminator (night mode) a flake at z metres sees E = I(θ)/z² from
 straight behind the camera, and a Lambertian sphere seen at zero phase has radiance (2/3) ρ E / π (its
 geometric albedo is 2/3 of its reflectance): the bright specks near the lens of IR night footage.
 
 **Not modelled.** Flakes drift with the scene's mean wind (`environment.wind`: speed and direction) but not
 with its gusts, and do not flutter or tumble (a real dendrite aggregate wanders by centimetres as it
-falls); the streak ignores the camera's own motion in the exposure; lamps do not light the flakes (as for
-rain); flakes are round soft spots, not dendrite shapes; no snow settles on the ground or on the lens.
+falls); the streak ignores the camera's own motion in the exposure; nothing shadows the flakes (a flake under
+a roof is lit as in the open) and the lamps' pools on the ground do not light them; flakes are round soft
+spots, not dendrite shapes; no snow settles on the ground or on the lens.
 """
 
 from __future__ import annotations
