@@ -1,11 +1,13 @@
 """Snow over a rendered frame (`camgen.world.snow`): the haze of the far flakes, then the short streaks of
 the near ones in the frame's exposure, depth-tested against the surfaces, lit by the sky, the ground, the
-sun and, in night mode, the camera's own IR illuminator.
+sun, the scene's lamps and, in night mode, the camera's own IR illuminator.
 
 The drawing is rain's (`camgen.world.rain.streak_layers`, the frame's exposure as `camgen.render.rain`
 spans it) with two of its options: a flake's footprint is spread by its own image and by the lens's defocus
 (flakes near the lens are large, soft discs, as a drop imaged that wide would be, which rain leaves out),
-and each flake carries its own radiance in the illuminator's beam (I/z²: the near flakes glow).
+and each flake carries its own radiance in the lamps' and the illuminator's light (I/d²: the flakes in a
+lantern's beam glitter, those near an IR camera's lens glow). The faintest flakes (`FLAKE_AREA_MIN_PX2`)
+are drawn as their mean, a veil (`left_out_flakes`).
 
 The haze is the snow's visual range (Rasmussen et al. 1999) over each pixel's distance beyond
 `STREAK_RANGE_M`, by Koschmieder's law (`camgen.world.fog`), the far ground's distance where no mesh is hit.
