@@ -116,38 +116,90 @@ class OrderedScene(pyrender.Scene):
     a different order in every run. The shader sums the lights' contributions in the order pyrender binds
     them (`light_nodes`), so a frame lit by several lights differed in its last bits from run to run (the
     night street's street lamps: 1e-5 of the radiance at 11 % of its pixels, enough to flip an 8-bit code
-    now and then), and the same seed must give the same bytes. Lists in insertion order fix it."""
+    now and then), and the same seed must give the same bytes. Lists in insertion order fix it.
+
+    It also keeps what pyrender works out again at each call: each list in order until a node is added or
+    removed, and each node's world pose (`get_pose`: pyrender walks the node's path to the root and multiplies
+    its matrices) until the node, or a node with children, is set another pose (`set_pose`), or a node is
+    added or removed. A draw asks for the same poses tens of thousands of times per frame (sorting, culling,
+    the shadow maps and the lit pass each ask for every node's) and the lists for every lit primitive
+    (pyrender's lighting). Everything that moves a node goes through `set_pose` (pyrender's own `set_pose`
+    stores the matrix it is given; nothing here changes a node's matrix in place)."""
 
     def __init__(self, *args, **kwargs):
         self._added: dict = {}
+        self.node_changes = 0
+        """How many times a node was added or removed (`camgen.render.renderer` skips pyrender's context update
+        while it holds)."""
+        self._orders: dict[str, list] = {}
+        """Each ordered list (by property name) since the last node was added or removed."""
+        self._poses: dict = {}
+        """Each node's world pose asked for since it, or any node with children, was last set another pose."""
         super().__init__(*args, **kwargs)
 
     def add_node(self, node, parent_node=None):
         self._added.setdefault(node, len(self._added))
+        self.node_changes += 1
+        self._orders.clear()
+        self._poses.clear()
         return super().add_node(node, parent_node)
+
+    def remove_node(self, node):
+        self.node_changes += 1
+        self._orders.clear()
+        self._poses.clear()
+        return super().remove_node(node)
+
+    def clear(self):
+        self.node_changes += 1
+        self._orders.clear()
+        self._poses.clear()
+        return super().clear()
+
+    def set_pose(self, node, pose):
+        super().set_pose(node, pose)
+        if node.children:  # its descendants' world poses move with it
+            self._poses.clear()
+        else:
+            self._poses.pop(node, None)
+
+    def get_pose(self, node):
+        pose = self._poses.get(node)
+        if pose is None:
+            pose = self._poses[node] = super().get_pose(node)
+        return pose.copy()  # pyrender hands out a new array; a caller may write into it
 
     def _in_order(self, nodes) -> list:
         return sorted(nodes, key=self._added.__getitem__)
 
+    def _kept_order(self, name: str, nodes) -> list:
+        """`_in_order(nodes)` kept under `name` until a node is added or removed; a new list each call."""
+        kept = self._orders.get(name)
+        if kept is None:
+            kept = self._orders[name] = self._in_order(nodes)
+        return list(kept)
+
     @property
     def mesh_nodes(self):
-        return self._in_order(self._mesh_nodes)
+        return self._kept_order("mesh_nodes", self._mesh_nodes)
 
     @property
     def point_light_nodes(self):
-        return self._in_order(self._point_light_nodes)
+        return self._kept_order("point_light_nodes", self._point_light_nodes)
 
     @property
     def spot_light_nodes(self):
-        return self._in_order(self._spot_light_nodes)
+        return self._kept_order("spot_light_nodes", self._spot_light_nodes)
 
     @property
     def directional_light_nodes(self):
-        return self._in_order(self._directional_light_nodes)
+        return self._kept_order("directional_light_nodes", self._directional_light_nodes)
 
     @property
     def light_nodes(self):
-        return self._in_order(self._point_light_nodes | self._spot_light_nodes | self._directional_light_nodes)
+        return self._kept_order(
+            "light_nodes", self._point_light_nodes | self._spot_light_nodes | self._directional_light_nodes
+        )
 
 
 FAR_GROUND_MIN_AREA_M2 = 100.0
@@ -735,14 +787,33 @@ def _pose_vehicle_mesh(node: pyrender.Node, rig: VehicleRig, deformed: set, sign
     `sign_cd_m2`)."""
     # One conversion to the primitives' float32 for the whole vehicle; each primitive takes its rows' view.
     vertices, normals = rig.vertices_m.astype(np.float32), rig.normals.astype(np.float32)
-    for primitive, part, piece in zip(node.mesh.primitives, rig.model.parts, rig.parts, strict=True):
+    bounds = _piece_bounds(vertices, rig.parts)
+    for k, (primitive, part, piece) in enumerate(zip(node.mesh.primitives, rig.model.parts, rig.parts, strict=True)):
         primitive.positions = vertices[piece]
         primitive.normals = normals[piece]
+        if bounds is not None:
+            primitive._bounds = bounds[k]  # what pyrender's `Primitive.bounds` would compute from them
         deformed.add(primitive)
         lamp = _lamp(part.surface)
         if lamp is not None:
             primitive.material.emissiveFactor = _lamp_emission(lamp, rig.lit.get(lamp, False), sign_cd_m2)
     node.mesh._bounds = None  # pyrender caches a mesh's bounds
+
+
+def _piece_bounds(vertices: np.ndarray, pieces: list[slice]) -> np.ndarray | None:
+    """(K, 2, 3) (low, high) of the rows of each of `pieces` of `vertices` (V, 3), in one reduction each way
+    instead of pyrender's two per primitive (`Primitive.bounds`, at the first use after each placement: a
+    vehicle's tens of primitives, placed at every motion-blur sub-frame); the same values (a minimum is exact).
+    None unless the pieces are non-empty and run back to back over every row (a vehicle's `parts` do)."""
+    starts = [piece.start for piece in pieces]
+    stops = [piece.stop for piece in pieces]
+    if not pieces or starts[0] != 0 or stops[-1] != len(vertices) or starts[1:] != stops[:-1]:
+        return None
+    if any(piece.step not in (None, 1) or piece.stop <= piece.start for piece in pieces):
+        return None
+    return np.stack(
+        [np.minimum.reduceat(vertices, starts, axis=0), np.maximum.reduceat(vertices, starts, axis=0)], axis=1
+    )
 
 
 def _light_display(node: pyrender.Node, rig: VehicleRig, sign_cd_m2: float) -> None:
