@@ -1,6 +1,6 @@
 """What the scene graph and the renderer keep between calls follows every change: `OrderedScene`'s world poses
-and ordered lists, a placed vehicle's primitive bounds (`_pose_vehicle_mesh`) and the renderer's skipped context
-update (`_PassRenderer._update_context`)."""
+and ordered lists, a placed vehicle's primitive bounds (`_pose_vehicle_mesh`), the renderer's skipped context
+update (`_PassRenderer._update_context`) and the vertex rows it keeps per deformed primitive (`_upload_deformed`)."""
 
 from __future__ import annotations
 
@@ -119,3 +119,96 @@ def test_a_mesh_added_after_a_draw_is_drawn(renderer):
     assert np.array_equal(again.instance_id, before.instance_id)
     assert np.array_equal(again.radiance, before.radiance)
 
+
+def _street(**actors):
+    return scene_from(
+        duration_s=4.0,
+        environment={"meshes": [{"type": "plane", "name": "ground", "size_m": [60, 60]}]},
+        lights=[{"type": "sun", "illuminance_lux": 20000, "azimuth_deg": 30, "elevation_deg": 40}],
+        actors=[
+            {"name": "car", "class": "car", "path": {"waypoints_m": [[-8, 0], [0, 0], [6, 12]], "speed_m_s": 6}},
+            {"name": "walker", "class": "person", "path": {"waypoints_m": [[2, -3], [2, 5]], "speed_m_s": 1.3}},
+        ],
+    )
+
+
+@pytest.mark.opengl
+def test_vertices_uploaded_again_are_a_fresh_graphs(renderer):
+    """A graph placed and drawn at one time, then another, draws the second as a graph placed there first does:
+    the vertex rows kept per primitive (`_upload_deformed`) take each placement's positions and normals."""
+    view = View(camera_matrix(300.0, 300.0, 159.5, 119.5), look_at((0.0, -12.0, 5.0), (0.0, 0.0, 0.5)), 320, 240)
+    graph = build_scene_graph(_street())
+    graph.place_actors(0.5)
+    first = renderer.draw(graph, view, ("radiance", "instance_id"))  # uploaded whole, into the context
+    graph.place_actors(1.1)
+    renderer.draw(graph, view, ("radiance",))  # uploaded again: its rows kept
+    graph.place_actors(1.7)
+    second = renderer.draw(graph, view, ("radiance", "instance_id"))  # through the kept rows
+    fresh = build_scene_graph(_street())
+    fresh.place_actors(1.7)
+    expected = renderer.draw(fresh, view, ("radiance", "instance_id"))
+    assert not np.array_equal(first.instance_id, second.instance_id)  # the actors moved in view
+    assert np.array_equal(second.instance_id, expected.instance_id)
+    assert np.array_equal(second.radiance, expected.radiance)
+
+
+@pytest.mark.opengl
+def test_a_deformed_primitive_with_new_colours_is_drawn_with_them(renderer):
+    """Kept vertex rows are used only while a primitive's other attributes are the arrays they were made with."""
+    view = View(camera_matrix(300.0, 300.0, 159.5, 119.5), look_at((0.0, -12.0, 5.0), (0.0, 0.0, 0.5)), 320, 240)
+    graph = build_scene_graph(_street())
+    for time_s in (0.5, 0.7, 0.9):  # into the context, uploaded whole, then through the kept rows
+        graph.place_actors(time_s)
+        renderer.draw(graph, view, ("radiance",))
+    car = graph.actor_nodes[0]
+    coloured = [p for p in car.mesh.primitives if p.color_0 is not None]
+    assert coloured, "the car's primitives carry vertex colours"
+    for primitive in coloured:
+        colours = np.array(primitive.color_0)
+        colours[:, :3] = colours[:, :3] * 0.25
+        primitive.color_0 = colours
+        graph.deformed.add(primitive)
+    darker = renderer.draw(graph, view, ("radiance", "instance_id"))
+    fresh = build_scene_graph(_street())
+    fresh.place_actors(0.9)
+    for primitive, changed in zip(fresh.actor_nodes[0].mesh.primitives, car.mesh.primitives, strict=True):
+        primitive.color_0 = changed.color_0
+    expected = renderer.draw(fresh, view, ("radiance", "instance_id"))
+    assert np.array_equal(darker.radiance, expected.radiance)
+
+
+@pytest.mark.opengl
+def test_lights_bound_once_per_program_light_every_primitive_as_bound_each_time(renderer, monkeypatch):
+    """A lit draw binds the lights at the first primitive of each program only (`_PassRenderer._bind_lit`); the same
+    pixels as binding them for every primitive: textured and plain materials (two programs, the textures on units
+    after the lights'), a sun's cascades and a spot light's map."""
+    from camgen.render.renderer import _PassRenderer
+
+    scene = scene_from(
+        environment={
+            "meshes": [
+                {"type": "plane", "name": "road", "size_m": [30, 30], "material": {"texture": {"type": "asphalt"}}},
+                {"type": "box", "name": "a", "size_m": [1, 1, 2], "position_m": [-1.5, 2, 1]},
+                {"type": "box", "name": "b", "size_m": [1, 2, 1], "position_m": [1.5, 0, 0.5],
+                 "material": {"texture": {"type": "brick"}}},
+                {"type": "box", "name": "c", "size_m": [2, 1, 1], "position_m": [0, -2, 0.5]},
+            ]
+        },
+        lights=[
+            {"type": "sun", "illuminance_lux": 20000, "azimuth_deg": 200, "elevation_deg": 35},
+            {"type": "spot", "position_m": [0.5, 0.5, 5], "target_m": [0, 0, 0], "intensity_cd": 20000},
+            {"type": "ambient", "illuminance_lux": 2000},
+        ],
+    )  # fmt: skip
+    view = View(camera_matrix(320.0, 320.0, 159.5, 119.5), look_at((2.0, -9.0, 6.0), (0.0, 0.0, 0.5)), 320, 240)
+    once = renderer.draw(build_scene_graph(scene), view, ("radiance",)).radiance
+    full = _PassRenderer._bind_lit
+
+    def every_time(self, scene, program, node, flags, lit_programs):
+        lit_programs.clear()
+        return full(self, scene, program, node, flags, lit_programs)
+
+    monkeypatch.setattr(_PassRenderer, "_bind_lit", every_time)
+    each = renderer.draw(build_scene_graph(scene), view, ("radiance",)).radiance
+    assert np.isfinite(once).all() and once.max() > 0.0
+    assert np.array_equal(once, each)

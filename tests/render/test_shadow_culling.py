@@ -21,6 +21,12 @@ class _Mesh:
     def __init__(self, *primitives):
         self.primitives = primitives
 
+    @property
+    def bounds(self) -> np.ndarray:
+        """pyrender's `Mesh.bounds`: the least and greatest of its primitives' bounds."""
+        bounds = np.array([primitive.bounds for primitive in self.primitives])
+        return np.array([bounds[:, 0].min(axis=0), bounds[:, 1].max(axis=0)])
+
 
 def _projections() -> dict[str, np.ndarray]:
     """P·V of an orthographic map (a sun's: 20 m × 10 m, depth 0-30 m) and of a perspective one (a lamp's)."""
