@@ -36,11 +36,11 @@ def schlick(cos_theta: float) -> float:
     return F0 + (1.0 - F0) * (1.0 - cos_theta) ** 5
 
 
-def _scene():
+def _scene(sky: str = "uniform", sky_luminance_cd_m2: float = AMBIENT_LUX / math.pi):
     return scene_from(
         environment={
-            "sky": "uniform",
-            "sky_luminance_cd_m2": AMBIENT_LUX / math.pi,
+            "sky": sky,
+            "sky_luminance_cd_m2": sky_luminance_cd_m2,
             "shadows": False,
             "meshes": [
                 {"type": "plane", "name": "ground", "size_m": [60, 60], "material": {"color_rgb": [GROUND_RHO] * 3}}
@@ -62,7 +62,10 @@ def _scene():
 @pytest.fixture(scope="module")
 def coat(renderer):
     """{view name: (radiance (H, W, 3), the target's pixel (x, y), the cosine of the view angle)}."""
-    graph = build_scene_graph(_scene())
+    return _coat(renderer, build_scene_graph(_scene()))
+
+
+def _coat(renderer, graph) -> dict:
     T_vehicle = graph.vehicles[0].T_world_from_vehicle
     look = draw_look(3, "car", pinned={"body_type": "sedan", "colour": "black"})
     flat = [u for u, z in PROFILES["sedan"].top if z == 1.0]
@@ -125,3 +128,28 @@ def test_the_ground_has_no_coat(coat):
     radiance, _, _ = coat["grazing"]
     ground = radiance[:3, :8].reshape(-1, 3)  # the plane beyond the car, above its roof in the view
     np.testing.assert_allclose(np.median(ground, axis=0), GROUND_RHO * AMBIENT_LUX / math.pi, rtol=0.02)
+
+
+OVERCAST_ZENITH_CD_M2 = 4000.0
+
+
+def test_under_a_cie_sky_the_paint_mirrors_the_sky_in_the_reflected_direction(renderer):
+    """Under the CIE overcast sky (type 1: three times brighter at the zenith than at the horizon) the roof seen
+    at a grazing 20° mirrors the sky 20° up beyond the car, not the uniform sky's E/π: against a uniform sky of
+    the same ambient light the paint differs by exactly F·(L_sky(r) − E/π), L_sky from `camgen.world.sky`
+    (`renderer.SkyMap`); the flank, which mirrors the ground, does not change."""
+    from camgen.world.sky import sky_radiance
+
+    cie = _coat(renderer, build_scene_graph(_scene("overcast", OVERCAST_ZENITH_CD_M2)))
+    uniform = _coat(renderer, build_scene_graph(_scene("uniform", OVERCAST_ZENITH_CD_M2)))
+    radiance, pixel, cos_theta = cie["grazing"]
+    # Seen from the car's right (−y) 20° up, a level roof mirrors the ray 20° up towards +y (the car's left).
+    T_vehicle = build_scene_graph(_scene()).vehicles[0].T_world_from_vehicle
+    left = T_vehicle[:3, 1]
+    reflected = math.cos(math.radians(20.0)) * left + np.array([0.0, 0.0, math.sin(math.radians(20.0))])
+    sky = sky_radiance(reflected[None], np.array([0.0, 0.0, 1.0]), "overcast", OVERCAST_ZENITH_CD_M2)[0]
+    assert sky[1] < 0.6 * OVERCAST_ZENITH_CD_M2  # 20° up the overcast sky is half the zenith's
+    difference = _at(radiance, pixel) - _at(*uniform["grazing"][:2])
+    expected = schlick(cos_theta) * (sky - AMBIENT_LUX / math.pi)
+    np.testing.assert_allclose(difference, expected, rtol=0.03)
+    np.testing.assert_allclose(_at(*cie["flank"][:2]), _at(*uniform["flank"][:2]), rtol=1e-5)

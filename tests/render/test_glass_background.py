@@ -58,7 +58,20 @@ def _scene(*, car: bool = True, sky: str = "uniform", sky_cd_m2: float = S1_CD_M
 @pytest.fixture(scope="module")
 def glass(renderer):
     """Per view: τ (H, W), R (H, W, 3), the glass's depth (H, W), the pixels seen through both windows,
-    the alpha the draw left there, and the draws of the cases."""
+    the alpha the draw left there, and the draws of the cases. The glass mirrors a uniform sky throughout (the
+    CIE sky's map left unused: `SkyMap.update`), so that R measured under the uniform sky is the glass's
+    reflection under the clear sky too; what a CIE sky adds to a reflection is tests/render/test_clearcoat.py's."""
+    from camgen.render.renderer import SkyMap
+
+    def no_map(self, graph) -> None:
+        self.used = False
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(SkyMap, "update", no_map)
+        return _glass(renderer)
+
+
+def _glass(renderer) -> dict:
     out = {}
     for name, T in VIEWS.items():
         view = View(K_PX, T, WIDTH_PX, HEIGHT_PX)

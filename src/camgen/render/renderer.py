@@ -482,6 +482,79 @@ class _SunPassPlan:
     P: np.ndarray
 
 
+SKY_MAP_TEXELS = (256, 64)
+"""Columns (azimuth over 360°) and rows (elevation 0–90°) of `SkyMap`: 1.4° a texel, against the clear sky's
+circumsolar peak, which falls by e over 19° (indicatrix d = −3 rad⁻¹: `camgen.world.sky`)."""
+
+
+class SkyMap:
+    """The graph's CIE sky (`camgen.world.sky.sky_radiance`) over the upper hemisphere as a float texture,
+    which the lit shader's `sky_along` reads for what a smooth clear coat and glass mirror (`mirrored_environment`):
+    texel (i, j) holds the radiance at azimuth (i + ½)/W·360° − 180° (atan2(y, x)) and elevation (j + ½)/H·90°,
+    sampled bilinearly (repeating in azimuth). Made again when the sky changes (`_sky_key`: its type, zenith
+    luminance and the sun, which a dusk moves frame by frame). A uniform sky has none: the shader mirrors
+    `ambient_light` (radiance E/π) there, as before the map."""
+
+    def __init__(self) -> None:
+        self.texture: int | None = None
+        self.key: tuple | None = None
+        self.used = False
+
+    @staticmethod
+    def directions() -> np.ndarray:
+        """(H, W, 3) unit world directions of the texel centres (z up)."""
+        columns, rows = SKY_MAP_TEXELS
+        azimuth = (np.arange(columns) + 0.5) / columns * 2.0 * math.pi - math.pi
+        elevation = (np.arange(rows) + 0.5) / rows * 0.5 * math.pi
+        el, az = np.meshgrid(elevation, azimuth, indexing="ij")
+        return np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=-1)
+
+    def update(self, graph) -> None:
+        """Make the map of `graph`'s sky unless it is the one made last; a uniform sky uses none."""
+        from camgen.world.sky import SKY_TYPES, sky_radiance
+
+        sky = getattr(graph, "sky", "uniform")
+        self.used = sky in SKY_TYPES
+        if not self.used:
+            return
+        key = _sky_key(graph)
+        if key == self.key and self.texture is not None:
+            return
+        sun = graph.sun_direction if graph.sun_direction is not None else np.array([0.0, 0.0, 1.0])
+        radiance = np.ascontiguousarray(sky_radiance(self.directions(), sun, sky, graph.sky_luminance_cd_m2))
+        if self.texture is None:
+            self.texture = int(GL.glGenTextures(1))
+        GL.glBindTexture(GL.GL_TEXTURE_2D, self.texture)
+        columns, rows = SKY_MAP_TEXELS
+        GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB32F, columns, rows, 0, GL.GL_RGB, GL.GL_FLOAT, radiance)
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_LINEAR)
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, GL.GL_REPEAT)
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE)
+        GL.glBindTexture(GL.GL_TEXTURE_2D, 0)
+        self.key = key
+
+    def bind(self, program, unit: int) -> None:
+        """The map on texture `unit` for `program` (every lit program declares the sampler: left at unit 0 it
+        would share a unit with another sampler type, which OpenGL refuses at the draw), and whether it is used."""
+        program.set_uniform("sky_map_used", int(self.used))
+        if self.texture is None:
+            # a uniform sky before any map: the sampler still needs a unit of its own and a 2D texture there
+            self.texture = int(GL.glGenTextures(1))
+            GL.glBindTexture(GL.GL_TEXTURE_2D, self.texture)
+            GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB32F, 1, 1, 0, GL.GL_RGB, GL.GL_FLOAT, np.zeros(3, np.float32))
+            GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST)
+            GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST)
+        GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
+        GL.glBindTexture(GL.GL_TEXTURE_2D, self.texture)
+        program.set_uniform("sky_map", unit)
+
+    def delete(self) -> None:
+        if self.texture is not None:
+            GL.glDeleteTextures([self.texture])
+        self.texture, self.key = None, None
+
+
 class _PassRenderer(pyrender.Renderer):
     """pyrender's renderer with camgen's shaders and a forward pass that sets each node's id."""
 
@@ -492,6 +565,8 @@ class _PassRenderer(pyrender.Renderer):
         """Per scene (by id, with a weak reference to tell a reused id): its spot-light table texture."""
         self.texture_lod_bias = 0.0
         """Added to every material texture's level of detail in the current draw (`Renderer.draw`)."""
+        self.sky_map = SkyMap()
+        """The CIE sky's radiance that smooth coats and glass mirror (`SkyMap`), set for each lit draw."""
         self.mirrored = False
         """Whether the current draw's view is mirrored (an improper pose: `camgen.render.wet`), which reverses
         the winding of its triangles on screen."""
@@ -842,6 +917,7 @@ class _PassRenderer(pyrender.Renderer):
         for _, by_size in self._sun_arrays.values():
             GL.glDeleteTextures(list(by_size.values()))
         self._sun_arrays.clear()
+        self.sky_map.delete()
         self._drawn_over_kept.clear()
         super().delete()
 
@@ -866,8 +942,9 @@ class _PassRenderer(pyrender.Renderer):
             program.set_uniform(f"directional_lights[{i}].shadow_maps", unit)
 
     def _bind_lit(self, scene, program, node, flags, lit_programs: dict[int, int]) -> None:
-        """The lights' uniforms and textures for a lit primitive (`_bind_lighting`, `_bind_spot_profiles`), worked out
-        at the first primitive of each program in a draw only (`lit_programs`, by the program's id: the texture units
+        """The lights' uniforms and textures for a lit primitive (`_bind_lighting`, `_bind_spot_profiles`, the sky's
+        map `SkyMap.bind`), worked out at the first primitive of each program in a draw only (`lit_programs`, by the
+        program's id: the texture units
         they took). Within a draw they are the same for every primitive: the lights, their shadow maps and matrices
         do not change, nor does which node is lit matter (pyrender sorts lights by distance to the node only when
         there are more than the shader holds, which `check_light_counts` refuses); the units are taken in the same
@@ -881,6 +958,7 @@ class _PassRenderer(pyrender.Renderer):
             return
         self._bind_lighting(scene, program, node, flags)
         self._bind_spot_profiles(scene, program)
+        self.sky_map.bind(program, self._get_next_active_texture())
         lit_programs[id(program)] = self._texture_alloc_idx
 
     def _bind_spot_profiles(self, scene, program) -> None:
@@ -1280,6 +1358,8 @@ class Renderer:
         lit = "radiance" in passes
         renderer = self._renderer
         renderer.texture_lod_bias = float(texture_lod_bias)
+        if lit:
+            renderer.sky_map.update(graph)
         flags = renderer.shadow_flags(scene, graph.shadows) if lit else RenderFlags.NONE
         pose_gl = gl_camera_pose(view.T_world_from_cam)
         renderer.mirrored = bool(np.linalg.det(view.T_world_from_cam[:3, :3]) < 0.0)

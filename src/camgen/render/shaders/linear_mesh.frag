@@ -134,6 +134,11 @@ uniform int transmissive;
 // camgen: a clear-coated material (camgen.render.scene_graph.ClearcoatMaterial: a car's paint); see clearcoat_ambient.
 uniform int clearcoat;
 uniform vec3 ambient_light;
+// camgen: the sky's radiance over the upper hemisphere (camgen.render.renderer.SkyMap: a CIE sky, azimuth
+// across, elevation 0 to 90 deg up), which smooth coats and glass mirror; sky_map_used 0: a uniform sky
+// of radiance ambient_light.
+uniform sampler2D sky_map;
+uniform int sky_map_used;
 uniform uint instance_id;
 
 #ifdef USE_IBL
@@ -450,8 +455,9 @@ bool in_sun_cascade(mat4 light_matrix, sampler2DArray shadow_maps)
 // (glTF KHR_materials_clearcoat), mirrors the environment along the reflected ray, and the base's diffuse
 // ambient term keeps the share (1 - F) (the light the coat lets in and out; the layering of Filament's clear
 // coat model, Guy & Agopian, "Physically Based Rendering in Filament", 2018, section 4.9). The environment
-// is the sky above the horizon, radiance ambient_light (a uniform sky of illuminance E has radiance E / pi,
-// camgen.render.scene_graph), and below it the ground, a Lambertian surface of albedo
+// is the sky above the horizon, its radiance along the reflected ray (sky_along: the scene's CIE sky, brighter
+// towards the horizon and the sun, bluer away from it; a uniform sky's radiance ambient_light, a uniform sky of
+// illuminance E having radiance E / pi, camgen.render.scene_graph), and below it the ground, a Lambertian surface of albedo
 // CLEARCOAT_GROUND_ALBEDO lit by that sky and the suns, blended over the reflected ray's elevation as the
 // glass's reflection is (sky_share: fully sky from 11.5 deg up, ground from 11.5 deg down: buildings and
 // trees break the horizon). At normal incidence the coat adds 4 % of the sky; at grazing views (a roof or
@@ -461,6 +467,19 @@ const float CLEARCOAT_F0 = 0.04;
 // Asphalt's albedo, 0.05 fresh to 0.10-0.18 aged (Pomerantz et al., "Cooler paving materials", LBNL-49283,
 // 2002); 0.15 for a mix of road and pavement.
 const float CLEARCOAT_GROUND_ALBEDO = 0.15;
+
+// The sky's radiance along `r` (at the horizon for a ray below it): the CIE sky's map where the scene has one
+// (its texel rows and columns centred on the elevations and azimuths they hold: `SkyMap`), else uniform.
+vec3 sky_along(vec3 r)
+{
+    if (sky_map_used == 0) {
+        return ambient_light;
+    }
+    float elevation = asin(clamp(r.z, 0.0, 1.0));
+    // atan(0, 0) is undefined in GLSL: straight up, every azimuth is the zenith
+    float azimuth = (abs(r.x) + abs(r.y) > 0.0) ? atan(r.y, r.x) : 0.0;
+    return texture(sky_map, vec2(azimuth / (2.0 * PI) + 0.5, elevation / (0.5 * PI))).rgb;
+}
 
 // The environment a smooth dielectric mirrors along the reflected ray `r`: the sky's radiance above the
 // horizon, the lit ground's below (see clearcoat_ambient).
@@ -473,7 +492,7 @@ vec3 mirrored_environment(vec3 r)
             * max(-directional_lights[i].direction.z, 0.0);
     }
     vec3 ground = CLEARCOAT_GROUND_ALBEDO * ground_irradiance / PI;
-    return mix(ground, ambient_light, sky_share);
+    return mix(ground, sky_along(r), sky_share);
 }
 
 vec3 clearcoat_ambient(vec3 n, vec3 diffuse_ambient)
