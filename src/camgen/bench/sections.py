@@ -655,9 +655,9 @@ def _vehicles(repo: Path) -> Section:
             wet = [score for score in scores if score.scene in weather]
             if clear and wet:
                 text.append(
-                    "By day in clear air (the scenes without fog or rain: issue 20's goal): "
+                    "By day in clear air (the scenes without fog, rain or snow: issue 20's goal): "
                     + overall_scores(clear)
-                    + f". In fog or rain ({', '.join(sorted({score.scene for score in wet}))}): "
+                    + f". In fog, rain or snow ({', '.join(sorted({score.scene for score in wet}))}): "
                     + overall_scores(wet)
                     + "."
                 )
