@@ -187,3 +187,31 @@ def test_false_colour_suppression_removes_the_colour_a_demosaiced_thin_line_gets
 def test_false_colour_suppression_refuses_windows_it_does_not_take(size):
     with pytest.raises(ValueError, match="size_px must be one of"):
         suppress_false_colour(np.zeros((8, 8, 3), np.uint8), size)
+
+
+def test_the_camera_isp_runs_false_colour_suppression_where_the_plan_keeps_it():
+    """`CameraIsp.process` with `isp.false_colour` among its steps gives the 8-bit image it gives without,
+    through `suppress_false_colour` at the profile's window (denoise and sharpening, which follow it, left off):
+    a demosaiced thin line's colour is taken out in the camera's own pipeline, not only by the function."""
+    from camgen.config.loader import load_profile
+    from camgen.isp.pipeline import CameraIsp
+    from camgen.plan.compile import isp_steps
+    from tests.conftest import REPO
+
+    bullet = load_profile(REPO / "profiles/bullet_4mp_2p8mm.yaml").profile
+    steps = isp_steps(bullet.isp, bullet.sensor) - {"isp.denoise", "isp.sharpen", "isp.contrast_stretch"}
+    assert "isp.false_colour" in steps
+    size, fine = 96, 8
+    ys, xs = np.mgrid[0 : size * fine, 0 : size * fine] / fine
+    distance = np.abs((ys - 48) * np.cos(np.radians(17)) - (xs - 48) * np.sin(np.radians(17)))
+    scene = np.where(distance < 0.6, 0.9, 0.25).reshape(size, fine, size, fine).mean(axis=(1, 3))
+    black, white = bullet.sensor.black_level_dn, 2**bullet.sensor.bit_depth - 1
+    raw = np.rint(black + scene * 0.8 * (white - black)).astype(np.uint16)  # a grey scene on every site
+
+    def process(with_steps: set[str]) -> np.ndarray:
+        return CameraIsp(bullet.isp, bullet.sensor, frame_interval_s=0.04, steps=with_steps).process(raw)
+
+    without = process(steps - {"isp.false_colour"})
+    with_it = process(steps)
+    np.testing.assert_array_equal(with_it, suppress_false_colour(without, bullet.isp.false_colour_median_px))
+    assert not np.array_equal(with_it, without)
