@@ -177,3 +177,41 @@ def test_under_a_clear_sky_the_paint_mirrors_the_sky_at_the_reflected_rays_azimu
     sky = sky_radiance(reflected[None], sun, "clear", OVERCAST_ZENITH_CD_M2)[0]
     difference = _at(radiance, pixel) - _at(*uniform["grazing"][:2])
     np.testing.assert_allclose(difference, schlick(cos_theta) * (sky - AMBIENT_LUX / math.pi), rtol=0.03)
+
+
+@pytest.mark.parametrize("sky", ["uniform", "overcast"])
+def test_the_first_draw_under_a_sky_is_the_draw_after_it(renderer, sky):
+    """A uniform sky's first lit draw makes the sky map's placeholder texture (`SkyMap.bind`) on the sampler's
+        own unit: made on the unit active before it (the last spot-light table's, a street lamp's IES profile),
+        it replaced that table for the first primitive drawn, which a fresh renderer then lit otherwise than every
+        later draw of the same view (the night street's first frame: 136 px of a car 0.35 % darker). A CIE sky's
+    map, made before the draw (`SkyMap.update`), is checked likewise."""
+    from pathlib import Path
+
+    scene = scene_from(
+        environment={
+            "sky": sky,
+            "sky_luminance_cd_m2": 0.01,
+            "shadows": False,
+            "meshes": [
+                {"type": "plane", "name": "ground", "size_m": [30, 30], "material": {"color_rgb": [0.3] * 3}},
+                {"type": "box", "name": "block", "size_m": [2, 2, 2], "position_m": [0, 3, 1]},
+            ],
+        },
+        lights=[
+            {"type": "ambient", "illuminance_lux": 0.03},
+            {
+                "type": "lamp",
+                "position_m": [2.0, 0.0, 6.0],
+                "ies_file": "ies/street_lantern_synthetic.ies",
+                "flux_lm": 6000,
+            },
+        ],
+    )
+    graph = build_scene_graph(scene, lambda path: Path(__file__).parents[2] / "scenes" / path)
+    view = View(K_PX, look_at(np.array([0.0, -8.0, 4.0]), np.array([0.0, 3.0, 0.5])), SIZE_PX, SIZE_PX)
+    renderer._renderer.sky_map.delete()  # as a fresh renderer's: no sky texture yet
+    first = renderer.draw(graph, view, ("radiance",)).radiance.copy()
+    second = renderer.draw(graph, view, ("radiance",)).radiance
+    assert first.max() > 0.1  # the lamp lights the scene
+    np.testing.assert_array_equal(first, second)

@@ -538,6 +538,9 @@ class SkyMap:
         """The map on texture `unit` for `program` (every lit program declares the sampler: left at unit 0 it
         would share a unit with another sampler type, which OpenGL refuses at the draw), and whether it is used."""
         program.set_uniform("sky_map_used", int(self.used))
+        # The sampler's own unit first: binding on the unit left active (the last spot-light table's or shadow
+        # map's) would replace that texture for this primitive.
+        GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
         if self.texture is None:
             # a uniform sky before any map: the sampler still needs a unit of its own and a 2D texture there
             self.texture = int(GL.glGenTextures(1))
@@ -545,7 +548,6 @@ class SkyMap:
             GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB32F, 1, 1, 0, GL.GL_RGB, GL.GL_FLOAT, np.zeros(3, np.float32))
             GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST)
             GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST)
-        GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.texture)
         program.set_uniform("sky_map", unit)
 
