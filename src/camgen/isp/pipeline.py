@@ -165,8 +165,10 @@ class CameraIsp:
         ccm = np.array(self.isp.ccm, np.float64) if "isp.ccm" in self.steps else np.eye(3)
         return np.hstack([ccm * gain, np.full((3, 1), -gain * lo)]).astype(np.float32)
 
-    def process(self, raw_dn: np.ndarray, gain_db: float = 0.0) -> np.ndarray:
-        """(H, W) uint16 raw taken at `gain_db` → (H, W, 3) uint8 RGB (a mono camera's grey in all three)."""
+    def process(self, raw_dn: np.ndarray, gain_db: float = 0.0, *, grey_out: bool = False) -> np.ndarray:
+        """(H, W) uint16 raw taken at `gain_db` → (H, W, 3) uint8 RGB (a mono camera's grey in all three).
+        `grey_out`: the caller sends the result as grey (a day/night camera in night mode), so nothing that only
+        moves colour runs (`isp.false_colour`)."""
         isp, steps = self.isp, self.steps
         linear = self._linear_mosaic(raw_dn, gain_db)
         stretch = isp.contrast_stretch
@@ -193,7 +195,7 @@ class CameraIsp:
         out = apply_lut(image, self._lut, executor=self.executor)
         if self.mono:
             out = cv2.cvtColor(out.reshape(out.shape[0], out.shape[1]), cv2.COLOR_GRAY2RGB)
-        elif "isp.false_colour" in steps:
+        elif "isp.false_colour" in steps and not grey_out:
             out = suppress_false_colour(out, isp.false_colour_median_px)
         if "isp.denoise" in steps:
             out = denoise(out, isp.denoise_strength)

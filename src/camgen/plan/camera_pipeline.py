@@ -255,7 +255,7 @@ class CameraPipeline:
         with self.clock("sensor.auto_exposure"):
             level = self._meter_and_adapt(state, raw)
         with self.clock("isp"):
-            rgb8 = None if self.isp is None else self.isp.process(raw, state.gain_db)
+            rgb8 = None if self.isp is None else self.isp.process(raw, state.gain_db, grey_out=state.night_mode)
             if rgb8 is not None and state.night_mode:  # the camera sends grey in night mode
                 rgb8 = monochrome(rgb8)
         white_balance = None if self.isp is None or self.mono else tuple(self.isp.white_balance_gains.tolist())
