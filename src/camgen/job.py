@@ -41,8 +41,8 @@ class PlanSettings(Frozen):
     """Largest image displacement (distortion, lateral CA) that may be ignored, px. Tight, because
     annotations and camera metadata must describe the pixels exactly."""
     blur_diameter_threshold_px: Annotated[float, Field(gt=0)] = 0.5
-    """Blur spot diameter (defocus, diffraction, motion) below which blur is skipped, px (diffraction's Gaussian
-    as the uniform disc of its variance, 4σ: `camgen.optics.diffraction.spot_diameter_px`)."""
+    """Blur spot diameter (defocus, motion) below which blur is skipped, px. Diffraction is kept wherever its
+    kernel changes a pixel (`camgen.optics.diffraction.diffraction_effect_rel`)."""
     illumination_tolerance_rel: Annotated[float, Field(gt=0)] = 0.005
     """Largest relative illumination change (vignetting) that may be ignored."""
     supersampling: Annotated[int, Field(ge=1, le=8)] = 2

@@ -1,7 +1,7 @@
-"""The plan keeps `optics.diffraction` where its blur spot reaches the plan's blur threshold, as defocus and motion
-do: the Airy pattern's Gaussian (σ = 0.42·λ·N) as the uniform disc of its variance, diameter 4σ, against
-`PlanSettings.blur_diameter_threshold_px` (0.5 px: σ = 0.125 px); the kernel applied is the discrete Gaussian of
-that variance (`camgen.optics.diffraction`), whose reach sets the render margin."""
+"""The plan keeps `optics.diffraction` wherever the kernel it applies changes a pixel: the Airy pattern's Gaussian
+(σ = 0.42·λ·N) as the discrete Gaussian of that variance (`camgen.optics.diffraction`), whose off-centre taps must
+weigh more than float32's resolution (2⁻²⁴) of its centre — about 2σ², so at any real aperture; its reach sets the
+render margin."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from camgen.plan.camera_pipeline import CameraPipeline, frame_rng
 from camgen.plan.lens_stages import LensStages
 from tests.conftest import FIXED_PROFILE, SCENE, write
 
-THRESHOLD_PX = 0.5
+FLOAT32_RESOLUTION = 2.0**-24
 SHORT_EXPOSURE = "exposure: {mode: manual, exposure_time_s: 0.0005}\n"  # no motion blur: no blur margin
 
 
@@ -38,30 +38,40 @@ def diffraction(camera):
 @pytest.mark.parametrize(
     ("f_number", "pitch_um", "cfa", "wavelength_um"),
     [
-        (1.6, 4.35, "RGGB", 0.60),  # the 30× dome at 1280×720, wide: σ = 0.093 px, spot 0.37 px
-        (1.45, 2.9, "RGGB", 0.60),  # σ = 0.126 px, spot 0.504: just over
-        (1.4, 2.9, "RGGB", 0.60),  # σ = 0.122 px, spot 0.487: just under
+        (1.6, 4.35, "RGGB", 0.60),  # the 30× dome at 1280×720, wide: σ = 0.093 px, off-centre weight 0.017
         (1.6, 2.9, "RGGB", 0.60),  # the 2.9 µm bullet at f/1.6: σ = 0.139 px
         (4.4, 4.35, "RGGB", 0.60),  # the dome at 1280×720, tele: σ = 0.255 px
         (8.0, 2.0, "RGGB", 0.60),  # σ = 1.0 px
-        (1.6, 3.0, "mono", 0.55),  # one λ for a mono sensor: σ = 0.123 px, under
-        (1.7, 3.0, "mono", 0.55),  # σ = 0.131 px, over
+        (1.6, 3.0, "mono", 0.55),  # one λ for a mono sensor: σ = 0.123 px
     ],
 )
-def test_diffraction_is_planned_where_its_spot_reaches_the_blur_threshold(
+def test_diffraction_is_planned_wherever_its_discrete_kernel_changes_a_pixel(
     workspace, f_number, pitch_um, cfa, wavelength_um
 ):
+    from camgen.optics.diffraction import kernel_taps
+
     camera = plan(workspace, f_number, pitch_um, cfa)
     d = diffraction(camera)
     sigma_px = 0.42 * wavelength_um * f_number / pitch_um
-    assert d.effect == pytest.approx(4 * sigma_px, rel=1e-9)
-    assert d.threshold == THRESHOLD_PX and d.unit == "px"
-    assert d.included == (4 * sigma_px > THRESHOLD_PX)
-    assert ("optics.diffraction" in [s.name for s in camera.stages]) == d.included
-    # Without distortion, motion or defocus, the margin is the kernel's reach, ⌈4σ⌉ + 1 in red, or nothing.
+    taps = kernel_taps(sigma_px).astype(np.float64)
+    centre = len(taps) // 2
+    s = (taps.sum() - taps[centre]) / taps[centre]
+    assert d.effect == pytest.approx(2 * s + s * s, rel=1e-6)
+    if sigma_px < 0.3:
+        assert d.effect == pytest.approx(2 * sigma_px**2, rel=0.1)  # about 2σ² under a third of a pixel
+    assert d.threshold == FLOAT32_RESOLUTION and d.unit == "relative"
+    assert d.included and "optics.diffraction" in [s.name for s in camera.stages]
+    # Without distortion, motion or defocus, the margin is the kernel's reach, ⌈4σ⌉ + 1 in red.
     sigma_red_px = 0.42 * 0.60 * f_number / pitch_um
-    expected_margin = math.ceil(4 * sigma_red_px) + 1 if d.included else 0
-    assert camera.render.margin_px == (expected_margin,) * 4
+    assert camera.render.margin_px == (math.ceil(4 * sigma_red_px) + 1,) * 4
+
+
+def test_a_pinhole_sized_kernel_is_skipped(workspace):
+    """Only a kernel at float32's resolution is skipped: the decision's function at f/0.5 on 2 mm pixels (σ = 6e-5
+    px, weight 8e-9 under 2⁻²⁴) and on 50 µm pixels (σ = 2.5e-3 px, weight 1.3e-5 over it)."""
+    from camgen.optics.diffraction import diffraction_effect_rel
+
+    assert diffraction_effect_rel(0.5, 2000.0) < FLOAT32_RESOLUTION < diffraction_effect_rel(0.5, 50.0)
 
 
 @pytest.mark.opengl

@@ -44,8 +44,8 @@ def test_no_annotations_plans_no_instance_pass(workspace):
 
 
 def test_zero_distortion_plans_no_remap_and_no_margin(workspace):
-    # No blur stage either: a fast lens (f/1.0 on 3 µm: its diffraction kernel is the identity, σ = 0.084 px)
-    # and a short manual exposure (no motion blur).
+    # No blur stage but diffraction: a fast lens (f/1.0 on 3 µm: σ = 0.084 px, whose discrete kernel reaches
+    # ⌈4σ⌉ + 1 = 2 px, the whole margin) and a short manual exposure (no motion blur).
     camera = plan(
         workspace,
         SCENE,
@@ -54,9 +54,10 @@ def test_zero_distortion_plans_no_remap_and_no_margin(workspace):
     )
     assert "optics.remap" not in stage_names(camera)
     assert decision(camera, "optics.distortion").reason == "all coefficients are zero"
-    assert not {"optics.diffraction", "optics.motion_blur", "optics.depth_of_field"} & set(stage_names(camera))
-    assert camera.render.margin_px == (0, 0, 0, 0)
-    assert (camera.render.width_px, camera.render.height_px) == (640, 480)
+    assert not {"optics.motion_blur", "optics.depth_of_field"} & set(stage_names(camera))
+    assert "optics.diffraction" in stage_names(camera)
+    assert camera.render.margin_px == (2, 2, 2, 2)
+    assert (camera.render.width_px, camera.render.height_px) == (644, 484)
     assert camera.states[0].distortion == (0.0,) * 8
 
 

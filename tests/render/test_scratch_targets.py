@@ -41,7 +41,10 @@ def test_alternating_draws_keep_their_targets_and_pixels(renderer, monkeypatch):
 
     monkeypatch.setattr(_Framebuffer, "__init__", counted)
     first = None
+    after_first = None
     for _ in range(3):  # a frame's supersampled radiance, then its depth and ids, then an actor's ids
+        if first is not None and after_first is None:
+            after_first = len(made)
         radiance = renderer.draw(graph, fine, ("radiance",)).radiance
         geometry = renderer.draw(graph, coarse, ("depth_m", "instance_id"))
         ids = renderer.draw(graph, coarse, ("instance_id",), crop_px=(40, 30, 120, 90)).instance_id
@@ -50,7 +53,9 @@ def test_alternating_draws_keep_their_targets_and_pixels(renderer, monkeypatch):
             first = drawn
         for now, then in zip(drawn, first, strict=True):
             np.testing.assert_array_equal(now, then)
-    assert len(made) == 3, made  # one target each, made once
+    # One target each, made once: at most three in the first round (fewer where an earlier test of this session's
+    # shared renderer left one of these sizes), none after it.
+    assert len(made) == len(set(made)) <= 3 and len(made) == after_first, made
     assert np.ptp(first[0]) > 0 and (first[2] > 0).any()
     for size in range(6):  # more sizes than are kept: the oldest go
         renderer.draw(graph, _view(64 + 16 * size, 48), ("instance_id",))

@@ -31,10 +31,11 @@ from camgen.motion.ptz import HeadTrack
 from camgen.motion.trajectory import Route, actor_routes
 from camgen.optics.diffraction import (
     CHANNEL_WAVELENGTHS_UM,
+    FLOAT32_RESOLUTION,
     MONO_WAVELENGTH_UM,
     REACH_SIGMAS,
     channel_sigmas_px,
-    spot_diameter_px,
+    diffraction_effect_rel,
 )
 from camgen.optics.distortion import max_displacement_px, undistort_normalized
 from camgen.optics.intrinsics import (
@@ -596,23 +597,23 @@ def _compile_camera(
     )
     f_number_max = max(ls.f_number for ls in states_lens)
     f_number_min = min(ls.f_number for ls in states_lens)
-    # A blur spot, as defocus's and motion's: the Airy Gaussian's variance as the uniform disc's of the same
-    # variance (diameter 4σ; `camgen.optics.diffraction`), applied as the discrete Gaussian of that variance. The
-    # widest kernel is the slowest aperture's at the longest wavelength.
+    # Decided on the kernel applied (`camgen.optics.diffraction`: the discrete Gaussian of the Airy Gaussian's
+    # variance): kept wherever it changes a pixel, which is wherever there is an aperture; a sub-pixel spot is
+    # still a visible blur at edges (see the module). The widest kernel is the slowest aperture's at the longest
+    # wavelength.
     diffraction_sigmas_px = channel_sigmas_px(f_number_max, sensor.pixel_pitch_um, mono)
-    diffraction_spot_px = spot_diameter_px(max(diffraction_sigmas_px))
+    diffraction_rel = diffraction_effect_rel(f_number_max, sensor.pixel_pitch_um, mono)
     decisions.append(
         _decision(
             "optics.diffraction",
-            diffraction_spot_px > blur_max and needs_image,
+            diffraction_rel > FLOAT32_RESOLUTION and needs_image,
             force and needs_image,
             f"Airy Gaussian σ = 0.42·λ·N = {max(diffraction_sigmas_px):.3g} px at N = {f_number_max:.3g}, "
-            f"λ = {MONO_WAVELENGTH_UM if mono else max(CHANNEL_WAVELENGTHS_UM)} µm: a spot of 4σ = "
-            f"{diffraction_spot_px:.3g} px (the uniform disc of its variance; the Airy disc's first dark ring "
-            f"{2.44 / 0.42 * max(diffraction_sigmas_px):.3g} px)",
-            effect=diffraction_spot_px,
-            threshold=blur_max,
-            unit="px",
+            f"λ = {MONO_WAVELENGTH_UM if mono else max(CHANNEL_WAVELENGTHS_UM)} µm: its discrete kernel's "
+            f"off-centre taps weigh {diffraction_rel:.3g} of its centre",
+            effect=diffraction_rel,
+            threshold=FLOAT32_RESOLUTION,
+            unit="relative",
         )
     )
     axial_shifts_um = (0.0,) if mono else (ca.axial_focus_shift_r_um, 0.0, ca.axial_focus_shift_b_um)
@@ -862,7 +863,7 @@ def _compile_camera(
         ("optics.axial_ca", {"focus_shift_um": list(axial_shifts_um)}),
         (
             "optics.diffraction",
-            {"sigma_max_px": max(diffraction_sigmas_px)},
+            {"sigma_max_px": max(diffraction_sigmas_px), "off_centre_weight_rel": diffraction_rel},
         ),
     )
     for name, params in blur_stages:
