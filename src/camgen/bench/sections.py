@@ -114,7 +114,7 @@ def _camera_model(repo: Path) -> Section:
         naive = _ms(results, "camera model 1080p, naive float64 reference")
         core_result = results["camera model 1080p, core (fast path)"]
         core = core_result.median_ms
-        planned = _ms(results, "camera model 1080p, as planned (+ diffraction, denoise, sharpen)")
+        planned = _ms(results, "camera model 1080p, as planned (+ diffraction, false colour, denoise, sharpen)")
         sites = _ms(results, "core part: lens onto the photosites (split + one remap)")
         sensor = _ms(results, "core part: lens + sensor (noise, full well, ADC)") - sites
         isp = _ms(results, "core part: ISP (WB, demosaic, CCM, stretch, tone)")
@@ -128,7 +128,8 @@ def _camera_model(repo: Path) -> Section:
                 "model, full well and ADC, white balance, edge-aware demosaic, CCM, contrast stretch, tone "
                 "curve, 8 bit. The naive reference (`camgen/bench/reference_camera.py`) does the same in "
                 "float64 numpy, stage after stage, with exact Poisson noise, `np.percentile` and a float tone "
-                "curve. *As planned* adds the scene's diffraction and the profile's denoise and sharpening.",
+                "curve. *As planned* adds the scene's diffraction and the profile's false-colour suppression, "
+                "denoise and sharpening.",
                 f"**Core: {core:.1f} ms per 1080p frame (IQR {core_result.q1_ms:.1f}–{core_result.q3_ms:.1f}), "
                 f"{fps:.0f} frames/s, which {verdict} the {CAMERA_MODEL_TARGET_FPS:.0f} frames/s target; "
                 f"{core / naive:.3f}× the naive reference's {naive:.0f} ms ({naive / core:.0f}× faster).** "
