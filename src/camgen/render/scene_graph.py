@@ -692,12 +692,29 @@ def _lamp_emission(surface: str, lit: bool, sign_cd_m2: float) -> tuple[float, f
     return tuple(luminance * c for c in LAMP_COLOUR_RGB[kind])
 
 
+def relative_intensity(light, pose: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """(N,) a point or spot light's intensity towards unit `directions` (N, 3) away from it, relative to its
+    `intensity`, as the lit shader takes it: 1 for a point light; a spot's ((cos θ − cos θₒ)/(cos θᵢ − cos θₒ))²
+    clipped to 0–1 (the renderer's cone, `camgen.world.night`), or an IES lamp's table at (γ, C) in its own axes
+    (`intensity_profile`, `camgen.world.ies`). `pose`: the light node's, which points it along its −z."""
+    directions = np.atleast_2d(np.asarray(directions, dtype=np.float64))
+    if not isinstance(light, pyrender.SpotLight):
+        return np.ones(len(directions))
+    profile = getattr(light, "intensity_profile", None)
+    if profile is not None:
+        local = directions @ profile.axes(pose).T  # (C = 0°, C = 90°, the lamp's axis) components
+        gamma_deg = np.degrees(np.arccos(np.clip(local[:, 2], -1.0, 1.0)))
+        return grid_intensity_cd(profile.relative, gamma_deg, np.degrees(np.arctan2(local[:, 1], local[:, 0])))
+    cos_i, cos_o = math.cos(light.innerConeAngle), math.cos(light.outerConeAngle)
+    share = np.clip((directions @ -pose[:3, 2] - cos_o) / max(cos_i - cos_o, 1e-9), 0.0, 1.0)
+    return share * share
+
+
 def horizontal_illuminance_lux(scene: pyrender.Scene, point_m: np.ndarray) -> float:
     """Illuminance of an upward-facing surface at `point_m` from `scene`'s lights as they are set now, lux, in
     photometric units (each light's colour weighted Y = 0.2126 R + 0.7152 G + 0.0722 B), nothing shadowed: the
     ambient light's π·ambient_light (its E), each directional light's E·sin(elevation), and each point and
-    spot light's I(θ)·cos(incidence)/d² (a spot's I(θ) the renderer's cone, `camgen.world.night`, or an IES
-    lamp's table, `camgen.world.ies`)."""
+    spot light's I(θ)·cos(incidence)/d² (I(θ) by `relative_intensity`)."""
     total = math.pi * float(LUMINANCE_WEIGHTS @ np.asarray(scene.ambient_light, dtype=np.float64))
     point = np.asarray(point_m, dtype=np.float64)
     for node in scene.light_nodes:
@@ -711,21 +728,7 @@ def horizontal_illuminance_lux(scene: pyrender.Scene, point_m: np.ndarray) -> fl
         if distance_m < 1e-6 or towards[2] <= 0.0:
             continue
         towards /= distance_m
-        if isinstance(light, pyrender.SpotLight):
-            profile = getattr(light, "intensity_profile", None)
-            if profile is not None:
-                c0, c90, axis = profile.axes(pose) @ -towards
-                power *= float(
-                    grid_intensity_cd(
-                        profile.relative,
-                        math.degrees(math.acos(np.clip(axis, -1.0, 1.0))),
-                        math.degrees(math.atan2(c90, c0)),
-                    )
-                )
-            else:
-                cos_i, cos_o = math.cos(light.innerConeAngle), math.cos(light.outerConeAngle)
-                share = min(1.0, max(0.0, (float(-towards @ -pose[:3, 2]) - cos_o) / max(cos_i - cos_o, 1e-9)))
-                power *= share * share
+        power *= float(relative_intensity(light, pose, -towards)[0])
         total += power * towards[2] / distance_m**2
     return total
 

@@ -30,8 +30,8 @@ import numpy as np
 
 from camgen.render.gl import pyrender
 from camgen.render.renderer import View, far_ground_depth_m, frustum_corners_m, horizon_airlight, ray_lengths
+from camgen.render.scene_graph import relative_intensity
 from camgen.world.fog import apply_fog
-from camgen.world.ies import grid_intensity_cd
 from camgen.world.night import SPOT_FULL_INTENSITY_FRACTION, nir_equivalent_intensity_cd
 from camgen.world.rain import NEAR_M, STREAK_RANGE_M, streak_layers
 from camgen.world.snow import (
@@ -221,9 +221,9 @@ def _lamp_veil(view: View, reach_m: np.ndarray, ranges_m, coverage_per_m, lamps)
 
 def lamp_illuminance_lx(graph, points_m: np.ndarray) -> np.ndarray:
     """(N, 3) the illuminance the graph's point, spot and lamp lights give points (N, 3) in the world, from
-    each light's direction, lux per colour channel: I(θ)/d² times its colour, I as the lit shader takes it
-    (a spot's ((cos θ − cos θₒ)/(cos θᵢ − cos θₒ))², clipped to 0–1; an IES lamp's I(γ, C) table,
-    `camgen.world.ies`), no shadows. The sun is `environment_flake_radiance`'s."""
+    each light's direction, lux per colour channel: I(θ)/d² times its colour, I(θ) as the lit shader takes it
+    (`camgen.render.scene_graph.relative_intensity`: a spot's cone or an IES lamp's table), no shadows. The
+    sun is `environment_flake_radiance`'s."""
     points_m = np.asarray(points_m, np.float64)
     total = np.zeros((len(points_m), 3))
     for node in graph.scene.light_nodes:
@@ -233,19 +233,7 @@ def lamp_illuminance_lx(graph, points_m: np.ndarray) -> np.ndarray:
         pose = graph.scene.get_pose(node)
         offset = points_m - pose[:3, 3]
         distance2 = np.maximum(np.einsum("ij,ij->i", offset, offset), NEAR_M**2)
-        factor = np.ones(len(points_m))
-        if isinstance(light, pyrender.SpotLight):
-            direction = offset / np.sqrt(distance2)[:, None]
-            profile = getattr(light, "intensity_profile", None)
-            if profile is not None:
-                local = direction @ profile.axes(pose).T
-                gamma_deg = np.degrees(np.arccos(np.clip(local[:, 2], -1.0, 1.0)))
-                c_deg = np.degrees(np.arctan2(local[:, 1], local[:, 0])) % 360.0
-                factor = grid_intensity_cd(profile.relative, gamma_deg, c_deg)
-            else:
-                cos_angle = np.clip(direction @ -pose[:3, 2], 0.0, 1.0)
-                outer, inner = math.cos(light.outerConeAngle), math.cos(light.innerConeAngle)
-                factor = np.clip((cos_angle - outer) / (inner - outer), 0.0, 1.0) ** 2
+        factor = relative_intensity(light, pose, offset / np.sqrt(distance2)[:, None])
         total += (light.intensity * factor / distance2)[:, None] * np.asarray(light.color, np.float64)
     return total
 
