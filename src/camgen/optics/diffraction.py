@@ -51,13 +51,19 @@ def channel_sigmas_px(f_number: float, pixel_pitch_um: float, mono: bool = False
     return tuple(airy_sigma_px(f_number, pixel_pitch_um, wavelength) for wavelength in wavelengths)
 
 
+def kernel_reach_px(sigma_px: float) -> int:
+    """R = ⌈4σ⌉ + 1: how far, px, `kernel_taps` reaches each side (`REACH_SIGMAS`); the render margin the stage
+    needs (`camgen.plan.compile`)."""
+    return math.ceil(REACH_SIGMAS * sigma_px) + 1
+
+
 def kernel_taps(sigma_px: float) -> np.ndarray:
-    """The 1-D taps, (2·R + 1,) float32 with R = ⌈4σ⌉ + 1, that `diffraction_blur` applies along each axis:
-    Lindeberg's discrete Gaussian T(k; σ²) = e^(−σ²)·I_|k|(σ²) (scipy's exponentially scaled `ive`), normalised
-    to sum 1 over the reach."""
+    """The 1-D taps, (2·R + 1,) float32 with R = `kernel_reach_px`, that `diffraction_blur` applies along each
+    axis: Lindeberg's discrete Gaussian T(k; σ²) = e^(−σ²)·I_|k|(σ²) (scipy's exponentially scaled `ive`),
+    normalised to sum 1 over the reach."""
     if not (math.isfinite(sigma_px) and sigma_px > 0):
         raise ValueError(f"sigma_px must be finite and > 0, got {sigma_px}")
-    reach = math.ceil(REACH_SIGMAS * sigma_px) + 1
+    reach = kernel_reach_px(sigma_px)
     taps = ive(np.abs(np.arange(-reach, reach + 1)), sigma_px * sigma_px)
     return (taps / taps.sum()).astype(np.float32)
 

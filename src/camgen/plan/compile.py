@@ -33,13 +33,13 @@ from camgen.optics.diffraction import (
     CHANNEL_WAVELENGTHS_UM,
     FLOAT32_RESOLUTION,
     MONO_WAVELENGTH_UM,
-    REACH_SIGMAS,
+    airy_sigma_px,
     channel_sigmas_px,
     diffraction_effect_rel,
+    kernel_reach_px,
 )
 from camgen.optics.distortion import max_displacement_px, undistort_normalized
 from camgen.optics.intrinsics import (
-    airy_sigma_um,
     blur_circle_diameter_mm,
     corner_radius_normalized,
     corner_radius_px,
@@ -683,9 +683,9 @@ def _compile_camera(
     blur_radius = 0.0
     if include["optics.depth_of_field"]:
         blur_radius = max(blur_radius, coc_px / 2)
-    if include["optics.diffraction"]:  # the kernel's reach (`kernel_taps`)
-        reach_sigma_px = airy_sigma_um(f_number_max, max(CHANNEL_WAVELENGTHS_UM)) / sensor.pixel_pitch_um
-        blur_radius = max(blur_radius, math.ceil(REACH_SIGMAS * reach_sigma_px) + 1)
+    if include["optics.diffraction"]:  # the reach of the longest wavelength's kernel
+        red_sigma_px = airy_sigma_px(f_number_max, sensor.pixel_pitch_um, max(CHANNEL_WAVELENGTHS_UM))
+        blur_radius = max(blur_radius, kernel_reach_px(red_sigma_px))
     if include["optics.axial_ca"]:
         blur_radius = max(blur_radius, max(axial_px) / 2)
     if include["optics.motion_blur"]:
