@@ -482,6 +482,22 @@ class _SunPassPlan:
     P: np.ndarray
 
 
+def _float_table_texture(table: np.ndarray, texture: int | None = None) -> int:
+    """A float 2D texture holding `table` ((H, W) one channel, or (H, W, 3)), made, or filled again in `texture`,
+    and left bound on the active unit: sampled bilinearly, repeating across (an angle that wraps: an IES table's C,
+    the sky's azimuth) and clamped at its first and last rows."""
+    table = np.ascontiguousarray(table, dtype=np.float32)
+    internal, layout = (GL.GL_R32F, GL.GL_RED) if table.ndim == 2 else (GL.GL_RGB32F, GL.GL_RGB)
+    texture = int(GL.glGenTextures(1)) if texture is None else texture
+    GL.glBindTexture(GL.GL_TEXTURE_2D, texture)
+    GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, internal, table.shape[1], table.shape[0], 0, layout, GL.GL_FLOAT, table)
+    GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_LINEAR)
+    GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
+    GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, GL.GL_REPEAT)
+    GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE)
+    return texture
+
+
 SKY_MAP_TEXELS = (256, 64)
 """Columns (azimuth over 360°) and rows (elevation 0–90°) of `SkyMap`: 1.4° a texel, against the clear sky's
 circumsolar peak, which falls by e over 19° (indicatrix d = −3 rad⁻¹: `camgen.world.sky`)."""
@@ -522,15 +538,7 @@ class SkyMap:
             return
         sun = graph.sun_direction if graph.sun_direction is not None else np.array([0.0, 0.0, 1.0])
         radiance = np.ascontiguousarray(sky_radiance(self.directions(), sun, sky, graph.sky_luminance_cd_m2))
-        if self.texture is None:
-            self.texture = int(GL.glGenTextures(1))
-        GL.glBindTexture(GL.GL_TEXTURE_2D, self.texture)
-        columns, rows = SKY_MAP_TEXELS
-        GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB32F, columns, rows, 0, GL.GL_RGB, GL.GL_FLOAT, radiance)
-        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_LINEAR)
-        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
-        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, GL.GL_REPEAT)
-        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE)
+        self.texture = _float_table_texture(radiance, self.texture)
         GL.glBindTexture(GL.GL_TEXTURE_2D, 0)
         self.key = key
 
@@ -543,11 +551,7 @@ class SkyMap:
         GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
         if self.texture is None:
             # a uniform sky before any map: the sampler still needs a unit of its own and a 2D texture there
-            self.texture = int(GL.glGenTextures(1))
-            GL.glBindTexture(GL.GL_TEXTURE_2D, self.texture)
-            GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB32F, 1, 1, 0, GL.GL_RGB, GL.GL_FLOAT, np.zeros(3, np.float32))
-            GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST)
-            GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST)
+            self.texture = _float_table_texture(np.zeros((1, 1, 3), np.float32))
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.texture)
         program.set_uniform("sky_map", unit)
 
@@ -993,16 +997,7 @@ class _PassRenderer(pyrender.Renderer):
             np.zeros_like(next(p for p in profiled if p is not None).relative) if p is None else p.relative
             for p in profiled
         ]
-        table = np.ascontiguousarray(np.concatenate(bands, axis=0), dtype=np.float32)
-        texture = int(GL.glGenTextures(1))
-        GL.glBindTexture(GL.GL_TEXTURE_2D, texture)
-        GL.glTexImage2D(
-            GL.GL_TEXTURE_2D, 0, GL.GL_R32F, table.shape[1], table.shape[0], 0, GL.GL_RED, GL.GL_FLOAT, table
-        )
-        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_LINEAR)
-        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
-        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, GL.GL_REPEAT)
-        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE)
+        texture = _float_table_texture(np.concatenate(bands, axis=0))
         self._profile_textures[id(scene)] = (weakref.ref(scene), texture)
         return texture
 
