@@ -251,7 +251,7 @@ def scene_condition(scene) -> str:
     environment = scene.environment
     if environment.night_sky is not None:
         return CONDITIONS[1]
-    weather = (getattr(environment, name, None) for name in ("fog", "rain", "snow"))
+    weather = (environment.fog, environment.rain, environment.snow)
     return CONDITIONS[2] if any(w is not None for w in weather) else CONDITIONS[0]
 
 
