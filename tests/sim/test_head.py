@@ -107,6 +107,37 @@ def test_goals_outside_the_range_are_clamped_and_reported():
     assert status.pan_deg == pytest.approx(-120.0, abs=1e-3) and status.tilt_deg == pytest.approx(-90.0, abs=1e-3)
 
 
+def test_get_status_reports_a_clamp_until_the_next_command_acts():
+    head = _head(latency_s=LATENCY_S)
+    head.command(AbsoluteMove(pan_deg=20.0, tilt_deg=50.0, zoom_x=40.0), 0.0, "test")
+    assert head.status(0.0).clamp is None and head.status(0.0).error is None  # given, not acting yet
+    _run(head, 0.0, 3.0)
+    status = head.status(3.0)
+    assert status.pan_tilt == status.zoom == "IDLE"  # arrived where it could: a real head stops short
+    assert status.tilt_deg == pytest.approx(10.0, abs=1e-3) and status.zoom_x == pytest.approx(10.0, rel=1e-3)
+    clamp = status.clamp
+    assert clamp.command == "AbsoluteMove"
+    assert (clamp.requested_pan_deg, clamp.clamped_pan_deg) == (None, None)  # 20° lies inside the range
+    assert (clamp.requested_tilt_deg, clamp.clamped_tilt_deg) == (50.0, 10.0)
+    assert clamp.requested_zoom_x == pytest.approx(40.0) and clamp.clamped_zoom_x == pytest.approx(10.0)
+    assert status.error == (
+        "tilt: AbsoluteMove to 50° is outside the range [-90°, 10°]; clamped to 10°; "
+        "zoom: AbsoluteMove to 40× is outside the range [1×, 10×]; clamped to 10×"
+    )
+    # A relative move's request is the goal it adds up to; SetPreset leaves the clamp reported.
+    head.command(RelativeMove(tilt_deg=-120.0), 3.0, "test")
+    head.command(SetPreset("low"), 3.0, "test")
+    _run(head, 3.0, 4.0)
+    clamp = head.status(7.0).clamp
+    assert clamp.command == "RelativeMove" and (clamp.requested_tilt_deg, clamp.clamped_tilt_deg) == (-110.0, -90.0)
+    assert clamp.requested_zoom_x is None
+    # The next move inside the range clears it once it acts.
+    head.command(AbsoluteMove(tilt_deg=-30.0), 7.0, "test")
+    assert head.status(7.0).clamp == clamp
+    _run(head, 7.0, 0.2)
+    assert head.status(7.2).clamp is None and head.status(7.2).error is None
+
+
 def test_continuous_move_stops_at_a_range_end_and_says_so():
     head = _head(latency_s=0.0)
     head.command(ContinuousMove(tilt=1.0), 0.0, "test")

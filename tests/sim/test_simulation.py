@@ -123,6 +123,11 @@ def test_bad_commands_are_clear_errors_and_the_world_keeps_running(world, render
         assert observations.events == {
             "dome": ["tilt: AbsoluteMove to 45° is outside the range [-90°, 10°]; clamped to 10°"]
         }
+        # GetStatus says it too (ONVIF's PTZStatus Error), in the observation and when asked
+        status = sim.status("dome")
+        assert status.error == "tilt: AbsoluteMove to 45° is outside the range [-90°, 10°]; clamped to 10°"
+        assert (status.clamp.requested_tilt_deg, status.clamp.clamped_tilt_deg) == (45.0, 10.0)
+        assert observations.cameras["dome"].status.clamp == status.clamp
         with pytest.raises(CommandError, match="is a fixed camera"):
             sim.status("overview")
 

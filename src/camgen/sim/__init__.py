@@ -5,6 +5,7 @@ the last two with the optional extra `sim`."""
 
 from camgen.sim.commands import (
     AbsoluteMove,
+    Clamp,
     CommandError,
     ContinuousMove,
     GotoPreset,
@@ -19,6 +20,7 @@ from camgen.sim.simulation import CameraObservation, LoggedCommand, Observations
 __all__ = [
     "AbsoluteMove",
     "CameraObservation",
+    "Clamp",
     "CommandError",
     "CommandLog",
     "ContinuousMove",

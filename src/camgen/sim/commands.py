@@ -8,8 +8,9 @@ velocity space, normalised to [−1, 1] per axis, where ±1 is the head's fastes
 argument (AbsoluteMove, RelativeMove, GotoPreset) is ONVIF's generic speed space, (0, 1] of the
 fastest.
 
-A position beyond the head's range is taken as a real head takes it: clamped to the range (and
-reported in the step's info); a value that is no number, or a velocity or speed outside its
+A position beyond the head's range is taken as a real head takes it: clamped to the range, reported
+in the step's events and, until the next command acts, in GetStatus (`PtzStatus.clamp` and its
+`error` text, ONVIF's PTZStatus Error); a value that is no number, or a velocity or speed outside its
 normalised space, is refused with `CommandError` (ONVIF answers ter:InvalidVelocity /
 ter:InvalidSpeed), and the head carries on as before.
 """
@@ -142,8 +143,28 @@ COMMAND_TYPES = (ContinuousMove, AbsoluteMove, RelativeMove, GotoPreset, SetPres
 
 
 @dataclass(frozen=True)
+class Clamp:
+    """A move whose goal lay beyond the head's range: what the command asked for and where the head
+    went instead, per axis (None: that axis was inside its range, or not moved). A RelativeMove's
+    request is the goal it adds up to (position + translation)."""
+
+    command: str
+    """AbsoluteMove, RelativeMove or GotoPreset."""
+    requested_pan_deg: float | None = None
+    requested_tilt_deg: float | None = None
+    requested_zoom_x: float | None = None
+    clamped_pan_deg: float | None = None
+    clamped_tilt_deg: float | None = None
+    clamped_zoom_x: float | None = None
+    error: str = ""
+    """The clamp in words, one sentence an axis ("tilt: AbsoluteMove to 50° is outside the range
+    [-90°, 10°]; clamped to 10°"), as the step's events say it."""
+
+
+@dataclass(frozen=True)
 class PtzStatus:
-    """GetStatus: where the head is and whether it moves (ONVIF tt:PTZStatus)."""
+    """GetStatus: where the head is and whether it moves (ONVIF tt:PTZStatus: Position, MoveStatus,
+    Error, UtcTime)."""
 
     pan_deg: float
     """Wrapped to [−180°, 180°) on an endless head; on the head's step grid."""
@@ -156,6 +177,16 @@ class PtzStatus:
     pan_deg_s: float = 0.0
     tilt_deg_s: float = 0.0
     log_zoom_per_s: float = 0.0
+    clamp: Clamp | None = None
+    """The clamp of the last move that acted (None: it was inside the range, or none acted yet). It
+    stays until the next command other than SetPreset acts, so a controller that polls after the
+    head has stopped short still learns why; a command given but not yet acting leaves it."""
+
+    @property
+    def error(self) -> str | None:
+        """ONVIF's PTZStatus Error, "a current PTZ error condition" (ONVIF PTZ Service
+        Specification, GetStatus; onvif.xsd tt:PTZStatus): the clamp in words, or None."""
+        return self.clamp.error if self.clamp is not None else None
 
 
 def velocity_action(action, where: str) -> ContinuousMove:

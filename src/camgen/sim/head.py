@@ -10,7 +10,8 @@ programmed one does. What a command adds:
   towards a goal `CARROT_DEG` ahead) with its speed capped at |v| of the fastest; it stops at a range
   end (reported) and brakes when the move's timeout ends;
 - AbsoluteMove, RelativeMove, GotoPreset: each axis goes to its goal at `speed` of the fastest; a goal
-  outside the range is clamped to it as a real head does, and the clamp is reported;
+  outside the range is clamped to it as a real head does, and the clamp is reported (in the step's
+  events, and in GetStatus's `clamp` until the next command acts);
 - Stop: the axes brake at their deceleration (a speed cap of 0), then rest.
 
 An axis at rest is not stepped, so a head that is never commanded stays exactly where it started.
@@ -25,6 +26,7 @@ from camgen.motion.programs import ARRIVED_DEG, ARRIVED_DEG_S, ARRIVED_LOG_ZOOM,
 from camgen.motion.ptz import AxisLimits, HeadLimits, quantize, step_axis, wrap_deg
 from camgen.sim.commands import (
     AbsoluteMove,
+    Clamp,
     Command,
     CommandError,
     ContinuousMove,
@@ -140,6 +142,8 @@ class CommandedHead:
         self.moved = False
         """Whether any axis has moved: until then the status reports the start exactly."""
         self._now_s = 0.0
+        self._clamp: Clamp | None = None
+        """The clamp of the last command that acted (GetStatus reports it)."""
 
     # --- commands --------------------------------------------------------------------------------
 
@@ -155,6 +159,8 @@ class CommandedHead:
 
     def _apply(self, command: Command, events: list[str]) -> None:
         axes = (self.pan, self.tilt, self.zoom)
+        if not isinstance(command, SetPreset):
+            self._clamp = None
         if isinstance(command, Stop):
             for axis in (self.pan, self.tilt) if command.pan_tilt else ():
                 axis.mode = "stop" if axis.moving else "rest"
@@ -186,31 +192,51 @@ class CommandedHead:
             else:  # GotoPreset
                 pan, tilt, zoom_x = self.presets[command.name]
                 goals = (pan, tilt, math.log(zoom_x))
+            name = type(command).__name__
+            requested: dict[str, float] = {}
+            clamped: dict[str, float] = {}
+            messages: list[str] = []
             for axis, goal in zip(axes, goals, strict=True):
                 if goal is None:
                     continue
-                axis.goal = self._clamped(axis, goal, type(command).__name__, events)
+                axis.goal, message = self._clamped(axis, goal, name)
                 axis.mode, axis.speed_cap = "goal", command.speed * axis.limits.speed_max
+                if message:
+                    messages.append(message)
+                    to_value = math.exp if axis.name == "zoom" else float
+                    requested[axis.name], clamped[axis.name] = to_value(goal), to_value(axis.goal)
+            if messages:
+                events.extend(messages)
+                self._clamp = Clamp(
+                    name,
+                    requested_pan_deg=requested.get("pan"),
+                    requested_tilt_deg=requested.get("tilt"),
+                    requested_zoom_x=requested.get("zoom"),
+                    clamped_pan_deg=clamped.get("pan"),
+                    clamped_tilt_deg=clamped.get("tilt"),
+                    clamped_zoom_x=clamped.get("zoom"),
+                    error="; ".join(messages),
+                )
 
-    def _clamped(self, axis: _Axis, goal: float, name: str, events: list[str]) -> float:
+    def _clamped(self, axis: _Axis, goal: float, name: str) -> tuple[float, str]:
         """The goal a real head takes: an endless pan anywhere, a limited angle at the turn (±360°) in
-        its range, else the range end nearest the goal (reported)."""
+        its range, else the range end nearest the goal; with what to report of a clamp ("" if none)."""
         limits = axis.limits
         if limits.endless:
-            return goal
+            return goal, ""
         if limits.angular and not limits.low <= goal <= limits.high:
             turns = [goal + 360.0 * k for k in (-2, -1, 1, 2) if limits.low <= goal + 360.0 * k <= limits.high]
             if turns:
-                return min(turns, key=lambda g: abs(g - axis.position))
+                return min(turns, key=lambda g: abs(g - axis.position)), ""
         clamped = min(max(goal, limits.low), limits.high)
-        if clamped != goal:
-            asked = f"{math.exp(goal):.4g}×" if axis.name == "zoom" and math.isfinite(goal) else _shown(axis.name, goal)
-            events.append(
-                f"{axis.name}: {name} to {asked} is outside the range "
-                f"[{_shown(axis.name, limits.low)}, {_shown(axis.name, limits.high)}]; clamped to "
-                f"{_shown(axis.name, clamped)}"
-            )
-        return clamped
+        if clamped == goal:
+            return goal, ""
+        asked = f"{math.exp(goal):.4g}×" if axis.name == "zoom" and math.isfinite(goal) else _shown(axis.name, goal)
+        return clamped, (
+            f"{axis.name}: {name} to {asked} is outside the range "
+            f"[{_shown(axis.name, limits.low)}, {_shown(axis.name, limits.high)}]; clamped to "
+            f"{_shown(axis.name, clamped)}"
+        )
 
     # --- time ---------------------------------------------------------------------------------------
 
@@ -237,7 +263,8 @@ class CommandedHead:
 
     def status(self, time_s: float) -> PtzStatus:
         """GetStatus at `time_s`: the reported position (pan wrapped on an endless head, on the step
-        grid) and IDLE or MOVING; a command given but not yet acting counts as moving."""
+        grid), IDLE or MOVING (a command given but not yet acting counts as moving) and the clamp of
+        the last command that acted."""
         pending = [_axes_moved(command) for _, command in self._pending]
         pending_pan_tilt = any(pan_tilt for pan_tilt, _ in pending)
         pending_zoom = any(zoom for _, zoom in pending)
@@ -256,4 +283,5 @@ class CommandedHead:
             pan_deg_s=self.pan.velocity,
             tilt_deg_s=self.tilt.velocity,
             log_zoom_per_s=self.zoom.velocity,
+            clamp=self._clamp,
         )
