@@ -248,6 +248,13 @@ CASES = [
         "must be ≥ 0, got -0.5",
     ),
     (
+        "autofocus_slower_than_any_camera",
+        "profile",
+        edit(PTZ_PROFILE, "pan_max_deg_s: 100", "pan_max_deg_s: 100\n  autofocus_time_s: 45 #<"),
+        "ptz.autofocus_time_s",
+        "must be ≤ 10, got 45; contrast-detection autofocus of CCTV zoom cameras locks in 1–3 s",
+    ),
+    (
         "duplicate_key",
         "profile",
         edit(FIXED_PROFILE, "  bit_depth: 12", "  bit_depth: 12\n  bit_depth: 10 #<"),

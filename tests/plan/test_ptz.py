@@ -161,8 +161,12 @@ def test_autofocus_lags_behind_a_zoom(tmp_path):
     data["cameras"][0]["profile"] = str(lagging)
     path = tmp_path / "af.yaml"
     path.write_text(yaml.safe_dump(data, sort_keys=False))
+    focusing_at_once = tmp_path / "profile_instant.yaml"
+    focusing_at_once.write_text(
+        "extends: " + str(REPO / "profiles/ptz_2mp_30x.yaml") + "\nptz:\n  autofocus_time_s: 0\n"
+    )
     instant = dict(data)
-    instant["cameras"] = [dict(data["cameras"][0], profile="ptz_2mp_30x")]
+    instant["cameras"] = [dict(data["cameras"][0], profile=str(focusing_at_once))]
     instant_path = tmp_path / "instant.yaml"
     instant_path.write_text(yaml.safe_dump(instant, sort_keys=False))
     lag = np.array([s.focus_distance_m for s in compile_scene(load_scene(path)).cameras[0].states])

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
 
-from camgen.config import load_profile
+from camgen.config import load_profile, load_scene
 from camgen.errors import ConfigError
 from camgen.motion.ptz import AxisLimits, HeadLimits
+from camgen.plan.ptz import ZOOM_RAMP_S, head_limits
 from camgen.sim import AbsoluteMove, CommandError, ContinuousMove, GotoPreset, RelativeMove, SetPreset, Stop
 from camgen.sim.head import CommandedHead
 from tests.conftest import write
@@ -196,4 +198,38 @@ def test_command_latency_is_a_validated_profile_key(tmp_path):
     assert load_profile(write(tmp_path, "default.yaml", base + "ptz: {}\n")).profile.ptz.command_latency_s == 0.1
     path = write(tmp_path, "bad.yaml", base + "ptz:\n  command_latency_s: -0.05\n")
     with pytest.raises(ConfigError, match=r"bad.yaml:4:3: ptz.command_latency_s must be ≥ 0, got -0.05; IP PTZ"):
+        load_profile(path)
+
+
+@pytest.mark.parametrize("command", [AbsoluteMove(zoom_x=30.0), ContinuousMove(zoom=1.0)])
+def test_a_wide_to_tele_zoom_takes_the_profiles_datasheet_time(command):
+    """ptz_follow's dome (ptz_2mp_30x, 4.5–135 mm: 30×) zooms from the wide to the tele end in
+    `ptz.zoom_wide_to_tele_s`, plus the motor's ramp up to its rate and down from it."""
+    loaded = load_scene(Path(__file__).parents[2] / "scenes" / "ptz_follow.yaml")
+    camera = loaded.scene.cameras[0]
+    profile = loaded.profiles[camera.name].profile
+    head = CommandedHead(head_limits(camera, profile), 0.0, -12.0, 1.0, latency_s=0.0)
+    head.command(command, 0.0, "test")
+    sweep_s = profile.ptz.zoom_wide_to_tele_s
+    _run(head, 0.0, sweep_s - 0.1)
+    assert head.status(sweep_s - 0.1).zoom == "MOVING" and head.status(sweep_s - 0.1).zoom_x < 29.0
+    _run(head, sweep_s - 0.1, ZOOM_RAMP_S + 0.1 + 2 * DT_S)
+    status = head.status(sweep_s + ZOOM_RAMP_S + 2 * DT_S)
+    assert status.zoom_x == pytest.approx(30.0, rel=1e-3) and status.zoom == "IDLE"
+
+
+def test_a_head_response_key_out_of_bounds_is_located_and_explained(tmp_path):
+    base = (
+        "sensor: {width_px: 64, height_px: 48, pixel_pitch_um: 3, full_well_e: 10000, conversion_gain_dn_per_e: 0.4}\n"
+    )
+    base += "lens: {focal_length_range_mm: [4, 40], f_number: 1.6}\n"
+    defaults = load_profile(write(tmp_path, "default.yaml", base + "ptz: {}\n")).profile.ptz
+    assert (defaults.autofocus_time_s, defaults.zoom_wide_to_tele_s) == (0.5, 3.5)
+    path = write(tmp_path, "slow_focus.yaml", base + "ptz:\n  pan_max_deg_s: 90\n  autofocus_time_s: 30\n")
+    with pytest.raises(
+        ConfigError, match=r"slow_focus.yaml:5:3: ptz.autofocus_time_s must be ≤ 10, got 30; contrast-detection"
+    ):
+        load_profile(path)
+    path = write(tmp_path, "no_zoom_time.yaml", base + "ptz:\n  zoom_wide_to_tele_s: 0\n")
+    with pytest.raises(ConfigError, match=r"no_zoom_time.yaml:4:3: ptz.zoom_wide_to_tele_s must be > 0, got 0; a zoom"):
         load_profile(path)

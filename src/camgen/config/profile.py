@@ -660,6 +660,15 @@ CommandLatency = Annotated[
     Why("IP PTZ heads start moving 50–200 ms after a command; over 5 s is no working camera"),
 ]
 """Time from a PTZ command to its head moving, s."""
+AutofocusTime = Annotated[
+    float,
+    Field(ge=0, le=10),
+    Why(
+        "contrast-detection autofocus of CCTV zoom cameras locks in 1–3 s (a time constant of about "
+        "0.3–1 s), so at most 10 s; 0 focuses at once"
+    ),
+]
+"""Time constant of the autofocus lag, s."""
 
 
 class Ptz(Model):
@@ -678,17 +687,34 @@ class Ptz(Model):
     """Mechanical resolution of pan, degrees (0 = continuous)."""
     tilt_step_deg: NonNegativeFloat = 0.0
     zoom_wide_to_tele_s: ZoomSweepTime = 3.5
-    """Time for a full zoom sweep, s. The zoom motor moves magnification at a constant rate in log
-    scale (1×→2× takes as long as 10×→20×) and reaches that rate in `ZOOM_RAMP_S` (camgen.plan.ptz)."""
-    autofocus_time_s: NonNegativeFloat = 0.0
+    """Time for a full zoom sweep from the optical wide end to the optical tele end, s: the figure
+    datasheets give as "zoom speed, approx. N s (optical, wide–tele)". The zoom motor moves
+    magnification at a constant rate in log scale (1×→2× takes as long as 10×→20×) and reaches that
+    rate in `ZOOM_RAMP_S` (camgen.plan.ptz), so a commanded sweep arrives `ZOOM_RAMP_S` (0.2 s) after
+    this time; the focus then settles with `autofocus_time_s`. 3.5 s lies between the PTZ listings
+    profiles/ptz_2mp_30x.yaml cites ([S5]): 2.3 s for a 15× and 5.6 s for a 32× module (the time
+    grows with the zoom ratio); an estimate for a head whose datasheet is not at hand: take the
+    figure from the camera's own."""
+    autofocus_time_s: AutofocusTime = 0.5
     """Time constant with which the focus follows the distance of the view after the head moves or
-    zooms, s (first order in dioptres); 0 focuses instantly. Autofocus lag blurs the first frames
-    after a zoom."""
+    zooms, s (first order in dioptres: 95 % of the way in 3 time constants); 0 focuses instantly.
+    Autofocus lag blurs the first frames after a zoom. 0.5 s (95 % in 1.5 s) is an estimate from
+    two sources, as no zoom-module datasheet found states an autofocus time: CCTV block cameras
+    focus by contrast detection (Sony FCB-H11 technical manual, "Focus": the lens is set by "the high
+    frequency content of the picture in a center measurement area"), and a PTZ module maker
+    gives contrast-detection lock times of 1.0–3.0 s against 0.1–0.5 s for phase detection
+    (Loyalty-Secu, "Can my PTZ focus algorithm maintain sub-second clarity after high-speed
+    rotation?", 2026, a table of typical lock times, not a measurement of one camera). Set the
+    measured time of a camera (frames from a zoom's end to the sharpest frame, divided by 3)."""
     command_latency_s: CommandLatency = 0.1
     """Time from a command reaching the camera to its head starting to move, s (`camgen.sim`). 0.1 s is
-    a typical value, not a published one: IP PTZ heads take 50–200 ms to parse an ONVIF request and
-    pass it to the motor controller's command cycle, and no maker states it; measure a camera's own
-    as US 2016/0191858 A1 does (command time against the first frame whose pixels change)."""
+    an estimate, not a published figure: no PTZ datasheet found states a command latency. What is
+    published bounds it from below: a Sony FCB block camera processes VISCA commands once per
+    vertical cycle and acknowledges one within 16.7 ms (NTSC) / 20 ms (PAL) (FCB-IX11A technical manual, "Timing
+    Chart"); an IP head adds receiving and parsing the ONVIF SOAP request and its motor controller's
+    cycle. Hill et al., "Measuring Latency for Video Surveillance Systems" (DICTA 2009), define this
+    "command latency" and a camera-agnostic way to measure it; measure a camera's own that way or as
+    US 2016/0191858 A1 does (command time against the first frame whose pixels change), and set it."""
 
     @model_validator(mode="after")
     def _check(self) -> Ptz:
