@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 
@@ -58,6 +59,20 @@ def test_the_log_records_every_command_with_its_frame_and_time(episode):
     assert load_command_log(path) == log  # floats survive the text exactly
 
 
+def test_the_log_says_how_turned_frames_were_drawn(episode, tmp_path):
+    """A run that drew every turned frame whole says so, and its replay does the same (the log's default, for logs
+    written before the key, is the turn canvas)."""
+    _, path, log, _ = episode
+    assert log.turns_reprojected and json.loads(path.read_text().splitlines()[0])["turns_reprojected"] is True
+    whole = save_command_log(dataclasses.replace(log, turns_reprojected=False), tmp_path / "whole.jsonl")
+    assert load_command_log(whole).turns_reprojected is False
+    records = path.read_text().splitlines()
+    header = json.loads(records[0])
+    del header["turns_reprojected"]
+    old = write(tmp_path, "old.jsonl", "\n".join([json.dumps(header), *records[1:]]) + "\n")
+    assert load_command_log(old).turns_reprojected is True
+
+
 def test_replay_reproduces_the_frames_byte_for_byte(episode, renderer):
     world, path, _, frames = episode
     replayed = [
@@ -103,6 +118,7 @@ def test_cli_replay_writes_the_same_frames_and_renders_another_profile(episode, 
         ('{"frame": 0, "camera": "dome", "command": "Jump"}', r"log.jsonl:2: command 'Jump' is not one of"),
         ('{"frame": 0, "camera": "dome", "command": "Stop", "fast": 1}', r"Stop has no field 'fast'"),
         ("[1, 2]", r"log.jsonl:2: expected a JSON object"),
+        ("HEADER", r"log.jsonl:1: turns_reprojected must be true or false .* got 'yes'"),
         ("{frame: 0}", r"log.jsonl:2: not JSON"),
     ],
 )
@@ -110,6 +126,11 @@ def test_a_bad_log_line_is_named(tmp_path, line, message):
     header = (
         '{"format": "camgen-command-log", "version": 1, "scene": "w", "seed": 0, "steps": 6, "resolution_px": null}'
     )
+    if line == "HEADER":  # a bad header key
+        header, line = (
+            header[:-1] + ', "turns_reprojected": "yes"}',
+            '{"frame": 0, "camera": "dome", "command": "Stop"}',
+        )
     path = write(tmp_path, "log.jsonl", header + "\n" + line + "\n")
     with pytest.raises(ConfigError, match=message):
         load_command_log(path)

@@ -63,12 +63,34 @@
   720p sim step of ptz_follow, stepped in turn with the code before (30 steps each, load 8): 1.11 → 0.86 s
   (×0.78 step by step); the blur test 96 → 42 ms, the rectangles 48 → 2 ms, placing the actors 61 → 34 ms, the
   draws 864 → 734 ms; the same frames bit for bit.
+- Turned frames (`CameraRenderer(turns_reprojected=True)`; `camgen.sim` turns it on): a head turns about its
+  centre of projection, so what one view sees, another view sees at the pixel a homography takes it to
+  (`_homography`: no parallax; the sky, shadows, fog and speculars alike, a surface's view direction unchanged).
+  While the head turns (the view differs from the last frame's by a pan or tilt; not a zoom, which would
+  magnify), each frame's base is its turn canvas (`_TurnCanvas`) warped to its view by bicubic resampling: a
+  draw through one view (anchored where the head, turning on at its present rates, will look a little later,
+  so that the frames sweep across its axis) grown by a quarter of the frame on each side, filled lazily. A
+  frame first brings the canvas up to its time: each moving node that changed since, at both times, with its
+  shadows (`_rects_of` through the canvas's view), where the canvas is filled; what the frame and the next
+  `TURN_LOOKAHEAD_S` of the turn will read and the canvas lacks (the strips a turn brings into view, in crops a
+  few frames wide); each crop drawn through a view of its own, s× finer, box-averaged, with the canvas's shadow
+  fit, so the canvas is a whole draw of its view at the frame time where it is filled (tested to 3e-5). A new
+  canvas is started when the frame leaves the canvas or its warp would stretch a pixel by more than
+  `TURN_SCALE_TOLERANCE`, when the daylight or the camera matrix changes, or when bringing it up to date would
+  draw more than a frame. The first frame of a held head is drawn whole (and kept: still frames), so a held
+  head's frames are the plan's bit for bit. A turned frame differs from the frame drawn whole by the
+  resampling alone: ~40 dB PSNR on the sim's 720p step of ptz_follow (the tradeoff is in BENCHMARKS.md's sim
+  section), where high-frequency texture aliases at another sampling phase; each turned frame depends on the
+  canvas's history, so a run's frames are reproducible from its start (the same commands give the same bytes),
+  not frame by frame as still frames are. Where the plan blurs the actors' own motion and the exposure needs
+  more than one sub-frame, a turned frame is drawn whole as before.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
+import sys
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -245,12 +267,28 @@ class Frame:
 class CameraRenderer:
     """Draws the planned passes of one camera; keeps its static background between frames."""
 
-    def __init__(self, renderer: Renderer, graph: SceneGraph, camera: CameraJob, *, moving_regions: bool = True):
+    def __init__(
+        self,
+        renderer: Renderer,
+        graph: SceneGraph,
+        camera: CameraJob,
+        *,
+        moving_regions: bool = True,
+        turns_reprojected: bool = False,
+    ):
         self.renderer, self.graph, self.camera = renderer, graph, camera
         self.spec = camera.render
         self.moving_regions = moving_regions
         """Draw still frames from the last one and motion sub-frames only where something moves (module
         docstring: still frames); False draws every frame, and each of its sub-frames, whole."""
+        self.turns_reprojected = turns_reprojected
+        """While the head turns, draw a frame as the last whole draw seen from the new view plus crops of what it
+        cannot show (module docstring: turned frames); False draws every turned frame whole. Needs
+        `moving_regions`."""
+        self._last_view: View | None = None
+        self._canvas: _TurnCanvas | None = None
+        """What a turning head's frames are warped from (`_turned_radiance`)."""
+        """The view of the last base drawn (`_base_radiance`): a head that held still since is not turning."""
         self._kept_views: dict[str, View] = {}
         self._reach_points_m, self._reach_radius_m = _reach(graph)
         reach = self._reach_radius_m[:, None]
@@ -355,6 +393,16 @@ class CameraRenderer:
         falling = self.graph.rain_rate_mm_h is not None or self._snow is not None
         return self.motion_samples(settled) > 1 or (falling and changed)
 
+    def _turn_from_base(self, state: CameraState, sharp: bool) -> bool:
+        """Whether a frame through a head that moves during its exposure (`_blurred_groups` is None) is its base at
+        the frame time (`_base_radiance`, reprojected from the kept one: `turns_reprojected`): drawn `sharp`, or
+        with nothing that blurs (one sub-frame by the plan's bound, the head's turn included), or smeared by the
+        head's turn alone (a motion-blur stage whose ``actors_blur`` is False: `camgen.sim`'s for a head's turns)."""
+        if not (self.turns_reprojected and self.moving_regions):
+            return False
+        p = self._motion
+        return sharp or p is None or not p.get("actors_blur", True) or self._plan_samples(state) == 1
+
     def _plan_samples(self, state: CameraState) -> int:
         """Sub-frames for this frame's exposure by the plan's bound on the image motion (`motion_samples`)."""
         p = self._motion
@@ -385,6 +433,13 @@ class CameraRenderer:
             radiance = self._still_radiance(state, view, groups)
             if radiance is not None:
                 return self._finished(index, state, view, radiance)
+        elif groups is None and "radiance" in passes and self._turn_from_base(state, sharp):
+            # The exposure is the frame time's base, smeared by the head's turn where the actors are not blurred.
+            base = self._base_radiance(state, view, self.shadow_fit(view), fine=True)
+            p = self._motion
+            smear = not sharp and p is not None and not p.get("actors_blur", True)
+            radiance = self._smeared(state, base, 0.0, 1.0, 0.0, 0.0, whole=True) if smear else base
+            return self._finished(index, state, view, base.copy() if radiance is base else radiance)
         samples = 1 if sharp else self._plan_samples(state) if groups is None else max(groups, default=1)
         if s == 1 and samples == 1:
             self.graph.place_actors(state.time_s)
@@ -542,6 +597,15 @@ class CameraRenderer:
         bit). What moved is told from the looks kept with the last frame (`_Looks`), so the actors are placed at the
         frame time only."""
         graph, s = self.graph, self.spec.supersampling
+        last, self._last_view = self._last_view, view
+        if (
+            fine
+            and self.turns_reprojected
+            and last is not None
+            and not _same_view(last, view)
+            and _turned_only(last, view)
+        ):
+            return self._turned_radiance(state, view)
         daylight = _daylight_state(graph)
         kept, rects = self._kept_base, None
         graph.place_actors(state.time_s)
@@ -574,6 +638,49 @@ class CameraRenderer:
                 radiance[y0:y1, x0:x1] = part
         self._kept_base = _KeptBase(view, daylight, radiance, fine, looks)
         return radiance
+
+    def _turned_radiance(self, state: CameraState, view: View) -> np.ndarray:
+        """The fine base at the frame time through a head that turned since the last frame (module docstring:
+        turned frames): the canvas (`_TurnCanvas`) brought up to the frame time and warped to this view. A new
+        canvas is started at this view when there is none, the daylight or the view's camera matrix or centre
+        changed, the frame reaches past the canvas or would be resampled by more than `TURN_SCALE_TOLERANCE`, or
+        bringing the canvas up to date would draw more pixels than a whole frame."""
+        graph, spec = self.graph, self.spec
+        graph.place_actors(state.time_s)
+        daylight = _daylight_state(graph)
+        canvas = self._canvas
+        fresh = (
+            canvas is None
+            or not _same_arrays(canvas.daylight, daylight)
+            or not _turned_only(canvas.anchor, view)
+            or not canvas.holds(view)
+        )
+        # Where this frame needs what the canvas lacks, what the head's turn at its present rates will show over the
+        # next `TURN_LOOKAHEAD_S` is drawn too: a turn's strips come a few frames wide, each crop's fixed cost once.
+        ahead = [view, *(view_at(state, spec, k * TURN_LOOKAHEAD_S / 4) for k in range(1, 5))]
+        if not fresh:
+            looks = _Looks.now(graph, canvas.looks)
+            moved = canvas.moved_rects(self, looks)
+            missing = canvas.unfilled_rects([view])
+            if missing:
+                missing = canvas.unfilled_rects(ahead)
+            rects = (
+                None if moved is None else merged_rects_px(moved + missing, RECT_MERGE_SLACK_PX / spec.supersampling**2)
+            )
+            fresh = rects is None or sum((x1 - x0) * (y1 - y0) for x0, y0, x1, y1 in rects) > (
+                view.width_px * view.height_px
+            )
+        if fresh:
+            for ahead_s in TURN_ANCHOR_AHEAD_S:  # the farthest ahead that holds this frame
+                anchor = view_at(state, spec, ahead_s)
+                canvas = _TurnCanvas.at(anchor, daylight, self.shadow_fit, spec.supersampling)
+                if ahead_s == 0.0 or (_turned_only(anchor, view) and canvas.holds(view)):
+                    break
+            self._canvas = canvas
+            looks = _Looks.now(graph, None)
+            rects = canvas.unfilled_rects(ahead)
+        canvas.draw(self, state, rects, looks)
+        return canvas.warped(view)
 
     def _fine_crops(self, state: CameraState, view: View, fit: ShadowFit, rects: list) -> list[np.ndarray]:
         """The radiance at the frame time in each of `rects` (x0, y0, x1, y1, their left and top on the grid of
@@ -654,7 +761,15 @@ class CameraRenderer:
         return total / len(draws) if len(draws) > 1 else total
 
     def _smeared(
-        self, state: CameraState, radiance: np.ndarray, offset: float, share: float, dx_px: float, dy_px: float
+        self,
+        state: CameraState,
+        radiance: np.ndarray,
+        offset: float,
+        share: float,
+        dx_px: float,
+        dy_px: float,
+        *,
+        whole: bool = False,
     ) -> np.ndarray:
         """A sub-frame drawn at `offset` (a fraction of the exposure) spread over its `share` of the exposure
         by the head's own motion, where the head turns or zooms by more than the plan's sample step in it.
@@ -666,14 +781,23 @@ class CameraRenderer:
         leaves out, and a fast pan shows a smear instead of that many ghost copies of every edge. Moving
         actors are smeared as the still world is within one share (their own motion there is the plan's
         step or less of what the sub-frames already sample). A warp samples the draw bilinearly, and the
-        edge pixels stand in for what lies beyond the render (a band as wide as one share's shift)."""
+        edge pixels stand in for what lies beyond the render (a band as wide as one share's shift).
+
+        `whole`: the draw stands for the whole exposure (`share` 1; `_turn_smeared_only`), smeared by as many warps
+        as the plan would draw sub-frames for the head's turn (`sub_frame_count` with its step and threshold, not
+        capped: each is a warp, not a draw)."""
         spec, exposure_s = self.spec, state.exposure_time_s
         here = shifted(view_at(state, spec, offset * exposure_s), dx_px, dy_px)
         start = shifted(view_at(state, spec, (offset - share / 2) * exposure_s), dx_px, dy_px)
         end = shifted(view_at(state, spec, (offset + share / 2) * exposure_s), dx_px, dy_px)
         p = self._motion
         step_px = p["sample_step_px"] if p is not None else 1.0
-        count = math.ceil(_head_shift_px(start, end) / step_px)
+        shift_px = _head_shift_px(start, end)
+        if whole:
+            threshold_px = p["threshold_px"] if p is not None else 0.5
+            count = sub_frame_count(shift_px, step_px=step_px, samples_max=sys.maxsize, threshold_px=threshold_px)
+        else:
+            count = math.ceil(shift_px / step_px)
         if count <= 1:
             return radiance
         h, w = radiance.shape[:2]
@@ -931,6 +1055,202 @@ class _KeptBase:
     """Drawn s× finer and box-averaged, or as s² jittered 1× draws (`CameraRenderer._base_radiance`)."""
     looks: _Looks
     """What each moving node drew then."""
+
+
+TURN_SCALE_TOLERANCE = 0.2
+"""The most a turned frame's pixel may be magnified or shrunk when warped from its canvas (`_TurnCanvas.holds`), as
+a fraction: a turn moves the view's edges to where the canvas's pixels subtend other angles (1/cos² off its axis).
+On the 720p sim step of ptz_follow panning at 12°/s (40 steps against the frames drawn whole, load 3.5): 0.1 gave
+40.3 dB PSNR and a mean step of 415 ms, 0.2 39.7 dB and 336 ms (a canvas lasting ~18 frames, not ~10)."""
+TURN_ANCHOR_AHEAD_S = (0.4, 0.2, 0.1, 0.0)
+"""A new turn canvas is anchored where the head, turning on at its present rates, will look this long after the frame
+(the first of these that still holds the frame, `_TurnCanvas.holds`): the frames then sweep across its axis, so a
+canvas lasts about twice as long for the same resampling."""
+TURN_LOOKAHEAD_S = 0.16
+"""A turned frame draws into its canvas what the head, turning on at its present rates, will show over this much more
+time (`CameraRenderer._turned_radiance`): the strips a turn uncovers come in crops a few frames wide, each costing a
+draw's fixed cost once."""
+TURN_MARGIN_FRACTION = 0.25
+"""A turn canvas's margin on each side, as a fraction of the larger side of the view it starts at."""
+CANVAS_CROP_ROUND_PX = 64
+"""A canvas crop is drawn through a view of its size rounded up to this, scissored to it (`_TurnCanvas.draw`), so
+that crops of slowly changing sizes reuse the renderer's few kept targets instead of making new ones."""
+TURN_WARP_INTERPOLATION = cv2.INTER_CUBIC
+"""The turned frame's resampling of its canvas: bicubic keeps 0.76 of the high-frequency energy (the Laplacian's
+variance) of a 720p parking-lot frame drawn exactly, bilinear 0.53, Lanczos-4 0.85 at 5× bicubic's 12 ms."""
+
+
+@dataclass
+class _TurnCanvas:
+    """What a turning head's frames are drawn from (module docstring: turned frames): the still world and the moving
+    nodes as of the last frame, drawn through one view (`anchor`, the frame's view where the canvas started) grown by
+    a margin on each side (`view`), filled where frames have looked so far. A frame brings it up to date (the moving
+    nodes that changed since, at both times, with their shadows, where it is filled; its own footprint where it is
+    not) and warps it to its view: the head turns about its centre of projection, so what the canvas's pixel (x, y)
+    shows, the frame's pixel H⁻¹·(x, y) shows (`_homography`), the sky, shadows, fog and speculars alike."""
+
+    anchor: View
+    view: View
+    margin_px: int
+    daylight: list[np.ndarray]
+    fit: ShadowFit
+    """Every draw into the canvas fits its shadow maps alike."""
+    supersampling: int
+    radiance: np.ndarray
+    """(H, W, 3) of `view`, valid where `filled`."""
+    filled: np.ndarray
+    """(H, W) bool."""
+    looks: _Looks | None
+    """The moving nodes' looks that the canvas shows (None before its first draw)."""
+    filled_box: tuple[int, int, int, int] = (0, 0, 0, 0)
+    """(x0, y0, x1, y1) around what is filled."""
+
+    @staticmethod
+    def at(view: View, daylight: list[np.ndarray], shadow_fit: Callable[[View], ShadowFit], supersampling: int):
+        step = _fine_step_px(supersampling)
+        margin = -(-int(TURN_MARGIN_FRACTION * max(view.width_px, view.height_px)) // step) * step
+        grown = View(
+            view.K_px + np.array([[0, 0, margin], [0, 0, margin], [0, 0, 0]], np.float64),
+            view.T_world_from_cam,
+            view.width_px + 2 * margin,
+            view.height_px + 2 * margin,
+        )
+        shape = (grown.height_px, grown.width_px)
+        return _TurnCanvas(
+            view, grown, margin, daylight, shadow_fit(grown), supersampling,
+            np.zeros((*shape, 3), np.float32), np.zeros(shape, bool), None,
+        )  # fmt: skip
+
+    def footprint_px(self, view: View) -> tuple[int, int, int, int] | None:
+        """The canvas's pixels (x0, y0, x1, y1) that `view`'s warp reads (its corners' and edges' images, grown by
+        the bicubic's reach of 2 pixels, aligned to the fine draws' grid); None where they pass the canvas's edge."""
+        w, h = view.width_px, view.height_px
+        xs, ys = np.linspace(-0.5, w - 0.5, 9), np.linspace(-0.5, h - 0.5, 9)
+        edge = np.concatenate(
+            [np.stack([xs, np.full(9, ys[0])]), np.stack([xs, np.full(9, ys[-1])]),
+             np.stack([np.full(9, xs[0]), ys]), np.stack([np.full(9, xs[-1]), ys])], axis=1
+        )  # fmt: skip
+        mapped = _homography(view, self.view) @ np.vstack([edge, np.ones(edge.shape[1])])
+        if np.any(mapped[2] <= 0):
+            return None
+        u, v = mapped[0] / mapped[2], mapped[1] / mapped[2]
+        rect = (math.floor(u.min()) - 2, math.floor(v.min()) - 2, math.ceil(u.max()) + 3, math.ceil(v.max()) + 3)
+        W, H = self.view.width_px, self.view.height_px
+        if rect[0] < 0 or rect[1] < 0 or rect[2] > W or rect[3] > H:
+            return None
+        return aligned_rect_px(rect, W, H, _fine_step_px(self.supersampling))
+
+    def holds(self, view: View) -> bool:
+        """Whether `view` can be warped from this canvas: its footprint lies inside, and the warp stretches or shrinks
+        no pixel of it along any direction by more than `TURN_SCALE_TOLERANCE` (the singular values of the warp's
+        Jacobian, at the view's corners and the middles of its edges, where they are largest: a pan by δ stretches a
+        pixel θ off the axis across by cos²θ / cos²(θ + δ) and along by cos θ / cos(θ + δ))."""
+        if self.footprint_px(view) is None:
+            return False
+        H = _homography(view, self.view)
+        w, h = view.width_px, view.height_px
+        limit = math.log1p(TURN_SCALE_TOLERANCE)
+        for x in (0.0, (w - 1) / 2, w - 1.0):
+            for y in (0.0, (h - 1) / 2, h - 1.0):
+                p = H @ np.array([x, y, 1.0])
+                J = (H[:2, :2] * p[2] - np.outer(p[:2], H[2, :2])) / p[2] ** 2  # d(p₀/p₂, p₁/p₂)/d(x, y)
+                stretch = np.linalg.svd(J, compute_uv=False)
+                if np.max(np.abs(np.log(stretch))) > limit:
+                    return False
+        return True
+
+    def unfilled_rects(self, views: list[View]) -> list[tuple[int, int, int, int]]:
+        """Rectangles holding every pixel of the canvas that the warp of any of `views` reads (the image of the view's
+        pixels' area, a convex quadrilateral, grown by the bicubic's reach of 2 pixels; clipped to the canvas) and
+        the canvas does not hold yet: per band of `UNCOVERED_BAND_ROWS` rows, one around each run of columns with such
+        a pixel (a turn uncovers a strip along an edge, a roll a sliver along another), aligned to the fine draws'
+        grid and merged while that costs no more than a draw's fixed cost (`RECT_MERGE_SLACK_PX`)."""
+        height, width = self.filled.shape
+        reads = np.zeros((height, width), np.uint8)
+        for view in views:
+            w, h = view.width_px, view.height_px
+            corners = np.array([[-0.5, -0.5, 1], [w - 0.5, -0.5, 1], [w - 0.5, h - 0.5, 1], [-0.5, h - 0.5, 1]])
+            mapped = corners @ _homography(view, self.view).T
+            if np.any(mapped[:, 2] <= 0):
+                continue
+            points = np.round(mapped[:, :2] / mapped[:, 2:] * 16).astype(np.int32)  # 4 fractional bits
+            cv2.fillConvexPoly(reads, points, 1, lineType=cv2.LINE_8, shift=4)
+        rows, cols = np.nonzero(reads.any(axis=1))[0], np.nonzero(reads.any(axis=0))[0]
+        if len(rows) == 0:
+            return []
+        x0, y0 = max(0, int(cols[0]) - 2), max(0, int(rows[0]) - 2)
+        x1, y1 = min(width, int(cols[-1]) + 3), min(height, int(rows[-1]) + 3)
+        grown = cv2.dilate(reads[y0:y1, x0:x1], np.ones((5, 5), np.uint8)).view(bool)
+        missing = grown & ~self.filled[y0:y1, x0:x1]
+        step = _fine_step_px(self.supersampling)
+        rects = []
+        for top in range(0, y1 - y0, UNCOVERED_BAND_ROWS):
+            columns = missing[top : top + UNCOVERED_BAND_ROWS].any(axis=0)
+            if not columns.any():
+                continue
+            bottom = min(y1 - y0, top + UNCOVERED_BAND_ROWS)
+            edges = np.flatnonzero(np.diff(np.concatenate([[0], columns.astype(np.int8), [0]])))
+            for start, end in zip(edges[::2], edges[1::2], strict=True):
+                rect = (x0 + int(start), y0 + top, x0 + int(end), y0 + bottom)
+                rects.append(aligned_rect_px(rect, width, height, step))
+        return merged_rects_px(rects, RECT_MERGE_SLACK_PX / self.supersampling**2)
+
+    def moved_rects(self, drawer: CameraRenderer, looks: _Looks) -> list[tuple[int, int, int, int]] | None:
+        """The filled part of the rectangles of the canvas around each moving node that changed since it was drawn (at
+        both times, with its shadows: `CameraRenderer._rects_of` through the canvas's view), for the moving nodes at
+        `looks`; None when one cannot be bounded."""
+        before = self.looks
+        changed = [looks.differ(before, k) for k in range(len(looks.versions))]
+        if not any(changed):
+            return []
+        step = _fine_step_px(self.supersampling)
+        boxes = [[before.boxes[k], looks.boxes[k]] if moved else [] for k, moved in enumerate(changed)]
+        rects = drawer._rects_of(self.view, self.fit, boxes, changed, RECT_MERGE_SLACK_PX / self.supersampling**2, step)
+        if rects is None:
+            return None
+        width, height = self.view.width_px, self.view.height_px
+        kept = (_intersection(rect, self.filled_box) for rect in rects)
+        return [aligned_rect_px(rect, width, height, step) for rect in kept if rect is not None]
+
+    def draw(self, drawer: CameraRenderer, state: CameraState, rects: list, looks: _Looks) -> None:
+        """Draw `rects` of the canvas at the frame time (the actors placed there), each through a view of its own (the
+        canvas's view cropped to it, its size rounded up to `CANVAS_CROP_ROUND_PX` and scissored back: the canvas's
+        pixels to ~1e-3, `Renderer.draw`'s `crop_px`), s× finer and box-averaged, with the canvas's shadow fit."""
+        s, renderer, graph = self.supersampling, drawer.renderer, drawer.graph
+        clip = drawer.clip_range_m(self.view)
+        graph.place_actors(state.time_s)
+        for k, (x0, y0, x1, y1) in enumerate(rects):
+            w, h = x1 - x0, y1 - y0
+            rounded = (x0, y0, x0 + -(-w // CANVAS_CROP_ROUND_PX) * CANVAS_CROP_ROUND_PX,
+                       y0 + -(-h // CANVAS_CROP_ROUND_PX) * CANVAS_CROP_ROUND_PX)  # fmt: skip
+            fine = self.view.cropped(rounded).scaled(s)
+            drawn = renderer.draw(
+                graph, fine, ("radiance",), clip_range_m=clip, shadow_fit=self.fit, crop_px=(0, 0, w * s, h * s),
+                shadow_maps_kept=k > 0,
+            ).radiance  # fmt: skip
+            self.radiance[y0:y1, x0:x1] = box_downsample(drawn, s)
+            self.filled[y0:y1, x0:x1] = True
+            a = self.filled_box
+            self.filled_box = (x0, y0, x1, y1) if a[2] <= a[0] else (
+                min(a[0], x0), min(a[1], y0), max(a[2], x1), max(a[3], y1)
+            )  # fmt: skip
+        self.looks = looks
+
+    def warped(self, view: View) -> np.ndarray:
+        """The canvas seen through `view` (`TURN_WARP_INTERPOLATION`; its lobes' undershoot clipped at 0)."""
+        radiance = cv2.warpPerspective(
+            self.radiance,
+            _homography(view, self.view),
+            (view.width_px, view.height_px),
+            flags=TURN_WARP_INTERPOLATION | cv2.WARP_INVERSE_MAP,
+            borderMode=cv2.BORDER_REPLICATE,
+        )
+        return np.maximum(radiance, 0.0, out=radiance)
+
+
+def _intersection(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> tuple[int, int, int, int] | None:
+    x0, y0, x1, y1 = max(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), min(a[3], b[3])
+    return (x0, y0, x1, y1) if x0 < x1 and y0 < y1 else None
 
 
 @dataclass
@@ -1213,6 +1533,20 @@ def _projected_rect_px(points_m: np.ndarray, view: View, near_m: float) -> tuple
     if x0 >= x1 or y0 >= y1:
         return None
     return x0, y0, x1, y1
+
+
+def _turned_only(a: View, b: View) -> bool:
+    """Whether views `a` and `b` differ by a turn of the camera about its centre of projection alone: the same
+    size, camera matrix and centre (a pan or tilt, not a zoom, whose warp would magnify the kept draw)."""
+    return (
+        (a.width_px, a.height_px) == (b.width_px, b.height_px)
+        and np.array_equal(a.K_px, b.K_px)
+        and np.array_equal(a.T_world_from_cam[:3, 3], b.T_world_from_cam[:3, 3])
+    )
+
+
+UNCOVERED_BAND_ROWS = 16
+"""Rows per band in which `_TurnCanvas.unfilled_rects` bounds what a turn canvas does not hold yet."""
 
 
 def _same_view(a: View, b: View) -> bool:

@@ -6,7 +6,7 @@ steps taken and the readout size; `save_command_log` writes it as JSON Lines (`c
 a header line, then one line per command::
 
     {"format": "camgen-command-log", "version": 1, "scene": "ptz_follow", "seed": 0, "steps": 50,
-     "resolution_px": [160, 120]}
+     "resolution_px": [160, 120], "turns_reprojected": true}
     {"frame": 0, "time_s": 0.0, "camera": "pole_ptz", "command": "ContinuousMove", "pan": -0.2,
      "tilt": 0.0, "zoom": 0.0, "timeout_s": null}
 
@@ -53,13 +53,18 @@ class CommandLog:
     """Steps taken after reset (frames delivered: steps + 1)."""
     resolution_px: tuple[int, int] | None
     commands: tuple[LoggedCommand, ...]
+    turns_reprojected: bool = True
+    """Whether the run drew a turning head's frames from its turn canvas (`Simulation`'s ``turns_reprojected``); a
+    log without the key was recorded before there was a choice, and is replayed with the default."""
 
 
 def command_log(sim: Simulation) -> CommandLog:
     """The log of `sim`'s run since its last reset."""
     if sim.frame < 0:
         raise RuntimeError("call reset() (and step) before taking the command log")
-    return CommandLog(sim.loaded.name, sim.seed, sim.frame, sim.resolution_px, tuple(sim.commands))
+    return CommandLog(
+        sim.loaded.name, sim.seed, sim.frame, sim.resolution_px, tuple(sim.commands), sim.turns_reprojected
+    )
 
 
 def command_record(entry: LoggedCommand) -> dict[str, Any]:
@@ -82,6 +87,7 @@ def log_records(log: CommandLog) -> list[dict[str, Any]]:
         "seed": log.seed,
         "steps": log.steps,
         "resolution_px": None if log.resolution_px is None else list(log.resolution_px),
+        "turns_reprojected": log.turns_reprojected,
     }
     return [header, *(command_record(entry) for entry in log.commands)]
 
@@ -119,6 +125,12 @@ def parse_log(records: Sequence[tuple[int, dict]], source: str = "<log>") -> Com
         isinstance(resolution, list) and len(resolution) == 2 and all(isinstance(v, int) and v >= 2 for v in resolution)
     ):
         raise ConfigError(f"{where}: resolution_px must be null or [W, H], whole numbers ≥ 2; got {resolution!r}")
+    reprojected = header.get("turns_reprojected", True)
+    if not isinstance(reprojected, bool):
+        raise ConfigError(
+            f"{where}: turns_reprojected must be true or false (whether a turning head's frames are drawn from its "
+            f"turn canvas), got {reprojected!r}"
+        )
     commands = []
     previous = 0
     for number, record in records[1:]:
@@ -130,7 +142,12 @@ def parse_log(records: Sequence[tuple[int, dict]], source: str = "<log>") -> Com
             )
         previous = commands[-1].frame
     return CommandLog(
-        str(header.get("scene", "")), seed, steps, None if resolution is None else tuple(resolution), tuple(commands)
+        str(header.get("scene", "")),
+        seed,
+        steps,
+        None if resolution is None else tuple(resolution),
+        tuple(commands),
+        reprojected,
     )
 
 
@@ -221,7 +238,14 @@ def replay(
             f"(cameras: {', '.join(cameras)}); replay it on the scene it was recorded on, "
             "or rename the camera in the log"
         )
-    with Simulation(loaded, ground_truth=ground_truth, raw=raw, resolution_px=size, renderer=renderer) as sim:
+    with Simulation(
+        loaded,
+        ground_truth=ground_truth,
+        raw=raw,
+        resolution_px=size,
+        renderer=renderer,
+        turns_reprojected=log.turns_reprojected,
+    ) as sim:
         if log.steps >= sim.frame_count:
             raise ConfigError(
                 f"the log takes {log.steps} steps, but {loaded.path} ends after frame {sim.frame_count - 1}; "

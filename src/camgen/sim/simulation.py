@@ -159,6 +159,13 @@ class Simulation:
         The plan's thresholds, as `camgen render` takes them.
     cameras : names or None
         The cameras that deliver frames (default all); the others' heads still take commands.
+    turns_reprojected : bool
+        While a head turns, draw each frame as the last whole draw seen from the new view plus exact crops
+        of what that draw cannot show: the edges newly in view and whatever moved since, with its shadows
+        (`camgen.render.sequence`'s turned frames; a head turns about its centre of projection, so the
+        still world seen from the new view is the old draw warped by a homography, resampled bilinearly).
+        A held head's frames are drawn exactly, as `camgen render` draws them. False: every turned frame
+        is drawn whole (BENCHMARKS.md's sim section gives both steps' time and the frames' difference).
     """
 
     def __init__(
@@ -172,10 +179,12 @@ class Simulation:
         settings: PlanSettings | None = None,
         cameras: Iterable[str] | None = None,
         profile_dirs: Sequence[Path] = (),
+        turns_reprojected: bool = True,
     ):
         loaded = scene if isinstance(scene, LoadedScene) else load_scene(scene, profile_dirs)
         self.loaded = loaded
         self.ground_truth, self.raw = ground_truth, raw
+        self.turns_reprojected = turns_reprojected
         source = loaded.scene
         outputs = source.outputs.model_copy(
             update={
@@ -237,7 +246,12 @@ class Simulation:
         self._cameras = {camera.name: i for i, camera in enumerate(self.job.cameras)}
         self._delivering = list(range(len(self.job.cameras))) if cameras is None else [self._index(c) for c in cameras]
         self._drawers = {
-            i: CameraRenderer(self.renderer, build_scene_graph(self.job.scene, resolve), self.job.cameras[i])
+            i: CameraRenderer(
+                self.renderer,
+                build_scene_graph(self.job.scene, resolve),
+                self.job.cameras[i],
+                turns_reprojected=turns_reprojected,
+            )
             for i in self._delivering
         }
         routes = actor_routes(held)
