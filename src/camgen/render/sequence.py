@@ -78,7 +78,7 @@
   canvas is started when the frame leaves the canvas or its warp would stretch a pixel by more than
   `TURN_SCALE_TOLERANCE`, when the daylight or the camera matrix changes, or when bringing it up to date would
   draw more than a frame. The first frame of a held head is drawn whole (and kept: still frames), so a held
-  head's frames are the plan's bit for bit. A turned frame differs from the frame drawn whole by the
+  head's draws are the plan's bit for bit. A turned frame differs from the frame drawn whole by the
   resampling alone: ~40 dB PSNR on the sim's 720p step of ptz_follow (the tradeoff is in BENCHMARKS.md's sim
   section), where high-frequency texture aliases at another sampling phase; each turned frame depends on the
   canvas's history, so a run's frames are reproducible from its start (the same commands give the same bytes),
