@@ -307,3 +307,17 @@ def test_a_turn_during_the_exposure_smears_the_canvas(turned, renderer, monkeypa
         # horizontal gradient 0.98 of the reference's, 1.14 unsmeared.
         assert error < 0.008, (k, error)
         assert abs(ratio["canvas"] - 1) < 0.05 and ratio["unsmeared"] > 1.08, (k, ratio)
+
+
+def test_lights_that_change_every_frame_draw_the_turned_frames_whole(turned, renderer, monkeypatch):
+    """Where the daylight (`_daylight_state`: the lights, the sky, the sun) differs from one frame to the next, as
+    under a car's lamps driving by or a dusk, no canvas would last a frame: the turned frames are drawn whole, the
+    same bytes as without the canvas."""
+    camera, states, runs = turned
+    counter = iter(range(1_000_000))
+    daylight = sequence._daylight_state
+    monkeypatch.setattr(sequence, "_daylight_state", lambda graph: [*daylight(graph), np.array([next(counter)])])
+    drawer = CameraRenderer(renderer, runs["whole drawer"].graph, camera, turns_reprojected=True)
+    for k in range(4):
+        assert np.array_equal(drawer.frame(states[k].frame, states[k]).passes.radiance, runs["whole"][k]), k
+    assert drawer._canvas is None

@@ -76,8 +76,9 @@
   few frames wide); each crop drawn through a view of its own, s× finer, box-averaged, with the canvas's shadow
   fit, so the canvas is a whole draw of its view at the frame time where it is filled (tested to 3e-5). A new
   canvas is started when the frame leaves the canvas or its warp would stretch a pixel by more than
-  `TURN_SCALE_TOLERANCE`, when the daylight or the camera matrix changes, or when bringing it up to date would
-  draw more than a frame. The first frame of a held head is drawn whole (and kept: still frames), so a held
+  `TURN_SCALE_TOLERANCE`, when the camera matrix changes, or when bringing it up to date would draw more than a
+  frame; where the lights or the sky change from one frame to the next (a car's lamps driving by, a dusk), turned
+  frames are drawn whole. The first frame of a held head is drawn whole (and kept: still frames), so a held
   head's draws are the plan's bit for bit. A turned frame differs from the frame drawn whole by the
   resampling alone: ~40 dB PSNR on the sim's 720p step of ptz_follow (the tradeoff is in BENCHMARKS.md's sim
   section), where high-frequency texture aliases at another sampling phase; each turned frame depends on the
@@ -286,6 +287,9 @@ class CameraRenderer:
         cannot show (module docstring: turned frames); False draws every turned frame whole. Needs
         `moving_regions`."""
         self._last_view: View | None = None
+        self._last_daylight: list[np.ndarray] | None = None
+        """The daylight of the last base drawn (`_daylight_state`): a turned frame is drawn from a canvas only while
+        it holds from frame to frame (lamps that move with a car, or a dusk, would start a canvas at every frame)."""
         self._canvas: _TurnCanvas | None = None
         """What a turning head's frames are warped from (`_turned_radiance`)."""
         """The view of the last base drawn (`_base_radiance`): a head that held still since is not turning."""
@@ -597,7 +601,11 @@ class CameraRenderer:
         bit). What moved is told from the looks kept with the last frame (`_Looks`), so the actors are placed at the
         frame time only."""
         graph, s = self.graph, self.spec.supersampling
+        graph.place_actors(state.time_s)
+        daylight = _daylight_state(graph)
         last, self._last_view = self._last_view, view
+        steady = self._last_daylight is not None and _same_arrays(self._last_daylight, daylight)
+        self._last_daylight = daylight
         if (
             fine
             and self.turns_reprojected
@@ -605,10 +613,10 @@ class CameraRenderer:
             and not _same_view(last, view)
             and _turned_only(last, view)
         ):
-            return self._turned_radiance(state, view)
-        daylight = _daylight_state(graph)
+            if steady:
+                return self._turned_radiance(state, view, daylight)
+            self._canvas = None  # the lights or the sky change frame by frame (a lit car, a dusk): drawn whole
         kept, rects = self._kept_base, None
-        graph.place_actors(state.time_s)
         looks = _Looks.now(graph, None if kept is None else kept.looks)
         if (
             kept is not None
@@ -639,15 +647,14 @@ class CameraRenderer:
         self._kept_base = _KeptBase(view, daylight, radiance, fine, looks)
         return radiance
 
-    def _turned_radiance(self, state: CameraState, view: View) -> np.ndarray:
+    def _turned_radiance(self, state: CameraState, view: View, daylight: list[np.ndarray]) -> np.ndarray:
         """The fine base at the frame time through a head that turned since the last frame (module docstring:
-        turned frames): the canvas (`_TurnCanvas`) brought up to the frame time and warped to this view. A new
-        canvas is started at this view when there is none, the daylight or the view's camera matrix or centre
-        changed, the frame reaches past the canvas or would be resampled by more than `TURN_SCALE_TOLERANCE`, or
-        bringing the canvas up to date would draw more pixels than a whole frame."""
+        turned frames), under `daylight` (`_daylight_state`, the same as at the last frame; the actors placed at the
+        frame time): the canvas (`_TurnCanvas`) brought up to the frame time and warped to this view. A new canvas is
+        started when there is none, the daylight or the view's camera matrix or centre changed, the frame reaches
+        past the canvas or would be resampled by more than `TURN_SCALE_TOLERANCE`, or bringing the canvas up to date
+        would draw more pixels than a whole frame."""
         graph, spec = self.graph, self.spec
-        graph.place_actors(state.time_s)
-        daylight = _daylight_state(graph)
         canvas = self._canvas
         fresh = (
             canvas is None
