@@ -34,6 +34,7 @@ def sections(repo: Path) -> list[Section]:
         _growth(repo),
         _people(repo),
         _vehicles(repo),
+        _exposure(repo),
         _sim(repo),
         _coverage(repo),
         _long(repo),
@@ -678,6 +679,46 @@ def _vehicles(repo: Path) -> Section:
     return Section(
         "vehicles", "Vehicles: real-photo detection by day", lambda: vehicle_cases(repo, scores, samples), body
     )
+
+
+def _exposure(repo: Path) -> Section:
+    from camgen.bench.exposure_cases import (
+        BRIGHT_LUMA,
+        MIN_HEIGHT_PX,
+        MIN_VISIBILITY,
+        READOUT_WIDTH_PX,
+        SILHOUETTE_LUMA,
+        exposure_cases,
+        exposure_table,
+    )
+
+    rows: list = []
+
+    def body(results, plots: Plots) -> str:
+        silhouettes = [(r.scene, r.camera, name) for r in rows for name in r.silhouettes]
+        counted = sum(len(r.objects) for r in rows)
+        verdict = (
+            "**No example camera films a silhouette.**"
+            if not silhouettes
+            else "**Silhouettes (FAIL):** " + "; ".join(f"{s}/{c}: {n}" for s, c, n in silhouettes) + "."
+        )
+        text = [
+            "**Exposure of the example cameras** (issue 20: no example camera may film a silhouette by accident; "
+            "`camgen.bench.exposure_cases`): frame 0 of every camera of every example scene, delivered through "
+            "the full camera model with auto-exposure converged on the view (`camgen.sim` meters frame 0 as a "
+            f"camera that has watched the view a while), read out binned to at most {READOUT_WIDTH_PX} px wide. "
+            f"Each person and vehicle at least {MIN_HEIGHT_PX} px tall there and {MIN_VISIBILITY:.0%} visible is "
+            "measured by the median luma (BT.601 Y′ of the 8-bit frame) of the middle of its box (half its width, "
+            "the middle 60 % of its height); a silhouette is an object under "
+            f"Y′ {SILHOUETTE_LUMA:g} in a frame whose 90th percentile is over {BRIGHT_LUMA:g} (a dark shape "
+            "against a bright sky or facade). Clipped: Y′ ≥ 250; crushed: Y′ ≤ 5.",
+            f"{verdict} {counted} people and vehicles counted over {len(rows)} cameras.",
+            exposure_table(rows),
+            _table(results),
+        ]
+        return "\n\n".join(text)
+
+    return Section("exposure", "Exposure of the example cameras", lambda: exposure_cases(repo, rows), body)
 
 
 def _sim(repo: Path) -> Section:
