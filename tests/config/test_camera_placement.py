@@ -100,3 +100,34 @@ def test_the_example_scenes_place_every_camera_well():
         with warnings.catch_warnings():
             warnings.simplefilter("error", ConfigWarning)
             load_scene(path)
+
+
+SKY = "  sky: clear\n  sky_luminance_cd_m2: {zenith}\n"
+LOW_SUN = "  - {type: sun, illuminance_lux: 6370, azimuth_deg: 270, elevation_deg: 4}\n"
+
+
+@pytest.mark.parametrize(
+    ("zenith", "ambient", "warned"),
+    [
+        (300, 40, "sheds 2,132 lx on the ground, 53× as much"),  # the intersection's old dusk
+        (689, 4890, None),  # the IES clear-sky model's own at 4°
+        (689, 1700, None),  # within a factor of 3 (buildings hide some sky)
+        (689, 1500, "sheds 4,89"),
+    ],
+)
+def test_a_sky_far_brighter_or_darker_than_its_light_is_a_located_warning(workspace: Path, zenith, ambient, warned):
+    """The sky the frames show sheds L_z·∫ℓ cos Z dω on the ground (4,890 lx for a clear sky of zenith 689 cd/m²
+    with the sun at 4°, `camgen.world.daylight`); an ambient light far from it is warned about where it is set."""
+    text = SCENE.replace("environment:\n", "environment:\n" + SKY.format(zenith=zenith), 1)
+    text = text.replace("{type: ambient, illuminance_lux: 1000}", f"{{type: ambient, illuminance_lux: {ambient}}}")
+    text = text.replace("lights:\n", "lights:\n" + LOW_SUN, 1)
+    path = write(workspace, "scenes/sky.yaml", text)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        load_scene(path)
+    messages = [str(w.message) for w in caught if isinstance(w.message, ConfigWarning)]
+    assert bool(messages) == (warned is not None), messages
+    if warned:
+        (message,) = messages
+        assert f"{path}:" in message and "lights[1].illuminance_lux" in message
+        assert warned in message and "silhouettes" in message and "environment.site" in message

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from camgen.config.dataset import Dataset
-from camgen.config.placement import cameras_behind_planes, cameras_inside_solids, warn_about
+from camgen.config.placement import cameras_behind_planes, cameras_inside_solids, sky_light_problems, warn_about
 from camgen.config.profile import Profile
 from camgen.config.scene import Camera, FileMesh, Scene, is_character
 from camgen.config.validation import show_value, validate
@@ -190,7 +190,12 @@ def load_scene(path: str | Path, profile_dirs: Sequence[Path] = ()) -> LoadedSce
     ]
     if located:
         raise ConfigError(located)
-    warn_about([Problem(p.path, p.message, doc.locate(p.path)) for p in cameras_inside_solids(scene)])
+    warn_about(
+        [
+            Problem(p.path, p.message, doc.locate(p.path))
+            for p in [*cameras_inside_solids(scene), *sky_light_problems(scene)]
+        ]
+    )
     return LoadedScene(
         name=path.stem, path=path.resolve(), scene=scene, profiles=profiles, file_bounds=file_bounds, document=doc
     )

@@ -154,6 +154,56 @@ def _shown(position_m) -> str:
     return "[" + ", ".join(f"{v:g}" for v in position_m) + "]"
 
 
+SKY_AMBIENT_RATIO_MAX = 3.0
+"""How far the light a scene's ambient term gives may stray from what its visible sky sheds (`sky_light_problems`)
+before a warning: the ambient term stands for the sky's light less what buildings and trees hide, plus the ground's
+bounce, which can take it some way from the open sky's own; a factor of 3 between them is already a sky that shows
+three times brighter than the light it gives, and no site does more than that by accident."""
+
+
+def sky_light_problems(scene: Scene) -> list[Problem]:
+    """A visible sky whose luminance and the ambient light that stands for its light on the scene disagree by more
+    than `SKY_AMBIENT_RATIO_MAX`: a warning (key paths from the scene). The renderer shows the sky at its luminance
+    (`environment.sky_luminance_cd_m2`, the zenith's of the CIE sky `environment.sky`) but lights the scene with the
+    ambient light's illuminance; the sky sheds L_z·∫ ℓ cos Z dω on the ground (`camgen.world.daylight`). Far
+    apart, people and vehicles lit by the ambient light film as silhouettes against the sky, or the sky as a dark
+    backdrop to a bright street. A scene with `environment.site` takes both from one model and is not checked."""
+    from camgen.config.scene import AmbientLight, SunLight
+    from camgen.world.daylight import sky_horizontal_illuminance_from_zenith_lux
+
+    environment = scene.environment
+    if environment.site is not None or environment.sky_luminance_cd_m2 <= 0:
+        return []
+    ambient = [(i, light) for i, light in enumerate(scene.lights) if isinstance(light, AmbientLight)]
+    suns = [light for light in scene.lights if isinstance(light, SunLight)]
+    elevation_deg = suns[0].elevation_deg if suns else 45.0
+    shed_lux = sky_horizontal_illuminance_from_zenith_lux(
+        environment.sky_luminance_cd_m2, elevation_deg, environment.sky
+    )
+    given_lux = sum(light.illuminance_lux for _, light in ambient)
+    if shed_lux <= 0 or (given_lux > 0 and 1 / SKY_AMBIENT_RATIO_MAX <= given_lux / shed_lux <= SKY_AMBIENT_RATIO_MAX):
+        return []
+    where = ("lights", ambient[0][0], "illuminance_lux") if ambient else ("environment", "sky_luminance_cd_m2")
+    sky = f"a {environment.sky} sky" + (f", the sun at {elevation_deg:g}°" if environment.sky != "uniform" else "")
+    given = f"the ambient light gives {_lux(given_lux)} lx" if ambient else "no ambient light gives any"
+    zenith_for_given = environment.sky_luminance_cd_m2 * given_lux / shed_lux
+    return [
+        Problem(
+            where,
+            f"{given}, but the sky the frames show (environment.sky_luminance_cd_m2 "
+            f"{environment.sky_luminance_cd_m2:g} cd/m², {sky}) sheds {_lux(shed_lux)} lx on the ground"
+            + (f", {shed_lux / given_lux:.2g}× as much" if given_lux > 0 else "")
+            + ": people and vehicles lit by the ambient light film as silhouettes against such a sky (or a dim sky "
+            f"frames a bright street); give the ambient light about {_lux(shed_lux)} lx, or the sky about "
+            f"{zenith_for_given:.3g} cd/m², or set environment.site, which takes both from one daylight model",
+        )
+    ]
+
+
+def _lux(value: float) -> str:
+    return f"{value:.3g}" if value < 1000 else f"{value:,.0f}"
+
+
 def warn_about(problems: list[Problem]) -> None:
     """Issue each problem as a `ConfigWarning` (the CLI prints them like errors, marked as warnings)."""
     for problem in problems:

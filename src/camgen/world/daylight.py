@@ -90,6 +90,13 @@ def _horizontal_integral(sky: str, sun_elevation_deg: float) -> float:
     return float(np.sum(ell * np.cos(Z) * np.sin(Z)) * step * step)
 
 
+def sky_horizontal_illuminance_from_zenith_lux(zenith_cd_m2: float, sun_elevation_deg: float, sky: str) -> float:
+    """The illuminance, lux, that the CIE sky `sky` ("uniform": one luminance everywhere) with zenith luminance
+    `zenith_cd_m2` gives a horizontal surface with the sun at `sun_elevation_deg`: L_z·∫ ℓ cos Z dω (the inverse
+    of `zenith_luminance_cd_m2`)."""
+    return zenith_cd_m2 * _horizontal_integral(sky, round(float(max(sun_elevation_deg, 0.0)), 2))
+
+
 def zenith_luminance_cd_m2(sky_illuminance_lux: float, sun_elevation_deg: float, sky: str) -> float:
     """L_z of the CIE sky `sky` (`camgen.world.sky`; "uniform": one luminance everywhere) whose
     horizontal illuminance is `sky_illuminance_lux` with the sun at `sun_elevation_deg`, cd/m²."""
