@@ -1173,34 +1173,50 @@ class _TurnCanvas:
         a pixel (a turn uncovers a strip along an edge, a roll a sliver along another), aligned to the fine draws'
         grid and merged while that costs no more than a draw's fixed cost (`RECT_MERGE_SLACK_PX`)."""
         height, width = self.filled.shape
-        reads = np.zeros((height, width), np.uint8)
+        quads = []
         for view in views:
             w, h = view.width_px, view.height_px
             corners = np.array([[-0.5, -0.5, 1], [w - 0.5, -0.5, 1], [w - 0.5, h - 0.5, 1], [-0.5, h - 0.5, 1]])
             mapped = corners @ _homography(view, self.view).T
-            if np.any(mapped[:, 2] <= 0):
-                continue
-            points = np.round(mapped[:, :2] / mapped[:, 2:] * 16).astype(np.int32)  # 4 fractional bits
-            cv2.fillConvexPoly(reads, points, 1, lineType=cv2.LINE_8, shift=4)
-        rows, cols = np.nonzero(reads.any(axis=1))[0], np.nonzero(reads.any(axis=0))[0]
-        if len(rows) == 0:
+            if np.all(mapped[:, 2] > 0):
+                quads.append(mapped[:, :2] / mapped[:, 2:])
+        if not quads:
             return []
-        x0, y0 = max(0, int(cols[0]) - 2), max(0, int(rows[0]) - 2)
-        x1, y1 = min(width, int(cols[-1]) + 3), min(height, int(rows[-1]) + 3)
-        grown = cv2.dilate(reads[y0:y1, x0:x1], np.ones((5, 5), np.uint8)).view(bool)
+        # Only the box around the quadrilaterals, grown by the bicubic's reach, is looked at.
+        every = np.concatenate(quads)
+        x0, y0 = max(0, math.floor(every[:, 0].min()) - 3), max(0, math.floor(every[:, 1].min()) - 3)
+        x1, y1 = min(width, math.ceil(every[:, 0].max()) + 4), min(height, math.ceil(every[:, 1].max()) + 4)
+        if x0 >= x1 or y0 >= y1 or self.filled[y0:y1, x0:x1].all():
+            return []  # the usual frame: all it reads is held
+        reads = np.zeros((y1 - y0, x1 - x0), np.uint8)
+        for quad in quads:
+            points = np.round((quad - [x0, y0]) * 16).astype(np.int32)  # 4 fractional bits
+            cv2.fillConvexPoly(reads, points, 1, lineType=cv2.LINE_8, shift=4)
+        grown = cv2.dilate(reads, np.ones((5, 5), np.uint8)).view(bool)
         missing = grown & ~self.filled[y0:y1, x0:x1]
         step = _fine_step_px(self.supersampling)
         rects = []
-        for top in range(0, y1 - y0, UNCOVERED_BAND_ROWS):
-            columns = missing[top : top + UNCOVERED_BAND_ROWS].any(axis=0)
-            if not columns.any():
-                continue
+        bands = -(-(y1 - y0) // UNCOVERED_BAND_ROWS)
+        padded = np.zeros((bands * UNCOVERED_BAND_ROWS, x1 - x0), bool)
+        padded[: y1 - y0] = missing
+        by_band = padded.reshape(bands, UNCOVERED_BAND_ROWS, x1 - x0).any(axis=1)  # (bands, columns)
+        for band in np.flatnonzero(by_band.any(axis=1)):
+            columns = by_band[band]
+            top = int(band) * UNCOVERED_BAND_ROWS
             bottom = min(y1 - y0, top + UNCOVERED_BAND_ROWS)
             edges = np.flatnonzero(np.diff(np.concatenate([[0], columns.astype(np.int8), [0]])))
             for start, end in zip(edges[::2], edges[1::2], strict=True):
                 rect = (x0 + int(start), y0 + top, x0 + int(end), y0 + bottom)
                 rects.append(aligned_rect_px(rect, width, height, step))
-        return merged_rects_px(rects, RECT_MERGE_SLACK_PX / self.supersampling**2)
+        # A strip's bands share their columns: join those first (one pass), then merge the few left.
+        stacked: list[tuple[int, int, int, int]] = []
+        for rect in sorted(rects, key=lambda r: (r[0], r[2], r[1])):
+            last = stacked[-1] if stacked else None
+            if last is not None and (last[0], last[2]) == (rect[0], rect[2]) and rect[1] <= last[3]:
+                stacked[-1] = (last[0], last[1], last[2], max(last[3], rect[3]))
+            else:
+                stacked.append(rect)
+        return merged_rects_px(stacked, RECT_MERGE_SLACK_PX / self.supersampling**2)
 
     def moved_rects(self, drawer: CameraRenderer, looks: _Looks) -> list[tuple[int, int, int, int]] | None:
         """The filled part of the rectangles of the canvas around each moving node that changed since it was drawn (at
