@@ -97,6 +97,7 @@ def test_list_names_every_section(capsys):
         "people",
         "vehicles",
         "sim",
+        "sim_examples",
         "coverage",
         "long",
         "other",

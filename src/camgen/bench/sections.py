@@ -36,6 +36,7 @@ def sections(repo: Path) -> list[Section]:
         _vehicles(repo),
         _exposure(repo),
         _sim(repo),
+        _sim_examples(repo),
         _coverage(repo),
         _long(repo),
         _other(repo),
@@ -809,6 +810,23 @@ def _sim(repo: Path) -> Section:
         "sim",
         "Closed-loop simulation: one PTZ step",
         lambda: sim_cases(repo, sim_stage_frames, sim_facts, sim_steps),
+        body,
+    )
+
+
+def _sim_examples(repo: Path) -> Section:
+    from camgen.bench.sim_example_cases import SimExampleFacts, section_text, sim_example_cases
+
+    facts = SimExampleFacts()
+
+    def body(results, plots: Plots) -> str:
+        run_s = {name: result.median_ms / 1000 for name, result in results.items()}
+        return section_text(facts, run_s, os.getloadavg()[0])
+
+    return Section(
+        "sim_examples",
+        "Closed-loop examples: following, CamShift, replay through another profile, hand-off",
+        lambda: sim_example_cases(repo, facts),
         body,
     )
 
