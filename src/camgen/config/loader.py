@@ -21,6 +21,7 @@ from camgen.config.yaml_source import YamlDocument, load_yaml, merge_documents
 from camgen.errors import ConfigError, Location, Problem
 from camgen.io.files import input_file_problem
 from camgen.io.gltf import IN_PLACE_SPEED_M_S, clip_ground_speed_m_s, load_character, posed_bounds
+from camgen.io.texture_images import TextureFileError, read_texture_images
 
 PROFILE_NAME = re.compile(r"^[A-Za-z0-9_.-]+$")
 
@@ -180,6 +181,7 @@ def load_scene(path: str | Path, profile_dirs: Sequence[Path] = ()) -> LoadedSce
                 Problem(p.path, p.message, doc.locate(p.path))
                 for p in _character_problems(path.parent, scene.actors[i], ("actors", i, "shape", "animation"), read)
             ]
+    problems += [Problem(key, message, doc.locate(key)) for key, message in _texture_file_problems(scene, path.parent)]
     if problems:
         raise ConfigError(problems)
     from camgen.motion.trajectory import vehicle_path_problems  # the motion package imports this one's models
@@ -199,6 +201,22 @@ def load_scene(path: str | Path, profile_dirs: Sequence[Path] = ()) -> LoadedSce
     return LoadedScene(
         name=path.stem, path=path.resolve(), scene=scene, profiles=profiles, file_bounds=file_bounds, document=doc
     )
+
+
+def _texture_file_problems(scene: Scene, directory: Path) -> list[tuple[tuple, str]]:
+    """(key path, message) of each file texture whose images cannot be used (`camgen.io.texture_images`)."""
+    surfaces = [(("environment", "meshes", i), mesh) for i, mesh in enumerate(scene.environment.meshes)]
+    surfaces += [(("actors", i, "shape"), actor.shape) for i, actor in enumerate(scene.actors)]
+    problems = []
+    for key, shape in surfaces:
+        texture = getattr(getattr(shape, "material", None), "texture", None)
+        if getattr(texture, "type", None) != "file":
+            continue
+        try:
+            read_texture_images(directory, texture.base_color_file, texture.normal_file, texture.roughness_file)
+        except TextureFileError as exc:
+            problems.append(((*key, "material", "texture", exc.key), exc.message))
+    return problems
 
 
 def _mesh_file_bounds(directory: Path, reference: str) -> tuple[tuple[float, float, float], tuple[float, float, float]]:

@@ -70,17 +70,47 @@ class SurfaceTexture(Model):
     """Size of one repeat of the texture, m; null: the type's own (8 m of asphalt, 4 m of paving, …)."""
 
 
+TileLength = Annotated[
+    float,
+    Field(gt=0, le=1000),
+    Why("one repeat of an image on the surface: more than 0 m (a photo of a few bricks is about 1 m), at most 1 km"),
+]
+
+
+class FileTexture(Model):
+    """A texture from image files over a plane's or a box's faces (a photo-scanned asphalt or brick set,
+    such as ambientCG's or Poly Haven's CC0 ones): base colour, and optionally a normal and a roughness
+    map of the same size. Paths are relative to the scene file. The image's top edge lies along the
+    face's +v edge: +Y on a level plane, up the wall on a box's sides (`camgen.render.scene_graph`)."""
+
+    type: Literal["file"]
+    base_color_file: Annotated[str, Field(min_length=1)]
+    """An 8- or 16-bit PNG, JPEG or TIFF, sRGB-encoded (as photos and glTF base-colour maps are), RGB,
+    RGBA (alpha ignored) or grey; its decoded (linear) texels are the surface's reflectance."""
+    normal_file: Annotated[str, Field(min_length=1)] | None = None
+    """A tangent-space normal map, OpenGL convention (+X right, +Y up the image, +Z out of the surface;
+    a DirectX map, "-Y", has its green channel inverted: flip it first), stored linearly, RGB."""
+    roughness_file: Annotated[str, Field(min_length=1)] | None = None
+    """A grey roughness map (stored linearly, 0 smooth to 1 rough); null: the material's roughness."""
+    tile_m: TileLength | tuple[TileLength, TileLength]
+    """Size of one repeat of the image on the surface, m: its width (the height follows from the image's
+    aspect ratio) or [width, height]. ambientCG and Poly Haven give each set's real-world size."""
+
+
 class Material(Model):
     """A PBR metallic-roughness material; colours are linear (not sRGB-encoded) reflectances."""
 
     color_rgb: tuple[Fraction, Fraction, Fraction] = (0.5, 0.5, 0.5)
-    """Mean linear reflectance; with a texture and no colour given, the texture type's typical one."""
+    """Mean linear reflectance; with a texture and no colour given, the texture type's typical one, or
+    a file texture's own (its base colour's decoded mean); given, a file's texels are scaled per channel
+    to this mean (to calibrate a photo whose exposure is unknown)."""
     roughness: Fraction = 0.8
     metallic: Fraction = 0.0
     emission_cd_m2: Luminance = 0.0
     """Luminance the surface emits by itself (signs, screens, lamps), cd/m²."""
-    texture: SurfaceTexture | None = None
-    """A procedural texture (planes and boxes; other shapes keep the plain colour)."""
+    texture: Annotated[SurfaceTexture | FileTexture, Field(discriminator="type")] | None = None
+    """A procedural texture, or image files (`type: file`); planes and boxes (other shapes keep the
+    plain colour)."""
     nir_reflectance: Fraction | None = None
     """Reflectance at 850 nm, what a camera in IR night mode sees (vegetation ≈ 0.45, skin ≈ 0.6,
     asphalt ≈ 0.14, carbon-black paint ≈ 0.05); null: the texture type's (`camgen.world.night.

@@ -14,7 +14,7 @@ NIR reflectance of each surface: the scene material's `nir_reflectance`; else, f
 texture, its type's (`NIR_REFLECTANCE_BY_TEXTURE`, the texture's own variation kept); a procedural
 prop's, per vertex (`camgen.props`: leaves 0.45–0.5); else the rule
 `default_nir_reflectance` on the base colour (vertex colours and textures included: people, vehicles,
-plates, glTF characters).
+plates, glTF characters, file textures).
 """
 
 from __future__ import annotations
@@ -39,10 +39,13 @@ from camgen.world.night import (
 from camgen.world.textures import decode_srgb8, encode_srgb8
 
 
-def material_nir_reflectance(material: Material) -> float:
-    """ρ₈₅₀ of a scene material: its own, its texture type's, or the base-colour rule (module docstring)."""
+def material_nir_reflectance(material: Material) -> float | None:
+    """ρ₈₅₀ of a scene material: its own, its texture type's, or the base-colour rule (module docstring);
+    None for a file texture's, whose texels each take the rule (`_nir_material`)."""
     if material.nir_reflectance is not None:
         return material.nir_reflectance
+    if material.texture is not None and material.texture.type == "file":
+        return None
     if material.texture is not None and "color_rgb" not in material.model_fields_set:
         return NIR_REFLECTANCE_BY_TEXTURE[material.texture.type]
     return float(default_nir_reflectance(material.color_rgb))

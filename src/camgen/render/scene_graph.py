@@ -25,6 +25,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import timedelta
+from functools import lru_cache
 from pathlib import Path
 from typing import Literal
 
@@ -59,6 +60,7 @@ from camgen.config.scene import (
 from camgen.errors import ConfigError
 from camgen.io.gltf import Character, load_character
 from camgen.io.ies import read_ies
+from camgen.io.texture_images import TextureFileError, read_texture_images
 from camgen.motion.pose import T_world_from_cam, rot_z
 from camgen.motion.trajectory import Route, actor_routes
 from camgen.props import PropModel, placed_props, prop_names
@@ -74,7 +76,14 @@ from camgen.world.night import SPOT_FULL_INTENSITY_FRACTION, peak_intensity_cd
 from camgen.world.rain import WET_ALBEDO_FACTOR, WET_ROUGHNESS_FACTOR, ground_is_wet
 from camgen.world.site import SiteDaylight, daylight_change, site_daylight
 from camgen.world.sky import LUMINANCE_WEIGHTS
-from camgen.world.textures import TYPICAL_ALBEDO_RGB, encode_srgb8, surface_maps
+from camgen.world.textures import (
+    TYPICAL_ALBEDO_RGB,
+    FileSurfaceMaps,
+    encode_normal8,
+    encode_srgb8,
+    file_surface_maps,
+    surface_maps,
+)
 
 from OpenGL.GL import GL_REPEAT  # isort: skip — after camgen.render.gl, which selects the EGL platform
 
@@ -206,21 +215,25 @@ FAR_GROUND_MIN_AREA_M2 = 100.0
 """The smallest level plane taken for the site's ground (10 × 10 m); a smaller one is a prop (a mat, a board)."""
 
 
-def far_ground(scene: Scene) -> FarGround | None:
+def far_ground(scene: Scene, resolve_path: Callable[[str], Path] | None = None) -> FarGround | None:
     """The largest level plane of the environment, facing up and at least `FAR_GROUND_MIN_AREA_M2`, as the
     ground that continues to the horizon; None when the scene has none or `environment.ground_to_horizon`
-    is off."""
+    is off. A file texture's files are found with `resolve_path`."""
     if not scene.environment.ground_to_horizon:
         return None
     ground = largest_level_plane(scene.environment.meshes, FAR_GROUND_MIN_AREA_M2)
     if ground is None:
         return None
-    material = ground.material
-    textured = material.texture is not None and "color_rgb" not in material.model_fields_set
-    rgb = TYPICAL_ALBEDO_RGB[material.texture.type] if textured else material.color_rgb
-    roughness, metallic = material.roughness, material.metallic
-    if material.texture is not None:  # `_textured` takes both from the texture's maps
-        texture = material.texture
+    material, texture = ground.material, ground.material.texture
+    rgb, roughness, metallic = material.color_rgb, material.roughness, material.metallic
+    if texture is not None and texture.type == "file":  # the images' means, as `_textured` draws them
+        maps = file_texture_maps(material, resolve_path)
+        rgb = tuple(maps.reflectance.reshape(-1, 3).mean(axis=0))
+        if maps.roughness is not None:
+            roughness = float(np.mean(maps.roughness))
+    elif texture is not None:  # `_textured` takes roughness and metalness from the texture's maps
+        if "color_rgb" not in material.model_fields_set:
+            rgb = TYPICAL_ALBEDO_RGB[texture.type]
         maps = surface_maps(texture.type, texture.seed, texture.tile_m)
         roughness, metallic = float(np.mean(maps.roughness)), float(np.mean(maps.metallic))
     if ground_is_wet(scene.environment):
@@ -454,8 +467,10 @@ def _plane(size_m: tuple[float, float]) -> trimesh.Trimesh:
 
 def _box_faces(size_m) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(positions (24, 3), normals (24, 3), texture coordinates in metres (24, 2), faces (12, 3)) of a
-    box centred on the origin: each face its own four vertices, its texture's u along the face's first
-    in-plane axis and v along the second (up the wall on the vertical faces)."""
+    box centred on the origin: each face its own four vertices, its texture's v along the face's second
+    in-plane axis (up the wall on the vertical faces) and u along ± the first, so that (u, v, outward
+    normal) is right-handed: no face shows its texture mirrored, and a normal map's +v (the shader's
+    bitangent, normal × tangent: `linear_mesh.frag` get_normal) is up the image on every face."""
     half = np.asarray(size_m, dtype=np.float64) / 2
     positions, normals, uvs, faces = [], [], [], []
     # (normal axis, sign, u axis, v axis): v is z on the four walls.
@@ -468,14 +483,15 @@ def _box_faces(size_m) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         (2, -1, 0, 1),
     ):
         base = len(positions)
+        n = np.zeros(3)
+        n[axis] = sign
+        u_sign = float(np.cross(np.eye(3)[u_axis], np.eye(3)[v_axis]) @ n)
         for du, dv in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
             p = np.zeros(3)
             p[axis], p[u_axis], p[v_axis] = sign * half[axis], du * half[u_axis], dv * half[v_axis]
             positions.append(p)
-            n = np.zeros(3)
-            n[axis] = sign
             normals.append(n)
-            uvs.append((p[u_axis] + half[u_axis], p[v_axis] + half[v_axis]))
+            uvs.append((u_sign * p[u_axis] + half[u_axis], p[v_axis] + half[v_axis]))
         # Counter-clockwise seen from outside.
         outward = np.cross(positions[base + 1] - positions[base], positions[base + 2] - positions[base])
         order = [(0, 1, 2), (0, 2, 3)] if outward @ normals[base] > 0 else [(0, 2, 1), (0, 3, 2)]
@@ -483,10 +499,15 @@ def _box_faces(size_m) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     return np.array(positions), np.array(normals), np.array(uvs), np.array(faces)
 
 
-def _textured(shape) -> pyrender.Mesh:
-    """A plane or a box with its material's procedural texture (`camgen.world.textures`): base colour
-    (the mean reflectance times the texture's variation, sRGB-encoded as glTF stores it), roughness
-    and metallic maps, repeated every `tile_m`, mipmapped and filtered trilinearly."""
+def _textured(shape, resolve_path: Callable[[str], Path] | None) -> pyrender.Mesh:
+    """A plane or a box with its material's texture, procedural (`camgen.world.textures`) or from files
+    (`FileTexture`): base colour (sRGB-encoded as glTF stores it), roughness and metallic, and a normal
+    map where the texture has one, repeated every tile, mipmapped and filtered trilinearly.
+
+    A normal map holds (u, v, out) components of the surface's frame; the shader's tangent frame is
+    ∂position/∂s from screen-space derivatives and normal × tangent (`linear_mesh.frag` get_normal; exact
+    on a flat face, where the texture coordinates are an affine function of position), which is (u, v)
+    because every face's (u, v, normal) is right-handed (`_box_faces`)."""
     material, texture = shape.material, shape.material.texture
     if isinstance(shape, PlaneMesh):
         plane = _plane(shape.size_m)
@@ -495,35 +516,84 @@ def _textured(shape) -> pyrender.Mesh:
         uv_m = positions[:, :2] + np.array(shape.size_m) / 2
     else:
         positions, normals, uv_m, faces = _box_faces(shape.size_m)
-    maps = surface_maps(texture.type, texture.seed, texture.tile_m)
-    mean_rgb = material.color_rgb if "color_rgb" in material.model_fields_set else TYPICAL_ALBEDO_RGB[texture.type]
-    base = encode_srgb8(maps.albedo * np.asarray(mean_rgb, dtype=np.float32))
-    # glTF's metallic-roughness texture: roughness in G, metallic in B, scaled by the factors (1 here).
-    mr = np.zeros((*maps.roughness.shape, 3), dtype=np.uint8)
-    mr[..., 1] = np.round(np.clip(maps.roughness, 0, 1) * 255)
-    mr[..., 2] = np.round(np.clip(maps.metallic, 0, 1) * 255)
     sampler = pyrender.Sampler(wrapS=GL_REPEAT, wrapT=GL_REPEAT)
+    metallic_factor = roughness_factor = 1.0
+    if texture.type == "file":
+        maps = file_texture_maps(material, resolve_path)
+        base_linear, roughness, metallic, normal = maps.reflectance, maps.roughness, None, maps.normal
+        (tile_w_m, tile_h_m), top_at_v0 = maps.tile_m, False  # an image's row 0 is its top: the tile's +v edge
+        if roughness is None:
+            roughness_factor = material.roughness
+        metallic_factor = material.metallic
+    else:
+        maps = surface_maps(texture.type, texture.seed, texture.tile_m)
+        mean_rgb = material.color_rgb if "color_rgb" in material.model_fields_set else TYPICAL_ALBEDO_RGB[texture.type]
+        base_linear = maps.albedo * np.asarray(mean_rgb, dtype=np.float32)
+        roughness, metallic, normal = maps.roughness, maps.metallic, maps.normal
+        tile_w_m = tile_h_m = maps.tile_m
+        top_at_v0 = True  # a procedural tile's row 0 is its v = 0 edge
+    base = encode_srgb8(base_linear)
+    metallic_roughness = None
+    if roughness is not None:
+        # glTF's metallic-roughness texture: roughness in G, metallic in B, each scaled by its factor.
+        mr = np.zeros((*roughness.shape, 3), dtype=np.uint8)
+        mr[..., 1] = np.round(np.clip(roughness, 0, 1) * 255)
+        mr[..., 2] = 255 if metallic is None else np.round(np.clip(metallic, 0, 1) * 255)
+        metallic_roughness = MipmappedTexture(srgb=False, source=mr, source_channels="RGB", sampler=sampler)
     pbr = pyrender.MetallicRoughnessMaterial(
         baseColorFactor=(1.0, 1.0, 1.0, 1.0),
         baseColorTexture=MipmappedTexture(srgb=True, source=base, source_channels="RGB", sampler=sampler),
-        metallicFactor=1.0,
-        roughnessFactor=1.0,
-        metallicRoughnessTexture=MipmappedTexture(srgb=False, source=mr, source_channels="RGB", sampler=sampler),
+        metallicFactor=metallic_factor,
+        roughnessFactor=roughness_factor,
+        metallicRoughnessTexture=metallic_roughness,
+        normalTexture=(
+            None
+            if normal is None
+            else MipmappedTexture(srgb=False, source=encode_normal8(normal), source_channels="RGB", sampler=sampler)
+        ),
         emissiveFactor=(material.emission_cd_m2,) * 3,
         doubleSided=False,
     )
-    # pyrender uploads the image flipped, so OpenGL's t = 1 is its row 0: t = 1 − v puts row 0 at v = 0.
-    texcoords = np.column_stack([uv_m[:, 0] / maps.tile_m, 1.0 - uv_m[:, 1] / maps.tile_m])
+    # pyrender uploads the image flipped, so OpenGL's t = 1 is its row 0.
+    t = 1.0 - uv_m[:, 1] / tile_h_m if top_at_v0 else uv_m[:, 1] / tile_h_m
+    texcoords = np.column_stack([uv_m[:, 0] / tile_w_m, t])
     primitive = pyrender.Primitive(
         positions=positions, normals=normals, texcoord_0=texcoords, indices=faces, material=pbr
     )
     return pyrender.Mesh(primitives=[primitive])
 
 
+def file_texture_maps(material: Material, resolve_path: Callable[[str], Path] | None) -> FileSurfaceMaps:
+    """The maps of a material's file texture, its colour the material's `color_rgb` when given (else the
+    image's own); a ConfigError naming the texture's key and what is wrong with the file."""
+    texture = material.texture
+    if resolve_path is None:
+        raise ConfigError(f"texture file {texture.base_color_file!r} needs the scene's directory to be found")
+    files = [
+        None if name is None else resolve_path(name)
+        for name in (texture.base_color_file, texture.normal_file, texture.roughness_file)
+    ]
+    stamps = tuple(None if path is None or not path.exists() else path.stat().st_mtime_ns for path in files)
+    mean_rgb = tuple(material.color_rgb) if "color_rgb" in material.model_fields_set else None
+    return _file_texture_maps(*files, texture.tile_m, mean_rgb, stamps)
+
+
+@lru_cache(maxsize=8)
+def _file_texture_maps(base, normal, roughness, tile_m, mean_rgb, stamps) -> FileSurfaceMaps:
+    """`file_texture_maps`, once per set of files (and their modification times) in a process."""
+    try:
+        images = read_texture_images(Path(), *(None if f is None else str(f) for f in (base, normal, roughness)))
+    except TextureFileError as exc:
+        raise ConfigError(f"material.texture.{exc.key} {exc.message}") from None
+    return file_surface_maps(
+        images.base_color, tile_m, normal_packed=images.normal, roughness=images.roughness, mean_rgb=mean_rgb
+    )
+
+
 def build_mesh(shape, resolve_path: Callable[[str], Path] | None = None) -> pyrender.Mesh:
     """A pyrender mesh in the shape's own frame (its placement goes on the node)."""
     if isinstance(shape, PlaneMesh | BoxMesh) and shape.material.texture is not None:
-        return _textured(shape)
+        return _textured(shape, resolve_path)
     material = _material(shape.material)
     if isinstance(shape, BoxMesh):
         return pyrender.Mesh.from_trimesh(trimesh.creation.box(extents=shape.size_m), material=material, smooth=False)
@@ -1141,7 +1211,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         fog_visibility_m=scene.environment.fog.visibility_m if scene.environment.fog is not None else None,
         rain_rate_mm_h=scene.environment.rain.rate_mm_h if scene.environment.rain is not None else None,
         rain_seed=scene.environment.rain.seed if scene.environment.rain is not None else 0,
-        far_ground=far_ground(scene),
+        far_ground=far_ground(scene, resolve_path),
         daylight=site_daylight_track(scene, graph, ambient_lux),
         shadows=scene.environment.shadows,
         actor_local_poses=local_poses,
