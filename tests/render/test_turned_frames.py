@@ -321,3 +321,28 @@ def test_lights_that_change_every_frame_draw_the_turned_frames_whole(turned, ren
     for k in range(4):
         assert np.array_equal(drawer.frame(states[k].frame, states[k]).passes.radiance, runs["whole"][k]), k
     assert drawer._canvas is None
+
+
+def test_the_first_frame_after_the_head_stops_is_drawn_whole(turned, renderer):
+    """A head that turned since the last frame but holds still during this one (it stopped between the two frames)
+    is drawn whole, bit for bit the plan's, not from its turn canvas (which drew it 2 % apart, measured)."""
+    camera, states, _runs = turned
+    spec = camera.render
+    last = states[3]
+    stopped = view_at(last, spec, 0.1)  # where the head stopped, 0.6° on: then it holds
+    held = last.model_copy(
+        update={
+            "frame": last.frame + 1,
+            "time_s": last.time_s + 0.1,
+            "pan_deg": last.pan_deg + PAN_DEG_S * 0.1,
+            "pan_deg_s": 0.0,
+            "T_world_from_cam": stopped.T_world_from_cam.tolist(),
+        }
+    )
+    frames = {}
+    scene = _runs["whole drawer"].graph.source[0]
+    for name, reprojected in (("canvas", True), ("whole", False)):
+        drawer = CameraRenderer(renderer, build_scene_graph(scene), camera, turns_reprojected=reprojected)
+        frames[name] = [drawer.frame(state.frame, state).passes.radiance for state in [*states[:4], held]]
+    assert not np.array_equal(frames["canvas"][3], frames["whole"][3])  # the turned frame came from the canvas
+    assert np.array_equal(frames["canvas"][4], frames["whole"][4])

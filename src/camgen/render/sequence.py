@@ -439,7 +439,7 @@ class CameraRenderer:
                 return self._finished(index, state, view, radiance)
         elif groups is None and "radiance" in passes and self._turn_from_base(state, sharp):
             # The exposure is the frame time's base, smeared by the head's turn where the actors are not blurred.
-            base = self._base_radiance(state, view, self.shadow_fit(view), fine=True)
+            base = self._base_radiance(state, view, self.shadow_fit(view), fine=True, turning=True)
             p = self._motion
             smear = not sharp and p is not None and not p.get("actors_blur", True)
             radiance = self._smeared(state, base, 0.0, 1.0, 0.0, 0.0, whole=True) if smear else base
@@ -592,14 +592,19 @@ class CameraRenderer:
         self._vertices_m[k] = (version, vertices)
         return vertices
 
-    def _base_radiance(self, state: CameraState, view: View, fit: ShadowFit, *, fine: bool) -> np.ndarray:
+    def _base_radiance(
+        self, state: CameraState, view: View, fit: ShadowFit, *, fine: bool, turning: bool = False
+    ) -> np.ndarray:
         """The radiance at the frame time with s × s area samples per pixel, kept for the next frame: `fine`, one
         draw s× finer, box-averaged; else s² draws at 1×, one through each sub-pixel position, as motion blur's
         sub-frames sample them. When the view, the daylight and the sampling are the kept one's, only the
         rectangles that bound what moved between the two (`moving_rects_px` at the two times) are drawn again,
         each cropped from the whole view's draws (`_fine_crops`, `_mean_of_draws`: the same pixels, bit for
         bit). What moved is told from the looks kept with the last frame (`_Looks`), so the actors are placed at the
-        frame time only."""
+        frame time only. `turning`: the head turns during this frame's exposure; then, where the view turned since
+        the last base (`turns_reprojected`), the base is the turn canvas's (`_turned_radiance`). A head that holds
+        still during the exposure is drawn so, even where it turned since the last frame (the first frame after it
+        stopped): a held head's bases are the plan's bit for bit."""
         graph, s = self.graph, self.spec.supersampling
         graph.place_actors(state.time_s)
         daylight = _daylight_state(graph)
@@ -608,6 +613,7 @@ class CameraRenderer:
         self._last_daylight = daylight
         if (
             fine
+            and turning
             and self.turns_reprojected
             and last is not None
             and not _same_view(last, view)
