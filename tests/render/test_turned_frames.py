@@ -346,3 +346,28 @@ def test_the_first_frame_after_the_head_stops_is_drawn_whole(turned, renderer):
         frames[name] = [drawer.frame(state.frame, state).passes.radiance for state in [*states[:4], held]]
     assert not np.array_equal(frames["canvas"][3], frames["whole"][3])  # the turned frame came from the canvas
     assert np.array_equal(frames["canvas"][4], frames["whole"][4])
+
+
+def test_canvas_crops_fit_the_renderers_largest_target(turned, renderer, monkeypatch):
+    """The canvas is half as wide again as the frame, so its crops drawn s× finer can pass the renderer's largest
+    target where the frame's own draw fits it (an OpenGL error: 1080p at supersampling 8 on llvmpipe's 16384, 4K at
+    4): at the tightest limit the frame allows, every draw fits, and the frames are the canvas's as before."""
+    camera, states, runs = turned
+    spec = camera.render
+    most = max(spec.width_px, spec.height_px) * spec.supersampling
+    monkeypatch.setattr(renderer, "max_size_px", most)
+    sizes = []
+    draw = renderer.draw
+
+    def recorded(graph, view, *args, **kwargs):
+        sizes.append((view.width_px, view.height_px))
+        return draw(graph, view, *args, **kwargs)
+
+    monkeypatch.setattr(renderer, "draw", recorded)
+    drawer = CameraRenderer(renderer, build_scene_graph(runs["whole drawer"].graph.source[0]), camera,
+                            turns_reprojected=True)  # fmt: skip
+    frames = [drawer.frame(state.frame, state).passes.radiance for state in states[:TURNED]]
+    monkeypatch.undo()
+    assert max(max(size) for size in sizes) <= most, (most, sorted(sizes)[-3:])
+    for k in range(1, TURNED):  # the same canvas but for the sky's and shadow lookups' rounding at the tiles' edges
+        assert np.abs(frames[k] - runs["canvas"][k]).mean() / runs["canvas"][k].mean() < 2e-3, k

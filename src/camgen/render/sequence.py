@@ -1244,14 +1244,25 @@ class _TurnCanvas:
     def draw(self, drawer: CameraRenderer, state: CameraState, rects: list, looks: _Looks) -> None:
         """Draw `rects` of the canvas at the frame time (the actors placed there), each through a view of its own (the
         canvas's view cropped to it, its size rounded up to `CANVAS_CROP_ROUND_PX` and scissored back: the canvas's
-        pixels to ~1e-3, `Renderer.draw`'s `crop_px`), s× finer and box-averaged, with the canvas's shadow fit."""
+        pixels to ~1e-3, `Renderer.draw`'s `crop_px`), s× finer and box-averaged, with the canvas's shadow fit. A
+        rectangle whose draw s× finer would pass the renderer's largest target (`Renderer.max_size_px`: the canvas is
+        half as wide again as the frame that `CameraRenderer` checked against it) is drawn in tiles that fit."""
         s, renderer, graph = self.supersampling, drawer.renderer, drawer.graph
         clip = drawer.clip_range_m(self.view)
         graph.place_actors(state.time_s)
-        for k, (x0, y0, x1, y1) in enumerate(rects):
+        most = renderer.max_size_px // s  # the canvas's pixels across that one draw s× finer may span
+        step = _fine_step_px(s)
+        tile = most // CANVAS_CROP_ROUND_PX * CANVAS_CROP_ROUND_PX or most // step * step  # starts stay on the grid
+        tiles = [
+            (tx, ty, min(x1, tx + tile), min(y1, ty + tile))
+            for x0, y0, x1, y1 in rects
+            for ty in range(y0, y1, tile)
+            for tx in range(x0, x1, tile)
+        ]
+        for k, (x0, y0, x1, y1) in enumerate(tiles):
             w, h = x1 - x0, y1 - y0
-            rounded = (x0, y0, x0 + -(-w // CANVAS_CROP_ROUND_PX) * CANVAS_CROP_ROUND_PX,
-                       y0 + -(-h // CANVAS_CROP_ROUND_PX) * CANVAS_CROP_ROUND_PX)  # fmt: skip
+            rounded = (x0, y0, x0 + min(most, -(-w // CANVAS_CROP_ROUND_PX) * CANVAS_CROP_ROUND_PX),
+                       y0 + min(most, -(-h // CANVAS_CROP_ROUND_PX) * CANVAS_CROP_ROUND_PX))  # fmt: skip
             fine = self.view.cropped(rounded).scaled(s)
             drawn = renderer.draw(
                 graph, fine, ("radiance",), clip_range_m=clip, shadow_fit=self.fit, crop_px=(0, 0, w * s, h * s),
