@@ -60,8 +60,8 @@ def test_the_log_records_every_command_with_its_frame_and_time(episode):
 
 
 def test_the_log_says_how_turned_frames_were_drawn(episode, tmp_path):
-    """A run that drew every turned frame whole says so, and its replay does the same (the log's default, for logs
-    written before the key, is the turn canvas)."""
+    """A run that drew every turned frame whole says so, and its replay does the same; a log written before the key
+    was drawn so too (every turned frame whole) and is replayed so."""
     _, path, log, _ = episode
     assert log.turns_reprojected and json.loads(path.read_text().splitlines()[0])["turns_reprojected"] is True
     whole = save_command_log(dataclasses.replace(log, turns_reprojected=False), tmp_path / "whole.jsonl")
@@ -70,7 +70,7 @@ def test_the_log_says_how_turned_frames_were_drawn(episode, tmp_path):
     header = json.loads(records[0])
     del header["turns_reprojected"]
     old = write(tmp_path, "old.jsonl", "\n".join([json.dumps(header), *records[1:]]) + "\n")
-    assert load_command_log(old).turns_reprojected is True
+    assert load_command_log(old).turns_reprojected is False
 
 
 def test_replay_reproduces_the_frames_byte_for_byte(episode, renderer):

@@ -55,7 +55,8 @@ class CommandLog:
     commands: tuple[LoggedCommand, ...]
     turns_reprojected: bool = True
     """Whether the run drew a turning head's frames from its turn canvas (`Simulation`'s ``turns_reprojected``); a
-    log without the key was recorded before there was a choice, and is replayed with the default."""
+    log without the key was recorded before there was a canvas, when every turned frame was drawn whole, and is
+    replayed so (False), as the run drew it."""
 
 
 def command_log(sim: Simulation) -> CommandLog:
@@ -125,7 +126,7 @@ def parse_log(records: Sequence[tuple[int, dict]], source: str = "<log>") -> Com
         isinstance(resolution, list) and len(resolution) == 2 and all(isinstance(v, int) and v >= 2 for v in resolution)
     ):
         raise ConfigError(f"{where}: resolution_px must be null or [W, H], whole numbers ≥ 2; got {resolution!r}")
-    reprojected = header.get("turns_reprojected", True)
+    reprojected = header.get("turns_reprojected", False)  # a log from before the key: every frame drawn whole
     if not isinstance(reprojected, bool):
         raise ConfigError(
             f"{where}: turns_reprojected must be true or false (whether a turning head's frames are drawn from its "
