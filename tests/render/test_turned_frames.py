@@ -311,7 +311,7 @@ def test_a_turn_during_the_exposure_smears_the_canvas(turned, renderer, monkeypa
 
 def test_lights_that_change_every_frame_draw_the_turned_frames_whole(turned, renderer, monkeypatch):
     """Where the daylight (`_daylight_state`: the lights, the sky, the sun) differs from one frame to the next, as
-    under a car's lamps driving by or a dusk, no canvas would last a frame: the turned frames are drawn whole, the
+    at a dusk lit frame by frame, no canvas would last a frame: the turned frames are drawn whole, the
     same bytes as without the canvas."""
     camera, states, runs = turned
     counter = iter(range(1_000_000))

@@ -77,9 +77,12 @@
   fit, so the canvas is a whole draw of its view at the frame time where it is filled (tested to 3e-5). A new
   canvas is started when the frame leaves the canvas or its warp would stretch a pixel by more than
   `TURN_SCALE_TOLERANCE`, when the camera matrix changes, or when bringing it up to date would draw more than a
-  frame; where the lights or the sky change from one frame to the next (a car's lamps driving by, a dusk), turned
-  frames are drawn whole. The first frame of a held head is drawn whole (and kept: still frames), so a held
-  head's draws are the plan's bit for bit. A turned frame differs from the frame drawn whole by the
+  frame; where the lights or the sky change from one frame to the next (a dusk lit frame by frame; a car's lamps
+  are part of its look, not lights), turned frames are drawn whole. A crop whose draw s× finer would pass the
+  renderer's largest target (the canvas is half as wide again as the frame) is drawn in tiles. The first frame
+  of a held head (still during its exposure, even where it turned since the last frame) is drawn whole (and
+  kept: still frames), so a held head's draws are the
+  plan's bit for bit. A turned frame differs from the frame drawn whole by the
   resampling alone: ~40 dB PSNR on the sim's 720p step of ptz_follow (the tradeoff is in BENCHMARKS.md's sim
   section), where high-frequency texture aliases at another sampling phase; each turned frame depends on the
   canvas's history, so a run's frames are reproducible from its start (the same commands give the same bytes),
@@ -283,16 +286,16 @@ class CameraRenderer:
         """Draw still frames from the last one and motion sub-frames only where something moves (module
         docstring: still frames); False draws every frame, and each of its sub-frames, whole."""
         self.turns_reprojected = turns_reprojected
-        """While the head turns, draw a frame as the last whole draw seen from the new view plus crops of what it
-        cannot show (module docstring: turned frames); False draws every turned frame whole. Needs
+        """While the head turns, draw a frame as its turn canvas (brought up to the frame time in crops) warped to the
+        frame's view (module docstring: turned frames); False draws every turned frame whole. Needs
         `moving_regions`."""
         self._last_view: View | None = None
+        """The view of the last base drawn (`_base_radiance`): a head that held still since is not turning."""
         self._last_daylight: list[np.ndarray] | None = None
         """The daylight of the last base drawn (`_daylight_state`): a turned frame is drawn from a canvas only while
-        it holds from frame to frame (lamps that move with a car, or a dusk, would start a canvas at every frame)."""
+        it holds from frame to frame (a dusk lit frame by frame would start a canvas at every frame)."""
         self._canvas: _TurnCanvas | None = None
         """What a turning head's frames are warped from (`_turned_radiance`)."""
-        """The view of the last base drawn (`_base_radiance`): a head that held still since is not turning."""
         self._kept_views: dict[str, View] = {}
         self._reach_points_m, self._reach_radius_m = _reach(graph)
         reach = self._reach_radius_m[:, None]
@@ -621,7 +624,7 @@ class CameraRenderer:
         ):
             if steady:
                 return self._turned_radiance(state, view, daylight)
-            self._canvas = None  # the lights or the sky change frame by frame (a lit car, a dusk): drawn whole
+            self._canvas = None  # the lights or the sky change frame by frame (a dusk): drawn whole
         kept, rects = self._kept_base, None
         looks = _Looks.now(graph, None if kept is None else kept.looks)
         if (
@@ -796,9 +799,9 @@ class CameraRenderer:
         step or less of what the sub-frames already sample). A warp samples the draw bilinearly, and the
         edge pixels stand in for what lies beyond the render (a band as wide as one share's shift).
 
-        `whole`: the draw stands for the whole exposure (`share` 1; `_turn_smeared_only`), smeared by as many warps
-        as the plan would draw sub-frames for the head's turn (`sub_frame_count` with its step and threshold, not
-        capped: each is a warp, not a draw)."""
+        `whole`: the draw stands for the whole exposure (`share` 1; a turned frame's base, `frame`), smeared by as
+        many warps as the plan would draw sub-frames for the head's turn (`sub_frame_count` with its step and
+        threshold, not capped: each is a warp, not a draw)."""
         spec, exposure_s = self.spec, state.exposure_time_s
         here = shifted(view_at(state, spec, offset * exposure_s), dx_px, dy_px)
         start = shifted(view_at(state, spec, (offset - share / 2) * exposure_s), dx_px, dy_px)
@@ -1096,10 +1099,11 @@ variance) of a 720p parking-lot frame drawn exactly, bilinear 0.53, Lanczos-4 0.
 @dataclass
 class _TurnCanvas:
     """What a turning head's frames are drawn from (module docstring: turned frames): the still world and the moving
-    nodes as of the last frame, drawn through one view (`anchor`, the frame's view where the canvas started) grown by
-    a margin on each side (`view`), filled where frames have looked so far. A frame brings it up to date (the moving
-    nodes that changed since, at both times, with their shadows, where it is filled; its own footprint where it is
-    not) and warps it to its view: the head turns about its centre of projection, so what the canvas's pixel (x, y)
+    nodes as of the last frame, drawn through one view (`anchor`: where the head, turning on at the rates of the frame
+    that started the canvas, looks `TURN_ANCHOR_AHEAD_S` later) grown by a margin on each side (`view`), filled
+    where frames have looked so far. A frame brings it up to date (the moving nodes that changed since, at both
+    times, with their shadows, where it is filled; its own footprint and the lookahead's where it is not) and warps
+    it to its view: the head turns about its centre of projection, so what the canvas's pixel (x, y)
     shows, the frame's pixel H⁻¹·(x, y) shows (`_homography`), the sky, shadows, fog and speculars alike."""
 
     anchor: View

@@ -160,12 +160,12 @@ class Simulation:
     cameras : names or None
         The cameras that deliver frames (default all); the others' heads still take commands.
     turns_reprojected : bool
-        While a head turns, draw each frame as the last whole draw seen from the new view plus exact crops
-        of what that draw cannot show: the edges newly in view and whatever moved since, with its shadows
-        (`camgen.render.sequence`'s turned frames; a head turns about its centre of projection, so the
-        still world seen from the new view is the old draw warped by a homography, resampled bilinearly).
-        A held head's frames are drawn exactly, as `camgen render` draws them. False: every turned frame
-        is drawn whole (BENCHMARKS.md's sim section gives both steps' time and the frames' difference).
+        While a head turns, draw each frame from a turn canvas (a draw of a view wider than the frame, brought
+        up to the frame time in crops: the edges the turn brings into view and whatever moved since, with its
+        shadows) warped to the frame's view by a homography (`camgen.render.sequence`'s turned frames; a head
+        turns about its centre of projection), resampled bicubically. A held head's frames are drawn exactly,
+        as `camgen render` draws them (auto-exposure still remembers the turned frames). False: every turned
+        frame is drawn whole (BENCHMARKS.md's sim section gives both steps' time and the frames' difference).
     """
 
     def __init__(
