@@ -96,6 +96,7 @@ def test_list_names_every_section(capsys):
         "growth",
         "people",
         "vehicles",
+        "exposure",
         "sim",
         "sim_examples",
         "coverage",

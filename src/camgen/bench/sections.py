@@ -754,9 +754,9 @@ def _sim(repo: Path) -> Section:
                 f"{shares_text(per_step_s, mean_step_s, smallest_pct=3)} |"
             )
         text.append("\n".join(rows))
-        for name in results:
-            baseline = next((c for c in results if name in c and c.endswith("every frame drawn whole")), None)
-            if "turning" not in name or baseline is None or baseline == name or "drawn whole" in name:
+        for name, result in results.items():
+            baseline = result.baseline  # the turned frames drawn whole (`sim_cases`' variants)
+            if baseline is None or baseline not in results:
                 continue
             ours, theirs = sim_steps.get(name, {}), sim_steps.get(baseline, {})
             pairs = list(zip(ours.get("frames", [])[1:], theirs.get("frames", [])[1:], strict=False))

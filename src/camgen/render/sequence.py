@@ -622,9 +622,11 @@ class CameraRenderer:
             and not _same_view(last, view)
             and _turned_only(last, view)
         ):
-            if steady:
-                return self._turned_radiance(state, view, daylight)
-            self._canvas = None  # the lights or the sky change frame by frame (a dusk): drawn whole
+            turned = self._turned_radiance(state, view, daylight) if steady else None
+            if turned is not None:
+                return turned
+            if not steady:
+                self._canvas = None  # the lights or the sky change frame by frame (a dusk): drawn whole
         kept, rects = self._kept_base, None
         looks = _Looks.now(graph, None if kept is None else kept.looks)
         if (
@@ -656,13 +658,14 @@ class CameraRenderer:
         self._kept_base = _KeptBase(view, daylight, radiance, fine, looks)
         return radiance
 
-    def _turned_radiance(self, state: CameraState, view: View, daylight: list[np.ndarray]) -> np.ndarray:
+    def _turned_radiance(self, state: CameraState, view: View, daylight: list[np.ndarray]) -> np.ndarray | None:
         """The fine base at the frame time through a head that turned since the last frame (module docstring:
         turned frames), under `daylight` (`_daylight_state`, the same as at the last frame; the actors placed at the
         frame time): the canvas (`_TurnCanvas`) brought up to the frame time and warped to this view. A new canvas is
-        started when there is none, the daylight or the view's camera matrix or centre changed, the frame reaches
-        past the canvas or would be resampled by more than `TURN_SCALE_TOLERANCE`, or bringing the canvas up to date
-        would draw more pixels than a whole frame."""
+        started when there is none, the daylight or the view's camera matrix or centre changed, or the frame reaches
+        past the canvas or would be resampled by more than `TURN_SCALE_TOLERANCE`. None (the caller draws the frame
+        whole, and the canvas is dropped) where bringing the canvas up to date would draw more pixels than a whole
+        frame, or what moved cannot be bounded: a new canvas would draw more than the frame."""
         graph, spec = self.graph, self.spec
         canvas = self._canvas
         fresh = (
@@ -683,9 +686,9 @@ class CameraRenderer:
             rects = (
                 None if moved is None else merged_rects_px(moved + missing, RECT_MERGE_SLACK_PX / spec.supersampling**2)
             )
-            fresh = rects is None or sum((x1 - x0) * (y1 - y0) for x0, y0, x1, y1 in rects) > (
-                view.width_px * view.height_px
-            )
+            if rects is None or sum((x1 - x0) * (y1 - y0) for x0, y0, x1, y1 in rects) > view.width_px * view.height_px:
+                self._canvas = None
+                return None
         if fresh:
             for ahead_s in TURN_ANCHOR_AHEAD_S:  # the farthest ahead that holds this frame
                 anchor = view_at(state, spec, ahead_s)
