@@ -304,9 +304,10 @@ def test_a_turn_during_the_exposure_smears_the_canvas(turned, renderer, monkeypa
         error = np.abs(smooth["canvas"] - smooth["whole"]).mean(axis=2)[below].mean() / whole.mean()
         ratio = {name: across(frames[name][k]) / across(whole) for name in ("canvas", "unsmeared")}
         # Measured at k = 1: smoothed 0.42 % apart (shadow edges fitted to another view, the car's edges); the
-        # horizontal gradient 0.98 of the reference's, 1.14 unsmeared.
+        # horizontal gradient 0.95–0.98 of the reference's (the warp held within each 2 × 2 where a lobe went under
+        # zero), 1.11–1.19 unsmeared.
         assert error < 0.008, (k, error)
-        assert abs(ratio["canvas"] - 1) < 0.05 and ratio["unsmeared"] > 1.08, (k, ratio)
+        assert abs(ratio["canvas"] - 1) < 0.08 and ratio["unsmeared"] > 1.08, (k, ratio)
 
 
 def test_lights_that_change_every_frame_draw_the_turned_frames_whole(turned, renderer, monkeypatch):
@@ -371,3 +372,34 @@ def test_canvas_crops_fit_the_renderers_largest_target(turned, renderer, monkeyp
     assert max(max(size) for size in sizes) <= most, (most, sorted(sizes)[-3:])
     for k in range(1, TURNED):  # the same canvas but for the sky's and shadow lookups' rounding at the tiles' edges
         assert np.abs(frames[k] - runs["canvas"][k]).mean() / runs["canvas"][k].mean() < 2e-3, k
+
+
+def test_a_bright_light_does_not_ring_in_the_warp():
+    """A lamp's 2 × 2 pixels at 20,000 cd/m² over a background of 0.2–0.4, warped by a pan of a fraction of a pixel:
+    each warped pixel stays within its 2 × 2 neighbours, so the lamp keeps its energy (within 1 %) and no neighbour
+    drops under the background; bicubic alone, its undershoot clipped at 0, gains 9 % here (16–19 % at other phases)
+    and blacks out a ring."""
+    anchor = _view()
+    canvas = _TurnCanvas.at(anchor, [], lambda view: None, 2)
+    rng = np.random.default_rng(0)
+    canvas.radiance[:] = rng.uniform(0.2, 0.4, canvas.radiance.shape).astype(np.float32)
+    y, x = canvas.margin_px + 60, canvas.margin_px + 100
+    canvas.radiance[y : y + 2, x : x + 2] = 20000.0
+    view = _panned(anchor, 0.137)
+
+    def lamp(out: np.ndarray) -> tuple[float, float]:
+        m = canvas.margin_px
+        window = out[y - m - 12 : y - m + 14, x - m - 12 : x - m + 14]
+        return float((window.sum() - 3 * 0.3 * window[..., 0].size) / (3 * 4 * 20000.0)), float(window.min())
+
+    energy, least = lamp(canvas.warped(view))
+    assert abs(energy - 1) < 0.01 and least >= 0.2 - 1e-6, (energy, least)
+    plain = cv2.warpPerspective(
+        canvas.radiance,
+        _homography(view, canvas.view),
+        (view.width_px, view.height_px),
+        flags=sequence.TURN_WARP_INTERPOLATION | cv2.WARP_INVERSE_MAP,
+        borderMode=cv2.BORDER_REPLICATE,
+    )
+    energy, least = lamp(np.maximum(plain, 0.0))  # bicubic alone, clipped at 0
+    assert energy > 1.05 and least < 0.1, (energy, least)  # measured: 1.086, 0

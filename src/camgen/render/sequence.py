@@ -1284,15 +1284,28 @@ class _TurnCanvas:
         self.looks = looks
 
     def warped(self, view: View) -> np.ndarray:
-        """The canvas seen through `view` (`TURN_WARP_INTERPOLATION`; its lobes' undershoot clipped at 0)."""
-        radiance = cv2.warpPerspective(
-            self.radiance,
-            _homography(view, self.view),
-            (view.width_px, view.height_px),
-            flags=TURN_WARP_INTERPOLATION | cv2.WARP_INVERSE_MAP,
-            borderMode=cv2.BORDER_REPLICATE,
-        )
-        return np.maximum(radiance, 0.0, out=radiance)
+        """The canvas seen through `view` (`TURN_WARP_INTERPOLATION`). Where a lobe of the bicubic went under zero
+        anywhere (a light, or the sun's glint on paint, over a dark surround), each pixel is held within the least and
+        largest of the 2 × 2 canvas pixels around its lookup, as a ringing-free interpolation of those four would be:
+        a lamp's 2 × 2 pixels at 20,000 cd/m² over a background of 0.3 gained 9–19 % of their energy, clipped at 0,
+        and blacked out a ring of neighbours (measured). Elsewhere the ringing is a few % of an edge's contrast, and
+        the clamp, 3–4× the warp's cost, is left out."""
+        H, size = _homography(view, self.view), (view.width_px, view.height_px)
+        interpolation = TURN_WARP_INTERPOLATION | cv2.WARP_INVERSE_MAP
+        radiance = cv2.warpPerspective(self.radiance, H, size, flags=interpolation, borderMode=cv2.BORDER_REPLICATE)
+        if radiance.min() >= 0.0:  # no lobe went under zero: the ringing is a few % of an edge's contrast
+            return radiance
+        # Over the frame's footprint, pixel (x, y) of the eroded (dilated) canvas holds the least (largest) of
+        # (x..x+1, y..y+1); a lookup's cell starts at ⌊H·p⌋, which the nearest lookup of H·p − ½ finds.
+        x0, y0, x1, y1 = self.footprint_px(view) or (0, 0, self.view.width_px, self.view.height_px)
+        part = self.radiance[y0:y1, x0:x1]
+        cell = np.array([[1.0, 0.0, -0.5 - x0], [0.0, 1.0, -0.5 - y0], [0.0, 0.0, 1.0]]) @ H
+        kernel, flags = np.ones((2, 2), np.uint8), cv2.WARP_INVERSE_MAP | cv2.INTER_NEAREST
+        low = cv2.erode(part, kernel, anchor=(0, 0), borderType=cv2.BORDER_REPLICATE)
+        high = cv2.dilate(part, kernel, anchor=(0, 0), borderType=cv2.BORDER_REPLICATE)
+        low = cv2.warpPerspective(low, cell, size, flags=flags, borderMode=cv2.BORDER_REPLICATE)
+        high = cv2.warpPerspective(high, cell, size, flags=flags, borderMode=cv2.BORDER_REPLICATE)
+        return np.clip(radiance, low, high, out=radiance)
 
 
 def _intersection(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> tuple[int, int, int, int] | None:
