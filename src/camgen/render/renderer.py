@@ -757,7 +757,11 @@ class _PassRenderer(pyrender.Renderer):
         cascade starts from the kept depths of the casters that held still (`_sun_shadow_pass`, as `plan`ned)."""
         self._shadow_pass = (light_node, flags)
         try:
-            if self._sun_layer is None:
+            if self._sun_layer is None and not any(node.mesh.is_visible for node in self._sorted_mesh_nodes(scene)):
+                # Nothing reaches the map (a car's headlamp aimed past every mesh): pyrender's pass, with no primitive
+                # to draw, fails on its unset program; the map is cleared, so nothing is in shadow.
+                self._configure_shadow_mapping_viewport(light_node.light, flags)
+            elif self._sun_layer is None:
                 super()._shadow_mapping_pass(scene, light_node, flags)
             else:
                 self._sun_shadow_pass(scene, light_node, flags, plan)
