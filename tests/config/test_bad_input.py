@@ -535,7 +535,8 @@ CASES = [
         "scene",
         edit(SCENE, "    class: person\n", "    class: truck\n    vehicle: {lights_on: bright} #<\n"),
         "actors[0].vehicle.lights_on",
-        "must be true or false, got 'bright'",
+        "must be true, false or auto (auto: lit while the vehicle is driven in under 1 000 lx of daylight), "
+        "got 'bright'",
     ),
     (
         "rides_for_a_car",

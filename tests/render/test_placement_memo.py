@@ -138,7 +138,14 @@ def test_a_vehicles_lamps_follow_lights_on_at_a_time_already_placed():
 
     scene = scene_from(
         lights=[{"type": "ambient", "illuminance_lux": 100}],
-        actors=[{"name": "car", "class": "car", "path": {"waypoints_m": [[0, 0], [20, 0]], "speed_m_s": 5}}],
+        actors=[
+            {
+                "name": "car",
+                "class": "car",
+                "vehicle": {"lights_on": False},  # (auto would light them: a driven car in 100 lx)
+                "path": {"waypoints_m": [[0, 0], [20, 0]], "speed_m_s": 5},
+            }
+        ],
     )
     rig = vehicle_rigs(scene, actor_routes(scene))["car"]
     rig.place(1.0)

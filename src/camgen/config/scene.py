@@ -728,13 +728,26 @@ class VehicleIdentity(Model):
     plate_text: str | None = None
     """The registration on both plates (a motorcycle's one rear plate, in two lines; a bicycle has none);
     null draws one in the UK's current format, "AB12 CDE"."""
-    lights_on: bool = False
-    """Head and tail lamps lit (they emit light; brake lamps and indicators follow the driving); a bicycle's
-    front white and rear red lamps."""
+    lights_on: bool | Literal["auto"] = "auto"
+    """Head and tail lamps lit (the lenses glow; the low beams light the road as photometric lights,
+    `camgen.vehicles.headlamps`; brake lamps and indicators follow the driving); a bicycle's front white and
+    rear red lamps. auto: lit while the vehicle is driven and the daylight on the ground is under 1 000 lx
+    (UN ECE R48's automatic passing-beam switching), so by day and on a parked vehicle they stay dark."""
     driver: bool | None = None
     """A car's, truck's or bus's driver seated at the wheel, seen through the glass (part of the vehicle,
     not annotated as a person: `camgen.vehicles.cabin`); null: a driver when the vehicle drives its
     route, none when it is parked. A bicycle's or motorcycle's rider is a person actor that `rides` it."""
+
+    @field_validator("lights_on", mode="before")
+    @classmethod
+    def _lights_on(cls, value: Any) -> Any:
+        if isinstance(value, bool) or value == "auto":
+            return value
+        raise invalid(
+            "",
+            f"must be true, false or auto (auto: lit while the vehicle is driven in under 1 000 lx of daylight), "
+            f"got {show_value(value)}",
+        )
 
     @field_validator("plate_text")
     @classmethod

@@ -5,7 +5,9 @@ colour and whose only light is the camera's IR illuminator, a spot at the camera
 axis with the candela that count as its 850 nm radiant intensity does on the sensor
 (`camgen.world.night.nir_equivalent_intensity_cd`). No ambient, no emission, no sky: the scene's
 lamps are taken to emit no 850 nm light (LED street lights emit almost none; the NIR lines of
-high-pressure sodium lamps are not modelled). The pass is drawn without shadows: the illuminator sits
+high-pressure sodium lamps are not modelled), and so are vehicles' headlamps (`camgen.vehicles.headlamps`:
+LED low beams emit almost none; a halogen lamp's near-infrared tail is not modelled), whose visible light
+still reaches the sensor through the visible pass. The pass is drawn without shadows: the illuminator sits
 at the lens, so the shadows it casts hide behind what casts them. Its radiance, in the visible pass's
 units, is added to every colour channel: without the IR-cut filter the colour filters pass 850 nm
 about equally.
@@ -104,6 +106,7 @@ def build_nir_graph(
                 primitive.color_0 = converted.astype(np.float32)
     for light_node in list(graph.scene.light_nodes):
         graph.scene.remove_node(light_node)
+    graph.headlamps = []
     graph.scene.ambient_light = np.zeros(3)
     illuminator = night.ir_illuminator
     outer = math.radians(illuminator.half_angle_deg)

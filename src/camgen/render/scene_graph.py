@@ -6,6 +6,8 @@ luminance in cd/m² once gamma and clamping are removed (`camgen.render.renderer
 
 - sun: a directional light of ``illuminance_lux`` (lux on a surface facing it);
 - point and spot: ``intensity_cd`` candela, falling off as 1/d²;
+- headlamps: a lit vehicle's low beams, a spot light moving with it whose intensity is the table of
+  `camgen.vehicles.headlamps` (`Headlamp`, `add_headlamps`);
 - ambient: a uniform sky of illuminance E lux lights a Lambertian surface of reflectance ρ to
   L = ρ·E/π cd/m²; pyrender adds base_colour × ambient_light, so ambient_light = E/π;
 - emission: ``emission_cd_m2`` is added as it is (white);
@@ -22,6 +24,7 @@ background. Ids are 32-bit, so any realistic number of instances fits.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import timedelta
@@ -37,6 +40,7 @@ from camgen.actors.character import CharacterRig, character_rig
 from camgen.config.markings import marking_names
 from camgen.config.placement import is_level_plane, largest_level_plane, placement
 from camgen.config.scene import (
+    MAX_LIGHTS,
     Actor,
     AmbientLight,
     BoxMesh,
@@ -68,6 +72,14 @@ from camgen.props.sway import SWAYING_TYPES, PropSway, bendable, prop_sway, wind
 from camgen.render.gl import pyrender
 from camgen.render.mipmaps import MipmappedTexture
 from camgen.vehicles import LAMP_COLOUR_RGB, LAMP_LUMINANCE_CD_M2, VehicleRig, plate_texture, vehicle_rigs
+from camgen.vehicles.headlamps import (
+    BEAM_CONE_DEG,
+    BEAM_VISIBLE_FRACTION,
+    daylight_horizontal_lux,
+    lit_at,
+    low_beam_table,
+    peak_road_illuminance_lux,
+)
 from camgen.vehicles.sign import display_luminance_cd_m2
 from camgen.world.ies import flux_lm as ies_flux_lm
 from camgen.world.ies import grid_intensity_cd, intensity_grid_cd
@@ -305,6 +317,8 @@ class SceneGraph:
     """The people, skinned together."""
     vehicles: list[VehicleRig | None] = field(default_factory=list)
     """Each actor's procedural vehicle (its mesh posed in world coordinates), or None."""
+    headlamps: list[Headlamp] = field(default_factory=list)
+    """The spot lights of the vehicles' low beams (`add_headlamps`), moved and switched with them."""
     prop_nir: dict[int, np.ndarray] = field(default_factory=dict)
     """id() of each prop's or road marking's primitive → its vertices' reflectance at 850 nm (`camgen.render.nir`)."""
     swaying: list[SwayingProp] = field(default_factory=list)
@@ -384,6 +398,8 @@ class SceneGraph:
             elif vehicle is not None and self.daylight is not None and vehicle.sign_centre_m is not None:
                 _light_display(node, vehicle, sign_luminance_cd_m2(self.scene, vehicle))  # a standing bus at dusk
                 versions[k] += 1
+        for headlamp in self.headlamps:
+            headlamp.place(self.scene, vehicles[headlamp.actor_index], time_s)
         self.crowd.place(time_s)
         for k, (node, rig) in enumerate(zip(self.actor_nodes, self.people, strict=True)):
             if rig is None:
@@ -1059,6 +1075,81 @@ def _ies_lamp(light: LampLight, resolve_path: Callable[[str], Path] | None) -> p
     return node_light
 
 
+@dataclass
+class Headlamp:
+    """A vehicle's lit low beams as one spot light (`camgen.vehicles.headlamps`: a car's pair of lamps as one
+    light midway between them): its node, placed with the vehicle (`place`), at `intensity_cd` while the
+    vehicle's head lamps are lit and 0 while they are not.
+
+    The light holds still over each frame's exposure, where the vehicle stands at the frame's time (the time
+    rounded to the scene's frames, `frame_s`): its pool, metres long and soft-edged, would smear by the
+    vehicle's travel in the exposure (0.33 m at 30 km/h in 1/25 s), which nobody sees; a light that moves during
+    the exposure makes the renderer draw the whole frame at every motion-blur sub-frame (`camgen.render.sequence`),
+    where a held one lets it blur the moving vehicle's pixels alone. It moves from frame to frame."""
+
+    actor_index: int
+    node: pyrender.Node
+    point_m: np.ndarray
+    """(3,) where the light stands in the vehicle's frame, m (`VehicleRig.headlamp`)."""
+    intensity_cd: float
+    """The beam's peak, all its lamps together, cd."""
+    frame_s: float
+    """The scene's frame period, s."""
+
+    def place(self, scene: pyrender.Scene, rig: VehicleRig, time_s: float) -> None:
+        """Put the light where `rig` holds its lamps at the frame time nearest `time_s`, aimed level along its
+        heading; lit as they are then."""
+        frame_time_s = round(time_s / self.frame_s) * self.frame_s
+        T, _ = rig.pose(frame_time_s)
+        ahead = np.array([T[0, 0], T[1, 0], 0.0])
+        scene.set_pose(self.node, _look_along(ahead, T[:3, :3] @ self.point_m + T[:3, 3]))
+        self.node.light.intensity = self.intensity_cd if rig.lamps(frame_time_s)["head"] else 0.0
+
+
+def add_headlamps(graph: pyrender.Scene, scene: Scene, vehicles: list[VehicleRig | None]) -> list[Headlamp]:
+    """A `Headlamp` for each vehicle of `scene` whose head lamps are lit at its first or last frame while
+    their pool would show: its brightest illuminance on the road at least `BEAM_VISIBLE_FRACTION` of the
+    daylight's then (`camgen.vehicles.headlamps.daylight_horizontal_lux`; by day a lit lamp only glows).
+
+    The renderer shades at most `MAX_LIGHTS["spot"]` spot lights, the scene's spot and lamp lights among them:
+    the vehicles beyond that room, in the scene's order of actors, keep glowing lenses but light nothing,
+    and a warning names them."""
+    times_s = (0.0, float(scene.duration_s))
+    daylight = daylight_horizontal_lux(scene)
+    darkest_lux = min(daylight(t) for t in times_s)
+    wanted = []
+    for index, rig in enumerate(vehicles):
+        carried = rig.headlamp if rig is not None else None
+        if carried is None or not any(lit_at(rig.lights_on, t) for t in times_s):
+            continue
+        point_m, lamps = carried
+        if peak_road_illuminance_lux(float(point_m[2]), lamps) >= BEAM_VISIBLE_FRACTION * darkest_lux:
+            wanted.append((index, point_m, lamps))
+    room = max(MAX_LIGHTS["spot"] - len(graph.spot_light_nodes), 0)
+    if len(wanted) > room:
+        names = ", ".join(scene.actors[index].name for index, _, _ in wanted[room:])
+        warnings.warn(
+            f"{len(wanted)} vehicles have lit low beams but the renderer shades at most {MAX_LIGHTS['spot']} spot "
+            f"lights ({len(graph.spot_light_nodes)} of them the scene's lamps): {names} light no road, their "
+            "lamps only glow; remove some lamps or vehicles, or set their vehicle.lights_on: false",
+            stacklevel=2,
+        )
+    table = low_beam_table()
+    peak_cd = float(table.max())
+    outer = math.radians(BEAM_CONE_DEG)
+    headlamps = []
+    for index, point_m, lamps in wanted[:room]:
+        light = pyrender.SpotLight(
+            color=(1.0, 1.0, 1.0), intensity=lamps * peak_cd, innerConeAngle=outer - 1e-3, outerConeAngle=outer
+        )
+        light.intensity_profile = SpotProfile(
+            relative=(table / peak_cd).astype(np.float32), c0_direction=np.array([0.0, 0.0, 1.0])
+        )
+        node = graph.add(light, name=f"headlamp:{scene.actors[index].name}")
+        headlamps.append(Headlamp(index, node, point_m, lamps * peak_cd, 1.0 / scene.fps))
+    return headlamps
+
+
 def _add_lights(scene: pyrender.Scene, lights, resolve_path: Callable[[str], Path] | None = None) -> None:
     for light in lights:
         if isinstance(light, SunLight):
@@ -1221,6 +1312,7 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         vehicles=vehicles,
         prop_nir=prop_nir,
         swaying=swaying,
+        headlamps=add_headlamps(graph, scene, vehicles),
         source=(scene, resolve_path),
     )
     result.place_actors(0.0)

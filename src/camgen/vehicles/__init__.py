@@ -16,6 +16,7 @@ pedals or footpegs are at any time. Nothing here touches OpenGL or files.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -25,6 +26,7 @@ from camgen.config.scene import Actor, Scene, is_procedural_vehicle
 from camgen.motion.memo import TimeMemo, frozen
 from camgen.motion.trajectory import Route
 from camgen.vehicles.body import Part, VehicleModel, build_vehicle
+from camgen.vehicles.headlamps import HEADLAMP_AHEAD_M, AutoHeadlamps, daylight_horizontal_lux, lit_at
 from camgen.vehicles.look import TWO_WHEELERS, VehicleLook, draw_look
 from camgen.vehicles.plate import motorcycle_plate_image, plate_image
 from camgen.vehicles.two_wheeler import (
@@ -155,12 +157,14 @@ class VehicleRig:
 
     After `place`: `vertices_m` and `normals` hold every part's vertices in the world, one slice of
     them per part (`parts`, in the model's order), `T_world_from_vehicle` its frame (read-only: a pose is
-    kept for its time, `pose`), and `lit` which lamps shine."""
+    kept for its time, `pose`), and `lit` which lamps shine.
+
+    `lights_on`: True or False, or a function of the time (`camgen.vehicles.headlamps.AutoHeadlamps`)."""
 
     keypoints_m = None
     """Vehicles carry no skeleton (the annotations read keypoints of people only)."""
 
-    def __init__(self, model: VehicleModel, route: Route, *, lights_on: bool = False):
+    def __init__(self, model: VehicleModel, route: Route, *, lights_on: bool | Callable[[float], bool] = False):
         self.model, self.route, self.lights_on = model, route, lights_on
         sizes = [len(part.vertices_m) for part in model.parts]
         ends = np.cumsum(sizes)
@@ -291,14 +295,28 @@ class VehicleRig:
         """`lamps` at `time_s`, the front wheels steered `steering_rad` (`steer_rad` at that time)."""
         standing = self.route.standing(time_s) if self.route.moves else None
         flash = (time_s * INDICATOR_HZ) % 1.0 < 0.5
+        lit = lit_at(self.lights_on, time_s)
         return {
-            "head": self.lights_on,
-            "tail": self.lights_on,
+            "head": lit,
+            "tail": lit,
             "brake": standing is not None and math.isfinite(standing[1]),
             "indicator_left": bool(steering_rad > INDICATOR_STEER_RAD and flash),
             "indicator_right": bool(steering_rad < -INDICATOR_STEER_RAD and flash),
             "destination": self._sign is not None,  # a bus in service shows its route (`camgen.vehicles.sign`)
         }
+
+    @property
+    def headlamp(self) -> tuple[np.ndarray, int] | None:
+        """(point (3,) in the vehicle's frame, m; how many lamps) of the light its lit low beams cast
+        (`camgen.vehicles.headlamps`): midway between the head lamps' lenses, `HEADLAMP_AHEAD_M` ahead of
+        them; None for a vehicle without head lamps (a bicycle's lamp glows only)."""
+        heads = [part for part in self.model.parts if part.surface == "head"]
+        if not heads:
+            return None
+        vertices = np.concatenate([part.vertices_m for part in heads])
+        centre = (vertices.min(axis=0) + vertices.max(axis=0)) / 2
+        centre[0] = vertices[:, 0].max() + HEADLAMP_AHEAD_M
+        return centre, 1 if self.look.body_type == "motorcycle" else 2
 
     @property
     def sign_centre_m(self) -> np.ndarray | None:
@@ -409,7 +427,7 @@ class TwoWheelerRig(VehicleRig):
         rear lamps when its lights are on."""
         lit = super()._lamps_at(time_s, steering_rad)
         lit = {key: value for key, value in lit.items() if not key.startswith("indicator")}
-        return lit | {"cycle_head": self.lights_on, "cycle_tail": self.lights_on}
+        return lit | {"cycle_head": lit["head"], "cycle_tail": lit["head"]}
 
     def rider_targets(self, time_s: float) -> RiderTargets:
         """Where the rider's body meets the two-wheeler at `time_s`, in the world."""
@@ -459,12 +477,24 @@ def saddle_for_rider(joints_m: np.ndarray, joint_index: dict[str, int]) -> float
 
 
 def vehicle_rig(
-    actor: Actor, route: Route, *, scene_seed: int, actor_index: int, saddle_m: float | None = None
+    actor: Actor,
+    route: Route,
+    *,
+    scene_seed: int,
+    actor_index: int,
+    saddle_m: float | None = None,
+    daylight_lux: Callable[[float], float] | None = None,
 ) -> VehicleRig:
     """The procedural vehicle of a car, truck, bus, bicycle or motorcycle actor without a shape, driving
-    its route; `saddle_m`: a bicycle's saddle height for its rider (`saddle_for_rider`)."""
+    its route; `saddle_m`: a bicycle's saddle height for its rider (`saddle_for_rider`); `daylight_lux`:
+    the scene's daylight on the ground over time (`camgen.vehicles.headlamps.daylight_horizontal_lux`), which
+    switches `auto` lamps (none given: `auto` lamps stay dark)."""
     look = vehicle_look(actor, scene_seed=scene_seed, actor_index=actor_index)
-    lights_on = actor.vehicle is not None and actor.vehicle.lights_on
+    switch = "auto" if actor.vehicle is None else actor.vehicle.lights_on
+    lights_on: bool | Callable[[float], bool] = switch
+    if switch == "auto":
+        driven = route.moves if look.body_type in TWO_WHEELERS else has_driver(actor, route)
+        lights_on = AutoHeadlamps(daylight_lux, driven) if daylight_lux is not None else False
     if look.body_type in TWO_WHEELERS:
         saddle_mm = round(1000 * (DEFAULT_SADDLE_M if saddle_m is None else saddle_m))
         return TwoWheelerRig(_two_wheeler(look, saddle_mm), route, lights_on=lights_on)
@@ -478,6 +508,7 @@ def vehicle_rigs(scene: Scene, routes: dict[str, Route]) -> dict[str, VehicleRig
     from camgen.actors.skeleton import INDEX
 
     riders = {actor.rides: (index, actor) for index, actor in enumerate(scene.actors) if actor.rides is not None}
+    daylight = daylight_horizontal_lux(scene)
     rigs = {}
     for index, actor in enumerate(scene.actors):
         if not is_procedural_vehicle(actor):
@@ -488,7 +519,7 @@ def vehicle_rigs(scene: Scene, routes: dict[str, Route]) -> dict[str, VehicleRig
             model = person_model(rider, scene_seed=scene.seed, actor_index=rider_index)
             saddle = saddle_for_rider(model.joints_m, INDEX)
         rigs[actor.name] = vehicle_rig(
-            actor, routes[actor.name], scene_seed=scene.seed, actor_index=index, saddle_m=saddle
+            actor, routes[actor.name], scene_seed=scene.seed, actor_index=index, saddle_m=saddle, daylight_lux=daylight
         )
     return rigs
 
