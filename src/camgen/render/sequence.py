@@ -291,6 +291,10 @@ class CameraRenderer:
         `moving_regions`."""
         self._last_view: View | None = None
         """The view of the last base drawn (`_base_radiance`): a head that held still since is not turning."""
+        self._lamp_owner = {
+            id(lamp.node): id(graph.actor_nodes[lamp.actor_index]) for lamp in getattr(graph, "headlamps", [])
+        }
+        """id() of each headlamp's light node → id() of its vehicle's node, which casts no shadow in its light."""
         self._last_daylight: list[np.ndarray] | None = None
         """The daylight of the last base drawn (`_daylight_state`): a turned frame is drawn from a canvas only while
         it holds from frame to frame (a dusk lit frame by frame would start a canvas at every frame)."""
@@ -565,13 +569,17 @@ class CameraRenderer:
         groups: dict[int, set[int]] = {}
         for k in range(len(moving)):
             node_vertices = [vertices[i][k] for i in range(3)]
+            # A vehicle casts no shadow in its own headlamps' light (they shine ahead of it, from it).
+            lit = [i for i, light in enumerate(casting) if self._lamp_owner.get(id(light)) != id(moving[k])]
+            lights_k = [casting[i] for i in lit]
+            poses_k = [[poses[i] for i in lit] for poses in light_poses]
             if lights_held and threshold >= 0.0:  # a path at or under the threshold needs 1 sub-frame
                 if versions[0][k] == versions[1][k] == versions[2][k]:
                     continue  # the same points at the three times: every path is 0 px
-                if _path_bound_px(node_vertices, view, casting, light_poses[0], self._lowest_z_m) <= threshold:
+                if _path_bound_px(node_vertices, view, lights_k, poses_k[0], self._lowest_z_m) <= threshold:
                     continue
             (uv0, front0), (uv1, front1), (uv2, front2) = (
-                _node_pixels(node_vertices[i], view, casting, light_poses[i], self._lowest_z_m) for i in range(3)
+                _node_pixels(node_vertices[i], view, lights_k, poses_k[i], self._lowest_z_m) for i in range(3)
             )
             seen = front0 & front1 & front2 & _near_view(uv1, view)
             if not seen.any():
@@ -900,7 +908,9 @@ class CameraRenderer:
             corners = np.concatenate(boxes[k])
             low, high = corners.min(axis=0), corners.max(axis=0)
             texels_m = []
-            for node in casting:
+            own = id(self.graph.moving_nodes[k])
+            lights_k = [light for light in casting if self._lamp_owner.get(id(light)) != own]
+            for node in lights_k:
                 if isinstance(node.light, DirectionalLight):  # the same for every caster, kept (`_sun_texel_m`)
                     texels_m.append(self._sun_texel_m(node, fit, (near_m, far_m)))
                 else:
@@ -908,7 +918,7 @@ class CameraRenderer:
             grow_m = SHADOW_TEXEL_MARGIN * max(texels_m, default=0.0)
             swept = box_corners(low - grow_m, high + grow_m, np.eye(4))
             hulls = [swept]
-            for node in casting:
+            for node in lights_k:
                 slices = _shadow_slices(scene, node, swept, self._lowest_z_m)
                 if slices is None:
                     return None
@@ -1379,6 +1389,10 @@ def _node_pixels(
             L = light_pose[:3, 3]
             above = L[2] - vertices[:, 2]
             reach = np.divide(L[2] - lowest_z_m, above, out=np.full(len(vertices), np.nan), where=above > 1e-6)
+            # Outside the cone its shadow map spans, the light casts no shadow (a headlamp's beam, aimed ahead).
+            rays = vertices - L
+            inside = rays @ -light_pose[:3, 2] >= np.cos(_spot_reach_rad(light.light)) * np.linalg.norm(rays, axis=1)
+            reach = np.where(inside, reach, np.nan)
             points.append(L + reach[:, None] * (vertices - L))
         valid.append(np.isfinite(reach) & (height_m >= 0.0))
     camera = _camera_frame(np.nan_to_num(np.concatenate(points)), view)
@@ -1550,6 +1564,13 @@ def _shadow_slices(scene, node, corners_m: np.ndarray, lowest_z_m: float) -> lis
         hulls = [np.concatenate([corners_m + a * d, corners_m + b * d]) for a, b in itertools.pairwise(ends)]
         return [_above_plane(hull, lowest_z_m) for hull in hulls]
     L = pose[:3, 3]
+    centre = (corners_m.min(axis=0) + corners_m.max(axis=0)) / 2
+    radius_m = float(np.linalg.norm(corners_m - centre, axis=1).max())
+    distance_m = float(np.linalg.norm(centre - L))
+    if distance_m > radius_m:  # the box's bounding sphere, seen from the light, wholly outside its cone: no shadow
+        off_axis = math.acos(float(np.clip((centre - L) @ -pose[:3, 2] / distance_m, -1.0, 1.0)))
+        if off_axis - math.asin(radius_m / distance_m) > _spot_reach_rad(node.light):
+            return []
     if L[2] <= corners_m[:, 2].max() + 1e-6:
         return None
     reach = float(np.max((L[2] - lowest_z_m) / (L[2] - corners_m[:, 2])))
@@ -1558,6 +1579,16 @@ def _shadow_slices(scene, node, corners_m: np.ndarray, lowest_z_m: float) -> lis
     ends = np.linspace(1.0, max(reach, 1.0), pieces + 1)
     hulls = [np.concatenate([L + a * (corners_m - L), L + b * (corners_m - L)]) for a, b in itertools.pairwise(ends)]
     return [_above_plane(hull, lowest_z_m) for hull in hulls]
+
+
+def _spot_reach_rad(light) -> float:
+    """The half-angle, rad, within which a spot light can cast a shadow: to the corners of its square shadow map
+    (pyrender's shadow camera: a field of view of 2·outer cone + π/16 across, at most π; its corners √2 times as far
+    off the axis in tangent)."""
+    half = light.outerConeAngle + math.pi / 32.0
+    if half >= math.pi / 2.0 - 1e-9:
+        return math.pi / 2.0
+    return math.atan(math.sqrt(2.0) * math.tan(half))
 
 
 def _above_plane(points_m: np.ndarray, z_m: float) -> np.ndarray:
