@@ -45,8 +45,8 @@ def test_the_first_goal_is_the_dead_zone_edge_short_of_the_walker(tmp_path):
     """The walker's box centre at t = 0 is (−1, 8, 0.875) m, the dome at (0, −2, 3) m looking along +y, so
     its bearing is pan atan(1/10) = 5.71° (left: positive), tilt −atan(2.125/√101) = −11.94°. Follow moves
     its goal just inside a window half the dead zone (0.3 of 160 px: ±24 px at fx 333.3 px · zoom 1.5,
-    ±2.75°; half: 1.37°, over cos(tilt) in pan): pan 5.71 − 1.40; the tilt is inside. It zooms to put the 1.75 m walker at 0.3 of
-    the 120 px frame at 10.27 m: 0.63×, the wide end 1× (past the 1.25 dead band from 1.5×). At the
+    ±2.75°; half: 1.37°, over cos(tilt) in pan): pan 5.71 − 1.40; the tilt is inside. It zooms to put the 1.75 m
+    walker at 0.3 of the 120 px frame at 10.27 m: 0.63×, the wide end 1× (past the 1.25 dead band from 1.5×). At the
     program's 50°/s of the head's 100°/s: speed 0.5."""
     world = write_world(tmp_path, program="{type: follow, target: walker, speed_deg_s: 50}")
     follower = sim_follow_program.ProgramFollower(SimpleNamespace(loaded=load_scene(world)), "dome")

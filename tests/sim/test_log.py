@@ -63,7 +63,9 @@ def test_the_log_says_how_turned_frames_were_drawn(episode, tmp_path):
     """A run that drew every turned frame whole says so, and its replay does the same; a log written before the key
     was drawn so too (every turned frame whole) and is replayed so."""
     _, path, log, _ = episode
-    assert log.turns_reprojected and json.loads(path.read_text().splitlines()[0])["turns_reprojected"] is True
+    assert log.turns_reprojected is None  # by the readout's size (80×60 draws whole), written "auto"
+    assert json.loads(path.read_text().splitlines()[0])["turns_reprojected"] == "auto"
+    assert load_command_log(path).turns_reprojected is None
     whole = save_command_log(dataclasses.replace(log, turns_reprojected=False), tmp_path / "whole.jsonl")
     assert load_command_log(whole).turns_reprojected is False
     records = path.read_text().splitlines()
@@ -118,7 +120,7 @@ def test_cli_replay_writes_the_same_frames_and_renders_another_profile(episode, 
         ('{"frame": 0, "camera": "dome", "command": "Jump"}', r"log.jsonl:2: command 'Jump' is not one of"),
         ('{"frame": 0, "camera": "dome", "command": "Stop", "fast": 1}', r"Stop has no field 'fast'"),
         ("[1, 2]", r"log.jsonl:2: expected a JSON object"),
-        ("HEADER", r"log.jsonl:1: turns_reprojected must be true or false .* got 'yes'"),
+        ("HEADER", r"log.jsonl:1: turns_reprojected must be true, false or \"auto\" .* got 'yes'"),
         ("{frame: 0}", r"log.jsonl:2: not JSON"),
     ],
 )

@@ -77,13 +77,13 @@ def test_same_seed_and_commands_give_byte_identical_frames(world, renderer):
 
 
 def test_a_turning_head_is_drawn_from_its_canvas_reproducibly(world, renderer):
-    """A pan alone (no zoom) draws the turned frames from the turn canvas (`turns_reprojected`, the default): the
+    """A pan alone (no zoom) draws the turned frames from the turn canvas (`turns_reprojected`): the
     same commands give the same bytes again, and frames within resampling of every turned frame drawn whole (the
     frames after the head stops are drawn whole again: test_turned_frames; delivered, they can still differ by a
     code value where auto-exposure, which remembers the turned frames, settled a hair apart)."""
     commands = [{"dome": ContinuousMove(pan=-0.6)}, {}, {}, {}, {"dome": Stop()}, {}, {}]
-    canvas = _run(world, renderer, 3, commands)
-    again = _run(world, renderer, 3, commands)
+    canvas = _run(world, renderer, 3, commands, turns_reprojected=True)
+    again = _run(world, renderer, 3, commands, turns_reprojected=True)
     whole = _run(world, renderer, 3, commands, turns_reprojected=False)
     for a, b in zip(canvas, again, strict=True):
         assert a["dome"].rgb8.tobytes() == b["dome"].rgb8.tobytes()
@@ -96,6 +96,22 @@ def test_a_turning_head_is_drawn_from_its_canvas_reproducibly(world, renderer):
         assert psnr_db > 30, (k, psnr_db)
         differ += not np.array_equal(a, b)
     assert differ >= 2  # the canvas drew them
+
+
+def test_by_default_a_small_readout_draws_turned_frames_whole(world, renderer, monkeypatch):
+    """`turns_reprojected` None decides by each camera's readout: from TURN_CANVAS_MIN_PX pixels the canvas, below
+    it every turned frame drawn whole (a small step's cost is its fixed costs; the canvas would only resample)."""
+    from camgen.sim import simulation
+
+    def reprojected(size) -> list[bool]:
+        with Simulation(world, renderer=renderer, resolution_px=size) as sim:
+            return [drawer.turns_reprojected for drawer in sim._drawers.values()]
+
+    assert simulation.TURN_CANVAS_MIN_PX == 320 * 240
+    assert reprojected((80, 60)) == [False, False]  # the dome and the overview
+    monkeypatch.setattr(simulation, "TURN_CANVAS_MIN_PX", 160 * 120)  # the test world's sensors are 160×120
+    assert reprojected((160, 120)) == [True, True]
+    assert reprojected((80, 60)) == [False, False]
 
 
 def test_ground_truth_follows_the_commanded_view(world, renderer):

@@ -1,7 +1,7 @@
 """Closed-loop cases: one `Simulation.step` of the parking lot's PTZ dome (scenes/ptz_follow.yaml) read
 out at 1280×720 with the full camera model (lens, sensor with auto-exposure, ISP), the head turning
 under a ContinuousMove (so its frames carry motion blur, as a tracking head's do) with its frames drawn
-from a turn canvas (`Simulation`'s ``turns_reprojected``, the default) and with every frame drawn whole,
+from a turn canvas (`Simulation`'s ``turns_reprojected``, its default at this size) and with every frame drawn whole,
 held, and turning with the ground truth asked for; then held and turning again without supersampling
 (`PlanSettings`' supersampling 1: one radiance sample a pixel, the option a closed loop that wants speed
 takes; the tradeoffs section measures what it costs in error). A case's time is one step: the head's

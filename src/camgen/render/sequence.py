@@ -63,8 +63,8 @@
   720p sim step of ptz_follow, stepped in turn with the code before (30 steps each, load 8): 1.11 → 0.86 s
   (×0.78 step by step); the blur test 96 → 42 ms, the rectangles 48 → 2 ms, placing the actors 61 → 34 ms, the
   draws 864 → 734 ms; the same frames bit for bit.
-- Turned frames (`CameraRenderer(turns_reprojected=True)`; `camgen.sim` turns it on): a head turns about its
-  centre of projection, so what one view sees, another view sees at the pixel a homography takes it to
+- Turned frames (`CameraRenderer(turns_reprojected=True)`; `camgen.sim` turns it on from 320×240): a head turns
+  about its centre of projection, so what one view sees, another view sees at the pixel a homography takes it to
   (`_homography`: no parallax; the sky, shadows, fog and speculars alike, a surface's view direction unchanged).
   While the head turns (the view differs from the last frame's by a pan or tilt; not a zoom, which would
   magnify), each frame's base is its turn canvas (`_TurnCanvas`) warped to its view by bicubic resampling: a

@@ -6,7 +6,7 @@ steps taken and the readout size; `save_command_log` writes it as JSON Lines (`c
 a header line, then one line per command::
 
     {"format": "camgen-command-log", "version": 1, "scene": "ptz_follow", "seed": 0, "steps": 50,
-     "resolution_px": [160, 120], "turns_reprojected": true}
+     "resolution_px": [160, 120], "turns_reprojected": "auto"}
     {"frame": 0, "time_s": 0.0, "camera": "pole_ptz", "command": "ContinuousMove", "pan": -0.2,
      "tilt": 0.0, "zoom": 0.0, "timeout_s": null}
 
@@ -53,10 +53,10 @@ class CommandLog:
     """Steps taken after reset (frames delivered: steps + 1)."""
     resolution_px: tuple[int, int] | None
     commands: tuple[LoggedCommand, ...]
-    turns_reprojected: bool = True
-    """Whether the run drew a turning head's frames from its turn canvas (`Simulation`'s ``turns_reprojected``); a
-    log without the key was recorded before there was a canvas, when every turned frame was drawn whole, and is
-    replayed so (False), as the run drew it."""
+    turns_reprojected: bool | None = None
+    """Whether the run drew a turning head's frames from its turn canvas (`Simulation`'s ``turns_reprojected``; None:
+    by the readout's size, written "auto"); a log without the key was recorded before there was a canvas, when every
+    turned frame was drawn whole, and is replayed so (False), as the run drew it."""
 
 
 def command_log(sim: Simulation) -> CommandLog:
@@ -88,7 +88,7 @@ def log_records(log: CommandLog) -> list[dict[str, Any]]:
         "seed": log.seed,
         "steps": log.steps,
         "resolution_px": None if log.resolution_px is None else list(log.resolution_px),
-        "turns_reprojected": log.turns_reprojected,
+        "turns_reprojected": "auto" if log.turns_reprojected is None else log.turns_reprojected,
     }
     return [header, *(command_record(entry) for entry in log.commands)]
 
@@ -127,11 +127,12 @@ def parse_log(records: Sequence[tuple[int, dict]], source: str = "<log>") -> Com
     ):
         raise ConfigError(f"{where}: resolution_px must be null or [W, H], whole numbers ≥ 2; got {resolution!r}")
     reprojected = header.get("turns_reprojected", False)  # a log from before the key: every frame drawn whole
-    if not isinstance(reprojected, bool):
+    if not (isinstance(reprojected, bool) or reprojected == "auto"):
         raise ConfigError(
-            f"{where}: turns_reprojected must be true or false (whether a turning head's frames are drawn from its "
-            f"turn canvas), got {reprojected!r}"
+            f'{where}: turns_reprojected must be true, false or "auto" (whether a turning head\'s frames are drawn '
+            f"from its turn canvas; auto: by the readout's size), got {reprojected!r}"
         )
+    reprojected = None if reprojected == "auto" else reprojected
     commands = []
     previous = 0
     for number, record in records[1:]:

@@ -58,6 +58,12 @@ NOISE_THREADS = 2
 """Threads for the sensor's row bands and the tone lookup (the machines here have 2 cores)."""
 
 
+TURN_CANVAS_MIN_PX = 320 * 240
+"""Readout pixels from which a camera draws a turning head's frames from its turn canvas by default (`Simulation`'s
+``turns_reprojected`` None): below it a step costs its fixed costs (ptz_follow: ~47 s of CPU for 300 steps at both
+96×54 and 160×90), so the canvas saves nothing and its resampling is all it brings."""
+
+
 @dataclass(frozen=True)
 class CameraObservation:
     """What one camera delivers at one frame."""
@@ -159,13 +165,16 @@ class Simulation:
         The plan's thresholds, as `camgen render` takes them.
     cameras : names or None
         The cameras that deliver frames (default all); the others' heads still take commands.
-    turns_reprojected : bool
+    turns_reprojected : bool or None
         While a head turns, draw each frame from a turn canvas (a draw of a view wider than the frame, brought
         up to the frame time in crops: the edges the turn brings into view and whatever moved since, with its
         shadows) warped to the frame's view by a homography (`camgen.render.sequence`'s turned frames; a head
         turns about its centre of projection), resampled bicubically. A held head's frames are drawn exactly,
         as `camgen render` draws them (auto-exposure still remembers the turned frames). False: every turned
         frame is drawn whole (BENCHMARKS.md's sim section gives both steps' time and the frames' difference).
+        None (the default): a camera read out at `TURN_CANVAS_MIN_PX` pixels or more uses the canvas, a smaller
+        one draws whole, where a step's cost is its fixed costs, not its pixels, and a resampling would buy
+        nothing (a CamShift tracker at 80×60 lost its window in 6 of 15 steps on the canvas's frames, 4 drawn whole).
     """
 
     def __init__(
@@ -179,7 +188,7 @@ class Simulation:
         settings: PlanSettings | None = None,
         cameras: Iterable[str] | None = None,
         profile_dirs: Sequence[Path] = (),
-        turns_reprojected: bool = True,
+        turns_reprojected: bool | None = None,
     ):
         loaded = scene if isinstance(scene, LoadedScene) else load_scene(scene, profile_dirs)
         self.loaded = loaded
@@ -250,7 +259,11 @@ class Simulation:
                 self.renderer,
                 build_scene_graph(self.job.scene, resolve),
                 self.job.cameras[i],
-                turns_reprojected=turns_reprojected,
+                turns_reprojected=(
+                    turns_reprojected
+                    if turns_reprojected is not None
+                    else self.job.cameras[i].width_px * self.job.cameras[i].height_px >= TURN_CANVAS_MIN_PX
+                ),
             )
             for i in self._delivering
         }
