@@ -115,3 +115,29 @@ def test_a_lamp_shadow_starts_at_its_casters_foot(renderer):
     assert ratio[0] < 0.8
     assert half_lit_m < 0.02
     assert ratio[40:].max() < 0.01  # 10 cm on: in the full shadow
+
+
+def test_a_renderer_draws_fewer_spot_lights_after_more():
+    """A renderer that drew a scene with two spot lights and a sun then draws one with a single spot light and the
+    sun as a fresh renderer does: the program's second spot shadow map kept the unit the first scene gave it, which
+    the second gives the sun's cascade array, and OpenGL refused the draw ("invalid operation") before the unused
+    entries were pointed at the first map's unit."""
+    from camgen.render.renderer import Renderer
+    from camgen.render.scene_graph import build_scene_graph
+
+    ground = {"type": "plane", "name": "ground", "size_m": [40.0, 40.0]}
+    box = {"type": "box", "name": "box", "size_m": [1.0, 1.0, 1.0], "position_m": [0.0, 2.0, 0.5]}
+    sun = {"type": "sun", "illuminance_lux": 20000, "azimuth_deg": 200, "elevation_deg": 30}
+    spot = {"type": "spot", "intensity_cd": 20000, "position_m": [2.0, 2.0, 6.0], "target_m": [0.0, 2.0, 0.0]}
+    other = {"type": "spot", "intensity_cd": 20000, "position_m": [-2.0, 4.0, 0.6], "target_m": [-2.0, 12.0, 0.2]}
+
+    def graph(lights):
+        return build_scene_graph(scene_from(environment={"meshes": [ground, box]}, lights=lights))
+
+    view = View(camera_matrix(80.0, 80.0, 79.5, 59.5), look_at((0.0, -6.0, 4.0), (0.0, 2.0, 0.0)), 160, 120)
+    with Renderer() as fresh:
+        expected = fresh.draw(graph([sun, spot]), view, ("radiance",)).radiance
+    with Renderer() as used:
+        used.draw(graph([sun, spot, other]), view, ("radiance",))
+        again = used.draw(graph([sun, spot]), view, ("radiance",)).radiance
+    assert np.array_equal(again, expected)

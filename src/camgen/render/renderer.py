@@ -934,6 +934,14 @@ class _PassRenderer(pyrender.Renderer):
     def _bind_lighting(self, scene, program, node, flags):
         """pyrender's lighting uniforms (with each sun's first cascade), and each sun's other cascades."""
         super()._bind_lighting(scene, program, node, flags)
+        if flags & RenderFlags.SHADOWS_SPOT:
+            # pyrender sets the shadow maps of the scene's spot lights only: an entry a scene drawn before with more
+            # spot lights set keeps its unit, which may now hold another kind of texture (a sun's array, the sky
+            # map): OpenGL refuses such a draw ("invalid operation"). The unused entries name the first map's unit.
+            spots = sum(isinstance(n.light, SpotLight) for n in scene.light_nodes)
+            first = program.values.get("spot_lights[0].shadow_map") if spots else None
+            for i in range(spots, int(program.defines.get("MAX_SPOT_LIGHTS", 0)) if first else 0):
+                program.set_uniform(f"spot_lights[{i}].shadow_map", first[1])
         if not flags & RenderFlags.SHADOWS_DIRECTIONAL:
             return
         suns = [n for n in scene.light_nodes if isinstance(n.light, DirectionalLight)]  # pyrender's order
