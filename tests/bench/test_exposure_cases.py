@@ -10,15 +10,15 @@ from camgen.bench.exposure_cases import (
     core_box,
     exposure_table,
     is_silhouette,
-    luma,
     readout_px,
     ring_boxes,
 )
+from camgen.world.night import luma_bt601
 
 
 def test_luma_is_bt601_as_opencv_computes_it():
     rgb = np.random.default_rng(0).integers(0, 256, (16, 24, 3), dtype=np.uint8)
-    assert np.allclose(luma(rgb), cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY), atol=0.51)
+    assert np.allclose(luma_bt601(rgb), cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY), atol=0.51)
 
 
 def test_core_box_is_the_middle_half_and_sixty_percent():

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from camgen.bench.harness import Case
+from camgen.world.night import luma_bt601
 
 READOUT_WIDTH_PX = 640
 MIN_HEIGHT_PX = 24
@@ -55,12 +56,6 @@ class CameraExposure:
     @property
     def silhouettes(self) -> list[str]:
         return [name for name, _, _, around in self.objects if is_silhouette(around, self.frame_p90_luma)]
-
-
-def luma(rgb8: np.ndarray) -> np.ndarray:
-    """BT.601 Y′ of an 8-bit RGB frame, float."""
-    rgb = rgb8.astype(np.float32)
-    return 0.299 * rgb[..., 0] + 0.587 * rgb[..., 1] + 0.114 * rgb[..., 2]
 
 
 def core_box(box: tuple[float, float, float, float]) -> tuple[int, int, int, int]:
@@ -122,7 +117,7 @@ def camera_exposures(repo: Path) -> list[CameraExposure]:
                 loaded, ground_truth=True, resolution_px=size, renderer=renderer, cameras=[camera.name]
             ) as sim:
                 delivered = sim.reset(0).cameras[camera.name]
-            y = luma(delivered.rgb8)
+            y = luma_bt601(delivered.rgb8)
             row = CameraExposure(
                 path.stem,
                 camera.name,

@@ -290,7 +290,7 @@ class CameraRenderer:
         frame's view (module docstring: turned frames); False draws every turned frame whole. Needs
         `moving_regions`."""
         self._last_view: View | None = None
-        """The view of the last base drawn (`_base_radiance`): a head that held still since is not turning."""
+        """The view of the last base drawn (`_base_radiance`): a turned frame is one whose view turned since."""
         self._lamp_owner = {
             id(lamp.node): id(graph.actor_nodes[lamp.actor_index]) for lamp in getattr(graph, "headlamps", [])
         }
@@ -569,8 +569,7 @@ class CameraRenderer:
         groups: dict[int, set[int]] = {}
         for k in range(len(moving)):
             node_vertices = [vertices[i][k] for i in range(3)]
-            # A vehicle casts no shadow in its own headlamps' light (they shine ahead of it, from it).
-            lit = [i for i, light in enumerate(casting) if self._lamp_owner.get(id(light)) != id(moving[k])]
+            lit = self._shadowing(moving[k], casting)
             lights_k = [casting[i] for i in lit]
             poses_k = [[poses[i] for i in lit] for poses in light_poses]
             if lights_held and threshold >= 0.0:  # a path at or under the threshold needs 1 sub-frame
@@ -589,6 +588,11 @@ class CameraRenderer:
             if samples > 1:
                 groups.setdefault(samples, set()).add(k)
         return groups
+
+    def _shadowing(self, node, casting: list) -> list[int]:
+        """Indices into `casting` of the lights in which `node` can cast a shadow: all but its own headlamps' (they
+        shine ahead of the vehicle, from it)."""
+        return [i for i, light in enumerate(casting) if self._lamp_owner.get(id(light)) != id(node)]
 
     def _world_vertices_m(self, k: int, node) -> np.ndarray:
         """(N, 3) world positions of the vertices of moving node `k` (`node`) as placed now, every primitive's in
@@ -908,8 +912,7 @@ class CameraRenderer:
             corners = np.concatenate(boxes[k])
             low, high = corners.min(axis=0), corners.max(axis=0)
             texels_m = []
-            own = id(self.graph.moving_nodes[k])
-            lights_k = [light for light in casting if self._lamp_owner.get(id(light)) != own]
+            lights_k = [casting[i] for i in self._shadowing(self.graph.moving_nodes[k], casting)]
             for node in lights_k:
                 if isinstance(node.light, DirectionalLight):  # the same for every caster, kept (`_sun_texel_m`)
                     texels_m.append(self._sun_texel_m(node, fit, (near_m, far_m)))
@@ -1151,19 +1154,22 @@ class _TurnCanvas:
             np.zeros((*shape, 3), np.float32), np.zeros(shape, bool), None,
         )  # fmt: skip
 
-    def footprint_px(self, view: View) -> tuple[int, int, int, int] | None:
-        """The canvas's pixels (x0, y0, x1, y1) that `view`'s warp reads (its corners' and edges' images, grown by
-        the bicubic's reach of 2 pixels, aligned to the fine draws' grid); None where they pass the canvas's edge."""
+    def quad_px(self, view: View) -> np.ndarray | None:
+        """(4, 2) where the corners of `view`'s pixels' area land in the canvas: the image of the view under the warp,
+        a convex quadrilateral (a homography keeps lines straight); None where a corner lies behind the canvas."""
         w, h = view.width_px, view.height_px
-        xs, ys = np.linspace(-0.5, w - 0.5, 9), np.linspace(-0.5, h - 0.5, 9)
-        edge = np.concatenate(
-            [np.stack([xs, np.full(9, ys[0])]), np.stack([xs, np.full(9, ys[-1])]),
-             np.stack([np.full(9, xs[0]), ys]), np.stack([np.full(9, xs[-1]), ys])], axis=1
-        )  # fmt: skip
-        mapped = _homography(view, self.view) @ np.vstack([edge, np.ones(edge.shape[1])])
-        if np.any(mapped[2] <= 0):
+        corners = np.array([[-0.5, -0.5, 1], [w - 0.5, -0.5, 1], [w - 0.5, h - 0.5, 1], [-0.5, h - 0.5, 1]])
+        mapped = corners @ _homography(view, self.view).T
+        return mapped[:, :2] / mapped[:, 2:] if np.all(mapped[:, 2] > 0) else None
+
+    def footprint_px(self, view: View) -> tuple[int, int, int, int] | None:
+        """The canvas's pixels (x0, y0, x1, y1) that `view`'s warp reads (the box around its quadrilateral, `quad_px`,
+        grown by the bicubic's reach of 2 pixels, aligned to the fine draws' grid); None where they pass the canvas's
+        edge."""
+        quad = self.quad_px(view)
+        if quad is None:
             return None
-        u, v = mapped[0] / mapped[2], mapped[1] / mapped[2]
+        u, v = quad[:, 0], quad[:, 1]
         rect = (math.floor(u.min()) - 2, math.floor(v.min()) - 2, math.ceil(u.max()) + 3, math.ceil(v.max()) + 3)
         W, H = self.view.width_px, self.view.height_px
         if rect[0] < 0 or rect[1] < 0 or rect[2] > W or rect[3] > H:
@@ -1196,13 +1202,7 @@ class _TurnCanvas:
         a pixel (a turn uncovers a strip along an edge, a roll a sliver along another), aligned to the fine draws'
         grid and merged while that costs no more than a draw's fixed cost (`RECT_MERGE_SLACK_PX`)."""
         height, width = self.filled.shape
-        quads = []
-        for view in views:
-            w, h = view.width_px, view.height_px
-            corners = np.array([[-0.5, -0.5, 1], [w - 0.5, -0.5, 1], [w - 0.5, h - 0.5, 1], [-0.5, h - 0.5, 1]])
-            mapped = corners @ _homography(view, self.view).T
-            if np.all(mapped[:, 2] > 0):
-                quads.append(mapped[:, :2] / mapped[:, 2:])
+        quads = [quad for quad in map(self.quad_px, views) if quad is not None]
         if not quads:
             return []
         # Only the box around the quadrilaterals, grown by the bicubic's reach, is looked at.
@@ -1530,7 +1530,7 @@ def _shadow_texel_m(scene, node, fit: ShadowFit, clip_m, box_m, corners_m: np.nd
         size_texels = shadow_map_size_texels(fit.view)
         cascades = sun_cascade_matrices(pose[:3, :3], box_m, fit.view, *clip_m, size_texels)
         return max(2.0 / (min(P[0, 0], P[1, 1]) * size_texels) for _, P in cascades)
-    fov = min(2.0 * light.outerConeAngle + math.pi / 16.0, math.pi)
+    fov = _spot_shadow_fov_rad(light)
     distance_m = float(np.linalg.norm(corners_m - pose[:3, 3], axis=1).max())
     return 2.0 * math.tan(fov / 2.0) / SHADOW_TEX_SZ * distance_m
 
@@ -1581,11 +1581,16 @@ def _shadow_slices(scene, node, corners_m: np.ndarray, lowest_z_m: float) -> lis
     return [_above_plane(hull, lowest_z_m) for hull in hulls]
 
 
+def _spot_shadow_fov_rad(light) -> float:
+    """The field of view, rad, across a spot light's square shadow map: pyrender's shadow camera, 2·outer cone + π/16,
+    at most π."""
+    return min(2.0 * light.outerConeAngle + math.pi / 16.0, math.pi)
+
+
 def _spot_reach_rad(light) -> float:
     """The half-angle, rad, within which a spot light can cast a shadow: to the corners of its square shadow map
-    (pyrender's shadow camera: a field of view of 2·outer cone + π/16 across, at most π; its corners √2 times as far
-    off the axis in tangent)."""
-    half = light.outerConeAngle + math.pi / 32.0
+    (`_spot_shadow_fov_rad` across; its corners √2 times as far off the axis in tangent)."""
+    half = _spot_shadow_fov_rad(light) / 2.0
     if half >= math.pi / 2.0 - 1e-9:
         return math.pi / 2.0
     return math.atan(math.sqrt(2.0) * math.tan(half))

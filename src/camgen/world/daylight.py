@@ -100,4 +100,4 @@ def sky_horizontal_illuminance_from_zenith_lux(zenith_cd_m2: float, sun_elevatio
 def zenith_luminance_cd_m2(sky_illuminance_lux: float, sun_elevation_deg: float, sky: str) -> float:
     """L_z of the CIE sky `sky` (`camgen.world.sky`; "uniform": one luminance everywhere) whose
     horizontal illuminance is `sky_illuminance_lux` with the sun at `sun_elevation_deg`, cd/m²."""
-    return sky_illuminance_lux / _horizontal_integral(sky, round(float(max(sun_elevation_deg, 0.0)), 2))
+    return sky_illuminance_lux / sky_horizontal_illuminance_from_zenith_lux(1.0, sun_elevation_deg, sky)

@@ -153,10 +153,16 @@ def default_nir_reflectance(color_rgb) -> np.ndarray:
     return rgb[..., 0]
 
 
+def luma_bt601(rgb: np.ndarray) -> np.ndarray:
+    """Each pixel's BT.601 luma Y = 0.299 R + 0.587 G + 0.114 B of (..., 3) → (...), unrounded (an integer image's
+    in float64)."""
+    return rgb[..., 0] * 0.299 + rgb[..., 1] * 0.587 + rgb[..., 2] * 0.114
+
+
 def monochrome(rgb: np.ndarray) -> np.ndarray:
-    """The stream of a camera in night mode: each pixel's BT.601 luma Y = 0.299 R + 0.587 G + 0.114 B in
-    all three channels (what a camera's ISP sends with its saturation at zero), same dtype and shape."""
-    y = rgb[..., 0] * 0.299 + rgb[..., 1] * 0.587 + rgb[..., 2] * 0.114
+    """The stream of a camera in night mode: each pixel's BT.601 luma (`luma_bt601`) in all three channels (what a
+    camera's ISP sends with its saturation at zero), same dtype and shape."""
+    y = luma_bt601(rgb)
     if np.issubdtype(rgb.dtype, np.integer):
         y = np.clip(np.rint(y), np.iinfo(rgb.dtype).min, np.iinfo(rgb.dtype).max)
     return np.repeat(y[..., None].astype(rgb.dtype), rgb.shape[-1], axis=-1)
