@@ -11,10 +11,13 @@ the references here were published or transcribed by someone else:
   illuminance per zenith luminance (`normsc`) and its overcast zenith luminance (`zenithbr = 8.6 sin α + 0.123`
   kcd/m²);
 - IES RP-21-1984 ("Recommended practice for the calculation of daylight availability", J. IES 13:4, 381–392)
-  as a 1991 C++ program transcribes it equation by equation (github.com/Rogreis/DLN, Antigos/DLN.CPP,
-  equations (07)–(27)): its zenith luminance factor table for the clear sky (`FatLumCC`, π L_z / E_kh from
-  90° down to 0° sun altitude in 5° steps: the program indexes it 18 − α/5), its overcast factor 1.286, its
-  overcast vertical sky illuminance 8.5 sin α klx (eq. 23), and its constants (eqs. 15, 16, 19, 22);
+  as a 1991 C++ program ("Cálculo da disponibilidade de luz natural", github.com/Rogreis/DLN,
+  Antigos/DLN.CPP) transcribes it equation by equation, (07)–(27). The file names no source: it is RP-21 by its
+  contents (its equation of time, declination, E_xt, extinction and sky illuminance constants are those camgen
+  cites from RP-21). Used: its zenith luminance factor table for the clear sky (`FatLumCC`, π L_z / E_kh from
+  90° down to 0° sun altitude in 5° steps: the program indexes it 18 − α/5; its partly cloudy table is the
+  integral of its own partly cloudy sky in the same order, to 0.06 %), its overcast factor 1.286, its overcast
+  vertical sky illuminance 8.5 sin α klx (eq. 23), and its constants (eqs. 15, 16, 19, 22);
 - the certification values of Table A of Janiczek & DeYoung, "Computer programs for sun and moon
   illuminance with contingent tables and diagrams" (US Naval Observatory Circular 171, 1987), as the R package
   skylight reproduces them in its unit test (github.com/bluegreen-labs/skylight, tests/testthat/test_skylight.R).
@@ -179,9 +182,10 @@ def test_the_ies_constants_match_an_independent_transcription():
 
 def test_clear_daylight_with_the_sun_at_the_zenith_is_usno_table_a():
     """USNO Circular 171, Table A: on 1986-12-18 at 21:00 UT at 23.4° S 135.8° W the sun stands at the zenith
-    (printed altitude 90°) and sun and clear sky give a horizontal surface 123 786 lx (Brown's 1952 measured
-    natural illumination, as fitted by the circular). camgen's sun there is within the table's rounding of the
-    zenith, and its direct plus sky illuminance E_dn sin α + E_kh is within 10 % (camgen: 123 047 lx, −0.6 %)."""
+    (printed altitude 90°) and sun and clear sky give a horizontal surface 123 786 lx (the circular's own
+    clear-sky model, independent of the IES one: 133 775 lx outside the air). camgen's sun there is within the
+    table's rounding of the zenith, and its direct plus sky illuminance E_dn sin α + E_kh is within 10 %
+    (camgen: 123 047 lx, −0.6 %)."""
     time = datetime(1986, 12, 18, 21, 0, tzinfo=UTC)
     sun = solar_position(-23.4, -135.8, unix_time_s(time))
     elevation = float(sun.elevation_deg)
