@@ -2,7 +2,8 @@
 
 Each texture is a pure function of (type, seed, tile size) returning per-texel linear albedo (RGB,
 relative to the surface's mean reflectance: its mean is 1), roughness and metallic maps (and, for
-paving and brick, a normal map of their recessed joints) for one tile
+paving and brick, a normal map of their recessed joints; for facades, of their recessed windows and doors) for
+one tile
 that repeats across a surface (`camgen.render.scene_graph` maps it at the tile's size in metres and
 lets the GPU filter it over mipmaps). Real pavements are not one grey: what a detector and a tracker
 see on them is grain, joints, patches, stains and cracks at several scales.
@@ -18,7 +19,8 @@ Mean reflectances (`TYPICAL_ALBEDO_RGB`, linear RGB) used when a scene gives a t
   quarter; red clay brick about 0.3 in red, under 0.1 in blue); estimates, not measured for camgen.
 Sizes: a brick is 215 × 65 mm with 10 mm joints (BS EN 771-1's UK work size); paving slabs 400 mm
 square with 6 mm joints (BS 7263 flags, 400 × 400 or 600 × 600); a facade storey is 3 m high with
-windows 1.2 m wide and 1.5 m tall, 0.9 m above the floor.
+windows 1.2 m wide and 1.5 m tall, 0.9 m above the floor, and its ground storey has entrance doors (1.0 m
+clear by 2.1 m, Approved Document M; `DOOR_CLEAR_W_M`), windows and doors set back `REVEAL_DEPTH_M`.
 """
 
 from __future__ import annotations
@@ -252,31 +254,120 @@ def _brick(rng, size, m_per_px):
 
 FACADE_STOREY_M = 3.0
 WINDOW_W_M, WINDOW_H_M, SILL_M, WINDOW_PITCH_M = 1.2, 1.5, 0.9, 3.0
+FRAME_M = 0.06
+"""Width of a window's frame (and a glazed door panel's bead) as the texture paints it, m."""
 GLASS_ALBEDO = 0.15
 """Glass's share of the wall's mean reflectance (dark: the interior behind it), relative units."""
+FRAME_ALBEDO = 0.25
+"""A window or door frame's reflectance relative to the wall's mean (dark-grey aluminium or uPVC)."""
+
+DOOR_CLEAR_W_M = 1.0
+"""Clear width of an entrance door's leaf, m: the effective clear width Approved Document M (vol. 2, 2015,
+table 2.1) asks of an external door to a building the public uses in new work, 1000 mm (800–825 mm for
+others), as BS 8300-2:2018 recommends for main entrances."""
+DOOR_H_M = 2.1
+"""Height of a door's leaf from the floor to the underside of its head frame, m: the UK's 1981 mm (6 ft 6 in)
+leaf hung in a frame with its threshold, about 2.04–2.1 m clear; 2.1 m is the common door-set height."""
+DOOR_FRAME_M = 0.07
+"""Width of a door's frame at its sides and head, m (a 70 mm timber or aluminium door frame), so that the
+opening in the wall is 1.14 × 2.17 m."""
+DOOR_PANEL_M = (0.15, 0.5, 1.9)
+"""A door's glazed vision panel: inset from the leaf's sides, bottom and top above the floor, m. Approved
+Document M (vol. 2, 2015, 2.13) asks a vision panel over the zone of visibility 500–1500 mm above the floor;
+entrance doors' panels commonly run higher."""
+DOOR_EVERY_BAYS = 4
+"""A ground storey has one entrance door per this many window bays (at least one per tile; a seeded bay, whose
+ground-storey window the door replaces): an estimate for blocks of shops and flats, one entrance per 10–12 m."""
+DOOR_RGB = (
+    (0.02, 0.02, 0.02),
+    (0.02, 0.03, 0.08),
+    (0.02, 0.06, 0.03),
+    (0.22, 0.03, 0.02),
+    (0.05, 0.05, 0.055),
+    (0.12, 0.06, 0.03),
+)
+"""Linear reflectances of a painted or stained door leaf drawn per door (black, navy, dark green, red, anthracite,
+stained timber): estimates of common door colours."""
+DOOR_ROUGHNESS = 0.45
+"""A door leaf's glTF roughness: satin or gloss paint over timber or steel."""
+REVEAL_DEPTH_M = 0.1
+"""How far windows and doors sit back from the wall's face, m: the London Building Act of 1709 set sash boxes
+back 4 in (0.10 m) behind the brickwork, and windows in today's cavity walls stand 50–100 mm behind the outer
+leaf's face (estimates, not measured for camgen). The height map holds each opening's reveal as a splay as
+wide as it is deep (a normal map cannot turn a face through 90°), so a low sun lights the reveal on its side
+and leaves the other darker; the frame lies `REVEAL_DEPTH_M` deep and the glass `GLASS_SET_BACK_M` deeper."""
+GLASS_SET_BACK_M = 0.03
+"""How far glass sits behind the face of its frame or door leaf, m (a glazing bead's depth)."""
+
+
+def _rect_mask(x: np.ndarray, y: np.ndarray, x0: float, y0: float, x1: float, y1: float) -> np.ndarray:
+    return (x > x0) & (x < x1) & (y > y0) & (y < y1)
+
+
+def _outside_m(x: np.ndarray, y: np.ndarray, x0: float, y0: float, x1: float, y1: float) -> np.ndarray:
+    """How far each point lies outside the rectangle, by the larger of its two axes' distances (0 inside)."""
+    return np.maximum(np.maximum(x0 - x, x - x1), np.maximum(np.maximum(y0 - y, y - y1), 0.0))
+
+
+def facade_door_bays(rng: np.random.Generator, bays: int) -> np.ndarray:
+    """The bays (sorted indices among `bays` across a tile) whose ground storey holds an entrance door:
+    max(1, round(bays / DOOR_EVERY_BAYS)) distinct bays drawn by `rng`."""
+    count = min(bays, max(1, round(bays / DOOR_EVERY_BAYS)))
+    return np.sort(rng.choice(bays, size=count, replace=False))
 
 
 def _facade(rng, size, m_per_px):
-    """A rendered or concrete wall with a grid of windows (texture v up the wall)."""
+    """A rendered or concrete wall with a grid of windows and entrance doors in its ground storey (texture v up
+    the wall, row 0 its foot), each opening recessed `REVEAL_DEPTH_M` in the height map."""
     grain = fbm(rng, size, 6, 16, 0.5)
     streaks = fbm(rng, size, 3, 4, 0.5)
     wall = 1.0 + 0.05 * grain - 0.05 * np.clip(streaks, 0, None)
     yy, xx = np.mgrid[0:size, 0:size].astype(np.float32) * m_per_px
-    in_x = xx % WINDOW_PITCH_M
-    in_y = yy % FACADE_STOREY_M
+    tile = size * m_per_px
+    bays, storeys = round(tile / WINDOW_PITCH_M), round(tile / FACADE_STOREY_M)
+    bay = np.minimum((xx // WINDOW_PITCH_M).astype(int), bays - 1)
+    storey = np.minimum((yy // FACADE_STOREY_M).astype(int), storeys - 1)
+    in_x = xx - bay * WINDOW_PITCH_M
+    in_y = yy - storey * FACADE_STOREY_M
+    door_bays = facade_door_bays(rng, bays)
+    has_door = np.isin(bay, door_bays) & (storey == 0)
+
     x0 = (WINDOW_PITCH_M - WINDOW_W_M) / 2
-    window = (in_x > x0) & (in_x < x0 + WINDOW_W_M) & (in_y > SILL_M) & (in_y < SILL_M + WINDOW_H_M)
-    frame = window & ~((in_x > x0 + 0.06) & (in_x < x0 + WINDOW_W_M - 0.06)
-                       & (in_y > SILL_M + 0.06) & (in_y < SILL_M + WINDOW_H_M - 0.06))  # fmt: skip
-    glass = window & ~frame
-    wall_only = ~window
-    albedo = _normalise(_grey(wall), wall_only)
-    lit = rng.random((int(size * m_per_px / FACADE_STOREY_M) + 1, int(size * m_per_px / WINDOW_PITCH_M) + 1))
-    pane = GLASS_ALBEDO * (0.7 + 0.6 * lit[(yy // FACADE_STOREY_M).astype(int), (xx // WINDOW_PITCH_M).astype(int)])
+    window_box = (x0, SILL_M, x0 + WINDOW_W_M, SILL_M + WINDOW_H_M)
+    window = _rect_mask(in_x, in_y, *window_box) & ~has_door
+    window_glass = window & _rect_mask(
+        in_x, in_y, x0 + FRAME_M, SILL_M + FRAME_M, x0 + WINDOW_W_M - FRAME_M, SILL_M + WINDOW_H_M - FRAME_M
+    )
+    d0 = (WINDOW_PITCH_M - DOOR_CLEAR_W_M) / 2  # the leaf's left edge in its bay
+    door_box = (d0 - DOOR_FRAME_M, 0.0, d0 + DOOR_CLEAR_W_M + DOOR_FRAME_M, DOOR_H_M + DOOR_FRAME_M)
+    door = _rect_mask(in_x, in_y, door_box[0], -1.0, *door_box[2:]) & has_door  # down to the floor
+    leaf = door & _rect_mask(in_x, in_y, d0, -1.0, d0 + DOOR_CLEAR_W_M, DOOR_H_M)
+    inset, panel_bottom, panel_top = DOOR_PANEL_M
+    panel = (d0 + inset, panel_bottom, d0 + DOOR_CLEAR_W_M - inset, panel_top)
+    door_glass = leaf & _rect_mask(in_x, in_y, *panel)
+    bead_box = (panel[0] - FRAME_M, panel[1] - FRAME_M, panel[2] + FRAME_M, panel[3] + FRAME_M)
+    panel_bead = leaf & _rect_mask(in_x, in_y, *bead_box) & ~door_glass
+    glass = window_glass | door_glass
+    opening = window | door
+    frame = (window & ~window_glass) | (door & ~leaf) | panel_bead
+
+    albedo = _normalise(_grey(wall), ~opening)
+    lit = rng.random((storeys, bays))
+    pane = GLASS_ALBEDO * (0.7 + 0.6 * lit[storey, bay])
     albedo[glass] = pane[glass][:, None]
-    albedo[frame] = 0.25
-    roughness = np.where(glass, 0.05, 0.85).astype(np.float32)
-    return albedo, roughness, np.zeros((size, size))
+    albedo[frame] = FRAME_ALBEDO
+    colours = np.asarray(DOOR_RGB)[rng.integers(0, len(DOOR_RGB), bays)] / np.asarray(TYPICAL_ALBEDO_RGB["facade"])
+    painted = leaf & ~door_glass & ~panel_bead
+    albedo[painted] = colours[bay[painted]]
+    roughness = np.where(glass, 0.05, np.where(painted, DOOR_ROUGHNESS, 0.85)).astype(np.float32)
+
+    # The wall's face at 0; each opening's reveal a splay down to its frame (`REVEAL_DEPTH_M`), glass deeper.
+    outside_window = _outside_m(in_x, in_y, *window_box)
+    outside_door = _outside_m(in_x, in_y, door_box[0], -1.0, *door_box[2:])
+    outside = np.where(has_door, outside_door, outside_window)
+    height_m = -REVEAL_DEPTH_M * np.clip(1.0 - outside / REVEAL_DEPTH_M, 0.0, 1.0)
+    height_m = np.where(glass, -REVEAL_DEPTH_M - GLASS_SET_BACK_M, height_m)
+    return albedo, roughness, np.zeros((size, size)), height_m.astype(np.float32)
 
 
 def decode_srgb(encoded: np.ndarray) -> np.ndarray:
