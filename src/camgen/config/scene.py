@@ -20,6 +20,7 @@ from pydantic import (
 )
 
 from camgen.config.base import Model, Why, invalid
+from camgen.config.kerbs import Kerb, kerb_names
 from camgen.config.markings import Marking, marking_names
 from camgen.config.profile import ZoomSweepTime
 from camgen.config.props import Prop, ScatterRule
@@ -480,6 +481,11 @@ class Environment(Model):
     parking bays) and ``{type: crossing, from_m, to_m}`` (a zebra crosswalk from kerb to kerb), white or
     yellow, worn from a seed. Ground, not occluders: they receive shadows but cast none, leave coverage and
     the far ground alone, and take instance ids after the props' (`<type>_<index>` unless named)."""
+    kerbs: list[Kerb] = []
+    """Kerbs at the road's edge (`camgen.config.kerbs`): ``{along_m: [[x, y], …], road_side}``, the foot of a
+    precast concrete kerb's road face (a half-battered HB2, 125 mm upstand, by default) with an open joint every
+    914 mm unit. Solid: they cast and receive shadows and hide what lies behind them; instance ids after the
+    markings' (`kerb_<index>` unless named). Coverage does not count them as occluders."""
     night_sky: Literal["natural", "rural", "suburban", "urban"] | None = None
     """A night scene: the moonless sky's luminance for its setting (`camgen.world.night.
     NIGHT_SKY_LUMINANCE_CD_M2`: 0.17 mcd/m² natural to 10 mcd/m² urban skyglow) fills in
@@ -516,6 +522,14 @@ class Environment(Model):
                     f"markings[{i}]" + (".name" if self.markings[i].name else ""),
                     f"is the instance {name!r}, a name another mesh, prop or marking has already; give the marking "
                     "another name",
+                )
+            seen.add(name)
+        for i, name in enumerate(kerb_names(self.kerbs)):
+            if name in taken or name in seen:
+                raise invalid(
+                    f"kerbs[{i}]" + (".name" if self.kerbs[i].name else ""),
+                    f"is the instance {name!r}, a name another mesh, prop, marking or kerb has already; give the "
+                    "kerb another name",
                 )
             seen.add(name)
         return self

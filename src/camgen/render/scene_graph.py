@@ -17,8 +17,8 @@ luminance in cd/m² once gamma and clamping are removed (`camgen.render.renderer
   distance (`camgen.world.fog`), drawing the depth it needs in the same draw.
 
 Instance ids: actors take 1…A in scene order (so an actor's id is its track id), environment meshes
-A+1…A+M, then props, then road markings (so a marking added to a scene changes no other id); 0 is the
-background. Ids are 32-bit, so any realistic number of instances fits.
+A+1…A+M, then props, then road markings, then kerbs (so a marking or kerb added to a scene changes no
+other id); 0 is the background. Ids are 32-bit, so any realistic number of instances fits.
 """
 
 from __future__ import annotations
@@ -37,6 +37,7 @@ import trimesh
 
 from camgen.actors import Crowd, PersonRig, person_rig, rider_rig
 from camgen.actors.character import CharacterRig, character_rig
+from camgen.config.kerbs import Kerb, kerb_names
 from camgen.config.markings import marking_names
 from camgen.config.placement import is_level_plane, largest_level_plane, placement
 from camgen.config.scene import (
@@ -83,6 +84,7 @@ from camgen.vehicles.headlamps import (
 from camgen.vehicles.sign import display_luminance_cd_m2
 from camgen.world.ies import flux_lm as ies_flux_lm
 from camgen.world.ies import grid_intensity_cd, intensity_grid_cd
+from camgen.world.kerbs import kerb_geometry
 from camgen.world.markings import PAINT_ROUGHNESS, PaintMesh, marking_paint, wet_reflectance
 from camgen.world.night import SPOT_FULL_INTENSITY_FRACTION, peak_intensity_cd
 from camgen.world.rain import WET_ALBEDO_FACTOR, WET_ROUGHNESS_FACTOR, ground_is_wet
@@ -94,6 +96,7 @@ from camgen.world.textures import (
     encode_normal8,
     encode_srgb8,
     file_surface_maps,
+    kerb_surface_maps,
     surface_maps,
 )
 
@@ -420,12 +423,13 @@ class SceneGraph:
 
 def instance_table(scene: Scene) -> tuple[Instance, ...]:
     """Every instance id the render assigns: actors 1…A in scene order, then environment meshes, then props,
-    then road markings."""
+    then road markings, then kerbs."""
     named = (
         [(actor.name, "actor") for actor in scene.actors]
         + [(m.name, "environment") for m in scene.environment.meshes]
         + [(name, "environment") for name in prop_names(scene.environment)]
         + [(name, "environment") for name in marking_names(scene.environment.markings)]
+        + [(name, "environment") for name in kerb_names(scene.environment.kerbs)]
     )
     return tuple(Instance(i, name, kind) for i, (name, kind) in enumerate(named, start=1))
 
@@ -548,6 +552,24 @@ def _textured(shape, resolve_path: Callable[[str], Path] | None) -> pyrender.Mes
         roughness, metallic, normal = maps.roughness, maps.metallic, maps.normal
         tile_w_m = tile_h_m = maps.tile_m
         top_at_v0 = True  # a procedural tile's row 0 is its v = 0 edge
+    pbr = _tiled_material(
+        base_linear, roughness, metallic, normal, sampler, metallic_factor, roughness_factor, material.emission_cd_m2
+    )
+    # pyrender uploads the image flipped, so OpenGL's t = 1 is its row 0.
+    t = 1.0 - uv_m[:, 1] / tile_h_m if top_at_v0 else uv_m[:, 1] / tile_h_m
+    texcoords = np.column_stack([uv_m[:, 0] / tile_w_m, t])
+    primitive = pyrender.Primitive(
+        positions=positions, normals=normals, texcoord_0=texcoords, indices=faces, material=pbr
+    )
+    return pyrender.Mesh(primitives=[primitive])
+
+
+def _tiled_material(
+    base_linear, roughness, metallic, normal, sampler, metallic_factor, roughness_factor, emission_cd_m2
+) -> pyrender.MetallicRoughnessMaterial:
+    """A material of texture maps repeated every tile: base colour (linear (H, W, 3), stored sRGB-encoded as
+    glTF does), roughness and metallic ((H, W) or None) packed as glTF's metallic-roughness texture, a normal map
+    ((H, W, 3) unit (u, v, out) or None), each mipmapped and filtered trilinearly."""
     base = encode_srgb8(base_linear)
     metallic_roughness = None
     if roughness is not None:
@@ -556,7 +578,7 @@ def _textured(shape, resolve_path: Callable[[str], Path] | None) -> pyrender.Mes
         mr[..., 1] = np.round(np.clip(roughness, 0, 1) * 255)
         mr[..., 2] = 255 if metallic is None else np.round(np.clip(metallic, 0, 1) * 255)
         metallic_roughness = MipmappedTexture(srgb=False, source=mr, source_channels="RGB", sampler=sampler)
-    pbr = pyrender.MetallicRoughnessMaterial(
+    return pyrender.MetallicRoughnessMaterial(
         baseColorFactor=(1.0, 1.0, 1.0, 1.0),
         baseColorTexture=MipmappedTexture(srgb=True, source=base, source_channels="RGB", sampler=sampler),
         metallicFactor=metallic_factor,
@@ -567,16 +589,9 @@ def _textured(shape, resolve_path: Callable[[str], Path] | None) -> pyrender.Mes
             if normal is None
             else MipmappedTexture(srgb=False, source=encode_normal8(normal), source_channels="RGB", sampler=sampler)
         ),
-        emissiveFactor=(material.emission_cd_m2,) * 3,
+        emissiveFactor=(emission_cd_m2,) * 3,
         doubleSided=False,
     )
-    # pyrender uploads the image flipped, so OpenGL's t = 1 is its row 0.
-    t = 1.0 - uv_m[:, 1] / tile_h_m if top_at_v0 else uv_m[:, 1] / tile_h_m
-    texcoords = np.column_stack([uv_m[:, 0] / tile_w_m, t])
-    primitive = pyrender.Primitive(
-        positions=positions, normals=normals, texcoord_0=texcoords, indices=faces, material=pbr
-    )
-    return pyrender.Mesh(primitives=[primitive])
 
 
 def file_texture_maps(material: Material, resolve_path: Callable[[str], Path] | None) -> FileSurfaceMaps:
@@ -722,6 +737,32 @@ def paint_mesh_node(paint: PaintMesh, *, wet: bool) -> pyrender.Mesh:
             roughnessFactor=PAINT_ROUGHNESS * (WET_ROUGHNESS_FACTOR if wet else 1.0),
             doubleSided=False,
         ),
+    )
+    return pyrender.Mesh(primitives=[primitive])
+
+
+def kerb_mesh_node(kerb: Kerb) -> pyrender.Mesh:
+    """A kerb (`camgen.world.kerbs`) as one textured primitive in world coordinates: precast concrete of the
+    kerb's colour (weathered concrete's by default) with its units' joints (`camgen.world.textures.
+    kerb_surface_maps`). Dry in the rain, as walls are (`wet_ground` wets level planes only)."""
+    mesh = kerb_geometry(kerb)
+    maps = kerb_surface_maps(kerb.seed, kerb.unit_length_m, kerb.joint_m)
+    rgb = TYPICAL_ALBEDO_RGB["concrete"] if kerb.color_rgb is None else kerb.color_rgb
+    sampler = pyrender.Sampler(wrapS=GL_REPEAT, wrapT=GL_REPEAT)
+    material = _tiled_material(
+        maps.albedo * np.asarray(rgb, dtype=np.float32),
+        maps.roughness,
+        maps.metallic,
+        maps.normal,
+        sampler,
+        metallic_factor=1.0,
+        roughness_factor=1.0,
+        emission_cd_m2=0.0,
+    )
+    # A procedural tile's row 0 is its v = 0 edge, and pyrender uploads the image flipped (`_textured`).
+    texcoords = np.column_stack([mesh.uv_m[:, 0] / maps.tile_m, 1.0 - mesh.uv_m[:, 1] / maps.tile_m])
+    primitive = pyrender.Primitive(
+        positions=mesh.vertices_m, normals=mesh.normals, texcoord_0=texcoords, indices=mesh.faces, material=material
     )
     return pyrender.Mesh(primitives=[primitive])
 
@@ -1287,6 +1328,8 @@ def build_scene_graph(scene: Scene, resolve_path: Callable[[str], Path] | None =
         mesh = paint_mesh_node(paint, wet=wet)
         prop_nir[id(mesh.primitives[0])] = paint.nir_reflectance
         environment_nodes.append(graph.add(mesh, name=f"environment:{names[index]}"))
+    for kerb, name in zip(scene.environment.kerbs, kerb_names(scene.environment.kerbs), strict=True):
+        environment_nodes.append(graph.add(kerb_mesh_node(kerb), name=f"environment:{name}"))
     nodes = actor_nodes + environment_nodes
     instance_ids = {node: instance.instance_id for node, instance in zip(nodes, instances, strict=True)}
     result = SceneGraph(

@@ -370,6 +370,47 @@ def _facade(rng, size, m_per_px):
     return albedo, roughness, np.zeros((size, size)), height_m.astype(np.float32)
 
 
+KERB_UNITS_PER_TILE = 4
+"""Kerb units along one tile of a kerb's texture (`kerb_surface_maps`): 3.66 m of 914 mm units, 3.6 mm texels."""
+KERB_JOINT_DEPTH_M = 0.003
+"""How far a kerb's open joint lies behind the faces either side of it in the normal map, m: the joint is open
+(no mortar), so deeper in fact; 3 mm tilts a joint's edges as a brick joint's are (`JOINT_DEPTH_M`)."""
+KERB_JOINT_ALBEDO = 0.3
+"""An open joint's reflectance relative to the kerb's mean: the shaded gap between two units."""
+
+
+@lru_cache(maxsize=8)
+def kerb_surface_maps(seed: int, unit_length_m: float, joint_m: float, texels: int = TEXELS_PER_TILE) -> SurfaceMaps:
+    """One tile of a precast concrete kerb's texture (`camgen.world.kerbs`: u along the kerb from its first
+    point, v around its profile): `KERB_UNITS_PER_TILE` units `unit_length_m` long, an open joint `joint_m`
+    wide across the whole tile at u = 0 and every unit after (dark, `KERB_JOINT_ALBEDO`, and recessed
+    `KERB_JOINT_DEPTH_M` in the normal map), each unit's own tint (± 4 %, as units cast on different days
+    differ) over a fine concrete grain. The mean over the units (not the joints) is 1."""
+    tile = KERB_UNITS_PER_TILE * unit_length_m
+    m_per_px = tile / texels
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(len(TEXTURE_TYPES),)))
+    u = np.arange(texels, dtype=np.float32) * m_per_px
+    in_unit = np.mod(u, unit_length_m)
+    joint_row = ((in_unit < joint_m / 2) | (in_unit > unit_length_m - joint_m / 2)).astype(np.float32)
+    joint = _blur_wrap(np.tile(joint_row, (texels, 1)), 0.5)
+    tints = 1.0 + 0.04 * rng.standard_normal(KERB_UNITS_PER_TILE)
+    unit_tint = tints[np.minimum((u // unit_length_m).astype(int), KERB_UNITS_PER_TILE - 1)][None, :]
+    grain = fbm(rng, texels, 7, 16, 0.55)
+    stains = np.clip(fbm(rng, texels, 3, 4, 0.5), 0, None)
+    concrete = unit_tint * (1.0 + 0.06 * grain - 0.05 * stains)
+    albedo = concrete * (1.0 - joint) + KERB_JOINT_ALBEDO * joint
+    albedo = _normalise(_grey(albedo), joint < 0.5)
+    height_m = -KERB_JOINT_DEPTH_M * joint
+    roughness = np.full((texels, texels), 0.85, dtype=np.float32)
+    return SurfaceMaps(
+        albedo.astype(np.float32),
+        roughness,
+        np.zeros((texels, texels), dtype=np.float32),
+        tile,
+        normal_map_from_height(height_m, m_per_px),
+    )
+
+
 def decode_srgb(encoded: np.ndarray) -> np.ndarray:
     """sRGB-encoded values in [0, 1] → linear values in [0, 1], float64 (IEC 61966-2-1)."""
     x = np.asarray(encoded, dtype=np.float64)
