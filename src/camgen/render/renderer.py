@@ -162,10 +162,14 @@ class _LinearProgramCache(ShaderProgramCache):
     """pyrender's program cache, answering with camgen's shaders for its lit and depth-only programs, each
     compiled without the light loops of the kinds that the scene being drawn has none of (`absent_lights`:
     the defines NO_SUNS, NO_POINT_LIGHTS, NO_SPOT_LIGHTS of `linear_mesh.frag`; a loop over no lights adds
-    nothing, so the same pixels)."""
+    nothing, so the same pixels) and with the paths of the primitive's kind of material only (`material_kind`:
+    CLEARCOATED_MATERIAL, TRANSMISSIVE_MATERIAL; the same code as a branch on a uniform, which llvmpipe ran for
+    every surface)."""
 
     absent_lights: tuple[str, ...] = ()
     """The defines for the kinds of light the current scene has none of (`_PassRenderer.forward` sets it)."""
+    material_kind: tuple[str, ...] = ()
+    """The defines of the primitive being drawn's kind of material (`material_defines`; set per primitive)."""
 
     OURS = {
         "mesh.vert": "linear_mesh.vert",
@@ -182,7 +186,8 @@ class _LinearProgramCache(ShaderProgramCache):
         defines each time (about a tenth of a millisecond; 300 primitives a step of a small simulated view)."""
 
     def get_program(self, vertex_shader, fragment_shader, geometry_shader=None, defines=None):
-        key = (vertex_shader, fragment_shader, geometry_shader, tuple((defines or {}).items()), self.absent_lights)
+        extra = self.absent_lights + self.material_kind if fragment_shader == "mesh.frag" else ()
+        key = (vertex_shader, fragment_shader, geometry_shader, tuple((defines or {}).items()), extra)
         program = self._answers.get(key)
         if program is not None:
             return program
@@ -190,8 +195,8 @@ class _LinearProgramCache(ShaderProgramCache):
         def ours(name):
             return str(SHADER_DIR / self.OURS[name]) if name in self.OURS else name
 
-        if fragment_shader == "mesh.frag" and self.absent_lights:
-            defines = {**(defines or {}), **dict.fromkeys(self.absent_lights, 1)}
+        if extra:
+            defines = {**(defines or {}), **dict.fromkeys(extra, 1)}
         program = super().get_program(ours(vertex_shader), ours(fragment_shader), geometry_shader, defines)
         if not isinstance(program, _RememberingProgram):
             program.__class__ = _RememberingProgram
@@ -954,6 +959,8 @@ class _PassRenderer(pyrender.Renderer):
             for k in range(1, SUN_CASCADES):
                 V, P = cascades[k]
                 program.set_uniform(f"directional_lights[{i}].cascade_matrices[{k - 1}]", P @ V)
+            for k, scales in enumerate(sun_cascade_scales(cascades, self.shadow_map_texels)):
+                program.set_uniform(f"directional_lights[{i}].cascade_scales[{k}]", scales)
         # The array's unused entries name a sun's array unit: left at unit 0 they would be array samplers on
         # the unit of the 2D samplers left unset (spot maps, spot_profile), which OpenGL refuses at the draw.
         for i in range(len(suns), int(program.defines.get("MAX_DIRECTIONAL_LIGHTS", 0)) if suns else 0):
@@ -1059,6 +1066,7 @@ class _PassRenderer(pyrender.Renderer):
         program = None
         lit_programs: dict[int, int] = {}  # per program (by id) lit in this draw: the units its lights took
         for node, primitive in _draw_order(scene, nodes, cam_position, lit):
+            self._program_cache.material_kind = material_defines(primitive.material) if lit else ()
             program = self._get_primitive_program(primitive, draw_flags, program_flags)
             program._bind()
             program.set_uniform("V", V)
@@ -1068,8 +1076,6 @@ class _PassRenderer(pyrender.Renderer):
             if lit:
                 program.set_uniform("cam_pos", cam_position)
                 program.set_uniform("texture_lod_bias", self.texture_lod_bias)
-                program.set_uniform("transmissive", int(primitive.material.alphaMode == "BLEND"))
-                program.set_uniform("clearcoat", int(getattr(primitive.material, "clearcoat", False)))
                 self._bind_lit(scene, program, node, flags, lit_programs)
                 self._bind_and_draw_primitive(primitive, scene.get_pose(node), program, draw_flags)
             else:
@@ -1077,6 +1083,17 @@ class _PassRenderer(pyrender.Renderer):
             self._reset_active_textures()
         if program is not None:
             program._unbind()
+
+
+def material_defines(material) -> tuple[str, ...]:
+    """The defines of `linear_mesh.frag` for a material's kind: CLEARCOATED_MATERIAL for a clear-coated one
+    (`scene_graph.ClearcoatMaterial`: a car's paint), TRANSMISSIVE_MATERIAL for a blended one (glass)."""
+    kind = ()
+    if getattr(material, "clearcoat", False):
+        kind += ("CLEARCOATED_MATERIAL",)
+    if material.alphaMode == "BLEND":
+        kind += ("TRANSMISSIVE_MATERIAL",)
+    return kind
 
 
 def meshes_reach_clip_volume(meshes: list, poses: np.ndarray, P_V: np.ndarray) -> np.ndarray:
@@ -2232,6 +2249,22 @@ def _texel_snapped(low: np.ndarray, high: np.ndarray, size_texels: int) -> tuple
     texel = 2.0 ** (np.ceil(np.log2((high - low) / (size_texels - 1)) * steps) / steps)
     snapped_low = np.floor(low / texel) * texel
     return snapped_low, snapped_low + size_texels * texel
+
+
+def sun_cascade_scales(cascades: list[tuple[np.ndarray, np.ndarray]], size_texels: int) -> np.ndarray:
+    """(SUN_CASCADES, 2) float32: for each cascade (V, P) of a sun (`sun_cascade_matrices`), the depth scale of
+    its P·V (the length of the first three entries of its row 2: map depth units per metre, V a rotation) and
+    its texel in metres (the coarser of its two axes': 2 / (size · the length of row 0's or row 1's first three
+    entries)), which the shader's bias (`linear_mesh.frag` shadow_calc_ortho) reads; worked out in float32 as
+    the shader did at every pixel from the matrix it was sent."""
+    scales = np.empty((len(cascades), 2), dtype=np.float32)
+    for k, (V, P) in enumerate(cascades):
+        rows = (np.asarray(P, np.float64) @ np.asarray(V, np.float64)).astype(np.float32)[:3, :3]
+        lengths = np.sqrt((rows * rows).sum(axis=1, dtype=np.float32), dtype=np.float32)
+        size = np.float32(size_texels)
+        texel_m = max(np.float32(2.0) / (size * lengths[0]), np.float32(2.0) / (size * lengths[1]))
+        scales[k] = (lengths[2], texel_m)
+    return scales
 
 
 def sun_cascade_matrices(

@@ -704,8 +704,8 @@ def person_mesh(rig: PersonRig) -> pyrender.Mesh:
 
 class ClearcoatMaterial(pyrender.MetallicRoughnessMaterial):
     """A glTF metallic-roughness material under a smooth clear coat (a car's paint: a pigmented base coat
-    under 35–50 µm of clear lacquer). The shader (`linear_mesh.frag`, its `clearcoat` path) adds the coat's
-    mirror reflection of the sky and the ground, Schlick's Fresnel factor of the view angle times the
+    under 35–50 µm of clear lacquer). The shader (`linear_mesh.frag`, its CLEARCOATED_MATERIAL path) adds the
+    coat's mirror reflection of the sky and the ground, Schlick's Fresnel factor of the view angle times the
     environment along the reflected ray, and takes that share off the base's ambient (diffuse) light, as
     glTF's KHR_materials_clearcoat layers a coat of IOR 1.5 (F0 = 0.04) over the base. Other materials
     (people, the ground, props) keep their diffuse-only ambient term."""
@@ -777,9 +777,9 @@ class ShadeMaterial(pyrender.MetallicRoughnessMaterial):
 
 GLASS_RGB = (0.005, 0.0055, 0.006)
 """Glass's own diffuse share as an albedo (a faint tint and road film; clean float glass scatters well under 1 %):
-a near-black base, glossy (roughness 0.05). Its look is its mirror reflection, added by the shader (the
-`transmissive` path): Schlick's Fresnel factor of the view angle (4 % at normal incidence) times the sky or the
-lit ground along the reflected ray, as the paint's clear coat mirrors them, and the sun's specular highlight;
+a near-black base, glossy (roughness 0.05). Its look is its mirror reflection, added by the shader (its
+TRANSMISSIVE_MATERIAL path): Schlick's Fresnel factor of the view angle (4 % at normal incidence) times the sky or
+the lit ground along the reflected ray, as the paint's clear coat mirrors them, and the sun's specular highlight;
 the transmitted cabin shows through (`camgen.vehicles.cabin`)."""
 CABIN_ROUGHNESS = 0.8
 """The cabin's lining and its driver: rough dielectrics (fabric, plastics, skin)."""

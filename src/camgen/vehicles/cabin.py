@@ -14,7 +14,7 @@ transmittance a maker asks), it is the darkest glass of a car. The renderer draw
 faces, `inner_glass_part`, for a view through two panes) as the reflection its material gives plus the
 transmitted share (1 − F) × T of what lies behind it, F the Fresnel reflectance (about 4 % per surface
 at normal incidence, rising to 1 at grazing), so that the dark cabin lets the reflection dominate
-(`camgen.render.scene_graph.GLASS_RGB`, the shader's `transmissive` path).
+(`camgen.render.scene_graph.GLASS_RGB`, the shader's TRANSMISSIVE_MATERIAL path).
 
 Interior (`lining_part`): the shell's painted faces again, facing inwards, in a dark trim colour
 (`INTERIOR_RGB`): the roof lining, door cards and floor as one dark surface, so that the glass shows a cabin

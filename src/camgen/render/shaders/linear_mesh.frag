@@ -42,6 +42,10 @@ struct DirectionalLight {
     // filtered lookup in each (camgen.render.renderer._PassRenderer._sun_cascade_array).
     sampler2DArray shadow_maps;
     mat4 cascade_matrices[SUN_EXTRA_CASCADES];
+    // camgen: each cascade's (finest first) depth scale (the length of the first three entries of row 2 of
+    // its P·V) and texel in metres (the coarser of its two axes'), for shadow_calc_ortho's bias, worked out
+    // once per draw (`_PassRenderer._bind_lighting`, `sun_cascade_scales`) instead of at every pixel.
+    vec2 cascade_scales[SUN_EXTRA_CASCADES + 1];
     #endif
 };
 
@@ -128,11 +132,14 @@ uniform vec3 cam_pos;
 // samples of a pixel (motion blur's jittered draws) takes -log2(s), the level an s x supersampled draw
 // picks; without it its textures came out a mip level blurrier than the same frame without motion blur.
 uniform float texture_lod_bias;
-// camgen: glass (a blended material): the base colour's alpha is the opacity 1 - T at normal incidence
-// (T the pane's visible transmittance, camgen.vehicles.cabin); see the end of main.
-uniform int transmissive;
-// camgen: a clear-coated material (camgen.render.scene_graph.ClearcoatMaterial: a car's paint); see clearcoat_ambient.
-uniform int clearcoat;
+// camgen: glass (a blended material) is drawn by a program of its own, with the define of the see-through
+// path: the base colour's alpha is the opacity 1 - T at normal incidence (T the pane's visible transmittance,
+// camgen.vehicles.cabin); see the end of main. A clear-coated material (camgen.render.scene_graph.
+// ClearcoatMaterial: a car's paint) too, with the define of clearcoat_ambient's path. Defines of the
+// material's program (`_LinearProgramCache.material_kind`; pyrender replaces a define's name wherever it
+// appears, so they are named only where tested), not uniforms: llvmpipe ran both sides of a branch on a
+// uniform, and the two paths' sky lookups cost every surface that has neither 26 % of a sunlit draw of
+// the parking lot.
 uniform vec3 ambient_light;
 // camgen: the sky's radiance over the upper hemisphere (camgen.render.renderer.SkyMap: a CIE sky, azimuth
 // across, elevation 0 to 90 deg up), which smooth coats and glass mirror; sky_map_used 0: a uniform sky
@@ -421,19 +428,13 @@ float shadow_calc_spot(mat4 light_matrix, sampler2D shadow_map, vec3 light_posit
 // one row of dots at 0.998: the rasterised depth of a plane clipped far outside the map slopes a little
 // off). The texel is the coarser of the map's two axes'. pyrender's bias, 0.001 (1 − n·l) of the
 // map's depth range, grew with the scene: tens of centimetres of detached shadow on a large site.
-float shadow_calc_ortho(mat4 light_matrix, sampler2DArray shadow_maps, float layer, float nl)
+float shadow_calc_ortho(vec3 ndc, sampler2DArray shadow_maps, float layer, vec2 scales, float nl)
 {
-    vec4 proj_coords = vec4(light_matrix * vec4(frag_position.xyz, 1.0));
-    vec3 light_coords = proj_coords.xyz / proj_coords.w;
-    light_coords = light_coords * 0.5 + 0.5;
-    float scale_x = length(vec3(light_matrix[0][0], light_matrix[1][0], light_matrix[2][0]));
-    float scale_z = length(vec3(light_matrix[0][2], light_matrix[1][2], light_matrix[2][2]));
+    vec3 light_coords = ndc * 0.5 + 0.5;
     vec2 size = vec2(textureSize(shadow_maps, 0).xy);
-    float scale_y = length(vec3(light_matrix[0][1], light_matrix[1][1], light_matrix[2][1]));
-    float texel_m = max(2.0 / (size.x * scale_x), 2.0 / (size.y * scale_y));
     float tan_incidence = sqrt(max(1.0 - nl * nl, 0.0)) / max(nl, 0.1);
-    float bias_m = 0.005 + 4.0 * texel_m * tan_incidence;
-    float compare = light_coords.z - bias_m * 0.5 * scale_z;
+    float bias_m = 0.005 + 4.0 * scales.y * tan_incidence;
+    float compare = light_coords.z - bias_m * 0.5 * scales.x;
     float shadow = texture2DArrayShadowPCF(shadow_maps, layer, size, light_coords.xy, compare);
     if (light_coords.z > 1.0) {
         shadow = 0.0;
@@ -441,11 +442,10 @@ float shadow_calc_ortho(mat4 light_matrix, sampler2DArray shadow_maps, float lay
     return shadow;
 }
 
-// camgen: whether a sun's (orthographic) map holds the point with the filter's reach (texture2DShadowPCF
-// reaches 2 texels from the lookup; 3 kept): the shader takes the finest cascade that does.
-bool in_sun_cascade(mat4 light_matrix, sampler2DArray shadow_maps)
+// camgen: whether a sun's (orthographic) map holds a point of map coordinates `ndc` with the filter's reach
+// (texture2DShadowPCF reaches 2 texels from the lookup; 3 kept): the shader takes the finest cascade that does.
+bool in_sun_cascade(vec2 ndc, sampler2DArray shadow_maps)
 {
-    vec2 ndc = (light_matrix * vec4(frag_position, 1.0)).xy;
     float margin = 2.0 * 3.0 / float(textureSize(shadow_maps, 0).x);
     return all(lessThan(abs(ndc), vec2(1.0 - margin)));
 }
@@ -572,17 +572,19 @@ void main()
         // Compute shadow
 #ifdef DIRECTIONAL_LIGHT_SHADOWS
         float nl = clamp(dot(n,l), 0.0, 1.0);
-        // The finest cascade that holds the point; one filtered lookup in its layer.
-        mat4 cascade = directional_lights[i].cascade_matrices[1];
-        float layer = 2.0;
-        if (in_sun_cascade(directional_lights[i].light_matrix, directional_lights[i].shadow_maps)) {
-            cascade = directional_lights[i].light_matrix;
-            layer = 0.0;
-        } else if (in_sun_cascade(directional_lights[i].cascade_matrices[0], directional_lights[i].shadow_maps)) {
-            cascade = directional_lights[i].cascade_matrices[0];
-            layer = 1.0;
-        }
-        float shadow = shadow_calc_ortho(cascade, directional_lights[i].shadow_maps, layer, nl);
+        // The finest cascade that holds the point; one filtered lookup in its layer. The point's coordinates in
+        // each map (orthographic: w is 1), picked by selects rather than a matrix chosen behind branches
+        // (llvmpipe runs both sides of a branch whose condition varies across a block of pixels).
+        vec4 point = vec4(frag_position, 1.0);
+        vec3 ndc_0 = (directional_lights[i].light_matrix * point).xyz;
+        vec3 ndc_1 = (directional_lights[i].cascade_matrices[0] * point).xyz;
+        vec3 ndc_2 = (directional_lights[i].cascade_matrices[1] * point).xyz;
+        bool in_0 = in_sun_cascade(ndc_0.xy, directional_lights[i].shadow_maps);
+        bool in_1 = in_sun_cascade(ndc_1.xy, directional_lights[i].shadow_maps);
+        vec3 ndc = in_0 ? ndc_0 : (in_1 ? ndc_1 : ndc_2);
+        float layer = in_0 ? 0.0 : (in_1 ? 1.0 : 2.0);
+        vec2 scales = directional_lights[i].cascade_scales[int(layer)];
+        float shadow = shadow_calc_ortho(ndc, directional_lights[i].shadow_maps, layer, scales, nl);
         res = res * (1.0 - shadow);
 #endif
         color.xyz += res;
@@ -653,11 +655,13 @@ void main()
         color.xyz += res;
     }
 #endif
-    if (clearcoat != 0) {
-        color.xyz += clearcoat_ambient(n, base_color.xyz * ambient_light);
-    } else if (transmissive == 0) {
-        color.xyz += base_color.xyz * ambient_light;
-    }
+#ifdef CLEARCOATED_MATERIAL
+    color.xyz += clearcoat_ambient(n, base_color.xyz * ambient_light);
+#else
+#ifndef TRANSMISSIVE_MATERIAL
+    color.xyz += base_color.xyz * ambient_light;
+#endif
+#endif
 
     // Calculate lighting from environment
 #ifdef USE_IBL
@@ -682,7 +686,8 @@ void main()
     // glBlendFuncSeparate), so the target's alpha ends as 1 - (the product of the panes' transmittances)
     // over the background and 1 over any surface: Renderer.draw composites the sky and far ground behind.
     float out_alpha = 1.0;
-    if (transmissive != 0) {
+#ifdef TRANSMISSIVE_MATERIAL
+    {
         // camgen glass, blended as a * colour + (1 - a) * behind: the reflection R plus the transmitted
         // T (1 - F) of what lies behind, F Schlick's Fresnel reflectance at the view angle. Its ambient
         // reflection is F times the environment along the reflected ray (mirrored_environment, as the
@@ -696,6 +701,7 @@ void main()
         out_alpha = 1.0 - (1.0 - base_color.a) * (1.0 - f_view);
         color.xyz /= out_alpha;
     }
+#endif
     out_radiance = vec4(color.xyz, out_alpha);
     out_depth_m = vec4(frag_depth_m, 0.0, 0.0, 1.0);
     out_instance_id = instance_id;
