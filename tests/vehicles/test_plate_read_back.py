@@ -80,7 +80,20 @@ VIEWS = (
     PlateView("pickup", "front", 20, 8, 12, 15.0),
     PlateView("motorcycle", "rear", 24, 10, 12, 8.0),
 )
-"""ANPR-like views (issue 20: characters at least about 20 px high; a slight yaw), one per vehicle."""
+"""ANPR-like views by day (issue 20: characters at least about 20 px high; a slight yaw), one per vehicle."""
+NIGHT_VIEWS = (
+    PlateView("hatchback", "rear", 24, 10, 10, 9.0),
+    PlateView("suv", "front", 24, -12, 10, 9.0),
+)
+"""Views at 0.05 lx, the cameras in IR night mode: the plates as the near-infrared pass draws them
+(`camgen.render.nir`)."""
+CASES = [(False, view) for view in VIEWS] + [(True, view) for view in NIGHT_VIEWS]
+"""(night, view) of each plate read."""
+
+
+def _case_id(case: tuple[bool, PlateView]) -> str:
+    night, view = case
+    return f"{'night' if night else 'day'}-{view.body_type}-{view.side}-{view.character_height_px:g}px"
 
 
 def _class_of(body_type: str) -> str:
@@ -304,32 +317,36 @@ def reader():
 
 @pytest.fixture(scope="module")
 def delivered(reader, renderer, tmp_path_factory):
-    """view → (delivered frame, its one visible plate's annotation), rendered through the camera model."""
+    """(night, view) → (delivered frame, its one visible plate's annotation), rendered through the camera
+    model."""
     from camgen.plan.execute import execute
 
     root = tmp_path_factory.mktemp("plates")
-    results = execute(plate_views_job(VIEWS, seed=40), root, renderer=renderer)
     out = {}
-    for view, result in zip(VIEWS, results, strict=True):
-        frame, plates = delivered_plates(result.directory)
-        (plate,) = [p for p in plates if p["side"] == view.side]  # the camera's own vehicle's plate
-        out[view] = frame, plate
+    for night, views, seed in ((False, VIEWS, 40), (True, NIGHT_VIEWS, 60)):
+        results = execute(plate_views_job(views, seed=seed, night=night), root / str(night), renderer=renderer)
+        for view, result in zip(views, results, strict=True):
+            frame, plates = delivered_plates(result.directory)
+            (plate,) = [p for p in plates if p["side"] == view.side]  # the camera's own vehicle's plate
+            out[night, view] = frame, plate
     return out
 
 
-@pytest.mark.parametrize("view", VIEWS, ids=lambda v: f"{v.body_type}-{v.side}-{v.character_height_px}px")
+@pytest.mark.parametrize("case", CASES, ids=_case_id)
 @pytest.mark.opengl
-def test_the_ocr_reads_the_annotated_text_in_the_annotated_quad(reader, delivered, view):
-    frame, plate = delivered[view]
+def test_the_ocr_reads_the_annotated_text_in_the_annotated_quad(reader, delivered, case):
+    _, view = case
+    frame, plate = delivered[case]
     assert UK_PLATE_PATTERN.match(plate["text"])
     read = read_plate(reader, frame, plate, view.body_type)
     assert plate_syntax(read) == plate["text"].replace(" ", ""), (read, plate["text"])
 
 
-@pytest.mark.parametrize("view", VIEWS, ids=lambda v: f"{v.body_type}-{v.side}-{v.character_height_px}px")
+@pytest.mark.parametrize("case", CASES, ids=_case_id)
 @pytest.mark.opengl
-def test_the_ocr_finds_the_text_where_the_annotated_box_puts_it(reader, delivered, view):
-    frame, plate = delivered[view]
+def test_the_ocr_finds_the_text_where_the_annotated_box_puts_it(reader, delivered, case):
+    _, view = case
+    frame, plate = delivered[case]
     found = detected_text_box_px(reader, frame, plate)
     assert found is not None, "no text found around the annotated plate"
     x, y, w, h = plate["bbox"]
@@ -345,7 +362,7 @@ def test_the_ocr_finds_the_text_where_the_annotated_box_puts_it(reader, delivere
     assert iou(found, expected) > 0.75, (found, expected)
 
 
-def test_a_syntax_check_changes_only_o_and_zero():
+def test_the_syntax_check_reads_capitals_and_resolves_only_o_and_zero_by_position():
     assert plate_syntax("M074 TR0") == "MO74TRO"
     assert plate_syntax("0S68 NKH") == "OS68NKH"
     assert plate_syntax("AB12 CD8") == "AB12CD8"  # a B read as 8 stays wrong
