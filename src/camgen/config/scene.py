@@ -485,7 +485,7 @@ class Environment(Model):
     """Kerbs at the road's edge (`camgen.config.kerbs`): ``{along_m: [[x, y], …], road_side}``, the foot of a
     precast concrete kerb's road face (a half-battered HB2, 125 mm upstand, by default) with an open joint every
     914 mm unit. Solid: they cast and receive shadows and hide what lies behind them; instance ids after the
-    markings' (`kerb_<index>` unless named). Coverage does not count them as occluders."""
+    markings' (`kerb_<index>` unless named). Coverage counts them as occluders (`camgen.coverage.occlusion`)."""
     night_sky: Literal["natural", "rural", "suburban", "urban"] | None = None
     """A night scene: the moonless sky's luminance for its setting (`camgen.world.night.
     NIGHT_SKY_LUMINANCE_CD_M2`: 0.17 mcd/m² natural to 10 mcd/m² urban skyglow) fills in

@@ -20,9 +20,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from camgen.config.kerbs import kerb_names
 from camgen.config.placement import local_bounds, placement
 from camgen.config.scene import BoxMesh, CheckerboardMesh, CylinderMesh, FileMesh, PlaneMesh, Scene, SphereMesh
 from camgen.props import placed_props
+from camgen.world.kerbs import kerb_geometry
 
 END_MARGIN_M = 1e-3
 """A hit this close to the point itself does not hide it, m."""
@@ -83,6 +85,10 @@ def scene_occluders(scene: Scene, file_triangles_m: Mapping[str, np.ndarray] | N
         T = np.linalg.inv(prop.T_world_from_prop)
         triangles = prop.model.occluder_triangles()
         occluders.append(Occluder(prop.name, "triangles", T, np.zeros(3), triangles, entering_only=True))
+    for kerb, name in zip(scene.environment.kerbs, kerb_names(scene.environment.kerbs), strict=True):
+        swept = kerb_geometry(kerb)  # in world coordinates, wound outward and open only along the road
+        triangles = swept.vertices_m.astype(np.float64)[swept.faces]
+        occluders.append(Occluder(name, "triangles", np.eye(4), np.zeros(3), triangles, entering_only=True))
     return occluders
 
 
