@@ -49,7 +49,7 @@ def conditions(plates: int):
         yield f"day, {height} px, 10°", views(height, 10), False
     for yaw in (30, 45, 60):
         yield f"day, 20 px, {yaw}°", views(20, yaw), False
-    for height in (13, 20, 28):
+    for height in (10, 13, 20, 28):
         yield f"night IR, {height} px, 10°", views(height, 10), True
 
 
