@@ -16,7 +16,7 @@ from camgen.config.scene import Environment
 from camgen.errors import ConfigError
 from camgen.props import placed_props, prop_box_corners, prop_names
 from camgen.props.scatter import scatter_spots
-from camgen.props.types import LAMP_HEIGHTS_M, LEAF_NIR, build_prop
+from camgen.props.types import LAMP_HEIGHTS_M, LEAF_CARD_PARTS, LEAF_NIR, build_prop
 
 KINDS = [("tree", None), ("tree", "conifer"), ("bush", None), ("bench", None), ("bin", None), ("bollard", None),
          ("lamp_post", None), ("sign", None), ("fence", None)]  # fmt: skip
@@ -36,8 +36,19 @@ def test_same_seed_same_prop_other_seed_other_prop():
 
 
 def test_every_part_is_closed_and_wound_outwards(models):
+    """Solid parts (and the envelopes leaves fill) are closed and wound outwards; leaves (a broadleaf crown, a
+    bush's foliage) are cards of two sides, each triangle's twin the same corners wound the other way."""
     for (kind, form, seed), model in models.items():
-        for part in model.parts:
+        cards = [part for part in model.parts if part.name in LEAF_CARD_PARTS]
+        for part in cards:
+            corners = part.vertices_m[part.faces].reshape(-1, 4, 3, 3)  # per card: front, front, back, back
+            front, back = corners[:, :2].reshape(-1, 3, 3), corners[:, 2:].reshape(-1, 3, 3)
+            n_front = np.cross(front[:, 1] - front[:, 0], front[:, 2] - front[:, 0])
+            n_back = np.cross(back[:, 1] - back[:, 0], back[:, 2] - back[:, 0])
+            assert np.allclose(n_front, -n_back, atol=1e-12), (kind, seed)  # the same card, facing away
+            assert np.array_equal(np.sort(front.reshape(-1, 9), axis=1), np.sort(back.reshape(-1, 9), axis=1))
+        assert (kind in ("tree", "bush") and form is None) == bool(cards), (kind, form)
+        for part in [p for p in model.parts if p.name not in LEAF_CARD_PARTS] + model.envelope:
             mesh = trimesh.Trimesh(part.vertices_m, part.faces)  # merges the split (hard-edged) vertices
             assert mesh.is_watertight, (kind, form, seed, part.name)
             assert mesh.volume > 0, (kind, form, seed, part.name)  # outward normals: positive volume

@@ -35,7 +35,8 @@ def _crown_track(model, sway, times_s):
     vertices, normals = model.arrays()[:2]
     top = int(np.argmax(vertices[:, 2]))
     assert sway.leafy[top]
-    one = dataclasses.replace(sway, leafy=sway.leafy[top : top + 1])
+    groups = None if sway.flutter_groups is None else sway.flutter_groups[top : top + 1]
+    one = dataclasses.replace(sway, leafy=sway.leafy[top : top + 1], flutter_groups=groups)
     rest = vertices[top : top + 1]
     return np.array([one.deformed(rest, normals[top : top + 1], float(t))[0][0] - rest[0] for t in times_s])
 
@@ -148,10 +149,18 @@ def test_a_bendable_trunk_is_the_same_surface_in_bands():
 
 
 def test_a_bent_normal_stays_perpendicular_to_the_bent_surface():
-    """The normals turn with the surface (n′ ∝ (I − ∇uᵀ)n): across each triangle of the bent crown the
-    face normal and the mean of its vertices' normals agree as well as they do at rest."""
-    model, sway = _sway(speed_m_s=16.0)
+    """The normals turn with the surface (n′ ∝ (I − ∇uᵀ)n): across each triangle of a bent bush's core (a
+    smooth closed blob, each vertex fluttering by its own place) the face normal and the mean of its vertices'
+    normals agree as well as they do at rest. (Leaf cards flutter a twig at a time, moved along while their
+    normals wobble with the wave's slope: a leaf's turning, shown in its shading only.)"""
+    model, sway = _sway(speed_m_s=16.0, kind="bush", height_m=1.8)
     vertices, normals, faces = model.arrays()[:3]
+    first = 0
+    for part in model.parts:  # the core's triangles only
+        if part.name == "foliage_core":
+            faces = part.faces + first
+            break
+        first += len(part.vertices_m)
 
     def misfit(v, n):
         face = np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]])
@@ -257,7 +266,8 @@ def test_the_crown_and_its_shadow_move_the_foot_sky_and_far_ground_do_not(swayin
 
     (a, b), plain, ids = swaying_frames
     tree = (a.instance_id == ids["tree_0"]) | (b.instance_id == ids["tree_0"])
-    changed = np.abs(a.radiance - b.radiance).max(axis=2) > 1e-4 * a.radiance.max()
+    tolerance = 1e-4 * a.radiance.max()
+    changed = np.abs(a.radiance - b.radiance).max(axis=2) > tolerance
     rows = np.flatnonzero(tree.any(axis=1))
     crown = tree.copy()
     crown[rows.max() - 25 :] = False  # the crown: all but the trunk's lower rows
@@ -269,7 +279,8 @@ def test_the_crown_and_its_shadow_move_the_foot_sky_and_far_ground_do_not(swayin
     sky = (a.instance_id == 0) & (b.instance_id == 0)
     assert sky.sum() > 1000 and not changed[sky].any()
     ground = (a.instance_id == ids["ground"]) & (b.instance_id == ids["ground"])
-    shade = np.minimum(a.radiance[..., 1], b.radiance[..., 1]) < 0.999 * plain[..., 1]  # penumbra too
+    # penumbra too: a leaf's faint fleck darkens the ground by less than 0.1 %, but by more than what counts as a change
+    shade = np.minimum(a.radiance[..., 1], b.radiance[..., 1]) < plain[..., 1] - tolerance
     # The shadow follows the crown: ground that changed lies in the tree's shadow at one of the times.
     moved_shadow = changed & ground
     assert moved_shadow.sum() >= 10

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from camgen.config.scene import Wind
-from camgen.props.sway import bendable, prop_sway, wind_gusts
+from camgen.props.sway import bendable, group_centres_m, prop_sway, wind_gusts
 from camgen.props.types import build_prop
 
 
@@ -26,6 +26,8 @@ def _formula(sway, vertices_m, normals, time_s):
     turned[:, 2] -= (2.0 * s / sway.height_m) * (normals @ D)
     if sway.leafy.any():
         rest = vertices_m[sway.leafy]
+        if sway.flutter_groups is not None:  # a group (a twig's leaves) by its leafy vertices' mean
+            rest, row = group_centres_m(rest, sway.flutter_groups[sway.leafy])
         g = float(sway.gusts.factor(time_s, sway.along_m))
         theta = (
             rest @ sway.flutter_wave_vectors_rad_m.T
@@ -33,8 +35,12 @@ def _formula(sway, vertices_m, normals, time_s):
             + sway.flutter_phases_rad
         )
         amplitude = g * sway.flutter_m
-        moved[sway.leafy] += (amplitude * np.sin(theta)) @ sway.flutter_axes
-        tilt = amplitude * np.cos(theta) * (normals[sway.leafy] @ sway.flutter_axes.T)
+        shift = (amplitude * np.sin(theta)) @ sway.flutter_axes
+        slope = amplitude * np.cos(theta)
+        if sway.flutter_groups is not None:
+            shift, slope = shift[row], slope[row]
+        moved[sway.leafy] += shift
+        tilt = slope * (normals[sway.leafy] @ sway.flutter_axes.T)
         turned[sway.leafy] -= tilt @ sway.flutter_wave_vectors_rad_m
     turned /= np.linalg.norm(turned, axis=1, keepdims=True)
     return moved, turned

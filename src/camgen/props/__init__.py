@@ -1,6 +1,7 @@
-"""Procedural props as pure geometry: street trees (broadleaf crowns of lumpy, noise-displaced blobs, or
-conifers of stacked irregular cones), bushes and hedges, benches, litter bins, bollards, lamp posts with a
-bracket and lantern, sign posts with a plate, and fences or railings.
+"""Procedural props as pure geometry: street trees (broadleaf crowns of clumped two-sided leaf cards filling
+a lumpy envelope, with branches, `camgen.props.foliage`; or conifers of stacked irregular cones), bushes and
+hedges (leaves over a dark core), benches, litter bins, bollards, lamp posts with a bracket and lantern, sign
+posts with a plate, and fences or railings.
 
 `placed_props` resolves a scene's `environment.props` and `environment.scatter` (placed props and
 scatter rules, `camgen.config.props`) into `PlacedProp`s: a `PropModel` (`camgen.props.types`: closed parts with a

@@ -36,6 +36,9 @@ class PropPart:
     """(V, 3) linear visible reflectance."""
     nir_reflectance: np.ndarray
     """(V,) reflectance at 850 nm."""
+    flutter_groups: np.ndarray | None = None
+    """(V,) int: the group each vertex flutters with as one (a twig's leaves, `camgen.props.foliage`); None:
+    each vertex on its own (`camgen.props.sway`)."""
 
 
 def _hard(name: str, mesh: trimesh.Trimesh, rgb, nir: float) -> PropPart:
@@ -106,6 +109,22 @@ def frustum(
 ) -> PropPart:
     mesh = frustum_mesh(r0_m, r1_m, z0_m, z1_m, bands=bands)
     mesh.vertices[:, :2] += np.asarray(offset_m, dtype=np.float64)
+    return _hard(name, mesh, rgb, nir)
+
+
+def limb(name: str, start_m, end_m, r0_m: float, r1_m: float, rgb, nir: float, sections: int = 6) -> PropPart:
+    """A closed tapered cylinder (a branch) from `start_m` (radius `r0_m`) to `end_m` (radius `r1_m`), with
+    `sections` sides (a branch a few pixels across needs few)."""
+    start, end = np.asarray(start_m, dtype=np.float64), np.asarray(end_m, dtype=np.float64)
+    axis = end - start
+    length = float(np.linalg.norm(axis))
+    mesh = frustum_mesh(r0_m, r1_m, 0.0, length, sections=sections)
+    z = axis / length
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    R = np.column_stack([x, np.cross(z, x), z])
+    mesh.vertices = np.asarray(mesh.vertices) @ R.T + start
     return _hard(name, mesh, rgb, nir)
 
 

@@ -35,7 +35,9 @@ The model, per plant (prop frame: z up, foot at the origin, height H):
   twigs in constant motion", WMO-No. 8; Tadrist et al. found leaf flutter to depend weakly on the speed
   and to dominate in light wind, the branches' buffeting to grow strongly and dominate in strong wind,
   as here the flutter's U against the sway's U²), and the normals wobble with it, so the crown's shading
-  flickers as a real one does.
+  flickers as a real one does. A part may group its vertices (`PropPart.flutter_groups`: a twig with its
+  leaf cards, `camgen.props.foliage`): a group moves as one, by the waves at its vertices' mean rest place,
+  its leaves keeping their shape, while its normals still wobble with the waves' slope.
 
 Calibration (chosen, against the Beaufort scale's descriptions, WMO-No. 8): the tip's mean lean is
 `LEAN_AT_REFERENCE_FRAC` = 3 % of the height at 10 m/s (Beaufort 5, "small trees in leaf begin to
@@ -195,6 +197,10 @@ class PropSway:
     """(W, 3)."""
     flutter_frequencies_hz: np.ndarray
     flutter_phases_rad: np.ndarray
+    flutter_groups: np.ndarray | None = None
+    """(V,) int, per vertex: the group (a twig with its leaves) whose leafy vertices' mean rest place sets
+    their phase in each wave, so that a group moves as one (its leaves keep their shape, and the sines are
+    taken once a group); None: each leafy vertex by its own rest place."""
     _rest: _RestTerms | None = dataclasses.field(default=None, init=False, repr=False, compare=False)
     """The time-independent terms of `deformed` for the last rest vertices and normals it was given."""
 
@@ -236,8 +242,12 @@ class PropSway:
                 rest.leafy_wave_phases_rad + rest.flutter_angular_frequencies_rad_s * time_s + self.flutter_phases_rad
             )
             amplitude = float(g) * self.flutter_m
-            moved[rest.leafy_rows] += (amplitude * np.sin(theta)) @ self.flutter_axes
-            tilt = amplitude * np.cos(theta) * rest.leafy_normals_along_axes
+            shift = (amplitude * np.sin(theta)) @ self.flutter_axes
+            slope = amplitude * np.cos(theta)
+            if rest.leafy_groups is not None:  # (G, …) per group, to each of its vertices
+                shift, slope = shift[rest.leafy_groups], slope[rest.leafy_groups]
+            moved[rest.leafy_rows] += shift
+            tilt = slope * rest.leafy_normals_along_axes
             turned[rest.leafy_rows] -= tilt @ self.flutter_wave_vectors_rad_m
         turned /= np.linalg.norm(turned, axis=1, keepdims=True)
         return moved, turned
@@ -289,20 +299,26 @@ class _RestTerms:
     leafy_rows: slice | np.ndarray | None
     """The leafy vertices (a slice where they are one run), None where none is."""
     leafy_wave_phases_rad: np.ndarray | None
-    """(L, W) each leafy vertex's phase in each flutter wave at rest, k·x, rad."""
+    """(L, W) each leafy vertex's phase in each flutter wave at rest, k·x, rad; (G, W) each flutter group's, at
+    the mean of its vertices' rest places, where the sway has `flutter_groups`."""
     flutter_angular_frequencies_rad_s: np.ndarray
     """(W,) 2πf of the flutter waves, rad/s."""
+    leafy_groups: np.ndarray | None
+    """(L,) each leafy vertex's row in `leafy_wave_phases_rad` (its flutter group's), None without groups."""
     leafy_normals_along_axes: np.ndarray | None
     """(L, W) each leafy vertex's rest normal along each wave's axis."""
 
     @classmethod
     def of(cls, sway: PropSway, vertices_m: np.ndarray, normals: np.ndarray) -> _RestTerms:
         s = np.clip(vertices_m[:, 2] / sway.height_m, 0.0, None)
-        leafy_rows, phases, along_axes = None, None, None
+        leafy_rows, phases, along_axes, groups = None, None, None, None
         if sway.leafy.any():
             rows = np.flatnonzero(sway.leafy)
             leafy_rows = slice(int(rows[0]), int(rows[-1]) + 1) if rows[-1] - rows[0] + 1 == len(rows) else rows
-            phases = vertices_m[sway.leafy] @ sway.flutter_wave_vectors_rad_m.T
+            places = vertices_m[sway.leafy]
+            if sway.flutter_groups is not None:
+                places, groups = group_centres_m(places, sway.flutter_groups[sway.leafy])
+            phases = places @ sway.flutter_wave_vectors_rad_m.T
             along_axes = normals[sway.leafy] @ sway.flutter_axes.T
         return cls(
             vertices_m=_read_only_copy(vertices_m),
@@ -314,12 +330,21 @@ class _RestTerms:
             leafy_wave_phases_rad=phases,
             flutter_angular_frequencies_rad_s=2 * math.pi * sway.flutter_frequencies_hz,
             leafy_normals_along_axes=along_axes,
+            leafy_groups=groups,
         )
 
     def describes(self, vertices_m: np.ndarray, normals: np.ndarray) -> bool:
         """Whether these are the terms of `vertices_m` and `normals`: the same dtype, shape and bytes (not just
         equal values: −0.0 and 0.0 differ)."""
         return _same_bits(self.vertices_m, vertices_m) and _same_bits(self.normals, normals)
+
+
+def group_centres_m(points_m: np.ndarray, groups: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mean (G, 3) of the points (N, 3) of each group present in `groups` (N,), and each point's row there (N,)."""
+    _, row = np.unique(groups, return_inverse=True)
+    counts = np.bincount(row)
+    centres = np.column_stack([np.bincount(row, weights=points_m[:, k]) / counts for k in range(3)])
+    return centres, row
 
 
 def _read_only_copy(array: np.ndarray) -> np.ndarray:
@@ -372,6 +397,12 @@ def prop_sway(model: PropModel, T_world_from_prop: np.ndarray, gusts: Gusts | No
     downwind /= np.linalg.norm(downwind)
     along_m = float(np.asarray(T_world_from_prop)[:2, 3] @ gusts.direction)
     leafy = np.concatenate([np.full(len(p.vertices_m), p.name.startswith(ORGANIC_PARTS)) for p in model.parts])
+    flutter_groups, first = [], 0
+    for part in model.parts:  # each part's groups numbered after the last part's; a vertex alone its own group
+        own = np.arange(len(part.vertices_m)) if part.flutter_groups is None else part.flutter_groups
+        flutter_groups.append(first + own)
+        first += int(own.max()) + 1 if len(own) else 0
+    grouped = any(p.flutter_groups is not None for p in model.parts)
     axes = rng.normal(size=(FLUTTER_WAVES, 3)) * (1.0, 1.0, 0.5)  # leaves and twigs move more sideways
     axes /= np.linalg.norm(axes, axis=1, keepdims=True)
     directions = rng.normal(size=(FLUTTER_WAVES, 3))
@@ -395,6 +426,7 @@ def prop_sway(model: PropModel, T_world_from_prop: np.ndarray, gusts: Gusts | No
         flutter_wave_vectors_rad_m=directions * (2 * math.pi / wavelengths_m)[:, None],
         flutter_frequencies_hz=rng.uniform(*FLUTTER_FREQUENCY_HZ, FLUTTER_WAVES),
         flutter_phases_rad=rng.uniform(0.0, 2 * math.pi, FLUTTER_WAVES),
+        flutter_groups=np.concatenate(flutter_groups) if grouped else None,
     )
 
 

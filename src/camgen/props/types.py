@@ -39,7 +39,18 @@ import numpy as np
 import trimesh
 
 from camgen.config.props import PROP_HEIGHT_RANGE_M
-from camgen.props.shapes import PropPart, blob, box, frustum, lumpy_cone, rot_x
+from camgen.props.foliage import (
+    BUSH_LARGEST_CARD_M2,
+    BUSH_LEAF_AREA_INDEX,
+    BUSH_LEAF_CARD_AREA_M2,
+    CROWN_GAP_FRACTION,
+    LEAF_CARD_AREA_M2,
+    envelope_of,
+    leaf_area_m2,
+    leafy_volume,
+    line_envelopes,
+)
+from camgen.props.shapes import PropPart, blob, box, frustum, limb, lumpy_cone, rot_x
 
 PROP_TYPE_KEYS = {"tree": 1, "bush": 2, "bench": 3, "bin": 4, "bollard": 5, "lamp_post": 6, "sign": 7, "fence": 8}
 """Each type's key in the seed sequence, so one seed draws different streams for different types."""
@@ -47,6 +58,10 @@ PROP_TYPE_KEYS = {"tree": 1, "bush": 2, "bench": 3, "bin": 4, "bollard": 5, "lam
 LEAF_RGB = ((0.045, 0.085, 0.025), (0.06, 0.10, 0.03), (0.05, 0.08, 0.035), (0.07, 0.095, 0.03))
 """Linear canopy albedos of broadleaf crowns (module docstring): fresh to olive greens."""
 LEAF_NIR = (0.45, 0.5)
+BUSH_CORE_SCALE = 0.7
+"""A bush's dark core: its outline shrunk by this about its foot."""
+BUSH_CORE_SHADE = 0.5
+"""The core's albedo over the leaves' (the inside of a bush gets little of the sky's light)."""
 CONIFER_RGB = ((0.03, 0.055, 0.03), (0.035, 0.06, 0.035))
 CONIFER_NIR = (0.35, 0.4)
 BARK_RGB = (0.10, 0.08, 0.06)
@@ -87,6 +102,8 @@ class PropModel:
     metallic: float = 0.0
     dims: dict[str, float] = field(default_factory=dict)
     """Named dimensions, m (trunk_diameter_m, seat_height_m, …), for tests and metadata."""
+    envelope: list[PropPart] = field(default_factory=list)
+    """Closed surfaces the leaves of a crown or bush fill (`camgen.props.foliage`); not drawn."""
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(vertices (V, 3), normals (V, 3), faces (F, 3), colours (V, 3), NIR (V,)) of all parts as one."""
@@ -101,9 +118,10 @@ class PropModel:
 
     def occluder_triangles(self) -> np.ndarray:
         """(T, 3, 3) triangles, in the prop's frame, that stand in for it in sight-line tests
-        (`camgen.coverage.occlusion`): its hard parts as drawn, and its leafy parts (a crown's lumps, a
-        bush) as one convex hull, a sixth to a twentieth of their triangles; the hull also fills the gaps
-        between lumps, which the render sees through at a crown's edge."""
+        (`camgen.coverage.occlusion`): its hard parts as drawn, and its leafy parts (a crown's leaves or
+        a conifer's lumps, a bush) as one convex hull, a small share of their triangles; the hull fills
+        the gaps between leaves too, which the render sees through (a crown hides 73–89 % of what lies
+        behind it, `camgen.props.foliage.CROWN_POROSITY_RANGE`: a sight line is taken as blocked)."""
         hard = [p.vertices_m[p.faces] for p in self.parts if not p.name.startswith(ORGANIC_PARTS)]
         leafy = [p.vertices_m for p in self.parts if p.name.startswith(ORGANIC_PARTS)]
         if leafy:
@@ -113,7 +131,11 @@ class PropModel:
 
 
 ORGANIC_PARTS = ("crown", "foliage")
-"""Name prefixes of the leafy parts, which `PropModel.occluder_triangles` replaces by their convex hull."""
+"""Name prefixes of the leafy parts, which `PropModel.occluder_triangles` replaces by their convex hull and
+`camgen.props.sway` makes flutter: a broadleaf crown's leaves ("crown"), a conifer's lumps ("crown_<k>"), a
+bush's leaves ("foliage") and its dark core ("foliage_core")."""
+LEAF_CARD_PARTS = ("crown", "foliage")
+"""Names of the parts made of two-sided leaf cards (`camgen.props.foliage`), open sheets unlike every other part."""
 
 
 def _height(kind: str, rng: np.random.Generator, pinned: float | None) -> float:
@@ -122,10 +144,12 @@ def _height(kind: str, rng: np.random.Generator, pinned: float | None) -> float:
     return drawn if pinned is None else float(pinned)
 
 
-def _fit_height(parts: list[PropPart], bottom_m: float, top_m: float) -> None:
-    """Stretch the parts' z span onto [bottom_m, top_m] (a crown's top at the tree's height)."""
-    low = min(float(p.vertices_m[:, 2].min()) for p in parts)
-    high = max(float(p.vertices_m[:, 2].max()) for p in parts)
+def _fit_height(parts: list[PropPart], bottom_m: float, top_m: float, span_of: list[PropPart] | None = None) -> None:
+    """Stretch the parts' z span (or that of `span_of`, the same stretch applied to all) onto [bottom_m, top_m]
+    (a crown's top at the tree's height)."""
+    measured = parts if span_of is None else span_of
+    low = min(float(p.vertices_m[:, 2].min()) for p in measured)
+    high = max(float(p.vertices_m[:, 2].max()) for p in measured)
     scale = (top_m - bottom_m) / (high - low)
     for p in parts:
         p.vertices_m[:, 2] = bottom_m + (p.vertices_m[:, 2] - low) * scale
@@ -190,9 +214,38 @@ def _tree(rng, height_m, form, length_m) -> PropModel:
     crown = parts[1:]
     bottom = min(float(p.vertices_m[:, 2].min()) for p in crown)
     _fit_height(crown, bottom, H)
+    lines = line_envelopes([(p.vertices_m, p.faces) for p in crown])
+    envelope = lines[0][0]
+    gap_fraction = float(rng.uniform(*CROWN_GAP_FRACTION))
+    leaves = leafy_volume(
+        "crown", envelope, gap_fraction=gap_fraction, gap_envelopes=lines, card_area_m2=LEAF_CARD_AREA_M2,
+        centre_m=(0.0, 0.0, centre_z),
+        radii_m=(crown_r, crown_r, crown_h / 2), rgb=rgb, nir=nir, rng=rng,
+    )  # fmt: skip
+    _fit_height([leaves, *crown], float(leaves.vertices_m[:, 2].min()), H, span_of=[leaves])
+    leaf_area = leaf_area_m2(leaves)  # as drawn, after the stretch
+    lai = leaf_area / envelope.projected_area_m2
+    trunk_top = centre_z + 0.2 * crown_h
+    branches = []
+    for k in range(int(rng.integers(4, 8))):
+        z0 = crown_base + rng.uniform(0.0, 0.7) * (trunk_top - crown_base)
+        azimuth = 2 * math.pi * (k + rng.uniform(-0.3, 0.3)) / 6
+        start = np.array([0.0, 0.0, z0])
+        end = np.array([crown_r * math.cos(azimuth), crown_r * math.sin(azimuth), z0 + rng.uniform(0.3, 0.6) * crown_h])
+        # out to 0.5–0.8 of the way to the envelope's edge along its line, so that no bare branch sticks out
+        steps = start + np.linspace(0.0, 1.0, 41)[:, None] * (end - start)
+        inside = envelope.contains(steps)
+        last = int(np.flatnonzero(inside)[-1]) if inside.any() else 0
+        reach = rng.uniform(0.5, 0.8) * last / 40
+        if reach * np.linalg.norm(end - start) < 0.3:
+            continue
+        r0 = 0.25 * trunk_d * (1.0 - 0.5 * (z0 - crown_base) / max(trunk_top - crown_base, 1e-9))
+        branches.append(limb("branch", start, start + reach * (end - start), r0, 0.3 * r0, BARK_RGB, BARK_NIR))
     return PropModel(
-        "tree", 0, parts, H, roughness=0.9,
-        dims={"height_m": H, "trunk_diameter_m": trunk_d, "crown_base_m": crown_base, "crown_radius_m": crown_r},
+        "tree", 0, [parts[0], *branches, leaves], H, roughness=0.9, envelope=crown,
+        dims={"height_m": H, "trunk_diameter_m": trunk_d, "crown_base_m": crown_base, "crown_radius_m": crown_r,
+              "leaf_area_index": lai, "leaf_area_m2": leaf_area, "crown_gap_fraction": gap_fraction,
+              "crown_projected_area_m2": envelope.projected_area_m2},
     )  # fmt: skip
 
 
@@ -203,12 +256,39 @@ def _bush(rng, height_m, form, length_m) -> PropModel:
     rgb = LEAF_RGB[rng.integers(len(LEAF_RGB))]
     nir = float(rng.uniform(*LEAF_NIR))
     subdivisions = 3 if L < 6 else 4
-    part = blob(
+    outline = blob(
         "foliage", (L / 2, depth / 2, H / 2), (L / 2, 0.0, H / 2 - 0.03), roughness=0.06, exponent=4.0,
         rgb=rgb, nir=nir, rng=rng, subdivisions=subdivisions,
     )  # fmt: skip
-    _fit_height([part], -0.03, H)
-    return PropModel("bush", 0, [part], H, roughness=0.9, dims={"height_m": H, "length_m": L, "depth_m": depth})
+    _fit_height([outline], -0.03, H)
+    # The dense inside, where little light reaches: a darker core the leaves cover (the outline shrunk
+    # about its foot's middle), so that a bush hides what lies behind it but shows a ragged, leafy surface.
+    foot = np.array([L / 2, 0.0, -0.03])
+    core = PropPart(
+        "foliage_core",
+        foot + BUSH_CORE_SCALE * (outline.vertices_m - foot),
+        outline.normals.copy(),
+        outline.faces.copy(),
+        outline.colours_rgb * BUSH_CORE_SHADE,
+        outline.nir_reflectance.copy(),
+    )
+    lai = float(rng.uniform(*BUSH_LEAF_AREA_INDEX))
+    envelope = envelope_of([(outline.vertices_m, outline.faces)])
+    inner = envelope_of([(core.vertices_m, core.faces)])
+    leaf_area = lai * envelope.projected_area_m2
+    leaves = leafy_volume(
+        "foliage", envelope, leaf_area, card_area_m2=BUSH_LEAF_CARD_AREA_M2, centre_m=(L / 2, 0.0, H / 2),
+        radii_m=(L / 2, depth / 2, H / 2), rgb=rgb, nir=nir, rng=rng, exclude=inner.contains,
+        largest_card_m2=BUSH_LARGEST_CARD_M2,
+    )  # fmt: skip
+    _fit_height([leaves, core, outline], -0.03, H, span_of=[leaves])
+    leaf_area = leaf_area_m2(leaves)  # as drawn, after the stretch
+    lai = leaf_area / envelope.projected_area_m2
+    return PropModel(
+        "bush", 0, [core, leaves], H, roughness=0.9, envelope=[outline],
+        dims={"height_m": H, "length_m": L, "depth_m": depth, "leaf_area_index": lai, "leaf_area_m2": leaf_area,
+              "crown_projected_area_m2": envelope.projected_area_m2},
+    )  # fmt: skip
 
 
 def _paint(rng) -> str:
