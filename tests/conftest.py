@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import textwrap
 from pathlib import Path
 
@@ -84,6 +85,23 @@ def write(directory: Path, name: str, text: str) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(textwrap.dedent(text), encoding="utf-8")
     return path
+
+
+def assert_located_problem(workspace: Path, text: str, key: str, fragment: str) -> None:
+    """Loading the scene `text` (written to `workspace`/scenes/bad.yaml) fails with one problem, located at the
+    line marked ``#<`` (file:line:column), naming `key` and saying `fragment`."""
+    from camgen.config import load_scene
+    from camgen.errors import ConfigError
+
+    path = write(workspace, "scenes/bad.yaml", text)
+    with pytest.raises(ConfigError) as caught:
+        load_scene(path)
+    (problem,) = caught.value.problems
+    message = str(problem)
+    assert fragment in message, message
+    assert f" {key} " in f" {message} ", message
+    marked = next(i + 1 for i, row in enumerate(text.splitlines()) if "#<" in row)
+    assert re.match(rf"^{re.escape(str(path))}:{marked}:\d+: ", message), message
 
 
 @pytest.fixture

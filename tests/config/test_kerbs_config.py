@@ -3,14 +3,13 @@ value, fix), as tests/config/test_bad_input.py checks every other key."""
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import pytest
 
 from camgen.config import load_scene
 from camgen.errors import ConfigError
-from tests.conftest import SCENE, write
+from tests.conftest import SCENE, assert_located_problem, write
 
 
 def with_kerb(line: str) -> str:
@@ -90,16 +89,7 @@ CASES = [
 
 @pytest.mark.parametrize(("line", "key", "fragment"), [c[1:] for c in CASES], ids=[c[0] for c in CASES])
 def test_bad_kerb_is_located_and_explained(workspace: Path, line: str, key: str, fragment: str):
-    text = with_kerb(line)
-    path = write(workspace, "scenes/bad.yaml", text)
-    with pytest.raises(ConfigError) as caught:
-        load_scene(path)
-    (problem,) = caught.value.problems
-    message = str(problem)
-    assert fragment in message, message
-    assert f" {key} " in f" {message} ", message
-    marked = next(i + 1 for i, row in enumerate(text.splitlines()) if "#<" in row)
-    assert re.match(rf"^{re.escape(str(path))}:{marked}:\d+: ", message), message
+    assert_located_problem(workspace, with_kerb(line), key, fragment)
 
 
 def test_unnamed_kerbs_take_their_default_names(workspace: Path):

@@ -516,22 +516,18 @@ class Environment(Model):
             prop.name or f"{prop.type}_{i}" for i, prop in enumerate(self.props)
         }
         seen: set[str] = set()
-        for i, name in enumerate(marking_names(self.markings)):
-            if name in taken or name in seen:
-                raise invalid(
-                    f"markings[{i}]" + (".name" if self.markings[i].name else ""),
-                    f"is the instance {name!r}, a name another mesh, prop or marking has already; give the marking "
-                    "another name",
-                )
-            seen.add(name)
-        for i, name in enumerate(kerb_names(self.kerbs)):
-            if name in taken or name in seen:
-                raise invalid(
-                    f"kerbs[{i}]" + (".name" if self.kerbs[i].name else ""),
-                    f"is the instance {name!r}, a name another mesh, prop, marking or kerb has already; give the "
-                    "kerb another name",
-                )
-            seen.add(name)
+        for key, items, names, others in (
+            ("markings", self.markings, marking_names(self.markings), "mesh, prop or marking"),
+            ("kerbs", self.kerbs, kerb_names(self.kerbs), "mesh, prop, marking or kerb"),
+        ):
+            for i, name in enumerate(names):
+                if name in taken or name in seen:
+                    raise invalid(
+                        f"{key}[{i}]" + (".name" if items[i].name else ""),
+                        f"is the instance {name!r}, a name another {others} has already; give the {key[:-1]} "
+                        "another name",
+                    )
+                seen.add(name)
         return self
 
 
