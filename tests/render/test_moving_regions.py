@@ -140,25 +140,19 @@ def test_a_panning_head_falls_back_to_whole_sub_frames(case):
     assert composited.moving_rects_px(state, view, [-0.25, 0.25], composited.shadow_fit(view)) is not None
 
 
-def test_a_spot_light_below_a_moving_top_or_a_sun_under_the_horizon_falls_back(case):
+def test_a_sun_under_the_horizon_falls_back(case):
+    """(A spot light below a moving top is bounded by the box of every surface: tests/render/test_spot_cone_regions.)"""
     composited, state, graph = case["composited"], case["state"], case["graph"]
     view = render_view(state, case["camera"].render)
     scene = graph.scene
-    (spot,) = scene.spot_light_nodes
     (sun,) = scene.directional_light_nodes
-    spot_pose, sun_pose = scene.get_pose(spot).copy(), scene.get_pose(sun).copy()
+    sun_pose = scene.get_pose(sun).copy()
     try:
-        low = spot_pose.copy()
-        low[2, 3] = 1.0  # under the car's 1.4 m roof
-        scene.set_pose(spot, low)
-        assert composited.moving_rects_px(state, view, [-0.25, 0.25], composited.shadow_fit(view)) is None
-        scene.set_pose(spot, spot_pose)
         under = sun_pose.copy()
         under[:3, :3] = np.diag([1.0, -1.0, -1.0]) @ sun_pose[:3, :3]  # −Z (the light's travel) points up
         scene.set_pose(sun, under)
         assert composited.moving_rects_px(state, view, [-0.25, 0.25], composited.shadow_fit(view)) is None
     finally:
-        scene.set_pose(spot, spot_pose)
         scene.set_pose(sun, sun_pose)
 
 
@@ -168,10 +162,12 @@ def test_no_moving_actor_in_the_exposure_leaves_no_region(case):
     assert composited.moving_rects_px(state, view, [0.0, 0.0], composited.shadow_fit(view)) == []
 
 
-@pytest.mark.parametrize("light", ["sun", "spot"])
+@pytest.mark.parametrize("light", ["sun", "spot", "low spot"])
 def test_the_shadow_slices_hold_the_whole_shadow_volume(light):
     """Points p + λd of a box's shadow volume (p in the box, down to the ground), or L + κ(p − L) for a
-    spot light at L, sampled at random, each lie in one of the slices' convex hulls (scipy's Delaunay)."""
+    spot light at L, sampled at random, each lie in one of the slices' convex hulls (scipy's Delaunay). A low
+    spot light (below the box's top: rays over it go up and never reach the ground) has its volume bounded by
+    a box holding every surface: the points of the volume inside that box."""
     from scipy.spatial import Delaunay
 
     from camgen.render.scene_graph import _look_along
@@ -191,20 +187,30 @@ def test_the_shadow_slices_hold_the_whole_shadow_volume(light):
             return self.pose
 
     d = np.array([0.9, 0.3, -0.12])  # a low sun: a shadow 8 times as long as the box is high
-    L = np.array([1.0, -2.0, 2.5])
-    pose = _look_along(d) if light == "sun" else _look_along(np.array([0.0, 0.0, -1.0]), L)
+    L = np.array([1.0, -2.0, 2.5]) if light != "low spot" else np.array([1.0, -4.0, 0.6])  # a headlamp's height
     low, high = np.array([-1.0, -0.5, 0.2]), np.array([1.0, 0.5, 1.6])
+    if light == "sun":
+        pose = _look_along(d)
+    else:  # straight down from over the box, or a headlamp aimed at it
+        pose = _look_along(np.array([0.0, 0.0, -1.0]) if light == "spot" else (low + high) / 2 - L, L)
     corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1]) for z in (low[2], high[2])])
-    slices = _shadow_slices(Scene(pose), Node(light), corners, 0.0)
+    surfaces = (np.array([-20.0, -20.0, 0.0]), np.array([20.0, 30.0, 10.0]))  # every surface: a street and houses
+    if light == "low spot":  # without the surfaces' box its rays over the lamp run on for ever
+        assert _shadow_slices(Scene(pose), Node("spot"), corners, 0.0) is None
+    slices = _shadow_slices(Scene(pose), Node(light.split()[-1]), corners, 0.0, surfaces)
     assert len(slices) > 2  # a long shadow is cut into pieces
     rng = np.random.default_rng(0)
     p = low + rng.random((4000, 3)) * (high - low)
     if light == "sun":
         reach = p[:, 2] / -(d[2] / np.linalg.norm(d))
         points = p + (rng.random(len(p)) * reach)[:, None] * (d / np.linalg.norm(d))
-    else:
+    elif light == "spot":
         reach = L[2] / (L[2] - p[:, 2])
         points = L + (1.0 + rng.random(len(p)) * (reach - 1.0))[:, None] * (p - L)
+    else:  # out to 15 times as far along each ray, then those inside the surfaces' box (the ground its floor)
+        points = L + (1.0 + rng.random(len(p)) * 14.0)[:, None] * (p - L)
+        points = points[np.all((points >= surfaces[0]) & (points <= surfaces[1]), axis=1)]
+        assert len(points) > 1000 and points[:, 2].max() > 5.0  # rays over the lamp reach the houses' height
     inside = np.zeros(len(points), bool)
     for hull in slices:
         inside |= Delaunay(hull).find_simplex(points, tol=1e-9) >= 0

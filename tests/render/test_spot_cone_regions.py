@@ -50,12 +50,34 @@ def test_a_mover_outside_a_low_lamps_cone_keeps_its_moving_regions(low_lamp, ren
     assert np.abs(fast - reference).max() <= 1e-5 * reference.max()
 
 
-def test_inside_the_cone_a_low_lamp_still_cannot_be_bounded(low_lamp, monkeypatch):
-    """The same mover, were the lamp's cone all round (its shadow map a hemisphere and more), falls back as before:
-    the cone is what lets it keep its rectangles."""
-    camera, _graph, composited = low_lamp
-    monkeypatch.setattr(sequence, "_spot_reach_rad", lambda light: np.pi)
+AIMED_LAMP = (
+    "  - {type: spot, intensity_cd: 20000, position_m: [-4, 4, 0.6], target_m: [2, 9, 0.6], cone_half_angle_deg: 30}\n"
+)
+"""A headlamp's height, 0.6 m up, aimed across the mover's lane (y = 9) at the wall behind it (y = 16): the mover,
+1.4 m tall, stands in its cone, above it, and throws its shadow up the wall and over it."""
+
+
+def test_a_mover_in_a_low_lamps_cone_is_bounded_by_the_surfaces(renderer, tmp_path, monkeypatch):
+    """Inside the cone, the rays over the lamp's height never reach the ground: the mover's shadow volume is
+    bounded by the box that holds every surface (`_shadow_slices`' `box_m`), and the composited frame still
+    equals every sub-frame drawn whole (the shadow on the wall included). Without that box it could not be
+    bounded, and every sub-frame was drawn whole."""
+    write(tmp_path, "profiles/fixed.yaml", SMALL_PROFILE)
+    text = SCENE.replace("lights:\n", "lights:\n" + AIMED_LAMP, 1)
+    job = compile_scene(load_scene(write(tmp_path, "scenes/s.yaml", text)), PlanSettings(supersampling=2))
+    camera = job.cameras[0]
+    graph = build_scene_graph(job.scene)
+    composited = CameraRenderer(renderer, graph, camera)
     state = camera.states[FRAME]
     view = render_view(state, camera.render)
     offsets = [t for t, _, _ in jittered_samples(composited.motion_samples(state), camera.render.supersampling)]
+    rects = composited.moving_rects_px(state, view, offsets, composited.shadow_fit(view))
+    assert rects, rects
+    fast = composited.frame(FRAME).passes.radiance
+    reference = CameraRenderer(renderer, graph, camera, moving_regions=False).frame(FRAME).passes.radiance
+    assert np.abs(fast - reference).max() <= 1e-5 * reference.max()
+    real = sequence._shadow_slices
+    monkeypatch.setattr(
+        sequence, "_shadow_slices", lambda scene, node, corners, z, box=None: real(scene, node, corners, z)
+    )
     assert composited.moving_rects_px(state, view, offsets, composited.shadow_fit(view)) is None

@@ -905,6 +905,7 @@ class CameraRenderer:
         scene = self.graph.scene
         near_m, far_m = self.clip_range_m(view)
         casting = _shadow_lights(scene) if self.graph.shadows else []
+        surfaces = _projected_rect_px(box_corners(*self._caster_box_m, np.eye(4)), view, NEAR_CLIP_M)
         rects = []
         for k, moved in enumerate(changed):
             if not moved:
@@ -922,12 +923,14 @@ class CameraRenderer:
             swept = box_corners(low - grow_m, high + grow_m, np.eye(4))
             hulls = [swept]
             for node in lights_k:
-                slices = _shadow_slices(scene, node, swept, self._lowest_z_m)
+                slices = _shadow_slices(scene, node, swept, self._lowest_z_m, self._caster_box_m)
                 if slices is None:
                     return None
                 hulls += slices
             for hull in hulls:
                 rect = _projected_rect_px(hull, view, NEAR_CLIP_M)
+                if rect is not None and surfaces is not None:  # a shadow falls on surfaces, all in the box
+                    rect = _rect_intersection(rect, surfaces)
                 if rect is not None:
                     rects.append(aligned_rect_px(rect, view.width_px, view.height_px, step_px))
         rects = merged_rects_px(rects, slack_px)
@@ -1539,17 +1542,24 @@ SHADOW_SLICES_MAX = 16
 """Most pieces a caster's shadow volume is cut into along the light (`_shadow_slices`)."""
 
 
-def _shadow_slices(scene, node, corners_m: np.ndarray, lowest_z_m: float) -> list[np.ndarray] | None:
-    """Point sets (N, 3) whose convex hulls together hold the shadow volume that the box with
-    corners `corners_m` (8, 3) casts in the light of `node` down to the plane z = `lowest_z_m`; None when
-    the light does not shine down past every corner.
+def _shadow_slices(
+    scene, node, corners_m: np.ndarray, lowest_z_m: float, box_m: tuple[np.ndarray, np.ndarray] | None = None
+) -> list[np.ndarray] | None:
+    """Point sets (N, 3) whose convex hulls together hold the part of the shadow volume that the box with
+    corners `corners_m` (8, 3) casts in the light of `node` that can fall on a surface: down to the plane
+    z = `lowest_z_m`, and within `box_m` (low, high: a box holding every surface) where the light does not
+    shine down past every corner (a spot light below the box's top, a vehicle's headlamp behind a walker:
+    the rays over the lamp's height never reach the ground). None when a sun does not shine down, or a
+    spot light does not shine down past every corner and no `box_m` is given.
 
     A sun shining along d moves a corner c to c + λd, λ ∈ [0, λ_ground(c)]; a spot light at L to
-    L + κ(c − L), κ ∈ [1, κ_ground(c)]. The volume lies in the union over λ (κ) of the box moved (scaled)
+    L + κ(c − L), κ ∈ [1, κ_end(c)], κ_end the lesser of where the ray meets the ground (going down) and
+    where it leaves `box_m` for good. The volume lies in the union over λ (κ) of the box moved (scaled)
     by it, and that union over an interval [a, b] lies in the hull of the box at a and at b (the box
     moved along a segment, or scaled about L between two factors), cut at the plane (`_above_plane`).
     Cutting the interval into pieces about as long as the box is wide bounds a long shadow by a chain of
-    small hulls, not one long diagonal."""
+    small hulls, not one long diagonal. The hulls of a spot light below the box's top reach out of `box_m`:
+    what they bound is their projection's part inside the box's (`_rects_of`)."""
     from pyrender.light import DirectionalLight
 
     pose = scene.get_pose(node)
@@ -1571,14 +1581,31 @@ def _shadow_slices(scene, node, corners_m: np.ndarray, lowest_z_m: float) -> lis
         off_axis = math.acos(float(np.clip((centre - L) @ -pose[:3, 2] / distance_m, -1.0, 1.0)))
         if off_axis - math.asin(radius_m / distance_m) > _spot_reach_rad(node.light):
             return []
-    if L[2] <= corners_m[:, 2].max() + 1e-6:
+    if L[2] > corners_m[:, 2].max() + 1e-6:
+        reach = float(np.max((L[2] - lowest_z_m) / (L[2] - corners_m[:, 2])))
+    elif box_m is None:
         return None
-    reach = float(np.max((L[2] - lowest_z_m) / (L[2] - corners_m[:, 2])))
+    else:
+        reach = float(np.max(_ray_ends(L, corners_m, lowest_z_m, box_m)))
     length_m = (reach - 1.0) * float(np.linalg.norm(corners_m - L, axis=1).max())
     pieces = int(min(SHADOW_SLICES_MAX, max(1, math.ceil(length_m / width_m))))
     ends = np.linspace(1.0, max(reach, 1.0), pieces + 1)
     hulls = [np.concatenate([L + a * (corners_m - L), L + b * (corners_m - L)]) for a, b in itertools.pairwise(ends)]
     return [_above_plane(hull, lowest_z_m) for hull in hulls]
+
+
+def _ray_ends(
+    L: np.ndarray, corners_m: np.ndarray, lowest_z_m: float, box_m: tuple[np.ndarray, np.ndarray]
+) -> np.ndarray:
+    """(N,) for each corner c of `corners_m` (N, 3), the least κ ≥ 1 from which the ray L + κ(c − L) from a light
+    at `L` meets no surface: where it meets the plane z = `lowest_z_m` (going down) or leaves the box `box_m`
+    (low, high) for good, whichever comes first; at least 1 (a corner outside the box)."""
+    low, high = (np.asarray(b, np.float64) for b in box_m)
+    d = corners_m - L  # (N, 3)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        leave = np.where(d > 0, (high - L) / d, np.where(d < 0, (low - L) / d, np.inf))  # each slab's far side
+        ground = np.where(d[:, 2] < 0, (lowest_z_m - L[2]) / d[:, 2], np.inf)
+    return np.maximum(np.minimum(leave.min(axis=1), ground), 1.0)
 
 
 def _spot_shadow_fov_rad(light) -> float:
@@ -1604,6 +1631,12 @@ def _above_plane(points_m: np.ndarray, z_m: float) -> np.ndarray:
     i, j = np.nonzero(above[:, None] & ~above[None, :])
     t = (z_m - points_m[i, 2]) / (points_m[j, 2] - points_m[i, 2])
     return np.concatenate([points_m[above], points_m[i] + t[:, None] * (points_m[j] - points_m[i])])
+
+
+def _rect_intersection(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> tuple[int, int, int, int] | None:
+    """The pixels (x0, y0, x1, y1; x1, y1 exclusive) rectangles `a` and `b` share; None when none."""
+    x0, y0, x1, y1 = max(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), min(a[3], b[3])
+    return (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else None
 
 
 def _projected_rect_px(points_m: np.ndarray, view: View, near_m: float) -> tuple[int, int, int, int] | None:
