@@ -73,6 +73,19 @@ CASES = [
         "leaves no top on a 0.06 m wide kerb",
     ),
     (
+        "arris_below_the_road",
+        "{along_m: [[0, 0], [4, 0]], upstand_m: 0.01, batter_setback_m: 0, batter_rise_m: 0}",
+        "environment.kerbs[0].arris_radius_m",
+        "is 0.015 m, whose rounding takes 15.0 mm of a 10.0 mm road face (upstand_m); make it at most 0.01 m",
+    ),
+    (
+        "arris_past_the_batter",
+        "{along_m: [[0, 0], [4, 0]], width_m: 0.2, batter_setback_m: 0.005, batter_rise_m: 0.005, "
+        "arris_radius_m: 0.05}",
+        "environment.kerbs[0].arris_radius_m",
+        "whose rounding takes 20.7 mm of a 7.1 mm batter",
+    ),
+    (
         "hairpin",
         "{along_m: [[0, 0], [4, 0], [0, 0.5]]}",
         "environment.kerbs[0].along_m[1]",

@@ -142,3 +142,27 @@ def test_a_configured_kerb_builds_its_geometry():
     kerb = Kerb(along_m=[[0, 0], [3, 0]], upstand_m=0.1, batter_setback_m=0.0, batter_rise_m=0.0, arris_radius_m=0.0)
     mesh = kerb_geometry(kerb)
     assert _signed_volume_m3(mesh, 0.0) == pytest.approx(HB2_WIDTH_M * 0.1 * 3.0, rel=1e-6)  # a square kerb
+
+
+def test_every_accepted_kerb_profile_stays_on_the_road_and_behind_its_face():
+    """Whatever sizes the config accepts, the profile lies within its width behind the road face and between the
+    road and its upstand: an arris too large for its face would dip below the road or bulge into it."""
+    from pydantic import ValidationError
+
+    accepted = 0
+    for upstand in (0.01, 0.025, 0.05, 0.125):
+        for setback, rise in ((0.0, 0.0), (0.005, 0.005), (0.01, 0.02), (0.05, 0.1)):
+            for radius in (0.0, 0.005, 0.015, 0.05):
+                try:
+                    kerb = Kerb(
+                        along_m=[[0, 0], [1, 0]], width_m=0.2, upstand_m=upstand, batter_setback_m=setback,
+                        batter_rise_m=rise, arris_radius_m=radius,
+                    )  # fmt: skip
+                except ValidationError:
+                    continue
+                accepted += 1
+                sizes = (kerb.width_m, kerb.upstand_m, kerb.batter_setback_m, kerb.batter_rise_m, kerb.arris_radius_m)
+                x, z = kerb_profile(*sizes).points.T
+                assert x.min() >= -1e-12 and z.min() >= -1e-12, (upstand, setback, rise, radius)
+                assert x.max() <= 0.2 + 1e-12 and z.max() <= upstand + 1e-12, (upstand, setback, rise, radius)
+    assert accepted >= 20

@@ -117,6 +117,19 @@ class Kerb(Model):
         if (self.batter_setback_m > 0) != (self.batter_rise_m > 0):
             given = "batter_setback_m" if self.batter_setback_m > 0 else "batter_rise_m"
             raise invalid(given, "needs the other of batter_setback_m and batter_rise_m above 0 too (0 and 0: square)")
+        # The arris's rounding runs tan(turn/2)·radius down the face it leaves (the batter, or the whole road face
+        # of a square kerb): past that face's foot the profile would dip below the road or bulge into it.
+        battered = self.batter_rise_m > 0
+        face_m = math.hypot(self.batter_setback_m, self.batter_rise_m) if battered else self.upstand_m
+        turn_rad = math.atan2(self.batter_rise_m, self.batter_setback_m) if battered else math.pi / 2
+        tangent_m = self.arris_radius_m * math.tan(turn_rad / 2)
+        if tangent_m > face_m + 1e-12:
+            face = "batter" if battered else "road face (upstand_m)"
+            raise invalid(
+                "arris_radius_m",
+                f"is {self.arris_radius_m:g} m, whose rounding takes {1000 * tangent_m:.1f} mm of a "
+                f"{1000 * face_m:.1f} mm {face}; make it at most {face_m / math.tan(turn_rad / 2):.4g} m",
+            )
         if self.batter_setback_m + self.arris_radius_m >= self.width_m:
             raise invalid(
                 "batter_setback_m",
