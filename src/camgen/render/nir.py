@@ -13,7 +13,8 @@ units, is added to every colour channel: without the IR-cut filter the colour fi
 about equally.
 
 NIR reflectance of each surface: the scene material's `nir_reflectance`; else, for a procedural
-texture, its type's (`NIR_REFLECTANCE_BY_TEXTURE`, the texture's own variation kept); a procedural
+texture, its type's (`NIR_REFLECTANCE_BY_TEXTURE`, the texture's own variation kept; a kerb's precast
+concrete, concrete's, unless the kerb gives its own colour: `kerb_nir_reflectance`); a procedural
 prop's, per vertex (`camgen.props`: leaves 0.45–0.5); else the rule
 `default_nir_reflectance` on the base colour (vertex colours and textures included: people, vehicles,
 plates, glTF characters, file textures).
@@ -27,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from camgen.config.kerbs import Kerb
 from camgen.config.profile import Profile
 from camgen.config.scene import Material, Scene, actor_shape
 from camgen.render.gl import pyrender
@@ -51,6 +53,14 @@ def material_nir_reflectance(material: Material) -> float | None:
     if material.texture is not None and "color_rgb" not in material.model_fields_set:
         return NIR_REFLECTANCE_BY_TEXTURE[material.texture.type]
     return float(default_nir_reflectance(material.color_rgb))
+
+
+def kerb_nir_reflectance(kerb: Kerb) -> float:
+    """ρ₈₅₀ of a kerb (`camgen.render.scene_graph.kerb_mesh_node`: precast concrete's texture): concrete's, as a
+    concrete-textured material's; the rule on its colour when the kerb gives one (as `material_nir_reflectance`)."""
+    if kerb.color_rgb is None:
+        return NIR_REFLECTANCE_BY_TEXTURE["concrete"]
+    return float(default_nir_reflectance(kerb.color_rgb))
 
 
 def _nir_material(material, reflectance: float | None) -> None:
@@ -90,6 +100,10 @@ def build_nir_graph(
     meshes = scene.environment.meshes  # the props' nodes follow the meshes' (`graph.prop_nir`)
     for node, mesh in zip(graph.environment_nodes[: len(meshes)], meshes, strict=True):
         known[id(node)] = material_nir_reflectance(mesh.material)
+    kerbs = scene.environment.kerbs  # the last environment nodes (`build_scene_graph`)
+    kerb_nodes = graph.environment_nodes[len(graph.environment_nodes) - len(kerbs) :]
+    for node, kerb in zip(kerb_nodes, kerbs, strict=True):
+        known[id(node)] = kerb_nir_reflectance(kerb)
     for index, (node, actor) in enumerate(zip(graph.actor_nodes, graph.actors, strict=True)):
         if graph.rig(index) is None:
             known[id(node)] = material_nir_reflectance(actor_shape(actor).material)
