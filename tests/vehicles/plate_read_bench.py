@@ -4,7 +4,7 @@ IR mode (the views and the reading of tests/vehicles/test_plate_read_back.py).
 
     .venv/bin/python -m tests.vehicles.plate_read_bench [--plates 24] [--only LABEL] [--out FILE.md]
 
-Needs RapidOCR (`make detectors`). Prints a Markdown table: for each condition the plates read exactly
+Needs RapidOCR (`make setup`). Prints a Markdown table: for each condition the plates read exactly
 (after `plate_syntax`), the characters read right (1 − edit distance / length, summed over plates), the
 plates read exactly without it (the read's letters and digits as they are: no capitals, no O/0 by
 position), the median IoU of the detector's text box with the annotated quad's text box, and where the

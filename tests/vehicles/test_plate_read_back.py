@@ -7,7 +7,7 @@ ISP, the 8-bit PNG a user gets) with their COCO annotations.
 
 - The text: each line of the annotated plate quad, rectified out of the frame with a margin, is read by
   PP-OCRv4's recogniser (RapidOCR's ONNX models, inside the `rapidocr-onnxruntime` wheel: `make
-  detectors`), and the read equals the annotated text character for character, as an ANPR syntax check
+  setup`), and the read equals the annotated text character for character, as an ANPR syntax check
   writes it (`plate_syntax`: capitals, plate characters only, spaces not compared, and where the UK format
   fixes a digit or a letter, the O/0 pair PP-OCR confuses on this font resolved by position; every other
   character must be read as annotated).
@@ -310,7 +310,7 @@ def reader():
     ocr = pytest.importorskip(
         "rapidocr_onnxruntime",
         reason="RapidOCR (PP-OCR's ONNX models run by onnxruntime, with pyclipper and shapely) is not installed: "
-        "`make detectors` installs it",
+        "`make setup` installs it (on Python < 3.13, which RapidOCR 1.4.4 requires)",
     )
     return ocr.RapidOCR()
 
