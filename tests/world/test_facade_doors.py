@@ -48,12 +48,17 @@ def _door_columns(maps) -> list[tuple[int, int]]:
 
 @pytest.mark.parametrize(("tile_m", "doors"), [(3.0, 1), (6.0, 1), (12.0, 1), (24.0, 2), (36.0, 3)])
 def test_one_door_per_four_bays_in_the_ground_storey_only(tile_m, doors):
+    """Within one tile; the tile repeats up a wall taller than it, door storey included (a 3 m tile is one
+    storey: a door on every storey of the wall), which the README says."""
     maps = _maps(tile_m)
     bays = round(tile_m / WINDOW_PITCH_M)
     assert doors == max(1, round(bays / DOOR_EVERY_BAYS))
     assert len(_door_columns(maps)) == doors
     above = maps.roughness[round(FACADE_STOREY_M / M_PER_TEXEL) :]
+    assert above.shape[0] == round((tile_m - FACADE_STOREY_M) / M_PER_TEXEL)  # the storeys above, if any
     assert not np.isclose(above, DOOR_ROUGHNESS).any()  # no door above the ground storey
+    if tile_m > FACADE_STOREY_M:  # and their windows are there: what the check looks at holds texels of the wall
+        assert (above < 0.1).any()
 
 
 def test_a_door_has_its_published_size_frame_and_vision_panel():
