@@ -10,9 +10,8 @@ import numpy as np
 import pytest
 
 from camgen.render.renderer import View
-from camgen.render.scene_graph import build_scene_graph
 from camgen.world.textures import REVEAL_DEPTH_M, SILL_M, WINDOW_H_M, WINDOW_PITCH_M, WINDOW_W_M
-from tests.render.conftest import camera_matrix, look_at, scene_from
+from tests.render.conftest import lit_wall_radiance
 
 pytestmark = pytest.mark.opengl
 
@@ -23,39 +22,18 @@ SUN_AZIMUTH_DEG, SUN_ELEVATION_DEG = 60.0, 10.0
 def _wall_radiance(renderer, relief: bool) -> tuple[np.ndarray, View]:
     """A 12 m facade's +x face (x = 0.5; texture u = y + 6 m, v = z) seen square-on from 12 m, under a sun 10° up
     from azimuth 60° (from +x towards +y): it reaches the face at 60° from its normal, from the +y side."""
-    scene = scene_from(
-        environment={
-            "ground_to_horizon": False,
-            "meshes": [
-                {
-                    "type": "box",
-                    "name": "wall",
-                    "size_m": [1, 12, 9],
-                    "position_m": [0, 0, 4.5],
-                    "material": {"texture": {"type": "facade", "seed": 3}},
-                }
-            ],
-        },
-        lights=[
-            {
-                "type": "sun",
-                "illuminance_lux": 50000,
-                "azimuth_deg": SUN_AZIMUTH_DEG,
-                "elevation_deg": SUN_ELEVATION_DEG,
-            }
-        ],
+    texture = {"type": "facade", "seed": 3}
+    return lit_wall_radiance(
+        renderer,
+        texture,
+        (1, 12, 9),
+        SUN_AZIMUTH_DEG,
+        SUN_ELEVATION_DEG,
+        F_PX,
+        DISTANCE_M,
+        relief,
+        (WIDTH_PX, HEIGHT_PX),
     )
-    graph = build_scene_graph(scene)
-    if not relief:
-        for primitive in graph.environment_nodes[0].mesh.primitives:
-            primitive.material.normalTexture = None
-    view = View(
-        camera_matrix(F_PX, F_PX, (WIDTH_PX - 1) / 2, (HEIGHT_PX - 1) / 2),
-        look_at((0.5 + DISTANCE_M, 0.0, 4.5), (0.5, 0.0, 4.5)),
-        WIDTH_PX,
-        HEIGHT_PX,
-    )
-    return renderer.draw(graph, view, ("radiance",)).radiance[..., 1].astype(np.float64), view
 
 
 def _pixels(view: View, y_m: np.ndarray, z_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -7,9 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from camgen.render.renderer import View
-from camgen.render.scene_graph import build_scene_graph
-from tests.render.conftest import camera_matrix, look_at, scene_from
+from tests.render.conftest import lit_wall_radiance
 
 pytestmark = pytest.mark.opengl
 
@@ -20,29 +18,7 @@ COURSE_M, BRICK_PITCH_M, JOINT_M = 0.075, 0.225, 0.010  # BS EN 771-1 work sizes
 def _wall_radiance(renderer, relief: bool) -> np.ndarray:
     """A brick wall's +x face (x = 0.5, y across, z up from the ground) seen square-on from 2 m, lit by a
     sun from the right (+y) and above, 20° over the horizon."""
-    scene = scene_from(
-        environment={
-            "ground_to_horizon": False,
-            "meshes": [
-                {
-                    "type": "box",
-                    "name": "wall",
-                    "size_m": [1, 6, 3],
-                    "position_m": [0, 0, 1.5],
-                    "material": {"texture": {"type": "brick"}},
-                }
-            ],
-        },
-        lights=[{"type": "sun", "illuminance_lux": 50000, "azimuth_deg": 70, "elevation_deg": 20}],
-    )
-    graph = build_scene_graph(scene)
-    if not relief:
-        for primitive in graph.environment_nodes[0].mesh.primitives:
-            primitive.material.normalTexture = None
-    view = View(
-        camera_matrix(F_PX, F_PX, 319.5, 239.5), look_at((0.5 + DISTANCE_M, 0.0, 1.5), (0.5, 0.0, 1.5)), 640, 480
-    )
-    return renderer.draw(graph, view, ("radiance",)).radiance[..., 1].astype(np.float64)
+    return lit_wall_radiance(renderer, {"type": "brick"}, (1, 6, 3), 70, 20, F_PX, DISTANCE_M, relief)[0]
 
 
 def test_joints_are_lit_from_the_suns_side(renderer):
