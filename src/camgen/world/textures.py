@@ -340,7 +340,8 @@ def _facade(rng, size, m_per_px):
     )
     d0 = (WINDOW_PITCH_M - DOOR_CLEAR_W_M) / 2  # the leaf's left edge in its bay
     door_box = (d0 - DOOR_FRAME_M, 0.0, d0 + DOOR_CLEAR_W_M + DOOR_FRAME_M, DOOR_H_M + DOOR_FRAME_M)
-    door = _rect_mask(in_x, in_y, door_box[0], -1.0, *door_box[2:]) & has_door  # down to the floor
+    door_to_floor = (door_box[0], -1.0, *door_box[2:])  # its opening runs down through the floor
+    door = _rect_mask(in_x, in_y, *door_to_floor) & has_door
     leaf = door & _rect_mask(in_x, in_y, d0, -1.0, d0 + DOOR_CLEAR_W_M, DOOR_H_M)
     inset, panel_bottom, panel_top = DOOR_PANEL_M
     panel = (d0 + inset, panel_bottom, d0 + DOOR_CLEAR_W_M - inset, panel_top)
@@ -363,7 +364,7 @@ def _facade(rng, size, m_per_px):
 
     # The wall's face at 0; each opening's reveal a splay down to its frame (`REVEAL_DEPTH_M`), glass deeper.
     outside_window = _outside_m(in_x, in_y, *window_box)
-    outside_door = _outside_m(in_x, in_y, door_box[0], -1.0, *door_box[2:])
+    outside_door = _outside_m(in_x, in_y, *door_to_floor)
     outside = np.where(has_door, outside_door, outside_window)
     height_m = -REVEAL_DEPTH_M * np.clip(1.0 - outside / REVEAL_DEPTH_M, 0.0, 1.0)
     height_m = np.where(glass, -REVEAL_DEPTH_M - GLASS_SET_BACK_M, height_m)
