@@ -3,7 +3,6 @@ value gets its own located error naming the key, the value and the fix (the patt
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import cv2
@@ -13,7 +12,7 @@ import pytest
 
 from camgen.config import load_scene
 from camgen.errors import ConfigError
-from tests.conftest import SCENE, write
+from tests.conftest import SCENE, assert_located_problem, write
 
 GROUND = "    - type: plane\n      name: ground\n      size_m: [20, 20]\n"
 
@@ -125,16 +124,8 @@ BAD = [
 
 @pytest.mark.parametrize(("texture", "key", "fragment"), [c[1:] for c in BAD], ids=[c[0] for c in BAD])
 def test_bad_file_texture_is_located_and_explained(scenes: Path, texture: str, key: str, fragment: str):
-    text = _scene_with(texture)
-    path = write(scenes, "bad.yaml", text)
-    with pytest.raises(ConfigError) as caught:
-        load_scene(path)
-    (problem,) = caught.value.problems
-    message = str(problem)
-    assert fragment.format(dir=scenes.resolve()) in message
-    assert f" environment.meshes[0].material.texture.{key} " in message, message
-    line = next(i + 1 for i, row in enumerate(text.splitlines()) if "#<" in row)
-    assert re.match(rf"^{re.escape(str(path))}:{line}:\d+: ", message), message
+    key_path = f"environment.meshes[0].material.texture.{key}"
+    assert_located_problem(scenes.parent, _scene_with(texture), key_path, fragment.format(dir=scenes.resolve()))
 
 
 def test_a_float_image_is_refused_with_the_format_to_use(scenes: Path):
