@@ -251,7 +251,9 @@ class SequenceAnnotations:
         self.tracks[track_id] = record
 
     def add(self, frame) -> None:
-        """One `camgen.plan.annotations.FrameAnnotations`."""
+        """One `camgen.plan.annotations.FrameAnnotations`. Each object's mask is read inside its visible box,
+        which must be the tight box of its `visible_pixels` pixels in the frame's instance image (as the
+        annotator gives them; `ids_mask` reads the whole image when the box misses some)."""
         image_id = frame.frame + 1
         image = {
             "id": image_id,
@@ -277,7 +279,7 @@ class SequenceAnnotations:
         crowds = crowd_groups(frame.objects, frame.instance_id)
         crowded = {track_id for group in crowds for track_id in group}
         for group in crowds:
-            self._add_crowd(image_id, frame.instance_id, group)
+            self._add_crowd(image_id, frame.instance_id, [obj for obj in frame.objects if obj.track_id in group])
         for obj in frame.objects:
             u0, v0, u1, v1 = (round(v, 4) for v in obj.unclipped_box)  # the same digits on every machine
             self.mot.append(
@@ -289,6 +291,7 @@ class SequenceAnnotations:
             if obj.visible_box is None or obj.track_id in crowded:
                 continue
             vx0, vy0, vx1, vy1 = obj.visible_box
+            mask, at_px = ids_mask(frame.instance_id, [obj.track_id], obj.visible_box, obj.visible_pixels)
             self.annotations.append(
                 _compact(
                     {
@@ -300,7 +303,7 @@ class SequenceAnnotations:
                         "instance_name": obj.name,
                         "bbox": [vx0, vy0, vx1 - vx0, vy1 - vy0],
                         "area": obj.visible_pixels,
-                        "segmentation": rle(frame.instance_id == obj.track_id),
+                        "segmentation": rle(mask, at_px=at_px, image_shape=frame.instance_id.shape),
                         "iscrowd": 0,
                         "amodal_bbox": [x0, y0, round(x1 - x0, 4), round(y1 - y0, 4)],
                         "visibility": round(obj.visibility, 6),
@@ -313,12 +316,16 @@ class SequenceAnnotations:
                 )
             )
 
-    def _add_crowd(self, image_id: int, instance_id: np.ndarray, track_ids: list[int]) -> None:
-        """One COCO crowd annotation (iscrowd 1) over the union of a group's visible pixels; its members
-        stay in MOT's gt.txt and in `tracks`, and are listed in ``crowd_track_ids``."""
-        mask = np.isin(instance_id, track_ids)
+    def _add_crowd(self, image_id: int, instance_id: np.ndarray, members: list) -> None:
+        """One COCO crowd annotation (iscrowd 1) over the union of a group's visible pixels (`members`:
+        their annotated objects); its members stay in MOT's gt.txt and in `tracks`, and are listed in
+        ``crowd_track_ids``."""
+        track_ids = [obj.track_id for obj in members]
+        boxes = np.array([obj.visible_box for obj in members])
+        union = (*boxes[:, :2].min(axis=0), *boxes[:, 2:].max(axis=0))
+        mask, (col0, row0) = ids_mask(instance_id, track_ids, union, sum(obj.visible_pixels for obj in members))
         rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
-        x0, x1, y0, y1 = int(cols[0]), int(cols[-1]) + 1, int(rows[0]), int(rows[-1]) + 1
+        x0, x1, y0, y1 = col0 + int(cols[0]), col0 + int(cols[-1]) + 1, row0 + int(rows[0]), row0 + int(rows[-1]) + 1
         self.annotations.append(
             _compact(
                 {
@@ -328,7 +335,7 @@ class SequenceAnnotations:
                     "category_id": COCO_CATEGORY_IDS["person"],
                     "bbox": [x0, y0, x1 - x0, y1 - y0],
                     "area": int(np.count_nonzero(mask)),
-                    "segmentation": rle(mask),
+                    "segmentation": rle(mask, at_px=(col0, row0), image_shape=instance_id.shape),
                     "iscrowd": 1,
                     "crowd_track_ids": sorted(track_ids),
                 }
@@ -595,7 +602,39 @@ def _keypoint_fields(obj) -> dict:
     }
 
 
-def rle(mask: np.ndarray) -> dict:
-    """COCO compressed RLE of a boolean (H, W) mask, JSON-ready."""
-    encoded = mask_utils.encode(np.asfortranarray(mask.astype(np.uint8)))
-    return {"size": [int(s) for s in encoded["size"]], "counts": encoded["counts"].decode("ascii")}
+def rle(mask: np.ndarray, *, at_px: tuple[int, int] = (0, 0), image_shape: tuple[int, int] | None = None) -> dict:
+    """COCO compressed RLE, JSON-ready, of a boolean (h, w) `mask` whose top-left pixel lies at column, row
+    `at_px` of an (H, W) image `image_shape` that is empty elsewhere (default: the mask is the image).
+    The same string as pycocotools' ``mask.encode`` of the whole image's mask, at a cost that follows the
+    mask's size instead of the image's.
+
+    COCO's runs go down each column of the image in turn, starting with a run of zeros (empty when the
+    first pixel is set); a run of ones that ends on the image's last row continues at the top of the next
+    column."""
+    height, width = mask.shape if image_shape is None else image_shape
+    col0, row0 = at_px
+    padded = np.zeros((mask.shape[1], mask.shape[0] + 2), np.int8)  # each column of the mask, a 0 at both ends
+    padded[:, 1:-1] = mask.T
+    col, row = np.nonzero(np.diff(padded, axis=1))  # where a run starts or ends, column by column
+    changes = (col0 + col).astype(np.int64) * height + row0 + row  # column-major index in the image, ascending
+    # A run that ends at the foot of one column and goes on at the head of the next is one run.
+    joined = np.flatnonzero(changes[1:] == changes[:-1])
+    changes = np.delete(changes, np.concatenate([joined, joined + 1]))
+    bounds = np.concatenate([[0], changes[changes < height * width], [height * width]])
+    encoded = mask_utils.frPyObjects({"size": [height, width], "counts": np.diff(bounds).tolist()}, height, width)
+    return {"size": [int(height), int(width)], "counts": encoded["counts"].decode("ascii")}
+
+
+def ids_mask(instance_id: np.ndarray, ids: list[int], box, pixels: int) -> tuple[np.ndarray, tuple[int, int]]:
+    """The mask of the pixels whose id is in `ids`, cut to `box` (x0, y0, x1, y1, pixel edges; grown to
+    whole pixels and clipped to the image) when that holds `pixels` of them (their count in the whole
+    image: then it holds them all), else the whole image's mask; with its top-left pixel (column, row).
+    What `rle` needs of an annotation's mask, at a cost that follows its box instead of the frame."""
+    height, width = instance_id.shape
+    x0, y0 = max(int(np.floor(box[0])), 0), max(int(np.floor(box[1])), 0)
+    x1, y1 = min(int(np.ceil(box[2])), width), min(int(np.ceil(box[3])), height)
+    window = instance_id[y0:y1, x0:x1]
+    mask = window == ids[0] if len(ids) == 1 else np.isin(window, ids)
+    if int(np.count_nonzero(mask)) == pixels:
+        return mask, (x0, y0)
+    return (instance_id == ids[0] if len(ids) == 1 else np.isin(instance_id, ids)), (0, 0)
