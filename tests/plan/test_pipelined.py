@@ -240,3 +240,79 @@ class NamedRenderer:
 )
 def test_the_default_pipelines_on_a_gpu_and_not_on_a_software_rasterizer(gl_renderer, pipelined):
     assert pipelines_by_default(NamedRenderer(gl_renderer)) is pipelined
+
+
+def encoder_threads() -> list[threading.Thread]:
+    return [thread for thread in threading.enumerate() if thread.name.startswith("camgen-video-encode")]
+
+
+@pytest.mark.parametrize("pipelined", [False, True], ids=["serial", "pipelined"])
+def test_the_video_encodes_beside_the_frames_other_writes(job, renderer, monkeypatch, tmp_path, pipelined):
+    """Each frame's encode runs in the encoder's thread while that frame's files are written: the encode of frame 0
+    holds until frame 0's depth file exists (it never would with the encode before the files, in one thread). The
+    video is the bytes of the same frames encoded one after another in this thread (one segment: no checkpoint)."""
+    from camgen.io.video import VideoWriter, join_videos
+
+    write, seen = VideoWriter.write, []
+
+    def waiting(self, frame_rgb8):
+        if not seen:
+            depth = next(tmp_path.glob("*/cam*/depth/000000.png"), None)
+            deadline = time.monotonic() + 10
+            while depth is None and time.monotonic() < deadline:
+                time.sleep(0.01)
+                depth = next(tmp_path.glob("*/cam*/depth/000000.png"), None)
+            seen.append(depth is not None)
+        seen.append(threading.current_thread().name)
+        return write(self, frame_rgb8)
+
+    monkeypatch.setattr(VideoWriter, "write", waiting)
+    (result,) = execute(job, tmp_path, renderer=renderer, frames=range(FRAMES), pipelined=pipelined)
+    assert seen[0] is True  # frame 0's depth was written while its encode waited
+    assert len(seen) == FRAMES + 1 and all(name.startswith("camgen-video-encode") for name in seen[1:])
+    assert encoder_threads() == []
+    for record in result.stage_frames:
+        assert record["io.video"] > 0 and "io.files" in record
+
+    monkeypatch.setattr(VideoWriter, "write", write)
+    camera, frames_dir = job.cameras[0], result.directory / "frames"
+    settings = {"width_px": camera.width_px, "height_px": camera.height_px, "fps": job.fps}
+    settings |= {"codec": camera.profile.codec, "preset": camera.profile.codec.preset}
+    segment = tmp_path / "reference-segment.mp4"
+    reference = VideoWriter(segment, **settings)
+    for path in sorted(frames_dir.glob("*.png")):
+        reference.write(np.asarray(cv2_rgb(path)))
+    reference.close()
+    join_videos([segment], tmp_path / "reference.mp4", **settings)
+    assert (result.directory / "video.mp4").read_bytes() == (tmp_path / "reference.mp4").read_bytes()
+
+
+def cv2_rgb(path: Path) -> np.ndarray:
+    import cv2
+
+    return cv2.imread(str(path), cv2.IMREAD_COLOR)[..., ::-1]
+
+
+@pytest.mark.parametrize("pipelined", [False, True], ids=["serial", "pipelined"])
+def test_an_encode_that_fails_stops_the_render_with_its_error(job, renderer, monkeypatch, tmp_path, pipelined):
+    """The encode of frame 3 fails (after frame 3's files began): the render stops with that error object, no
+    encoder thread is left, and nothing of the render stays."""
+    from camgen.io.video import VideoWriter
+
+    write, calls, raised = VideoWriter.write, [], []
+
+    def failing(self, frame_rgb8):
+        calls.append(1)
+        if len(calls) == FAILING_INDEX + 1:
+            raised.append(OSError(errno.EIO, os.strerror(errno.EIO), "encoder"))
+            raise raised[-1]
+        return write(self, frame_rgb8)
+
+    monkeypatch.setattr(VideoWriter, "write", failing)
+    drawn = []
+    with pytest.raises(OSError) as stopped:
+        render(job, tmp_path, renderer, pipelined=pipelined, on_frame=lambda camera, index: drawn.append(index))
+    assert stopped.value is raised[0]
+    assert max(drawn) <= FAILING_INDEX + PIPELINE_FRAMES
+    assert encoder_threads() == [] and writer_threads() == []
+    assert list(tmp_path.iterdir()) == []

@@ -36,20 +36,25 @@ main thread keeps what carries state into the next frame or needs OpenGL: the re
 (auto-exposure, the ISP's adaptation), the lens applied to the passes, the annotations' geometry and unoccluded
 draws, the flow (it moves the actors). The writer gets copies of the arrays (`_detached`), so the same bytes
 come out as from the serial render (``pipelined=False``; the default on a software rasterizer, where the
-writer thread only takes cores from the drawing: `pipelines_by_default`). The writer is drained before each
-checkpoint and before a camera's files are finished, so a checkpoint describes only frames fully written; a
-write that fails stops the render with its own exception at the next frame (or the drain), and the render then
-unwinds as from any error.
+writer thread only takes cores from the drawing: `pipelines_by_default`). Either way a frame's video encode runs
+in a thread of its own (``camgen-video-encode``) beside that frame's other writes, and is waited for before they
+return (`_encoding`): the encoder and the PNG and DNG writers each keep one core busy, outside the GIL. The
+writer is drained before each checkpoint and before a camera's files are finished, so a checkpoint describes only
+frames fully written; a write that fails stops the render with its own exception at the next frame (or the
+drain), and the render then unwinds as from any error.
 
 Timing with the pipeline: a frame's `CameraResult.stage_frames` record adds the writer thread's stages of that
 frame (timed in that thread) to the main thread's; ``io.wait`` is the main thread's time waiting for the writer
 (a free slot, a drain). The stages of a frame then overlap and can sum to more than its wall time
 (`frame_wall_s`): a stage's share of the wall time says how long it kept its thread busy, the main thread's
-stages plus ``io.wait`` are the wall time, and a large ``io.wait`` says the writer set the pace.
+stages plus ``io.wait`` are the wall time, and a large ``io.wait`` says the writer set the pace. Serial too,
+``io.video`` is the encoder thread's time, which overlaps the frame's other writes, and ``io.wait`` the wait for
+it after them.
 """
 
 from __future__ import annotations
 
+import concurrent.futures
 import contextlib
 import dataclasses
 import functools
@@ -85,7 +90,7 @@ from camgen.plan.camera_pipeline import CameraPipeline, cuts_reid_crops, frame_r
 from camgen.plan.flow import FlowField
 from camgen.plan.lens_stages import LensStages
 from camgen.plan.timing import StageClock, stage_sums
-from camgen.plan.writer import FrameWriter
+from camgen.plan.writer import WAIT_STAGE, FrameWriter
 from camgen.render.renderer import Passes, Renderer
 from camgen.render.scene_graph import build_scene_graph, instance_table
 from camgen.render.sequence import CameraRenderer
@@ -830,21 +835,30 @@ def _execute_camera(
         pipeline is not None and camera.exposure_mode == "auto" and job.settings.auto_exposure_start == "converged"
     )
     frame_writer = FrameWriter(clock, threaded=context.pipelined)
+    # The video's encode runs in a thread of its own beside the frame's other writes (`_encoding`).
+    encoder = ThreadPoolExecutor(1, thread_name_prefix="camgen-video-encode") if "io.video" in stages else None
 
-    def write_frame_outputs(
+    def write_frame_outputs(clock: StageClock, **writes) -> None:
+        """One frame's writes (`FrameWriter`: in the writer thread when pipelined), the video's encode beside the
+        others (`_encoding`), done when this returns."""
+        nonlocal video, segment
+        encoding = None
+        if writes["rgb8"] is not None and "io.video" in stages:
+            if video is None:  # a segment from each checkpoint on (see the module docstring)
+                from camgen.io.video import VideoWriter  # PyAV only where a video is written
+
+                with clock("io.video"):
+                    segment = _SEGMENT_NAME.format(writes["done"].frames)
+                    video = VideoWriter(spool_dir / segment, **video_settings)
+            encoding = encoder.submit(_timed, video.write, writes["rgb8"])
+        with _encoding(encoding, clock):
+            frame_other_writes(clock, **writes)
+
+    def frame_other_writes(
         clock: StageClock, *, frame, done, state, captured, rgb8, stream, scene_radiance, annotated, flow
     ) -> None:
-        """One frame's writes, in this order (`FrameWriter`: in the writer thread when pipelined). `done`: the
-        frames done before this one and the camera's list of files, which these writes extend."""
-        nonlocal video, segment
-        if rgb8 is not None and "io.video" in stages:
-            with clock("io.video"):
-                if video is None:  # a segment from each checkpoint on (see the module docstring)
-                    from camgen.io.video import VideoWriter  # PyAV only where a video is written
-
-                    segment = _SEGMENT_NAME.format(done.frames)
-                    video = VideoWriter(spool_dir / segment, **video_settings)
-                video.write(rgb8)
+        """A frame's writes but the video's, in this order. `done`: the frames done before this one and the
+        camera's list of files, which these writes extend."""
         with clock("io.files"):
             _write_files(context, stages, state, frame, captured, rgb8, stream, done)
         if scene_radiance is not None:
@@ -1022,17 +1036,53 @@ def _execute_camera(
     except BaseException:
         # The folder is deleted (`discard_unfinished`) or, for a render that resumes, kept with its spools
         # and the segments up to its last checkpoint; the segment being written is never finished. The writer
-        # ends first: nothing writes into the folder after this.
+        # and the encoder end first: nothing writes into the folder after this.
         frame_writer.stop()
+        if encoder is not None:
+            encoder.shutdown(wait=True, cancel_futures=True)
         if video is not None:
             video.abort()
         for spool in spools.values():
             spool.close(keep=True)
         raise
     finally:
+        if encoder is not None:
+            encoder.shutdown(wait=True)
         camera_renderer.close()
     result.total_s = time.perf_counter() - started
     return result
+
+
+def _timed(function: Callable, *args) -> float:
+    """Call `function(*args)`; the seconds it took."""
+    start = time.perf_counter()
+    function(*args)
+    return time.perf_counter() - start
+
+
+@contextlib.contextmanager
+def _encoding(encoding, clock: StageClock):
+    """Around a frame's other writes while its video frame is encoded in the encoder's thread (`encoding`, a
+    future of `_timed`, or None): afterwards, wait for the encode, add its seconds to the frame's ``io.video``
+    and the wait to ``io.wait``, and raise the encode's exception. Where the other writes raise, theirs is
+    raised once the encode has ended (the caller then aborts the video), and the encode's is dropped.
+
+    The encode (x265 or x264, one thread for reproducible bytes: `camgen.io.video`) and the frame, depth and raw
+    files (OpenImageIO's PNG and DNG writers) each keep one core busy and release the GIL, so on two cores the
+    frame's writes take about the longer of the two instead of their sum. Measured on the parking lot's PTZ at
+    1080p (below, in BENCHMARKS.md).
+    """
+    if encoding is None:
+        yield
+        return
+    try:
+        yield
+    except BaseException:
+        concurrent.futures.wait([encoding])
+        raise
+    with clock(WAIT_STAGE):
+        seconds = encoding.result()
+    clock.add("io.video", seconds)
 
 
 def _close_segment(video, name: str, segments: list[str], clock: StageClock) -> None:

@@ -32,6 +32,10 @@ class StageClock:
         finally:
             self._current[stage] = self._current.get(stage, 0.0) + self._clock() - start
 
+    def add(self, stage: str, seconds: float) -> None:
+        """Count `seconds` spent in `stage` during this frame elsewhere (another thread timed them)."""
+        self._current[stage] = self._current.get(stage, 0.0) + seconds
+
     def end_frame(self) -> None:
         now = self._clock()
         self.frames.append(self._current)
