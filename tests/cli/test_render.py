@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import re
 
 import av
@@ -47,10 +48,12 @@ def test_render_writes_video_passes_and_job(workspace, capsys):
     # Where the time went, per stage, as shares of the camera's total.
     time_line = next(line for line in captured.out.splitlines() if line.strip().startswith("time:"))
     # (which stages pass the 1 % cut depends on the machine's load: only the shape and the sum are fixed)
-    shares = dict(
-        re.fullmatch(r"([\w.]+) (\d+) %", part).groups() for part in time_line.split(":", 1)[1].strip().split(", ")
-    )
+    stages, busy = time_line.split(":", 1)[1].strip().split("; ")
+    shares = dict(re.fullmatch(r"([\w.]+) (\d+) %", part).groups() for part in stages.split(", "))
     assert "render" in shares and abs(sum(map(int, shares.values())) - 100) <= len(shares)
+    # and the CPU time that took, every thread's: between none and every core busy all the time
+    cpu_s, cores = map(float, re.fullmatch(r"CPU ([\d.]+) s, ([\d.]+) cores busy", busy).groups())
+    assert cpu_s > 0 and 0 < cores <= os.cpu_count() + 0.1
 
 
 def test_render_rejects_an_unknown_camera(workspace, capsys):

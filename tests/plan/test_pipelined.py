@@ -139,6 +139,10 @@ def test_the_writers_stages_are_in_each_frames_record(job, renderer, tmp_path):
     for record in result.stage_frames:
         assert {"render", "io.video", "io.files", "io.radiance", "annotate", "io.wait"} <= set(record)
     assert "io.wait" in result.finish_s  # the last frames' writes, waited for
+    # Each frame's CPU time is its own (not the running total) and no more than every core busy all the time
+    assert len(result.frame_cpu_s) == FRAMES
+    for cpu_s, wall_s in zip(result.frame_cpu_s, result.frame_wall_s, strict=True):
+        assert 0 < cpu_s <= wall_s * os.cpu_count() + 0.02  # process_time ticks
 
 
 class Terminated(BaseException):

@@ -50,10 +50,17 @@ class EndToEnd:
     """Mean wall ms per timed frame."""
     warm: bool = True
     """False for a one-frame sequence: its only frame, warm-up included, is what is timed."""
+    cpu_ms: float = 0.0
+    """Mean CPU ms of the process per timed frame, every thread's (the finish shared out as the wall time's)."""
 
     @property
     def frames_per_s(self) -> float:
         return 1e3 / self.frame_ms
+
+    @property
+    def cores_busy(self) -> float:
+        """CPU time over wall time: how many cores the frames kept busy on average."""
+        return self.cpu_ms / self.frame_ms
 
     @property
     def other_ms(self) -> float:
@@ -107,6 +114,7 @@ def measure(
         stage_ms=stage_ms,
         frame_ms=frame_ms,
         warm=len(result.frame_wall_s) > 1,
+        cpu_ms=cpu_per_frame_ms(result),
     )
 
 
@@ -133,6 +141,14 @@ def timed_per_frame(result) -> tuple[float, dict[str, float]]:
     totals = stage_sums([*frame_records, finish])
     wall_s = sum(result.frame_wall_s[1:] or result.frame_wall_s) + sum(finish.values())
     return 1e3 * wall_s / timed, {stage: 1e3 * s / timed for stage, s in totals.items()}
+
+
+def cpu_per_frame_ms(result) -> float:
+    """Mean CPU ms of the process per timed frame (as `timed_per_frame`: the warm-up left out, the finish
+    shared out)."""
+    timed = max(len(result.frame_cpu_s) - 1, 1)
+    share = timed / max(len(result.frame_cpu_s), 1)
+    return 1e3 * (sum(result.frame_cpu_s[1:] or result.frame_cpu_s) + result.finish_cpu_s * share) / timed
 
 
 def e2e_cases(repo: Path, records: dict[str, EndToEnd]) -> list[Case]:

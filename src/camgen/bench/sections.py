@@ -71,7 +71,8 @@ def _end_to_end(repo: Path) -> Section:
             note = "" if r.warm else " (one-frame scene: warm-up included)"
             rows.append(
                 f"| {r.scene} | {r.camera} ({r.profile}) | {r.size} | {optics or '—'} | {r.frame_ms:.0f}{note} "
-                f"| {r.frames_per_s:.2f} | {shares_text(r.stage_ms, r.frame_ms, smallest_pct=3)} |"
+                f"| {r.frames_per_s:.2f} | {r.cpu_ms:.0f} ({r.cores_busy:.2f}) "
+                f"| {shares_text(r.stage_ms, r.frame_ms, smallest_pct=3)} |"
             )
         headline = next((r for r in records.values() if r.scene == "parking_lot" and r.size == "1920×1080"), None)
         text = [
@@ -86,17 +87,23 @@ def _end_to_end(repo: Path) -> Section:
             "files written at the end are shared out over the timed frames. Stages are the wall time inside "
             "each stage (`camgen.plan.timing`); `render` includes every motion-blur sub-frame, `optics.blur` "
             "is depth of field, axial CA and diffraction, `optics.remap` the distortion/CA resampling onto "
-            "the photosites, `optics.passes` the lens applied to depth and ids for the annotations.",
+            "the photosites, `optics.passes` the lens applied to depth and ids for the annotations. CPU ms is the "
+            "process's CPU time per timed frame, every thread's (the rasterizer's, the encoder's); over the wall "
+            f"time, the cores it kept busy: on this machine's {os.cpu_count()} cores a frame cannot take less wall "
+            "time than its CPU time over the cores, however its work is overlapped.",
         ]
         if headline is not None:
             text.append(
                 f"**Parking lot, full camera model, 1920×1080: {headline.frames_per_s:.2f} frames/s "
                 f"({headline.frame_ms:.0f} ms per frame)**: "
-                f"{shares_text(headline.stage_ms, headline.frame_ms)}."
+                f"{shares_text(headline.stage_ms, headline.frame_ms)}. Its work is {headline.cpu_ms:.0f} ms of CPU "
+                f"a frame ({headline.cores_busy:.2f} cores busy): {os.cpu_count()} cores fully used would give at "
+                f"most {1e3 * (os.cpu_count() or 1) / headline.cpu_ms:.2f} frames/s."
             )
         text.append(
-            "| scene | camera (profile) | stream | optics planned | ms per frame | frames/s | where the time goes |\n"
-            "|---|---|---|---|---:|---:|---|\n" + "\n".join(rows)
+            "| scene | camera (profile) | stream | optics planned | ms per frame | frames/s | CPU ms per frame "
+            "(cores busy) | where the time goes |\n"
+            "|---|---|---|---|---:|---:|---:|---|\n" + "\n".join(rows)
         )
         stage_bars(plots.path("end_to_end.png"), "ms per frame by stage (end to end)", bars)
         text.append(plots.link("end_to_end.png", "ms per frame by stage, each scene and size"))

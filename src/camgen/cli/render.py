@@ -135,7 +135,9 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         )
         shares = shares_text(stage_sums([*result.stage_frames, result.finish_s]), result.total_s)
         if shares:
-            out.print(f"    time: {shares}", highlight=False)
+            cpu_s = sum(result.frame_cpu_s) + result.finish_cpu_s
+            busy = f"; CPU {cpu_s:.1f} s, {cpu_s / result.total_s:.1f} cores busy" if result.total_s > 0 else ""
+            out.print(f"    time: {shares}{busy}", highlight=False)
         for path in result.files[:3]:
             out.print(f"    {escape(str(path))}", highlight=False)
         if len(result.files) > 3:

@@ -166,8 +166,12 @@ class CameraResult:
     the writer thread's stages of the frame are added and the stages overlap (see the module docstring)."""
     frame_wall_s: list[float] = field(default_factory=list)
     """Wall time of each frame, s (the first from the camera's setup on)."""
+    frame_cpu_s: list[float] = field(default_factory=list)
+    """CPU time of the process during each frame, s, every thread's (`StageClock.frame_cpu_s`)."""
     finish_s: dict[str, float] = field(default_factory=dict)
     """Wall time per stage after the last frame: flushing the video encoder, writing annotations."""
+    finish_cpu_s: float = 0.0
+    """CPU time of the process after the last frame, s."""
     resumed_frames: int = 0
     """Frames taken over from a checkpoint (`execute`'s resume) instead of rendered in this run; `frames`
     counts them, the timings do not."""
@@ -1033,6 +1037,7 @@ def _execute_camera(
         clock.end_frame()
         result.stage_frames, result.finish_s = clock.frames[:-1], clock.frames[-1]
         result.frame_wall_s = clock.frame_wall_s[:-1]
+        result.frame_cpu_s, result.finish_cpu_s = clock.frame_cpu_s[:-1], clock.frame_cpu_s[-1]
     except BaseException:
         # The folder is deleted (`discard_unfinished`) or, for a render that resumes, kept with its spools
         # and the segments up to its last checkpoint; the segment being written is never finished. The writer

@@ -15,14 +15,20 @@ from contextlib import contextmanager
 class StageClock:
     """Seconds spent in each named stage, accumulated per frame and in total."""
 
-    def __init__(self, clock: Callable[[], float] = time.perf_counter):
-        self._clock = clock
+    def __init__(
+        self, clock: Callable[[], float] = time.perf_counter, cpu_clock: Callable[[], float] = time.process_time
+    ):
+        self._clock, self._cpu_clock = clock, cpu_clock
         self._current: dict[str, float] = {}
-        self._frame_start = clock()
+        self._frame_start, self._frame_cpu_start = clock(), cpu_clock()
         self.frames: list[dict[str, float]] = []
         """One record per finished frame: stage → seconds spent in it during that frame."""
         self.frame_wall_s: list[float] = []
         """Wall time of each finished frame, s: from the end of the one before (or the clock's creation)."""
+        self.frame_cpu_s: list[float] = []
+        """CPU time of the whole process during each finished frame, s (`time.process_time`: every thread's,
+        OpenGL's rasterizer threads, the writer's and the encoder's included). Over the wall time: how many cores
+        the frame kept busy; on n cores a frame cannot take less wall time than its CPU time ÷ n."""
 
     @contextmanager
     def __call__(self, stage: str) -> Iterator[None]:
@@ -37,10 +43,11 @@ class StageClock:
         self._current[stage] = self._current.get(stage, 0.0) + seconds
 
     def end_frame(self) -> None:
-        now = self._clock()
+        now, cpu_now = self._clock(), self._cpu_clock()
         self.frames.append(self._current)
         self.frame_wall_s.append(now - self._frame_start)
-        self._current, self._frame_start = {}, now
+        self.frame_cpu_s.append(cpu_now - self._frame_cpu_start)
+        self._current, self._frame_start, self._frame_cpu_start = {}, now, cpu_now
 
 
 def stage_sums(frames: list[dict[str, float]]) -> dict[str, float]:
