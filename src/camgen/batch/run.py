@@ -16,11 +16,13 @@ Stopping: SIGINT (Ctrl-C, to this process or its whole process group) or SIGTERM
 stop) stops the batch within seconds, not after the running renders. The parent alone decides: pool
 workers ignore SIGINT, and the parent sends each worker SIGTERM, on which the worker unwinds its job
 (its temporary ``.partial`` files are deleted, no manifest is written) and exits; one still alive after
-`STOP_GRACE_S` is killed. A batch killed outright (SIGKILL) cannot stop its workers: each stops itself, as on
-SIGTERM, when it sees the batch process end. The interrupted jobs are recorded as such and a rerun renders
-them again. In a batch that resumes, the stopped workers keep their jobs' ``.partial`` folders (checkpoints,
-spools, video segments) and so does the parent for a killed one; a rerun with ``resume`` continues each from
-its last checkpoint.
+`STOP_GRACE_S` is killed. At a batch's end the pool's idle workers end on its end-of-work message; one that
+has not within `STOP_GRACE_S` is stopped the same way (a worker killed at that moment can take the pool's queue
+lock with it, which the others then wait for: `PoolExecutor._shut_down`). A batch killed outright (SIGKILL)
+cannot stop its workers: each stops itself, as on SIGTERM, when it sees the batch process end. The interrupted
+jobs are recorded as such and a rerun renders them again. In a batch that resumes, the stopped workers keep
+their jobs' ``.partial`` folders (checkpoints, spools, video segments) and so does the parent for a killed
+one; a rerun with ``resume`` continues each from its last checkpoint.
 """
 
 from __future__ import annotations
@@ -170,25 +172,42 @@ class PoolExecutor:
 
     def cancel(self, handles: Collection[Future]) -> None:
         # shutdown() would wait for the running renders (minutes each) and for the calls already queued to
-        # the workers, which cancel_futures cannot reach; so the workers are stopped instead. The pool has
-        # no public handle on its processes before Python 3.14 (terminate_workers, without a grace period).
-        workers = list((self._pool._processes or {}).values())
-        self._pool.shutdown(wait=False, cancel_futures=True)
-        for worker in workers:
-            worker.terminate()
-        deadline = time.monotonic() + STOP_GRACE_S
-        for worker in workers:
-            worker.join(max(0.0, deadline - time.monotonic()))
-        for worker in workers:
-            if worker.is_alive():
-                worker.kill()
-                worker.join()
-        # The pool's manager thread has seen its workers end: it fails the running futures and frees the
-        # queues (and their semaphores).
-        self._pool.shutdown(wait=True)
+        # the workers, which cancel_futures cannot reach; so the workers are stopped at once instead.
+        self._shut_down(stop_now=True)
 
     def close(self) -> None:
-        self._pool.shutdown(wait=True, cancel_futures=True)
+        self._shut_down(stop_now=False)
+
+    def _shut_down(self, *, stop_now: bool) -> None:
+        """Shut the pool down and wait, boundedly, until its manager thread has ended: every worker has ended,
+        every future is settled (a running one failed if its worker was stopped), the queues are freed.
+
+        The pool's own shutdown(wait=True) sends each worker an end-of-work message through the call queue and
+        joins them without a timeout. An idle worker waits in the queue holding its read lock (the others wait
+        for that lock); one killed then, once the pool no longer watches for dead workers (a worker's death
+        found as the last result comes in, or during the shutdown), takes the lock with it, and the others,
+        hence the pool, the batch and the interpreter's exit, which joins the manager thread, wait for ever.
+        So a worker still alive `STOP_GRACE_S` after the shutdown (at once with `stop_now`) is stopped:
+        SIGTERM (an idle worker ends at once, a working one unwinds its job) and, `STOP_GRACE_S` later, SIGKILL.
+        The pool has no public handle on its processes or its thread before Python 3.14 (terminate_workers)."""
+        pool = self._pool
+        workers = list((pool._processes or {}).values())
+        manager, results = pool._executor_manager_thread, pool._result_queue
+        pool.shutdown(wait=False, cancel_futures=True)  # wakes the manager thread; the pool lets go of all three
+        if manager is not None:  # None: no worker ever started, or the pool was shut down before (a cancel)
+            if not stop_now:
+                manager.join(STOP_GRACE_S)  # each worker ends on its end-of-work message
+            for stop in ("terminate", "kill"):
+                if not manager.is_alive():
+                    break
+                # Signals only: the manager thread joins the workers, and a second reader of a worker's exit
+                # status (the fork server's pipe) could take half of it.
+                for worker in workers:
+                    getattr(worker, stop)()
+                manager.join(STOP_GRACE_S)
+            manager.join()  # every worker has ended or been killed: the pool's last joins return
+        if results is not None:
+            results.close()
 
 
 def check_options(
