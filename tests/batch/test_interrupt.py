@@ -187,12 +187,57 @@ def test_sigint_to_the_batch_alone_mid_render_ends_it_in_seconds(tmp_path):
     stop_batch(tmp_path, signal.SIGINT, to_group=False, after=rendering, what="a job being written")
 
 
+def pending_signals(pid: int) -> int:
+    """The signals sent to process `pid` and not yet delivered (a stopped process's), as a bit mask."""
+    status = (Path("/proc") / str(pid) / "status").read_text()
+    return int(next(line.split()[1] for line in status.splitlines() if line.startswith("ShdPnd:")), 16)
+
+
+def kill_a_worker_before_the_jobs_end(batch: int, out: Path) -> bool:
+    """SIGKILL one of the batch's two workers while a job is unfinished, once one has finished; False if every
+    job had finished first (the batch then ends as it would have).
+
+    Both workers are stopped (SIGSTOP) while the jobs are counted, so none finishes between the count and the
+    kill, and the other is let go only when the pool has found the dead worker (SIGTERM pending on the other:
+    the pool stops its workers when one dies), so it cannot finish the last job before the pool fails it."""
+    wait_for(
+        lambda: finished_jobs(out) == 4 or (finished_jobs(out) >= 1 and len(workers_of(batch)) == 2),
+        "a finished job and two workers",
+    )
+    stopped = []
+    try:
+        for worker in workers_of(batch):
+            os.kill(worker, signal.SIGSTOP)
+            stopped.append(worker)
+        if len(stopped) < 2 or finished_jobs(out) == 4:
+            return False
+        killed, other = stopped
+        os.kill(killed, signal.SIGKILL)
+        stopped.remove(killed)
+        wait_for(lambda: pending_signals(other) & 1 << (signal.SIGTERM - 1), "the pool to stop its other worker")
+        return True
+    except ProcessLookupError:  # a worker ended after it was listed: the batch ended its pool
+        return False
+    finally:
+        for worker in stopped:
+            try:
+                os.kill(worker, signal.SIGCONT)
+            except ProcessLookupError:
+                pass
+
+
 def test_a_killed_worker_then_resume_gives_the_uninterrupted_dataset(tmp_path, uninterrupted):
-    dataset = make_dataset(tmp_path, DATASET)
-    out = tmp_path / "out"
-    process = start_batch(dataset, out)
-    wait_for(lambda: finished_jobs(out) >= 1 and workers_of(process.pid), "a finished job and a busy worker")
-    os.kill(workers_of(process.pid)[0], signal.SIGKILL)
+    # Before the kill, a job must have finished and another not; on a loaded machine every job can finish
+    # before the test looks again, and then the batch is run again.
+    for attempt in range(3):
+        dataset = make_dataset(tmp_path / str(attempt), DATASET)
+        out = tmp_path / str(attempt) / "out"
+        process = start_batch(dataset, out)
+        if kill_a_worker_before_the_jobs_end(process.pid, out):
+            break
+        process.communicate(timeout=TIMEOUT_S)
+    else:
+        raise AssertionError("the batch finished its jobs before a worker could be killed three times")
     _, stderr = process.communicate(timeout=TIMEOUT_S)
     assert process.returncode == 1, stderr.decode()  # the jobs the broken pool lost are reported as failed
     assert b"Traceback" not in stderr
