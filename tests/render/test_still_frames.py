@@ -137,3 +137,74 @@ def test_a_metering_frame_is_drawn_sharp(job, renderer):
     without = CameraRenderer(renderer, build_scene_graph(job.scene), sharp_camera).frame(FRAME).passes.radiance
     np.testing.assert_array_equal(metered, without)
     assert np.abs(blurred - metered).max() > 0.05 * metered.max()  # the racer is smeared in the blurred one
+
+
+def _with_geometry(job):
+    """The job's camera drawing depth_m and instance_id besides radiance."""
+    camera = job.cameras[0]
+    render = camera.render.model_copy(update={"passes": ("radiance", "depth_m", "instance_id")})
+    return camera.model_copy(update={"render": render})
+
+
+def _geometric_crops(renderer, monkeypatch) -> list:
+    """The crop of every draw of depth and ids alone from now on (None: a whole draw)."""
+    crops = []
+    draw = renderer.draw
+
+    def counted(graph, view, passes, **options):
+        if "radiance" not in passes:
+            crops.append(options.get("crop_px"))
+        return draw(graph, view, passes, **options)
+
+    monkeypatch.setattr(renderer, "draw", counted)
+    return crops
+
+
+def test_depth_and_ids_after_other_frames_are_bit_for_bit_those_drawn_alone(job, renderer, monkeypatch):
+    """The geometric passes of a frame after others are the kept ones with the rectangles of what moved drawn again
+    (`CameraRenderer._geometry`): bit for bit the frame's drawn alone, and each rectangle is needed (leaving out
+    the largest leaves stale pixels)."""
+    camera = _with_geometry(job)
+    alone = CameraRenderer(renderer, build_scene_graph(job.scene), camera).frame(FRAME).passes
+    assert np.isfinite(alone.depth_m).any() and len(np.unique(alone.instance_id)) > 2  # ground, wall, movers
+
+    def after_others(drop_largest: bool):
+        drawer = CameraRenderer(renderer, build_scene_graph(job.scene), camera)
+        for index in (FRAME - 5, FRAME - 1):
+            drawer.frame(index)
+        if drop_largest:
+            rects_of = drawer._geometry_rects
+
+            def fewer(*args):
+                rects = rects_of(*args)
+                largest = max(rects, key=lambda r: (r[2] - r[0]) * (r[3] - r[1]))
+                return [r for r in rects if r != largest]
+
+            monkeypatch.setattr(drawer, "_geometry_rects", fewer)
+        with monkeypatch.context() as patched:
+            crops = _geometric_crops(renderer, patched)
+            passes = drawer.frame(FRAME).passes
+        return passes, crops
+
+    kept, crops = after_others(drop_largest=False)
+    assert crops and None not in crops, "depth and ids were drawn from the kept frame's, in rectangles only"
+    np.testing.assert_array_equal(kept.depth_m, alone.depth_m)
+    np.testing.assert_array_equal(kept.instance_id, alone.instance_id)
+    stale, _ = after_others(drop_largest=True)
+    assert not np.array_equal(stale.instance_id, alone.instance_id)
+
+
+def test_depth_and_ids_through_a_moved_view_are_drawn_whole(job, renderer, monkeypatch):
+    camera = _with_geometry(job)
+    drawer = CameraRenderer(renderer, build_scene_graph(job.scene), camera)
+    drawer.frame(FRAME - 1)
+    state = camera.states[FRAME]
+    T = np.array(state.T_world_from_cam)
+    T[0, 3] += 0.5  # the camera half a metre to the side
+    moved = state.model_copy(update={"T_world_from_cam": tuple(map(tuple, T))})
+    crops = _geometric_crops(renderer, monkeypatch)
+    passes = drawer.frame(FRAME, moved).passes
+    assert crops == [None]
+    fresh = CameraRenderer(renderer, build_scene_graph(job.scene), camera).frame(FRAME, moved).passes
+    np.testing.assert_array_equal(passes.depth_m, fresh.depth_m)
+    np.testing.assert_array_equal(passes.instance_id, fresh.instance_id)

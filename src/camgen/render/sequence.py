@@ -63,6 +63,12 @@
   720p sim step of ptz_follow, stepped in turn with the code before (30 steps each, load 8): 1.11 → 0.86 s
   (×0.78 step by step); the blur test 96 → 42 ms, the rectangles 48 → 2 ms, placing the actors 61 → 34 ms, the
   draws 864 → 734 ms; the same frames bit for bit.
+  depth_m and instance_id are kept too (`CameraRenderer._geometry`): under the same view, only the rectangles
+  that bound each moving node whose look changed since the kept frame (its box at both times; shadows play no
+  part) are drawn again, each the whole geometry-only draw scissored to it, so the same point samples bit for bit
+  (tests/render/test_still_frames.py). On the parking lot's PTZ at 1080p the whole draw's 60–82 ms of CPU a
+  frame (llvmpipe's threads included, load 9–10) became 48 ms: five crops covering 15 % of the frame, whose cost
+  is mostly the swaying crowns' leaves they reach, and the two copies a frame gets.
 - Turned frames (`CameraRenderer(turns_reprojected=True)`; `camgen.sim` turns it on from 320×240): a head turns
   about its centre of projection, so what one view sees, another view sees at the pixel a homography takes it to
   (`_homography`: no parallax; the sky, shadows, fog and speculars alike, a surface's view direction unchanged).
@@ -327,6 +333,8 @@ class CameraRenderer:
         """id() of the environment nodes lying flat on the wet ground, left out of its mirror (found once)."""
         self._kept_base: _KeptBase | None = None
         """The last still frame's radiance (`_base_radiance`)."""
+        self._kept_geometry: _KeptGeometry | None = None
+        """The last frame's depth_m and instance_id (`_geometry`)."""
         self._sun_texels_m: dict[int, tuple[tuple, float]] = {}
         """Per sun light node (by id), what its last `_sun_texel_m` depended on, and its value."""
         self._vertices_m: dict[int, tuple[int, np.ndarray]] = {}
@@ -484,7 +492,7 @@ class CameraRenderer:
             result.depth_m, result.instance_id = geometry.depth_m, geometry.instance_id
         elif geometric:
             self.graph.place_actors(state.time_s)
-            coarse = self._draw(view, geometric, "geometric")
+            coarse = self._geometry(view, geometric)
             result.depth_m, result.instance_id = coarse.depth_m, coarse.instance_id
         if "radiance" in passes and self._wet_ground_m is not None:
             result.radiance = self._wet(view, state, result.radiance, result.depth_m)
@@ -497,6 +505,57 @@ class CameraRenderer:
                 self.graph, view, result.radiance, result.depth_m, state, self.camera.profile
             )
         return Frame(index, state.time_s, result)
+
+    def _geometry(self, view: View, passes: tuple[str, ...]) -> Passes:
+        """depth_m and instance_id (those of `passes`) of `view` with the actors placed as they are now: the kept
+        ones of the last frame (`_KeptGeometry`) where the view is the same, with the rectangles that bound each
+        moving node whose look changed since (its box then and now, `_geometry_rects`) drawn again, each the whole
+        draw scissored to it (`Renderer.draw`'s `crop_px`: point samples at pixel centres, the same values bit for
+        bit); else one whole draw, kept. Without `moving_regions`, or over a kept static background, drawn whole."""
+        if not self.moving_regions or self.spec.static_background:
+            return self._draw(view, passes, "geometric")
+        graph, kept, base = self.graph, self._kept_geometry, self._kept_base
+        # Shared with the radiance's base where a node's look is the one it drew (its version the same).
+        looks = _Looks.now(graph, base.looks if base is not None else None if kept is None else kept.looks)
+        rects = None
+        if kept is not None and kept.passes == passes and _same_view(kept.view, view):
+            rects = self._geometry_rects(view, kept.looks, looks)
+        if rects is None:
+            drawn = self._draw(view, passes, "geometric")
+            depth_m, ids = (None if a is None else a.copy() for a in (drawn.depth_m, drawn.instance_id))
+            self._kept_geometry = _KeptGeometry(view, passes, depth_m, ids, looks)
+            return drawn
+        clip = self.clip_range_m(view)
+        for x0, y0, x1, y1 in rects:
+            part = self.renderer.draw(graph, view, passes, clip_range_m=clip, crop_px=(x0, y0, x1, y1))
+            if part.depth_m is not None:
+                kept.depth_m[y0:y1, x0:x1] = part.depth_m
+            if part.instance_id is not None:
+                kept.instance_id[y0:y1, x0:x1] = part.instance_id
+        kept.looks = looks
+        # The kept arrays stay this renderer's: the frame gets copies, which its consumers may change.
+        return Passes(
+            depth_m=None if kept.depth_m is None else kept.depth_m.copy(),
+            instance_id=None if kept.instance_id is None else kept.instance_id.copy(),
+        )
+
+    def _geometry_rects(self, view: View, before: _Looks, now: _Looks) -> list[tuple[int, int, int, int]] | None:
+        """The rectangles of `view` outside which no pixel's depth or id differs between the moving nodes' looks
+        `before` and `now`: each changed node's box at both (`_projected_rect_px`, padded by `RECT_PAD_PX`), merged
+        as the radiance's rectangles are (`merged_rects_px`); None where they would cover most of the frame."""
+        rects = []
+        for k in range(len(now.versions)):
+            if now.differ(before, k):
+                rect = _projected_rect_px(np.concatenate([before.boxes[k], now.boxes[k]]), view, NEAR_CLIP_M)
+                if rect is not None:
+                    rects.append(rect)
+        rects = merged_rects_px(rects, RECT_MERGE_SLACK_PX)
+        if (
+            sum((x1 - x0) * (y1 - y0) for x0, y0, x1, y1 in rects)
+            > MOVING_AREA_MAX_FRACTION * view.width_px * view.height_px
+        ):
+            return None
+        return rects
 
     def _still_radiance(self, state: CameraState, view: View, groups: dict[int, set[int]]) -> np.ndarray | None:
         """The frame's radiance through a camera that holds still during the exposure under lights that do
@@ -1088,6 +1147,18 @@ class _KeptBase:
     radiance: np.ndarray
     fine: bool
     """Drawn s× finer and box-averaged, or as s² jittered 1× draws (`CameraRenderer._base_radiance`)."""
+    looks: _Looks
+    """What each moving node drew then."""
+
+
+@dataclass
+class _KeptGeometry:
+    """The last frame's geometric passes at its frame time (`CameraRenderer._geometry`)."""
+
+    view: View
+    passes: tuple[str, ...]
+    depth_m: np.ndarray | None
+    instance_id: np.ndarray | None
     looks: _Looks
     """What each moving node drew then."""
 
