@@ -58,6 +58,7 @@ def keypoint_visibility(
     width_px: int,
     height_px: int,
     own_depth_m: np.ndarray | None = None,
+    own_depth_at_px: tuple[int, int] = (0, 0),
 ) -> np.ndarray:
     """(K, 3) COCO keypoints (x, y, v) of one person from its world keypoints (K, 3).
 
@@ -65,7 +66,8 @@ def keypoint_visibility(
     covers it (the scene's instance pass shows no pixel of this person within
     `VISIBILITY_RADIUS_PX`) or, given `own_depth_m` (the person drawn alone, camera z per pixel), when
     the person's own body does (the keypoint lies more than `SELF_OCCLUSION_M` behind the person's
-    nearest surface there); 2 otherwise.
+    nearest surface there); 2 otherwise. `own_depth_m` may cover a window of the image only (the
+    person's box), its top-left pixel at column, row `own_depth_at_px`: the person is nowhere outside it.
     """
     points_px, depth_m = project_points(keypoints_world_m, T_world_from_cam, K_px, distortion)
     out = np.zeros((len(points_px), 3))
@@ -77,6 +79,10 @@ def keypoint_visibility(
         window = (slice(max(row - r, 0), row + r + 1), slice(max(col - r, 0), col + r + 1))
         seen = bool(np.any(instance_id[window] == track_id))
         if seen and own_depth_m is not None:
-            seen = depth_m[k] <= float(np.min(own_depth_m[window])) + SELF_OCCLUSION_M
+            col0, row0 = own_depth_at_px
+            own = own_depth_m[
+                max(row - r - row0, 0) : max(row + r + 1 - row0, 0), max(col - r - col0, 0) : max(col + r + 1 - col0, 0)
+            ]
+            seen = depth_m[k] <= (float(np.min(own)) if own.size else np.inf) + SELF_OCCLUSION_M
         out[k] = (u + 0.5, v + 0.5, 2 if seen else 1)
     return out

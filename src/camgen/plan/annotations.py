@@ -100,7 +100,7 @@ class Annotator:
             None if graph.rig(index) else _mesh_geometry(node) for index, node in enumerate(graph.actor_nodes)
         ]
         self._ids = [graph.instance_ids[node] for node in graph.actor_nodes]
-        self._alone_kept: dict[int, tuple[tuple, tuple[int, np.ndarray | None]]] = {}
+        self._alone_kept: dict[int, tuple[tuple, tuple[int, np.ndarray | None, tuple[int, int]]]] = {}
         """Per actor (index): its last draw alone in its window (`_alone_in_window`), by what it depends on."""
 
     def annotate(self, state: CameraState, passes: Passes, *, post=None) -> FrameAnnotations:
@@ -142,7 +142,7 @@ class Annotator:
             skeleton = rig is not None and rig.keypoints_m is not None
             alone_passes = ("depth_m", "instance_id") if skeleton else ("instance_id",)
             if direct:
-                unoccluded_pixels, own_depth = self._alone_kept_or_drawn(
+                unoccluded_pixels, own_depth, own_depth_at = self._alone_kept_or_drawn(
                     index, state, view, node, alone_passes, clip, clipped
                 )
             else:
@@ -150,6 +150,7 @@ class Annotator:
                 lensed = self.lens.apply(state, Passes(depth_m=alone.depth_m, instance_id=alone.instance_id))
                 unoccluded_pixels = int(np.count_nonzero(post(lensed.instance_id) == track_id))
                 own_depth = None if not skeleton else post(np.where(lensed.depth_m > 0, lensed.depth_m, np.inf))
+                own_depth_at = (0, 0)
             seen = visible.get(track_id)
             pixels = 0 if seen is None else seen.pixels
             keypoints = keypoints_world = None
@@ -160,7 +161,16 @@ class Annotator:
             if skeleton:
                 keypoints_world = rig.keypoints_m
                 keypoints = keypoint_visibility(
-                    keypoints_world, T, K, distortion, instance, track_id, W, H, own_depth_m=own_depth
+                    keypoints_world,
+                    T,
+                    K,
+                    distortion,
+                    instance,
+                    track_id,
+                    W,
+                    H,
+                    own_depth_m=own_depth,
+                    own_depth_at_px=own_depth_at,
                 )
             plates = []
             for side, corners in (rig.plate_corners_world() if hasattr(rig, "plate_corners_world") else {}).items():
@@ -216,9 +226,10 @@ class Annotator:
         """An actor drawn alone, only where it can show: the output pixels of its amodal `box` (pixel edges,
         clipped to the image) grown by `WINDOW_PAD_PX`, drawn as the crop of the render that those pixels
         take their ids and depth from (`LensStages.source_pixels`; `Renderer.draw`'s crop gives the whole
-        draw's pixels bit for bit). The number of its unoccluded pixels, and (with depth) its camera z at
-        every output pixel, +inf where it is not: what a whole-frame draw through the lens gives, at a cost
-        that follows the actor's size instead of the frame's."""
+        draw's pixels bit for bit). The number of its unoccluded pixels, and (with depth) its camera z at every
+        output pixel of the window (+inf where it is not; it is nowhere outside) with the window's top-left
+        pixel (column, row): what a whole-frame draw through the lens gives, at a cost that follows the
+        actor's size instead of the frame's."""
         W, H = self.camera.output_size_px or (self.camera.width_px, self.camera.height_px)
         x0, y0 = max(0, int(np.floor(box[0])) - WINDOW_PAD_PX), max(0, int(np.floor(box[1])) - WINDOW_PAD_PX)
         x1, y1 = min(W, int(np.ceil(box[2])) + WINDOW_PAD_PX), min(H, int(np.ceil(box[3])) + WINDOW_PAD_PX)
@@ -230,11 +241,9 @@ class Annotator:
         track_id = self.graph.instance_ids[node]
         pixels = int(np.count_nonzero(alone.instance_id[rows, cols] == track_id))
         if alone.depth_m is None:
-            return pixels, None
-        own_depth = np.full((H, W), np.inf, np.float32)
+            return pixels, None, (x0, y0)
         depth = alone.depth_m[rows, cols]
-        own_depth[y0:y1, x0:x1] = np.where(depth > 0, depth, np.inf)
-        return pixels, own_depth
+        return pixels, np.where(depth > 0, depth, np.float32(np.inf)), (x0, y0)
 
 
 WINDOW_PAD_PX = 2
