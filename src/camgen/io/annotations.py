@@ -265,11 +265,14 @@ class SequenceAnnotations:
         if self.frame_suffix is not None:  # relative to coco.json
             image["file_name"] = f"frames/{frame.frame:06d}{self.frame_suffix}"
         self.images.append(_compact(image))
+        world_points = {
+            obj.track_id: _world_points(obj.keypoints_world_m) for obj in frame.objects if obj.keypoints is not None
+        }
         people = [
             {
                 "track_id": obj.track_id,
                 "keypoints": np.round(obj.keypoints, 3).tolist(),
-                "keypoints_world_m": _world_points(obj.keypoints_world_m),
+                "keypoints_world_m": world_points[obj.track_id],
             }
             for obj in frame.objects
             if obj.keypoints is not None
@@ -310,7 +313,7 @@ class SequenceAnnotations:
                         "truncation": round(obj.truncation, 6),
                         "bbox_3d_world_m": np.round(obj.box_3d_world_m, 6).tolist(),
                         "bbox_3d_cam_m": np.round(obj.box_3d_cam_m, 6).tolist(),
-                        **_keypoint_fields(obj),
+                        **_keypoint_fields(obj, world_points.get(obj.track_id)),
                         **({"plates": list(obj.plates)} if getattr(obj, "plates", ()) else {}),
                     }
                 )
@@ -582,23 +585,23 @@ def crowd_groups(objects, instance_id: np.ndarray | None) -> list[list[int]]:
 def _world_points(points_m: np.ndarray) -> list:
     """[[x, y, z], …] in m, 5 decimals; null for a keypoint the person's rig has no joint for (a glTF
     character's rig may lack some of COCO's 17, `camgen.actors.character.coco_joint_nodes`)."""
-    return [
-        [round(float(v), 5) for v in point] if np.all(np.isfinite(point)) else None
-        for point in np.asarray(points_m, dtype=np.float64)
-    ]
+    points = np.asarray(points_m, dtype=np.float64)
+    finite = np.isfinite(points).all(axis=1).tolist()
+    return [[round(v, 5) for v in point] if ok else None for point, ok in zip(points.tolist(), finite, strict=True)]
 
 
-def _keypoint_fields(obj) -> dict:
+def _keypoint_fields(obj, world_points: list | None = None) -> dict:
     """COCO `keypoints` (x, y, v triplets, x and y 0 where v = 0), `num_keypoints` (labelled ones,
-    v > 0) and the 3-D keypoints in the world, for an annotated person."""
+    v > 0) and the 3-D keypoints in the world (`world_points`: `_world_points` of them when already
+    made), for an annotated person."""
     if obj.keypoints is None:
         return {}
     keypoints = np.array(obj.keypoints, dtype=np.float64)
     keypoints[keypoints[:, 2] == 0, :2] = 0.0
     return {
-        "keypoints": [round(float(v), 3) if i % 3 != 2 else int(v) for i, v in enumerate(keypoints.ravel())],
+        "keypoints": [round(v, 3) if i % 3 != 2 else int(v) for i, v in enumerate(keypoints.ravel().tolist())],
         "num_keypoints": int(np.count_nonzero(keypoints[:, 2] > 0)),
-        "keypoints_world_m": _world_points(obj.keypoints_world_m),
+        "keypoints_world_m": _world_points(obj.keypoints_world_m) if world_points is None else world_points,
     }
 
 
