@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from camgen.bench.batch_cases import BatchCpu
 from camgen.bench.harness import Case, Result, markdown_table, power_law_fit
 from camgen.bench.plots import TradeoffPoint, growth_plot, memory_plot, stage_bars, threshold_plot, tradeoff_plot
 from camgen.bench.report import Plots, Section
@@ -938,12 +939,14 @@ def _device(repo: Path) -> Section:
 
 
 def _other(repo: Path) -> Section:
-    from camgen.bench.batch_cases import batch_cases
+    from camgen.bench import batch_cases as batch
     from camgen.bench.cases import planning_cases
     from camgen.bench.dof_cases import dof_cases
     from camgen.bench.optics_cases import stage_cases
     from camgen.bench.render_cases import planned_frame_cases, static_background_cases
     from camgen.bench.video_cases import video_cases
+
+    batch_cpu = batch.BatchCpu()
 
     def cases() -> list[Case]:
         return [
@@ -952,27 +955,23 @@ def _other(repo: Path) -> Section:
             *static_background_cases(repo),
             *stage_cases(),
             *[c for c in dof_cases() if c.name.startswith("DoF layered 1920")],
-            *batch_cases(),
+            *batch.batch_cases(repo, batch_cpu),
             *video_cases(),
         ]
 
     def body(results, plots: Plots) -> str:
-        batch = [r for n, r in results.items() if n.startswith("batch ")]
         text = [
             "Loading and compiling each example scene; the undistortion of a 1080p grid; a frame drawn as "
             "planned; the static background (environment kept on the GPU, only actors drawn) and still frames "
             "(the last frame kept, what moved drawn again) against a full draw, on consecutive frames; each "
             "lens stage on a 1080p frame; the depth of field on a 1080p frame through two "
-            "lenses; a 20-job batch on 1 and 2 worker processes; the video encoder with the settings that make "
+            f"lenses; two batches, each on 1 and 2 worker processes: {batch.JOBS} short jobs of one walker through "
+            f"one 320×240 camera, and {batch.TWO_CAMERA_JOBS} seeds of the two-camera intersection (vehicles, walkers, "
+            f"riders; each stream shrunk to {batch.TWO_CAMERA_WIDTH_PX} px wide, the scene otherwise as written), "
+            f"{batch.TWO_CAMERA_FRAMES} frames a job; the video encoder with the settings that make "
             "its bytes reproducible against FFmpeg's own threading."
         ]
-        if len(batch) == 2:
-            ratio = batch[1].median_ms / batch[0].median_ms
-            text.append(
-                f"Batch: 2 workers take {ratio:.2f}× the time of 1, a scaling efficiency of 1/(2 × {ratio:.2f}) "
-                f"= {100 / (2 * ratio):.0f} % on this machine's cores; a single job already keeps every core "
-                "busy (llvmpipe renders on all of them, the noise model runs two threads)."
-            )
+        text.extend(_batch_scaling_text(results, batch_cpu))
         reproducible = [r for n, r in results.items() if n.startswith("encode ") and r.baseline in results]
         if reproducible:
             costs = ", ".join(
@@ -986,6 +985,33 @@ def _other(repo: Path) -> Section:
         return "\n\n".join(text)
 
     return Section("other", "Planning, single stages and batch throughput", cases, body)
+
+
+def _batch_scaling_text(results: Mapping[str, Result], cpu: BatchCpu) -> list[str]:
+    """A paragraph per batch pair: the 2-worker time over the 1-worker time, the speed-up, the scaling
+    efficiency, and the CPU seconds of the workers per run with the cores they kept busy."""
+    paragraphs = []
+    for r in results.values():
+        if not (r.name.startswith("batch ") and r.baseline in results):
+            continue
+        one = results[r.baseline]
+        ratio = r.median_ms / one.median_ms
+        what = one.name.removesuffix(", 1 worker").removeprefix("batch ")
+        line = (
+            f"Batch, {what}: 2 workers take {ratio:.2f}× the time of 1 ({1 / ratio:.2f}× the throughput), a scaling "
+            f"efficiency of 1/(2 × {ratio:.2f}) = {100 / (2 * ratio):.0f} % on this machine's {os.cpu_count()} cores."
+        )
+        if one.name in cpu.workers_s and r.name in cpu.workers_s:
+            worker_s = [float(np.median(cpu.workers_s[c.name])) for c in (one, r)]
+            batch_s = [float(np.median(cpu.batch_s[c.name])) for c in (one, r)]
+            busy = [1e3 * w / c.median_ms for w, c in zip(worker_s, (one, r), strict=True)]
+            line += (
+                f" The workers used {worker_s[0]:.1f} CPU s a run on 1 worker and {worker_s[1]:.1f} on 2 (median; "
+                f"the batch process itself {batch_s[0]:.2f} and {batch_s[1]:.2f}): on average {busy[0]:.2f} and "
+                f"{busy[1]:.2f} cores busy."
+            )
+        paragraphs.append(line)
+    return paragraphs
 
 
 def _scale(repo: Path) -> Section:
