@@ -268,3 +268,66 @@ def test_the_blur_test_decides_as_projecting_every_vertex(tmp_path, renderer, mo
             decided.append(groups)
     assert any(decided) and not all(decided)
     assert min(bounds) < 0.5 < max(bounds)  # some nodes settled by the bound, others projected
+
+
+@pytest.mark.opengl
+@pytest.mark.parametrize("exposure_s", [2e-3, 0.04])
+def test_swaying_trees_settled_without_bending_them_decide_as_projecting_every_vertex(
+    tmp_path, renderer, monkeypatch, exposure_s
+):
+    """Two trees in a 6 m/s wind beside the racer: the groups are the brute-force ones (every vertex of every tree
+    bent to the exposure's start, middle and end). At 2 ms `_sway_bound_px` settles the trees from their
+    frame-time vertices alone, and they are bent once a frame; at 40 ms the nearer tree's crown blurs, so the
+    bound cannot settle it, and it is bent to the exposure's ends and projected."""
+    from camgen.config import load_scene
+    from camgen.plan import PlanSettings, compile_scene
+    from camgen.props.sway import PropSway
+    from camgen.render.scene_graph import build_scene_graph
+    from camgen.render.sequence import CameraRenderer, render_view
+
+    scene = SUN_SCENE.replace(
+        "lights:",
+        "  props:\n"
+        "    - {type: tree, position_m: [-4, 12], seed: 2, height_m: 6}\n"
+        "    - {type: tree, position_m: [5, 20], seed: 3, height_m: 8}\n"
+        "  wind: {speed_m_s: 6.0, direction_deg: 30.0, turbulence_intensity: 0.3}\n"
+        "lights:",
+    )
+    write(tmp_path, "profiles/fixed.yaml", SMALL_PROFILE)
+    job = compile_scene(load_scene(write(tmp_path, "scenes/s.yaml", scene)), PlanSettings(supersampling=2))
+    camera = job.cameras[0]
+    drawer = CameraRenderer(renderer, build_scene_graph(job.scene), camera)
+    trees = set(range(len(drawer.graph.actor_nodes), len(drawer.graph.moving_nodes)))
+    assert len(trees) == 2
+    bends, settled, bent_to_ends = [0], [], []
+    deformed, bound, bent = PropSway.deformed, CameraRenderer._sway_bound_px, CameraRenderer._bent_vertices_m
+
+    def counted_deformed(self, *args):
+        bends[0] += 1
+        return deformed(self, *args)
+
+    def counted_bound(self, k, *args):
+        settled.append(bound(self, k, *args) <= self._motion["threshold_px"])
+        return bound(self, k, *args)
+
+    def counted_bent(self, k, times_s):
+        bent_to_ends.append(k)
+        return bent(self, k, times_s)
+
+    monkeypatch.setattr(PropSway, "deformed", counted_deformed)
+    monkeypatch.setattr(CameraRenderer, "_sway_bound_px", counted_bound)
+    monkeypatch.setattr(CameraRenderer, "_bent_vertices_m", counted_bent)
+    blurred = set()
+    for frame in (3, 20, 21):
+        state = camera.states[frame].model_copy(update={"exposure_time_s": exposure_s})
+        view = render_view(state, camera.render)
+        bends[0] = 0
+        groups = drawer._blurred_groups(state, view)
+        assert bends[0] <= len(trees) + 3 * len(bent_to_ends)  # each tree to the frame time; to the ends if unsettled
+        assert groups == _reference_groups(drawer, state, view), frame
+        blurred |= {k for nodes in groups.values() for k in nodes} & trees
+        bent_to_ends.clear()
+    if exposure_s < 0.01:
+        assert all(settled) and not blurred
+    else:
+        assert not all(settled) and blurred

@@ -153,3 +153,47 @@ def test_a_vehicles_lamps_follow_lights_on_at_a_time_already_placed():
     rig.lights_on = True
     rig.place(1.0)
     assert rig.lit["head"] and rig.lit == rig.lamps(1.0)
+
+
+def test_props_left_at_another_time_are_bent_when_the_actors_time_is_asked_for_again():
+    """`place_actors(props=False)` (the blur test's exposure ends) leaves the swaying trees bent as they were, so
+    the graph no longer stands at one time: placing at any time again, that one too, bends them; `bend_prop` bends
+    one tree alone, and the graph stands at one time again once every tree is back at the actors' time."""
+    from camgen.render.scene_graph import build_scene_graph
+
+    graph = build_scene_graph(
+        scene_from(
+            environment={
+                "meshes": [{"type": "plane", "name": "ground", "size_m": [40, 40]}],
+                "props": [
+                    {"type": "bush", "position_m": [3, 4], "seed": 1},
+                    {"type": "bush", "position_m": [-3, 4], "seed": 2},
+                ],
+                "wind": {"speed_m_s": 6.0},
+            },
+            lights=[{"type": "sun", "illuminance_lux": 1000, "azimuth_deg": 30, "elevation_deg": 40}],
+            actors=[{"name": "walker", "class": "person", "path": {"waypoints_m": [[3, -6], [3, 6]]}}],
+        )
+    )
+    props = graph.swaying
+    assert len(props) == 2
+
+    def positions():
+        return [np.array(prop.node.mesh.primitives[0].positions) for prop in props]
+
+    graph.place_actors(0.5)
+    at_half = positions()
+    graph.place_actors(0.7, props=False)
+    assert graph.placed_time_s is None and all(prop.placed_at_s == 0.5 for prop in props)
+    np.testing.assert_array_equal(np.concatenate(positions()), np.concatenate(at_half))
+    graph.place_actors(0.7)
+    assert graph.placed_time_s == 0.7 and all(prop.placed_at_s == 0.7 for prop in props)
+    versions = list(graph.look_versions)
+    graph.bend_prop(0, 0.5)
+    assert graph.placed_time_s is None and graph.look_versions[1] == versions[1] + 1
+    np.testing.assert_array_equal(positions()[0], at_half[0])
+    graph.bend_prop(0, 0.7)
+    assert graph.placed_time_s == 0.7
+    graph.place_actors(0.5, props=False)
+    graph.place_actors(0.5)  # the actors stand there, the trees do not yet
+    np.testing.assert_array_equal(np.concatenate(positions()), np.concatenate(at_half))

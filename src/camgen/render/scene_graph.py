@@ -330,7 +330,10 @@ class SceneGraph:
     """The scene it was built from and its path resolver (a night-mode camera builds its NIR graph
     from them: `camgen.render.nir`)."""
     placed_time_s: float | None = None
-    """The time the actors were last placed at (`place_actors` places them again only for another)."""
+    """The time the actors were last placed at and every swaying prop bent to (`place_actors` places them again
+    only for another); None when the props are bent to other times (`bend_prop`)."""
+    _actors_placed_s: float | None = field(init=False, default=None, repr=False)
+    """The time the actors were last placed at."""
     look_versions: list[int] = field(init=False, default_factory=list)
     """Per moving node (in the order of `moving_nodes`), a count that `place_actors` raises whenever it may have
     changed what the node draws (its pose, vertices, normals or lamps), and only then: equal counts at two times
@@ -379,13 +382,15 @@ class SceneGraph:
         )
         self.sun_direction = towards_sun if track.suns else self.sun_direction
 
-    def place_actors(self, time_s: float) -> None:
+    def place_actors(self, time_s: float, *, props: bool = True) -> None:
         """Move every actor to where its route puts it at `time_s` (and pose every person), and bend every
-        swaying prop to its shape in the wind then; nothing when they stand there already (a still frame
-        asks for its frame time four or five times: rectangles, blur groups, draws, the geometric pass)."""
+        swaying prop to its shape in the wind then (`props` False: leave the props as they are, as the blur
+        test does where it can bound their motion without them); nothing when they stand there already (a
+        still frame asks for its frame time four or five times: rectangles, blur groups, draws, the geometric
+        pass)."""
         if time_s == self.placed_time_s:
             return
-        self.placed_time_s = time_s
+        self.placed_time_s = self._actors_placed_s = time_s
         vehicles = self.vehicles or [None] * len(self.actor_nodes)
         versions = self.look_versions
         for k, (route, node, local, rig, vehicle) in enumerate(
@@ -416,9 +421,22 @@ class SceneGraph:
                 self.deformed.add(primitive)
             node.mesh._bounds = None  # pyrender caches a mesh's bounds, and the scene's bounds until
             self.scene.set_pose(node, np.eye(4))  # a node moves: the identity pose stands for "moved"
-        for k, prop in enumerate(self.swaying, start=len(self.actor_nodes)):
-            if prop.place(time_s, self.scene, self.deformed):
-                versions[k] += 1
+        if props:
+            for index in range(len(self.swaying)):
+                self.bend_prop(index, time_s)
+        self._held_time()
+
+    def bend_prop(self, index: int, time_s: float) -> None:
+        """Bend swaying prop `index` (of `swaying`) to its shape at `time_s`, raising its look version when it
+        changed; the actors stay where they are."""
+        if self.swaying[index].place(time_s, self.scene, self.deformed):
+            self.look_versions[len(self.actor_nodes) + index] += 1
+            self._held_time()
+
+    def _held_time(self) -> None:
+        """`placed_time_s`: the actors' time where every swaying prop is bent to it too, else None."""
+        held = all(prop.placed_at_s == self._actors_placed_s for prop in self.swaying)
+        self.placed_time_s = self._actors_placed_s if held else None
 
 
 def instance_table(scene: Scene) -> tuple[Instance, ...]:

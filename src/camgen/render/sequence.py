@@ -73,7 +73,12 @@
   a crop over a swaying crown no longer shades the facade behind it and the leaves behind its leaves. The parking
   lot's PTZ at 1080p, `frame()` by CPU a frame (llvmpipe's threads included; A/B interleaved, 3 rounds of 5
   frames each): with the kept depth and ids alone 900, 910, 830 ms, with the pre-pass too 826, 870, 786 ms (load
-  3.6–4.3); before both 900, 908, 858 ms, after both 850, 818, 798 ms (load 5–9).
+  3.6–4.3); before both 900, 908, 858 ms, after both 850, 818, 798 ms (load 5–9). The blur test bends a swaying
+  prop to the exposure's ends only where `_sway_bound_px` (its frame-time vertices and `PropSway.moved_bound_m`, a
+  bound of the bend and the flutter between two times) leaves its path above the threshold: the parking lot's six
+  trees in a 4 m/s wind are settled at 0.02–0.05 px and bent once a frame instead of three times, the same
+  decisions; `frame()` 779 → 743 ms of CPU a frame (mean of the 4 frames after the first, 3 interleaved rounds,
+  load 4.0–4.3).
 - Turned frames (`CameraRenderer(turns_reprojected=True)`; `camgen.sim` turns it on from 320×240): a head turns
   about its centre of projection, so what one view sees, another view sees at the pixel a homography takes it to
   (`_homography`: no parallax; the sky, shadows, fog and speculars alike, a surface's view direction unchanged).
@@ -599,7 +604,8 @@ class CameraRenderer:
         no motion blur or `blur` is False; None when the head moves or a light changes during the exposure.
 
         The same decision at a fraction of the cost: the actors are placed at the start and the end first and
-        at the frame time last (where the frame's draws want them); a node whose look holds over the three
+        at the frame time last (where the frame's draws want them), the swaying props bent to the frame time only
+        and to the ends only where `_sway_bound_px` does not settle them; a node whose look holds over the three
         (`SceneGraph.look_versions`: a parked car) moves by 0 px; a node whose paths `_path_bound_px` bounds
         under the threshold is not projected; the others are, vertex by vertex. A stage whose ``actors_blur`` is
         False (`camgen.sim` adds one for a head's turns to a plan that blurs nothing) blurs no node: {}."""
@@ -612,14 +618,19 @@ class CameraRenderer:
             return {}
         scene, moving = graph.scene, graph.moving_nodes
         casting = _shadow_lights(scene) if graph.shadows else []
+        first_prop = len(graph.actor_nodes)  # the swaying props follow the actors in `moving`
         placed = {}
         for offset in (-0.5, 0.5, 0.0):
-            graph.place_actors(state.time_s + offset * exposure_s)
+            # The swaying props are bent at the exposure's ends only where `_sway_bound_px` does not settle them.
+            graph.place_actors(state.time_s + offset * exposure_s, props=offset == 0.0)
             placed[offset] = (
                 _light_state(scene),
                 [scene.get_pose(light).copy() for light in casting],
                 list(graph.look_versions),
-                [self._world_vertices_m(k, node) for k, node in enumerate(moving)],
+                [
+                    self._world_vertices_m(k, node) if offset == 0.0 or k < first_prop else None
+                    for k, node in enumerate(moving)
+                ],
             )
         lights, light_poses, versions, vertices = zip(*(placed[offset] for offset in ends), strict=True)
         if not _same_arrays(lights[0], lights[-1]):
@@ -636,8 +647,14 @@ class CameraRenderer:
             lit = self._shadowing(moving[k], casting)
             lights_k = [casting[i] for i in lit]
             poses_k = [[poses[i] for i in lit] for poses in light_poses]
+            if k >= first_prop:
+                if lights_held and threshold >= 0.0:
+                    bound_px = self._sway_bound_px(k, node_vertices[1], view, lights_k, poses_k[1], state, exposure_s)
+                    if bound_px <= threshold:
+                        continue
+                node_vertices = self._bent_vertices_m(k, [state.time_s + offset * exposure_s for offset in ends])
             if lights_held and threshold >= 0.0:  # a path at or under the threshold needs 1 sub-frame
-                if versions[0][k] == versions[1][k] == versions[2][k]:
+                if k < first_prop and versions[0][k] == versions[1][k] == versions[2][k]:
                     continue  # the same points at the three times: every path is 0 px
                 if _path_bound_px(node_vertices, view, lights_k, poses_k[0], self._lowest_z_m) <= threshold:
                     continue
@@ -652,6 +669,68 @@ class CameraRenderer:
             if samples > 1:
                 groups.setdefault(samples, set()).add(k)
         return groups
+
+    def _sway_bound_px(
+        self,
+        k: int,
+        middle_m: np.ndarray,
+        view: View,
+        casting: list,
+        light_poses: list[np.ndarray],
+        state: CameraState,
+        exposure_s: float,
+    ) -> float:
+        """An upper bound, px, of `_path_bound_px` for swaying prop `k` of `SceneGraph.moving_nodes` over the
+        exposure, from its vertices at the frame time, `middle_m` (N, 3, world), alone: each end's vertices lie
+        within `PropSway.moved_bound_m` of them, plus the rounding of the float32 positions the prop's primitive
+        holds (an ulp of the largest coordinate at each end), times the pose's largest stretch; so the least depth
+        at an end is at least the middle's less that, and a sun's shadow (`_path_bound_px`: P + ((P_z −
+        z_low)/(−d_z))·d) moves by at most (1 + 1/|d_z|) times it, its depth by at most (1 + |d·axis|/|d_z|) times
+        it. Where this is at or under the threshold, so is `_path_bound_px` of the vertices at the ends, and the
+        blur test need not bend the prop to them (the same decision); inf where `_path_bound_px` is (a spot light
+        casts)."""
+        if any(type(light.light).__name__ != "DirectionalLight" for light in casting):
+            return math.inf
+        if len(middle_m) == 0:
+            return 0.0
+        graph = self.graph
+        prop = graph.swaying[k - len(graph.actor_nodes)]
+        K, T = view.K_px, view.T_world_from_cam
+        A = np.array([[K[0, 0], K[0, 1]], [0.0, K[1, 1]]])
+        w, h = view.width_px, view.height_px
+        corners = np.array([[-w, -h], [2 * w, -h], [-w, 2 * h], [2 * w, 2 * h]], np.float64) - K[:2, 2]
+        q = np.linalg.solve(A, corners.T)
+        gain = float(np.linalg.norm(A, 2)) * math.sqrt(1.0 + float(np.max(np.sum(q * q, axis=0))))
+        axis_m, origin_m = T[:3, 2], T[:3, 3]
+        stretch = float(np.linalg.norm(graph.scene.get_pose(prop.node)[:3, :3], 2))
+        s_max = max(0.0, float(prop.rest_vertices_m[:, 2].max()) / prop.sway.height_m)
+        rounding_m = 2.0**-22 * (float(np.abs(prop.rest_vertices_m).max()) + prop.sway.reach_m())
+        depth_m = (middle_m - origin_m) @ axis_m
+        suns = [-pose[:3, 2] for pose in light_poses if -pose[2, 2] < -1e-6]
+        kinds = [0.0] * (1 + len(suns))
+        for offset in (-0.5, 0.5):
+            moved_m = stretch * (
+                prop.sway.moved_bound_m(state.time_s + offset * exposure_s, state.time_s, s_max) + rounding_m
+            )
+            kinds[0] += moved_m / max(NEAR_CLIP_M, float(depth_m.min()) - moved_m)
+            for j, d in enumerate(suns, start=1):
+                shadow_depth_m = depth_m + (middle_m[:, 2] - self._lowest_z_m) / -d[2] * float(d @ axis_m)
+                shadow_moved_m = moved_m * (1.0 + 1.0 / abs(d[2]))
+                nearest_m = float(shadow_depth_m.min()) - moved_m * (1.0 + abs(float(d @ axis_m)) / abs(d[2]))
+                kinds[j] += shadow_moved_m / max(NEAR_CLIP_M, nearest_m)
+        bound = gain * max(kinds)
+        return bound * (1.0 + PATH_BOUND_MARGIN) + PATH_BOUND_MARGIN if math.isfinite(bound) else math.inf
+
+    def _bent_vertices_m(self, k: int, times_s: list[float]) -> list[np.ndarray]:
+        """The world vertices of swaying prop `k` of `SceneGraph.moving_nodes` bent to each of `times_s` (the
+        exposure's start, middle and end), left bent to the middle (the frame time, where the draws want it)."""
+        graph = self.graph
+        index, node = k - len(graph.actor_nodes), graph.moving_nodes[k]
+        bent = {}
+        for time_s in (times_s[0], times_s[2], times_s[1]):
+            graph.bend_prop(index, time_s)
+            bent[time_s] = self._world_vertices_m(k, node)
+        return [bent[time_s] for time_s in times_s]
 
     def _shadowing(self, node, casting: list) -> list[int]:
         """Indices into `casting` of the lights in which `node` can cast a shadow: all but its own headlamps' (they
