@@ -98,3 +98,14 @@ def test_inverting_beyond_the_fold_raises_with_the_place():
     past_fold = np.array([[K[0, 2] + 1.5 * K[0, 0], K[1, 2]]])  # beyond the largest radius g can reach
     with pytest.raises(LensInversionError, match=r"cannot be inverted at pixel \(\d+\.\d+, \d+\.\d+\)"):
         undistort_points(past_fold, K, [-0.3])
+
+
+def test_the_kept_fold_radius_is_each_lenss_own():
+    """Kept per coefficients: a lens asked for after another gets its own radius, whatever form its
+    coefficients come in (list, array, trailing zeros), and the radius limit is part of the question."""
+    for k1 in (-0.3, -0.2, -0.3, -0.1):
+        expected = np.sqrt(1 / (3 * -k1))  # 1 + 3 k1 r² = 0
+        assert fold_radius_normalized([k1]) == pytest.approx(expected, abs=2e-3)
+        assert fold_radius_normalized(np.array([k1, 0.0, 0.0, 0.0, 0.0])) == fold_radius_normalized((k1,))
+    assert fold_radius_normalized([-0.1], r_max=1.0) == np.inf  # its fold (1.83) lies beyond this limit
+    assert fold_radius_normalized([-0.1]) == pytest.approx(np.sqrt(1 / 0.3), abs=2e-3)
