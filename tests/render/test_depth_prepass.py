@@ -72,14 +72,19 @@ def _view(mirrored: bool = False) -> View:
 
 def _both(renderer, draw):
     """`draw()`'s passes and the target's coverage, with the pre-pass and without."""
-    out = {}
+    out, default = {}, renderer._renderer.depth_prepass
     for prepass in (True, False):
         renderer._renderer.depth_prepass = prepass
         try:
             out[prepass] = draw()
         finally:
-            renderer._renderer.depth_prepass = True
+            renderer._renderer.depth_prepass = default
     return out[True], out[False]
+
+
+def test_the_prepass_is_on_for_llvmpipe_only(renderer):
+    """Measured there (bit for bit and cheaper); a GPU culls hidden fragments itself (`_PassRenderer.depth_prepass`)."""
+    assert renderer._renderer.depth_prepass == ("llvmpipe" in renderer.gl_renderer)
 
 
 def _assert_same(with_prepass, without) -> None:

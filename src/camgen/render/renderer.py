@@ -593,7 +593,10 @@ class _PassRenderer(pyrender.Renderer):
         """The CIE sky's radiance that smooth coats and glass mirror (`SkyMap`), set for each lit draw."""
         self.depth_prepass = True
         """Whether a lit draw draws its depth first and shades each pixel once (`forward`); False shades every
-        fragment that passes the depth test as it comes (the same pixels, at more cost)."""
+        fragment that passes the depth test as it comes (the same pixels, at more cost on llvmpipe). `Renderer`
+        turns it on for llvmpipe only, where it was measured (bit for bit, and cheaper): a GPU culls hidden
+        fragments in hardware before shading them, and its compiler need not place a vertex bit for bit alike in
+        two programs (no `invariant gl_Position`), which GL_EQUAL needs. Not measured on a GPU."""
         self.mirrored = False
         """Whether the current draw's view is mirrored (an improper pose: `camgen.render.wet`), which reverses
         the winding of its triangles on screen."""
@@ -1362,6 +1365,7 @@ class Renderer:
         extensions = {GL.glGetStringi(GL.GL_EXTENSIONS, i).decode() for i in range(count)}
         check_gl_features(version, extensions, self.gl_renderer)
         self._renderer.keep_still_casters = copies_images(version, extensions)
+        self._renderer.depth_prepass = "llvmpipe" in self.gl_renderer
         self.max_size_px = int(GL.glGetIntegerv(GL.GL_MAX_RENDERBUFFER_SIZE))
         """The largest width or height of a render target here."""
 
