@@ -35,8 +35,8 @@ camera.jsonl) runs in one writer thread (`camgen.plan.writer.FrameWriter`), in f
 main thread keeps what carries state into the next frame or needs OpenGL: the render, the camera model
 (auto-exposure, the ISP's adaptation), the lens applied to the passes, the annotations' geometry and unoccluded
 draws, the flow (it moves the actors). The writer gets copies of the arrays (`_detached`), so the same bytes
-come out as from the serial render (``pipelined=False``; the default on a software rasterizer, where the
-writer thread only takes cores from the drawing: `pipelines_by_default`). Either way a frame's video encode runs
+come out as from the serial render (``pipelined=False``; pipelined by default, on a GPU and on llvmpipe alike:
+`execute`'s notes). Either way a frame's video encode runs
 in a thread of its own (``camgen-video-encode``) beside that frame's other writes, and is waited for before they
 return (`_encoding`): the encoder and the PNG and DNG writers each keep one core busy, outside the GIL. The
 writer is drained before each checkpoint and before a camera's files are finished, so a checkpoint describes only
@@ -210,7 +210,7 @@ def execute(
     checkpoint_frames: int | None = None,
     on_resume: Callable[[str, int, int], None] | None = None,
     on_note: Callable[[str], None] | None = None,
-    pipelined: bool | None = None,
+    pipelined: bool = True,
 ) -> list[CameraResult]:
     """Render `job` into ``out_dir/<scene>-<hash>/<camera>/`` and return what was written.
 
@@ -234,11 +234,18 @@ def execute(
     pipelined: each frame's writes (the video's encode, the files, the annotation lines and images,
     camera.jsonl) run in a background thread while the next frame renders (`camgen.plan.writer`; see
     "Pipelining" in the module docstring); False writes each frame before rendering the next. The files are
-    the same bytes either way. None (the default): pipelined unless the renderer is a software rasterizer
-    (`pipelines_by_default`).
+    the same bytes either way. Pipelined by default, on a GPU and on llvmpipe alike: a GPU draws while the CPU
+    waits for it, so the writes of the frame before overlap the draw; llvmpipe draws on every core, but a frame
+    spends most of its time in one thread (the Python around the draws, the camera model, the annotations), and
+    the writer thread fills the other core then. Measured on 2 cores, quiet (one camera at 1920×1080 with every
+    output the scene plans, the first frame left out; serial and pipelined in turn, each its own process): the
+    parking lot's PTZ, 10 frames, 3 rounds: 1132 / 832 / 860 ms a frame serial against 792 / 751 / 772
+    pipelined (0.90×); the misty street, 2 rounds: 236 / 218 against 152 / 158 (0.69×); the intersection's 4K
+    box camera, 4 frames, 2 rounds, its frame 95 % drawing: 6780 / 6439 against 6509 / 6547 (1.0×). Earlier,
+    when the parking lot's frame was 1.3–1.9 s and mostly its draws, the writer beside llvmpipe slowed them more
+    than it hid, and a software rasterizer wrote in turn.
     """
     checkpoint_frames = CHECKPOINT_FRAMES if checkpoint_frames is None else checkpoint_frames
-    pipelined = pipelines_by_default(renderer) if pipelined is None else pipelined
     if isinstance(checkpoint_frames, bool) or not isinstance(checkpoint_frames, int) or checkpoint_frames < 1:
         raise ValueError(f"checkpoint_frames must be an integer ≥ 1, got {checkpoint_frames!r}")
     job_dir = Path(out_dir) / job_directory_name(job)
@@ -316,25 +323,6 @@ def execute(
             discard_unfinished(job, job_dir, wanted)
         raise
     return results
-
-
-SOFTWARE_RASTERIZERS = ("llvmpipe", "softpipe", "swrast", "software rasterizer", "swr")
-"""Words in `Renderer.gl_renderer` that name an OpenGL drawing on the CPU (Mesa's llvmpipe, softpipe, swrast
-and OpenSWR; Microsoft's GDI "Software Rasterizer")."""
-
-
-def pipelines_by_default(renderer: Renderer) -> bool:
-    """Whether `execute` pipelines a render on `renderer` when not told: not on a software rasterizer.
-
-    A GPU draws while the CPU waits for it, so the writes of the frame before overlap the draw. llvmpipe draws
-    on every core, and the writer thread takes cores from it. Measured on 2 cores (`execute` of
-    scenes/parking_lot.yaml, 1920×1080, 12 frames; the median frame of frames 2–12; 8 rounds of a pipelined and
-    a serial render in turn, beside other renders): the pipelined frame took 0.93–1.60 times the serial one,
-    median 1.04 (1.48 and 1.60 with the machine least loaded: 1.96 and 2.23 s against 1.32 and 1.39 s). In the 3
-    rounds timed by stage, the pipelined render's draws took 2.32–2.47 s per frame against 1.86–1.95 s serial:
-    more than the 0.29 s of writes the pipeline hid."""
-    name = getattr(renderer, "gl_renderer", "").lower()
-    return not any(word in name for word in SOFTWARE_RASTERIZERS)
 
 
 NOTHING_TO_RESUME = (
