@@ -1161,18 +1161,7 @@ class _PassRenderer(pyrender.Renderer):
                 wireframe = material.wireframe != bool(draw_flags & RenderFlags.FLIP_WIREFRAME)
                 line = draw_flags & RenderFlags.ALL_WIREFRAME or wireframe
                 GL.glPolygonMode(GL.GL_FRONT_AND_BACK, GL.GL_LINE if line else GL.GL_FILL)
-                if material.doubleSided or draw_flags & RenderFlags.SKIP_CULL_FACES:
-                    GL.glDisable(GL.GL_CULL_FACE)
-                else:
-                    GL.glEnable(GL.GL_CULL_FACE)
-                    GL.glCullFace(GL.GL_BACK)
-                instances = 1 if primitive.poses is None else len(primitive.poses)
-                if primitive.indices is not None:
-                    GL.glDrawElementsInstanced(
-                        primitive.mode, primitive.indices.size, GL.GL_UNSIGNED_INT, None, instances
-                    )
-                else:
-                    GL.glDrawArraysInstanced(primitive.mode, 0, len(primitive.positions), instances)
+                _cull_and_draw(primitive, material.doubleSided or bool(draw_flags & RenderFlags.SKIP_CULL_FACES))
                 primitive._unbind()
         finally:
             if program is not None:
@@ -1310,7 +1299,12 @@ def _draw_geometry(primitive, pose: np.ndarray, program) -> None:
     primitive._bind()
     GL.glDisable(GL.GL_BLEND)
     GL.glPolygonMode(GL.GL_FRONT_AND_BACK, GL.GL_FILL)
-    if primitive.material.doubleSided:
+    _cull_and_draw(primitive, primitive.material.doubleSided)
+
+
+def _cull_and_draw(primitive, double_sided: bool) -> None:
+    """Draw a bound primitive's instances (one where it has no poses), culling back faces unless `double_sided`."""
+    if double_sided:
         GL.glDisable(GL.GL_CULL_FACE)
     else:
         GL.glEnable(GL.GL_CULL_FACE)

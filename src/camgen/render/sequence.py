@@ -698,12 +698,8 @@ class CameraRenderer:
             return 0.0
         graph = self.graph
         prop = graph.swaying[k - len(graph.actor_nodes)]
-        K, T = view.K_px, view.T_world_from_cam
-        A = np.array([[K[0, 0], K[0, 1]], [0.0, K[1, 1]]])
-        w, h = view.width_px, view.height_px
-        corners = np.array([[-w, -h], [2 * w, -h], [-w, 2 * h], [2 * w, 2 * h]], np.float64) - K[:2, 2]
-        q = np.linalg.solve(A, corners.T)
-        gain = float(np.linalg.norm(A, 2)) * math.sqrt(1.0 + float(np.max(np.sum(q * q, axis=0))))
+        T = view.T_world_from_cam
+        gain = _path_gain_px(view)
         axis_m, origin_m = T[:3, 2], T[:3, 3]
         stretch = float(np.linalg.norm(graph.scene.get_pose(prop.node)[:3, :3], 2))
         s_max = max(0.0, float(prop.rest_vertices_m[:, 2].max()) / prop.sway.height_m)
@@ -1567,6 +1563,17 @@ PATH_BOUND_MARGIN = 1e-6
 the vertex-by-vertex paths it stands for (~1e-12 px), so that a bound under the threshold stays a proof."""
 
 
+def _path_gain_px(view: View) -> float:
+    """‖A‖₂·√(1 + |q|²) at its largest over the box (−W, 2W) × (−H, 2H) of a view's pixels (A the upper 2×2 of K,
+    q = A⁻¹(uv − c)): a world move of d m at depth z moves such a pixel by at most gain·d/z px (`_path_bound_px`)."""
+    K = view.K_px
+    A = np.array([[K[0, 0], K[0, 1]], [0.0, K[1, 1]]])
+    w, h = view.width_px, view.height_px
+    corners = np.array([[-w, -h], [2 * w, -h], [-w, 2 * h], [2 * w, 2 * h]], np.float64) - K[:2, 2]
+    q = np.linalg.solve(A, corners.T)
+    return float(np.linalg.norm(A, 2)) * math.sqrt(1.0 + float(np.max(np.sum(q * q, axis=0))))
+
+
 def _path_bound_px(
     vertices_m: list[np.ndarray], view: View, casting: list, light_poses: list[np.ndarray], lowest_z_m: float
 ) -> float:
@@ -1590,12 +1597,8 @@ def _path_bound_px(
     start, middle, end = vertices_m
     if len(middle) == 0:
         return 0.0
-    K, T = view.K_px, view.T_world_from_cam
-    A = np.array([[K[0, 0], K[0, 1]], [0.0, K[1, 1]]])
-    w, h = view.width_px, view.height_px
-    corners = np.array([[-w, -h], [2 * w, -h], [-w, 2 * h], [2 * w, 2 * h]], np.float64) - K[:2, 2]
-    q = np.linalg.solve(A, corners.T)
-    gain = float(np.linalg.norm(A, 2)) * math.sqrt(1.0 + float(np.max(np.sum(q * q, axis=0))))
+    T = view.T_world_from_cam
+    gain = _path_gain_px(view)
     axis_m, origin_m = T[:3, 2], T[:3, 3]  # the camera's depth axis and centre, world
     suns = [-pose[:3, 2] for pose in light_poses if -pose[2, 2] < -1e-6]  # else no shadow (`_node_pixels`)
     kinds = [0.0] * (1 + len(suns))  # the bound of the vertices' paths, then of each sun's shadows'
