@@ -50,7 +50,10 @@ def test_render_writes_video_passes_and_job(workspace, capsys):
     # (which stages pass the 1 % cut depends on the machine's load: only the shape and the sum are fixed)
     stages, busy = time_line.split(":", 1)[1].strip().split("; ")
     shares = dict(re.fullmatch(r"([\w.]+) (\d+) %", part).groups() for part in stages.split(", "))
-    assert "render" in shares and abs(sum(map(int, shares.values())) - 100) <= len(shares)
+    # The render is pipelined (`execute`): the main thread's stages and its waits for the writer make up the wall
+    # time, and the writer's and the encoder's stages overlap them, so the shares sum to 100 % or more, at most
+    # three threads' worth (the stages under 1 % each, and `other` when negative, are not shown: hence the slack).
+    assert "render" in shares and 85 <= sum(map(int, shares.values())) <= 300 + len(shares)
     # and the CPU time that took, every thread's: between none and every core busy all the time
     cpu_s, cores = map(float, re.fullmatch(r"CPU ([\d.]+) s, ([\d.]+) cores busy", busy).groups())
     assert cpu_s > 0 and 0 < cores <= os.cpu_count() + 0.1

@@ -137,7 +137,8 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
         if shares:
             cpu_s = sum(result.frame_cpu_s) + result.finish_cpu_s
             busy = f"; CPU {cpu_s:.1f} s, {cpu_s / result.total_s:.1f} cores busy" if result.total_s > 0 else ""
-            out.print(f"    time: {shares}{busy}", highlight=False)
+            # One line however many stages pass the cut (a console wraps at its width: 160 when piped).
+            out.print(f"    time: {shares}{busy}", highlight=False, soft_wrap=True)
         for path in result.files[:3]:
             out.print(f"    {escape(str(path))}", highlight=False)
         if len(result.files) > 3:
