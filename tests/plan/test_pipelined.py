@@ -317,3 +317,23 @@ def test_an_encode_that_fails_stops_the_render_with_its_error(job, renderer, mon
     assert max(drawn) <= FAILING_INDEX + PIPELINE_FRAMES
     assert encoder_threads() == [] and writer_threads() == []
     assert list(tmp_path.iterdir()) == []
+
+
+def test_io_wait_is_the_main_threads_wait_alone(job, renderer, monkeypatch, tmp_path):
+    """``io.wait`` is the main thread's time waiting for the writer (`execute`'s module docstring), so a frame's
+    never exceeds that frame's wall time. With each encode slowed to 0.6 s the writer waits some 0.5 s a frame for
+    the encoder; that wait is its own (``io.video.wait``), not added to the main thread's ``io.wait`` (it was: the
+    second frame, handed over without a wait, then counted ~0.5 s of io.wait in a ~0.1 s frame)."""
+    from camgen.io.video import VideoWriter
+
+    write = VideoWriter.write
+
+    def slow(self, frame_rgb8):
+        time.sleep(0.6)
+        return write(self, frame_rgb8)
+
+    monkeypatch.setattr(VideoWriter, "write", slow)
+    (result,) = execute(job, tmp_path, renderer=renderer, frames=range(4), pipelined=True)
+    for record, wall_s in zip(result.stage_frames, result.frame_wall_s, strict=True):
+        assert record["io.wait"] <= wall_s + 1e-3
+        assert record["io.video.wait"] > 0.3  # the writer's wait for the slowed encode

@@ -48,8 +48,9 @@ frame (timed in that thread) to the main thread's; ``io.wait`` is the main threa
 (a free slot, a drain). The stages of a frame then overlap and can sum to more than its wall time
 (`frame_wall_s`): a stage's share of the wall time says how long it kept its thread busy, the main thread's
 stages plus ``io.wait`` are the wall time, and a large ``io.wait`` says the writer set the pace. Serial too,
-``io.video`` is the encoder thread's time, which overlaps the frame's other writes, and ``io.wait`` the wait for
-it after them.
+``io.video`` is the encoder thread's time, which overlaps the frame's other writes, and ``io.video.wait``
+(`ENCODE_WAIT_STAGE`) the wait for it after them, in the thread that wrote them (the writer's, when pipelined:
+not part of ``io.wait``).
 """
 
 from __future__ import annotations
@@ -90,7 +91,7 @@ from camgen.plan.camera_pipeline import CameraPipeline, cuts_reid_crops, frame_r
 from camgen.plan.flow import FlowField
 from camgen.plan.lens_stages import LensStages
 from camgen.plan.timing import StageClock, stage_sums
-from camgen.plan.writer import WAIT_STAGE, FrameWriter
+from camgen.plan.writer import FrameWriter
 from camgen.render.renderer import Passes, Renderer
 from camgen.render.scene_graph import build_scene_graph, instance_table
 from camgen.render.sequence import CameraRenderer
@@ -1046,6 +1047,12 @@ def _execute_camera(
     return result
 
 
+ENCODE_WAIT_STAGE = "io.video.wait"
+"""The stage of a frame's wait for its video encode after its other writes (`_encoding`): in the writer's thread
+when pipelined, so kept apart from ``io.wait``, the main thread's wait for the writer
+(`camgen.plan.writer.WAIT_STAGE`)."""
+
+
 def _timed(function: Callable, *args) -> float:
     """Call `function(*args)`; the seconds it took."""
     start = time.perf_counter()
@@ -1057,8 +1064,9 @@ def _timed(function: Callable, *args) -> float:
 def _encoding(encoding, clock: StageClock):
     """Around a frame's other writes while its video frame is encoded in the encoder's thread (`encoding`, a
     future of `_timed`, or None): afterwards, wait for the encode, add its seconds to the frame's ``io.video``
-    and the wait to ``io.wait``, and raise the encode's exception. Where the other writes raise, theirs is
-    raised once the encode has ended (the caller then aborts the video), and the encode's is dropped.
+    and the wait to ``io.video.wait`` (`ENCODE_WAIT_STAGE`), and raise the encode's exception. Where the other
+    writes raise, theirs is raised once the encode has ended (the caller then aborts the video), and the encode's
+    is dropped.
 
     The encode (x265 or x264, one thread for reproducible bytes: `camgen.io.video`) and the frame, depth and raw
     files (OpenImageIO's PNG and DNG writers) each keep one core busy and release the GIL, so on two cores the
@@ -1073,7 +1081,7 @@ def _encoding(encoding, clock: StageClock):
     except BaseException:
         concurrent.futures.wait([encoding])
         raise
-    with clock(WAIT_STAGE):
+    with clock(ENCODE_WAIT_STAGE):
         seconds = encoding.result()
     clock.add("io.video", seconds)
 
