@@ -83,7 +83,7 @@ def job(workspace) -> Job:
 
 
 def render(job: Job, out: Path, renderer, **options):
-    """`execute` the test's frames; pipelined unless told (the default on llvmpipe is serial)."""
+    """`execute` the test's frames; pipelined unless told (the default)."""
     options.setdefault("pipelined", True)
     return execute(job, out, renderer=renderer, frames=range(FRAMES), checkpoint_frames=CHECKPOINT_FRAMES, **options)
 
