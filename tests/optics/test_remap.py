@@ -99,6 +99,18 @@ def test_geometric_passes_keep_exact_values():
     assert np.array_equal(remap_nearest(ids, maps), ids[rows, cols])
 
 
+def test_a_render_narrower_than_the_maps_is_refused():
+    """The flat index reads row r, column c at r·W + c: a render narrower than the columns the map reads would
+    take them from the next row without a word (indexing by row and column raised IndexError), so it is
+    refused with both widths."""
+    maps = lens_maps(_geometry())
+    needed = int(maps.nearest_index[1].max()) + 1
+    narrow = np.zeros((300, needed - 1), np.float32)
+    with pytest.raises(ValueError, match=rf"column {needed - 1}.* {needed - 1} px wide"):
+        remap_nearest(narrow, maps)
+    assert remap_nearest(np.zeros((300, needed), np.float32), maps).shape == (240, 320)  # just wide enough
+
+
 def test_a_margin_too_small_for_the_lens_is_caught():
     maps = lens_maps(_geometry(margin=(5, 5, 5, 5)))
     with pytest.raises(ValueError, match="reads left/above the render"):

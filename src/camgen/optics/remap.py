@@ -84,6 +84,11 @@ class LensMaps:
         flat = self._flat_index.get(render_width_px)
         if flat is None:
             rows, cols = self.nearest_index
+            if int(cols.max()) >= render_width_px:  # its pixels would come from the next row, without a word
+                raise ValueError(
+                    f"the lens map reads render column {int(cols.max())}, but the render is {render_width_px} px "
+                    "wide: pass the render-size passes (output plus margin) the maps were made for"
+                )
             flat = rows.astype(np.intp) * render_width_px + cols
             self._flat_index[render_width_px] = flat
         return flat
