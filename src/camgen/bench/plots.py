@@ -71,8 +71,17 @@ def tradeoff_plot(
     return _save(figure, path)
 
 
-def stage_bars(path: Path, title: str, rows: Sequence[tuple[str, dict[str, float]]], *, unit: str = "ms") -> Path:
-    """Horizontal stacked bars: one row per label, one segment per stage (time per frame)."""
+def stage_bars(
+    path: Path,
+    title: str,
+    rows: Sequence[tuple[str, dict[str, float]]],
+    *,
+    unit: str = "ms",
+    wall: Sequence[float] | None = None,
+) -> Path:
+    """Horizontal stacked bars: one row per label, one segment per stage (time per frame); `wall`, one per row,
+    marks each row's wall time per frame where stages ran in several threads at once (the bar then reaches past
+    it)."""
     stages: list[str] = []
     for _, parts in rows:
         stages += [s for s in parts if s not in stages]
@@ -84,6 +93,8 @@ def stage_bars(path: Path, title: str, rows: Sequence[tuple[str, dict[str, float
         widths = np.array([parts.get(stage, 0.0) for _, parts in rows])
         axes.barh(y, widths, left=left, color=colour, label=stage, height=0.7)
         left += widths
+    if wall is not None:
+        axes.scatter(wall, y, marker="|", s=260, color="black", linewidths=2, label="wall time", zorder=3)
     axes.set_yticks(y, [label for label, _ in rows], fontsize=7)
     axes.set_xlabel(f"{unit} per frame")
     axes.set_title(title, fontsize=10)

@@ -133,12 +133,19 @@ def run(args: argparse.Namespace, out: Console, err: Console) -> int:
             f"total {result.total_s:.1f} s → {escape(str(result.directory))}",
             highlight=False,
         )
-        shares = shares_text(stage_sums([*result.stage_frames, result.finish_s]), result.total_s)
+        stages = stage_sums([*result.stage_frames, result.finish_s])
+        shares = shares_text(stages, result.total_s)
         if shares:
             cpu_s = sum(result.frame_cpu_s) + result.finish_cpu_s
             busy = f"; CPU {cpu_s:.1f} s, {cpu_s / result.total_s:.1f} cores busy" if result.total_s > 0 else ""
             # One line however many stages pass the cut (a console wraps at its width: 160 when piped).
             out.print(f"    time: {shares}{busy}", highlight=False, soft_wrap=True)
+            if sum(stages.values()) > result.total_s:
+                out.print(
+                    "    (the writes run in threads beside the drawing: each stage's share is the time it kept its "
+                    "thread busy, and the shares add up to more than 100 %)",
+                    highlight=False,
+                )
         for path in result.files[:3]:
             out.print(f"    {escape(str(path))}", highlight=False)
         if len(result.files) > 3:
