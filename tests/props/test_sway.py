@@ -130,7 +130,7 @@ def test_the_moved_bound_holds_for_every_vertex_and_is_near_the_largest_move(spe
     within 4x of the largest move (a bound that is tight enough to settle a tree in a short exposure)."""
     model, sway = _sway(speed_m_s=speed_m_s, turbulence=turbulence)
     vertices, normals = model.arrays()[:2]
-    s_max = max(0.0, float(vertices[:, 2].max()) / sway.height_m)
+    height_frac_max = max(0.0, float(vertices[:, 2].max()) / sway.height_m)
     rng = np.random.default_rng(3)
     ratios = []
     for gap_s in (1e-4, 5e-3, 0.02, 0.5, 3.0):
@@ -138,12 +138,12 @@ def test_the_moved_bound_holds_for_every_vertex_and_is_near_the_largest_move(spe
             a, _ = sway.deformed(vertices, normals, float(t))
             b, _ = sway.deformed(vertices, normals, float(t) + gap_s)
             moved = float(np.linalg.norm(b - a, axis=1).max())
-            bound = sway.moved_bound_m(float(t), float(t) + gap_s, s_max)
+            bound = sway.moved_bound_m(float(t), float(t) + gap_s, height_frac_max)
             assert moved <= bound, (gap_s, t)
             if gap_s <= 0.02 and moved > 0.0:  # (in a lull the gusts' factor is 0 and nothing moves)
                 ratios.append(bound / moved)
     assert max(ratios) < 4.0
-    assert sway.moved_bound_m(5.0, 5.0, s_max) < 1e-8  # no time between: the rounding margin alone
+    assert sway.moved_bound_m(5.0, 5.0, height_frac_max) < 1e-8  # no time between: the rounding margin alone
 
 
 def test_a_bendable_trunk_is_the_same_surface_in_bands():

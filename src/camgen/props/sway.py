@@ -273,17 +273,18 @@ class PropSway:
         flutter = g * float(self.flutter_m @ (2 * math.pi * self.flutter_frequencies_hz)) if self.leafy.any() else 0.0
         return tip + flutter
 
-    def moved_bound_m(self, time_a_s: float, time_b_s: float, s_max: float) -> float:
-        """An upper bound, m, on how far any vertex whose s = max(z/H, 0) at rest is at most `s_max` lies at
-        `time_a_s` from where it lies at `time_b_s` (`deformed`, in the prop's frame), with a margin far above
-        the rounding of both. Its bend moves by s²·ΔD and drops by (2/3)·(s³/H)·Δ|D|²; a leafy vertex besides by
-        Σ_w a_w·|g_a·sin θ_a − g_b·sin θ_b| ≤ Σ_w a_w·(|g_a − g_b| + g_b·min(2, ω_w·|t_a − t_b|)) (θ_a − θ_b =
-        ω_w·(t_a − t_b); each wave moves along a unit axis)."""
+    def moved_bound_m(self, time_a_s: float, time_b_s: float, height_frac_max: float) -> float:
+        """An upper bound, m, on how far any vertex whose height fraction s = max(z/H, 0) at rest is at most
+        `height_frac_max` lies at `time_a_s` from where it lies at `time_b_s` (`deformed`, in the prop's frame),
+        with a margin far above the rounding of both. Its bend moves by s²·ΔD and drops by (2/3)·(s³/H)·Δ|D|²; a
+        leafy vertex besides by Σ_w a_w·|g_a·sin θ_a − g_b·sin θ_b| ≤ Σ_w a_w·(|g_a − g_b| + g_b·min(2, ω_w·|t_a −
+        t_b|)) (θ_a − θ_b = ω_w·(t_a − t_b); each wave moves along a unit axis)."""
         t = np.array([time_a_s, time_b_s], dtype=np.float64)
         g = self.gusts.factor(t, self.along_m)
         D = self._tip_displacement_m(t, g)
         squared = D @ D.T
-        bend = s_max**2 * float(np.linalg.norm(D[0] - D[1])) + (2.0 / 3.0) * s_max**3 / self.height_m * abs(
+        s = height_frac_max
+        bend = s**2 * float(np.linalg.norm(D[0] - D[1])) + (2.0 / 3.0) * s**3 / self.height_m * abs(
             float(squared[0, 0] - squared[1, 1])
         )
         flutter = 0.0

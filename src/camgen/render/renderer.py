@@ -591,7 +591,7 @@ class _PassRenderer(pyrender.Renderer):
         """Added to every material texture's level of detail in the current draw (`Renderer.draw`)."""
         self.sky_map = SkyMap()
         """The CIE sky's radiance that smooth coats and glass mirror (`SkyMap`), set for each lit draw."""
-        self.depth_prepass = True
+        self.depth_prepass = False
         """Whether a lit draw draws its depth first and shades each pixel once (`forward`); False shades every
         fragment that passes the depth test as it comes (the same pixels, at more cost on llvmpipe). `Renderer`
         turns it on for llvmpipe only, where it was measured (bit for bit, and cheaper): a GPU culls hidden
@@ -1088,11 +1088,11 @@ class _PassRenderer(pyrender.Renderer):
         self._program_cache.absent_lights = tuple(define for define, lights in kinds if not lights)
         order = _draw_order(scene, nodes, cam_position, lit)
         prepass = lit and self.depth_prepass
-        if prepass:
-            self._depth_prepass(scene, order, V, P, draw_flags, program_flags)
         program = None
         lit_programs: dict[int, int] = {}  # per program (by id) lit in this draw: the units its lights took
         try:
+            if prepass:  # inside: a failed pre-pass leaves no stencil test on (the `finally`)
+                self._depth_prepass(scene, order, V, P, draw_flags, program_flags)
             for node, primitive in order:
                 if prepass and primitive.material.alphaMode == "BLEND":  # glass: depth-tested as drawn alone
                     GL.glDepthFunc(GL.GL_LESS)

@@ -702,14 +702,14 @@ class CameraRenderer:
         gain = _path_gain_px(view)
         axis_m, origin_m = T[:3, 2], T[:3, 3]
         stretch = float(np.linalg.norm(graph.scene.get_pose(prop.node)[:3, :3], 2))
-        s_max = max(0.0, float(prop.rest_vertices_m[:, 2].max()) / prop.sway.height_m)
+        height_frac_max = max(0.0, float(prop.rest_vertices_m[:, 2].max()) / prop.sway.height_m)
         rounding_m = 2.0**-22 * (float(np.abs(prop.rest_vertices_m).max()) + prop.sway.reach_m())
         depth_m = (middle_m - origin_m) @ axis_m
         suns = [-pose[:3, 2] for pose in light_poses if -pose[2, 2] < -1e-6]
         kinds = [0.0] * (1 + len(suns))
         for offset in (-0.5, 0.5):
             moved_m = stretch * (
-                prop.sway.moved_bound_m(state.time_s + offset * exposure_s, state.time_s, s_max) + rounding_m
+                prop.sway.moved_bound_m(state.time_s + offset * exposure_s, state.time_s, height_frac_max) + rounding_m
             )
             kinds[0] += moved_m / max(NEAR_CLIP_M, float(depth_m.min()) - moved_m)
             for j, d in enumerate(suns, start=1):
