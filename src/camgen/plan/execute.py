@@ -242,7 +242,9 @@ def execute(
     output the scene plans, the first frame left out; serial and pipelined in turn, each its own process): the
     parking lot's PTZ, 10 frames, 3 rounds: 1132 / 832 / 860 ms a frame serial against 792 / 751 / 772
     pipelined (0.90×); the misty street, 2 rounds: 236 / 218 against 152 / 158 (0.69×); the intersection's 4K
-    box camera, 4 frames, 2 rounds, its frame 95 % drawing: 6780 / 6439 against 6509 / 6547 (1.0×). Earlier,
+    box camera, 4 frames, 2 rounds, its frame 95 % drawing: 6780 / 6439 against 6509 / 6547 (1.0×); the
+    corridor, whose depth of field already keeps both cores busy, 10 frames, 3 rounds: 467 / 479 / 486 against
+    526 / 543 / 468 (1.0–1.13×). Earlier,
     when the parking lot's frame was 1.3–1.9 s and mostly its draws, the writer beside llvmpipe slowed them more
     than it hid, and a software rasterizer wrote in turn.
     """
