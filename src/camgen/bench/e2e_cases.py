@@ -139,16 +139,22 @@ def timed_per_frame(result) -> tuple[float, dict[str, float]]:
     share = timed / len(result.frame_wall_s)
     finish = {stage: s * share for stage, s in result.finish_s.items()}
     totals = stage_sums([*frame_records, finish])
-    wall_s = sum(result.frame_wall_s[1:] or result.frame_wall_s) + sum(finish.values())
-    return 1e3 * wall_s / timed, {stage: 1e3 * s / timed for stage, s in totals.items()}
+    frame_ms = _timed_mean_ms(result.frame_wall_s, sum(result.finish_s.values()))
+    return frame_ms, {stage: 1e3 * s / timed for stage, s in totals.items()}
 
 
 def cpu_per_frame_ms(result) -> float:
     """Mean CPU ms of the process per timed frame (as `timed_per_frame`: the warm-up left out, the finish
     shared out)."""
-    timed = max(len(result.frame_cpu_s) - 1, 1)
-    share = timed / max(len(result.frame_cpu_s), 1)
-    return 1e3 * (sum(result.frame_cpu_s[1:] or result.frame_cpu_s) + result.finish_cpu_s * share) / timed
+    return _timed_mean_ms(result.frame_cpu_s, result.finish_cpu_s)
+
+
+def _timed_mean_ms(per_frame_s: list[float], finish_s: float) -> float:
+    """Mean ms per timed frame of a per-frame time (`timed_per_frame`'s frames), the timed frames' share of
+    `finish_s`, the time after the last frame, included."""
+    timed = max(len(per_frame_s) - 1, 1)
+    share = timed / max(len(per_frame_s), 1)
+    return 1e3 * (sum(per_frame_s[1:] or per_frame_s) + finish_s * share) / timed
 
 
 def e2e_cases(repo: Path, records: dict[str, EndToEnd]) -> list[Case]:

@@ -36,12 +36,11 @@ main thread keeps what carries state into the next frame or needs OpenGL: the re
 (auto-exposure, the ISP's adaptation), the lens applied to the passes, the annotations' geometry and unoccluded
 draws, the flow (it moves the actors). The writer gets copies of the arrays (`_detached`), so the same bytes
 come out as from the serial render (``pipelined=False``; pipelined by default, on a GPU and on llvmpipe alike:
-`execute`'s notes). Either way a frame's video encode runs
-in a thread of its own (``camgen-video-encode``) beside that frame's other writes, and is waited for before they
-return (`_encoding`): the encoder and the PNG and DNG writers each keep one core busy, outside the GIL. The
-writer is drained before each checkpoint and before a camera's files are finished, so a checkpoint describes only
-frames fully written; a write that fails stops the render with its own exception at the next frame (or the
-drain), and the render then unwinds as from any error.
+`execute`'s notes). Either way a frame's video encode runs in a thread of its own (``camgen-video-encode``)
+beside that frame's other writes, and is waited for before they return (`_encoding`): the encoder and the PNG
+and DNG writers each keep one core busy, outside the GIL. The writer is drained before each checkpoint and before a
+camera's files are finished, so a checkpoint describes only frames fully written; a write that fails stops the render
+with its own exception at the next frame (or the drain), and the render then unwinds as from any error.
 
 Timing with the pipeline: a frame's `CameraResult.stage_frames` record adds the writer thread's stages of that
 frame (timed in that thread) to the main thread's; ``io.wait`` is the main thread's time waiting for the writer
@@ -244,9 +243,8 @@ def execute(
     pipelined (0.90×); the misty street, 2 rounds: 236 / 218 against 152 / 158 (0.69×); the intersection's 4K
     box camera, 4 frames, 2 rounds, its frame 95 % drawing: 6780 / 6439 against 6509 / 6547 (1.0×); the
     corridor, whose depth of field already keeps both cores busy, 10 frames, 3 rounds: 467 / 479 / 486 against
-    526 / 543 / 468 (1.0–1.13×). Earlier,
-    when the parking lot's frame was 1.3–1.9 s and mostly its draws, the writer beside llvmpipe slowed them more
-    than it hid, and a software rasterizer wrote in turn.
+    526 / 543 / 468 (1.0–1.13×). Earlier, when the parking lot's frame was 1.3–1.9 s and mostly its draws, the
+    writer beside llvmpipe slowed them more than it hid, and a software rasterizer wrote in turn.
     """
     checkpoint_frames = CHECKPOINT_FRAMES if checkpoint_frames is None else checkpoint_frames
     if isinstance(checkpoint_frames, bool) or not isinstance(checkpoint_frames, int) or checkpoint_frames < 1:
@@ -1072,8 +1070,7 @@ def _encoding(encoding, clock: StageClock):
 
     The encode (x265 or x264, one thread for reproducible bytes: `camgen.io.video`) and the frame, depth and raw
     files (OpenImageIO's PNG and DNG writers) each keep one core busy and release the GIL, so on two cores the
-    frame's writes take about the longer of the two instead of their sum. Measured on the parking lot's PTZ at
-    1080p (below, in BENCHMARKS.md).
+    frame's writes take about the longer of the two instead of their sum (BENCHMARKS.md, end to end).
     """
     if encoding is None:
         yield

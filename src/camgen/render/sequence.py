@@ -529,7 +529,7 @@ class CameraRenderer:
             return self._draw(view, passes, "geometric")
         graph, kept, base = self.graph, self._kept_geometry, self._kept_base
         # Shared with the radiance's base where a node's look is the one it drew (its version the same).
-        looks = _Looks.now(graph, base.looks if base is not None else None if kept is None else kept.looks)
+        looks = _Looks.now(graph, base.looks if base is not None else (None if kept is None else kept.looks))
         rects = None
         if kept is not None and kept.passes == passes and _same_view(kept.view, view):
             rects = self._geometry_rects(view, kept.looks, looks)
